@@ -1,0 +1,46 @@
+"""Errors reported against a place in the program text."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+from .terms import Span
+
+
+class RetalisError(Exception):
+    """An error in a Retalis program, with the place it was found."""
+
+    kind = "error"
+
+    def __init__(self, message: str, span: Optional[Span] = None):
+        super().__init__(message)
+        self.message = message
+        self.span = span
+
+    def render(self, source_text: Optional[str] = None) -> str:
+        """`file:line:col: message`, then the offending line with a caret under the column."""
+        if self.span is None:
+            return f"error: {self.message}"
+        head = f"{self.span}: {self.kind}: {self.message}"
+        text = source_text
+        if text is None:
+            try:
+                text = Path(self.span.file).read_text()
+            except OSError:
+                text = None
+        if text is None:
+            return head
+        lines = text.splitlines()
+        if not 1 <= self.span.line <= len(lines):
+            return head
+        line = lines[self.span.line - 1].replace("\t", " ")
+        caret = " " * (max(self.span.column, 1) - 1) + "^"
+        return f"{head}\n    {line}\n    {caret}"
+
+
+class RetalisSyntaxError(RetalisError):
+    kind = "syntax error"
+
+
+class RetalisSemanticError(RetalisError):
+    kind = "error"

@@ -1,0 +1,447 @@
+"""Reading program text into terms.
+
+Two steps: the lark grammar (`retalis.lark`) splits the text into clauses, each a flat
+sequence of operands and names; `_Resolver` then applies the operator table to each
+sequence, exactly like a Prolog reader. `:- op(P, T, N)` directives take effect for the
+clauses after them.
+"""
+from __future__ import annotations
+
+import codecs
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import List, Optional, Tuple
+
+from lark import Lark, Token, Tree
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from .errors import RetalisSyntaxError
+from .operators import ARGUMENT_PRIORITY, CLAUSE_PRIORITY, EVENT_OPERATORS, STANDARD_OPERATORS, OperatorTable
+from .terms import NIL, Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
+
+_GRAMMAR = (Path(__file__).with_name("retalis.lark")).read_text()
+_LARK = Lark(_GRAMMAR, start="program", parser="lalr", propagate_positions=True, maybe_placeholders=False)
+
+
+@dataclass
+class ReadClause:
+    """One clause as read: its term, where it starts, and the variable names in it."""
+
+    term: Term
+    span: Span
+    text: str
+
+
+# ---- items of a flat sequence ------------------------------------------------------------
+
+
+@dataclass
+class _Operand:
+    term: Term
+    start: int
+    end: int
+
+
+@dataclass
+class _Name:
+    name: str
+    span: Span
+    start: int
+    end: int
+    quoted: bool = False
+
+
+class _Resolver:
+    """Operator-precedence parsing of one flat sequence of `_Operand`s and `_Name`s."""
+
+    def __init__(self, items: list, ops: OperatorTable, file: str, source: "_Source"):
+        self.items = items
+        self.pos = 0
+        self.ops = ops
+        self.file = file
+        self.source = source
+
+    def error(self, message: str, at: Optional[int] = None) -> RetalisSyntaxError:
+        if at is None:
+            at = self.pos if self.pos < len(self.items) else len(self.items) - 1
+        item = self.items[at]
+        span = item.span if isinstance(item, _Name) else self.source.span_at(item.start)
+        return RetalisSyntaxError(message, span)
+
+    def peek(self, offset: int = 0):
+        index = self.pos + offset
+        return self.items[index] if index < len(self.items) else None
+
+    def parse_all(self, max_priority: int) -> Term:
+        term, _ = self.parse(max_priority)
+        if self.pos < len(self.items):
+            item = self.items[self.pos]
+            if isinstance(item, _Operand) and isinstance(item.term, Var) and item.term.name.lower() in EVENT_OPERATORS:
+                lower = item.term.name.lower()
+                raise self.error(f"'{item.term.name}' reads as a variable; write the event operator in lowercase: '{lower}'")
+            if isinstance(item, _Name) and self.ops.infix_op(item.name):
+                raise self.error(f"operator priority clash at '{item.name}' (put brackets around the operands)")
+            raise self.error("operator expected")
+        return term
+
+    def starts_term(self, item) -> bool:
+        if item is None:
+            return False
+        if isinstance(item, _Operand):
+            return True
+        if item.name in (",", "|"):
+            return False
+        if self.ops.infix_op(item.name) and not self.ops.prefix_op(item.name):
+            nxt = self.items[self.items.index(item) + 1] if self.items.index(item) + 1 < len(self.items) else None
+            return nxt is None
+        return True
+
+    def parse(self, max_priority: int) -> Tuple[Term, int]:
+        left, left_priority = self.parse_primary(max_priority)
+        return self.parse_infix(left, left_priority, max_priority)
+
+    def parse_infix(self, left: Term, left_priority: int, max_priority: int) -> Tuple[Term, int]:
+        while True:
+            item = self.peek()
+            if not isinstance(item, _Name):
+                return left, left_priority
+            op = self.ops.infix_op(item.name)
+            if op is not None:
+                priority, kind = op
+                left_max = priority if kind == "yfx" else priority - 1
+                right_max = priority if kind == "xfy" else priority - 1
+                if priority <= max_priority and left_priority <= left_max and self.peek(1) is not None:
+                    self.pos += 1
+                    right, _ = self.parse(right_max)
+                    left = Compound(item.name, (left, right), _span_of(left) or item.span)
+                    left_priority = priority
+                    continue
+            op = self.ops.postfix.get(item.name)
+            if op is not None:
+                priority, kind = op
+                left_max = priority if kind == "yf" else priority - 1
+                if priority <= max_priority and left_priority <= left_max:
+                    self.pos += 1
+                    left = Compound(item.name, (left,), _span_of(left) or item.span)
+                    left_priority = priority
+                    continue
+            return left, left_priority
+
+    def parse_primary(self, max_priority: int) -> Tuple[Term, int]:
+        item = self.peek()
+        if item is None:
+            raise self.error("unexpected end of clause", len(self.items) - 1)
+        self.pos += 1
+        if isinstance(item, _Operand):
+            return item.term, 0
+        name = item.name
+        if name in (",", "|"):
+            raise self.error(f"unexpected '{name}'", self.pos - 1)
+        nxt = self.peek()
+        # A minus sign written directly before a number is part of the number.
+        if name == "-" and not item.quoted and isinstance(nxt, _Operand) and isinstance(nxt.term, Number) \
+                and nxt.start == item.end:
+            self.pos += 1
+            return Number(-nxt.term.value, item.span), 0
+        prefix = self.ops.prefix_op(name) if not item.quoted or True else None
+        if prefix is not None and self._can_take_argument(nxt):
+            priority, kind = prefix
+            if priority > max_priority:
+                priority = min(max_priority, ARGUMENT_PRIORITY)
+            arg_max = priority if kind == "fy" else priority - 1
+            saved = self.pos
+            try:
+                arg, _ = self.parse(arg_max)
+                return Compound(name, (arg,), item.span), priority
+            except RetalisSyntaxError:
+                self.pos = saved
+        atom_priority = 0
+        if self.ops.is_operator(name) and nxt is not None and not isinstance(nxt, _Operand):
+            atom_priority = 0
+        return Atom(name, item.span), atom_priority
+
+    def _can_take_argument(self, nxt) -> bool:
+        if nxt is None:
+            return False
+        if isinstance(nxt, _Operand):
+            return True
+        if nxt.name in (",", "|"):
+            return False
+        if self.ops.infix_op(nxt.name) and not self.ops.prefix_op(nxt.name):
+            # `- = x`: the prefix operator stands as an atom before an infix operator,
+            # unless that name is the last thing (then it is an atom operand: `- =`).
+            return self.pos + 1 >= len(self.items)
+        return True
+
+
+def _span_of(term: Term) -> Optional[Span]:
+    return getattr(term, "span", None)
+
+
+class _Source:
+    def __init__(self, text: str, file: str):
+        self.text = text
+        self.file = file
+        self.line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
+
+    def span_at(self, offset: int) -> Span:
+        import bisect
+
+        line = bisect.bisect_right(self.line_starts, offset)
+        column = offset - self.line_starts[line - 1] + 1
+        return Span(self.file, line, column)
+
+
+_ESCAPES = {"a": "\a", "b": "\b", "f": "\f", "n": "\n", "r": "\r", "t": "\t", "v": "\v", "0": "\0",
+            "\\": "\\", "'": "'", '"': '"', "`": "`", "e": "\x1b", "s": " ", "\n": ""}
+
+
+def _unescape(body: str, quote: str) -> str:
+    out = []
+    i = 0
+    while i < len(body):
+        c = body[i]
+        if c == quote and i + 1 < len(body) and body[i + 1] == quote:
+            out.append(quote)
+            i += 2
+            continue
+        if c == "\\" and i + 1 < len(body):
+            d = body[i + 1]
+            if d in _ESCAPES:
+                out.append(_ESCAPES[d])
+                i += 2
+                continue
+            if d == "x":
+                m = re.match(r"x([0-9a-fA-F]+)\\?", body[i + 1:])
+                if m:
+                    out.append(chr(int(m.group(1), 16)))
+                    i += 1 + m.end()
+                    continue
+            if d in "uU":
+                width = 4 if d == "u" else 8
+                digits = body[i + 2:i + 2 + width]
+                out.append(chr(int(digits, 16)))
+                i += 2 + width
+                continue
+            if d.isdigit():
+                m = re.match(r"([0-7]+)\\?", body[i + 1:])
+                out.append(chr(int(m.group(1), 8)))
+                i += 1 + m.end()
+                continue
+            out.append(d)
+            i += 2
+            continue
+        out.append(c)
+        i += 1
+    return "".join(out)
+
+
+def _number(text: str):
+    text = text.replace("_", "")
+    if text.startswith(("0x", "0o", "0b")):
+        return int(text[2:], {"x": 16, "o": 8, "b": 2}[text[1]])
+    if text.endswith("Inf"):
+        return float("inf")
+    if text.endswith("NaN"):
+        return float("nan")
+    if "." in text or "e" in text or "E" in text:
+        return float(text)
+    return int(text)
+
+
+class _Builder:
+    """Turns the lark tree of one clause into a term, resolving operators."""
+
+    def __init__(self, source: _Source, ops: OperatorTable):
+        self.source = source
+        self.ops = ops
+        self.file = source.file
+
+    def span(self, token_or_tree) -> Span:
+        meta = token_or_tree if isinstance(token_or_tree, Token) else token_or_tree.meta
+        return Span(self.file, meta.line, meta.column, getattr(meta, "end_line", 0) or 0,
+                    getattr(meta, "end_column", 0) or 0)
+
+    def sequence(self, tree: Tree, max_priority: int) -> Term:
+        items = [self.item(child) for child in tree.children]
+        resolver = _Resolver(items, self.ops, self.file, self.source)
+        return resolver.parse_all(max_priority)
+
+    def item(self, node):
+        if isinstance(node, Token):
+            if node.type in ("COMMA", "BAR"):
+                return _Name(str(node), self.span(node), node.start_pos, node.end_pos)
+            raise AssertionError(node.type)
+        if node.data == "name":
+            token = node.children[0]
+            text = str(token)
+            quoted = token.type == "QUOTED_NAME"
+            name = _unescape(text[1:-1], "'") if quoted else text
+            return _Name(name, self.span(token), token.start_pos, token.end_pos, quoted)
+        term = self.operand(node)
+        return _Operand(term, node.meta.start_pos, node.meta.end_pos)
+
+    def operand(self, node: Tree) -> Term:
+        kind = node.data
+        span = self.span(node)
+        if kind == "variable":
+            return Var(str(node.children[0]), span)
+        if kind == "number":
+            return Number(_number(str(node.children[0])), span)
+        if kind == "char_code":
+            body = str(node.children[0])[2:]
+            char = "'" if body == "''" else _unescape(body, "'") if body.startswith("\\") else body
+            return Number(ord(char[0]), span)
+        if kind == "string":
+            return String(_unescape(str(node.children[0])[1:-1], '"'), span)
+        if kind == "backquoted":
+            text = _unescape(str(node.children[0])[1:-1], "`")
+            return make_list([Number(ord(c)) for c in text])
+        if kind == "compound":
+            functor = str(node.children[0])[:-1]
+            if functor.startswith("'"):
+                functor = _unescape(functor[1:-1], "'")
+            args = tuple(self.sequence(child, ARGUMENT_PRIORITY) for child in node.children[1:])
+            return Compound(functor, args, span)
+        if kind == "empty_list":
+            return Atom("[]", span)
+        if kind == "list":
+            args = [self.sequence(child, ARGUMENT_PRIORITY) for child in node.children]
+            # the grammar cannot tell "[a, b | T]" from "[a, b]" by child count alone
+            if self._has_tail(node):
+                return make_list(args[:-1], args[-1])
+            return make_list(args)
+        if kind == "empty_curly":
+            return Atom("{}", span)
+        if kind == "curly":
+            return Compound("{}", (self.sequence(node.children[0], 1200),), span)
+        if kind == "bracketed":
+            term = self.sequence(node.children[0], 1200)
+            return term
+        raise AssertionError(kind)
+
+    def _has_tail(self, node: Tree) -> bool:
+        text = self.source.text[node.meta.start_pos:node.meta.end_pos]
+        # find a top-level '|' in the list text (outside nested brackets and quotes)
+        depth = 0
+        i = 0
+        quote = None
+        while i < len(text):
+            c = text[i]
+            if quote:
+                if c == "\\":
+                    i += 2
+                    continue
+                if c == quote:
+                    quote = None
+            elif c in "'\"`":
+                if c == "'" and i > 0 and text[i - 1] == "0" and (i < 2 or not text[i - 2].isalnum()):
+                    i += 2
+                    continue
+                quote = c
+            elif c == "%":
+                nl = text.find("\n", i)
+                i = len(text) if nl < 0 else nl
+                continue
+            elif c in "([{":
+                depth += 1
+            elif c in ")]}":
+                depth -= 1
+            elif c == "|" and depth == 1:
+                return True
+            i += 1
+        return False
+
+
+def read_program(text: str, file: str = "<program>", ops: Optional[OperatorTable] = None) -> List[ReadClause]:
+    """Read every clause of a program; raise RetalisSyntaxError at the first error."""
+    source = _Source(text, file)
+    try:
+        tree = _LARK.parse(text)
+    except UnexpectedInput as exc:
+        raise _lark_error(exc, source) from None
+    ops = (ops or STANDARD_OPERATORS).copy()
+    builder = _Builder(source, ops)
+    clauses = []
+    for clause_tree in tree.children:
+        term = builder.sequence(clause_tree.children[0], CLAUSE_PRIORITY)
+        span = builder.span(clause_tree)
+        clauses.append(ReadClause(term, span, text[clause_tree.meta.start_pos:clause_tree.meta.end_pos]))
+        _apply_op_directive(term, ops)
+    return clauses
+
+
+def read_term(text: str, file: str = "<term>", ops: Optional[OperatorTable] = None) -> Term:
+    """Read a single term (with or without a final full stop)."""
+    stripped = text.strip()
+    if not stripped.endswith(".") or stripped.endswith(".."):
+        stripped += " ."
+    else:
+        stripped += " "
+    clauses = read_program(stripped, file, ops)
+    if len(clauses) != 1:
+        raise RetalisSyntaxError("expected exactly one term", Span(file, 1, 1))
+    return clauses[0].term
+
+
+def _apply_op_directive(term: Term, ops: OperatorTable) -> None:
+    if not (isinstance(term, Compound) and term.name == ":-" and term.arity == 1):
+        return
+    goal = term.args[0]
+    goals = []
+    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
+        goals.append(goal.args[0])
+        goal = goal.args[1]
+    goals.append(goal)
+    for g in goals:
+        if isinstance(g, Compound) and g.name == "op" and g.arity == 3:
+            priority, kind, names = g.args
+            if not (isinstance(priority, Number) and isinstance(kind, Atom)):
+                continue
+            names_list = list_items(names)
+            if names_list is None:
+                names_list = [names]
+            for n in names_list:
+                if isinstance(n, Atom):
+                    ops.add(int(priority.value), kind.name, n.name)
+
+
+def _lark_error(exc: UnexpectedInput, source: _Source) -> RetalisSyntaxError:
+    line = getattr(exc, "line", None) or 1
+    column = getattr(exc, "column", None) or 1
+    if isinstance(exc, UnexpectedCharacters):
+        char = source.text[exc.pos_in_stream] if exc.pos_in_stream < len(source.text) else "end of file"
+        message = f"unexpected character {char!r}"
+    elif isinstance(exc, UnexpectedEOF):
+        line = source.text.count("\n") + 1
+        column = len(source.text) - source.text.rfind("\n")
+        message = "unexpected end of file (missing '.' at the end of a clause?)"
+    elif isinstance(exc, UnexpectedToken):
+        token = exc.token
+        if token.type == "$END":
+            line = source.text.rstrip().count("\n") + 1
+            last = source.text.rstrip()
+            column = len(last) - last.rfind("\n")
+            message = "unexpected end of file (missing '.' at the end of the last clause?)"
+        else:
+            expected = _describe_expected(exc.expected)
+            message = f"unexpected {_describe_token(token)}" + (f"; expected {expected}" if expected else "")
+    else:
+        message = str(exc).splitlines()[0]
+    return RetalisSyntaxError(message, Span(source.file, line, column))
+
+
+_TOKEN_NAMES = {"END": "end of clause '.'", "RPAR": "')'", "RSQB": "']'", "RBRACE": "'}'",
+                "COMMA": "','", "BAR": "'|'", "LPAR": "'('", "LSQB": "'['", "LBRACE": "'{'"}
+
+
+def _describe_token(token: Token) -> str:
+    if token.type == "END":
+        return "end of clause '.' (unbalanced brackets?)"
+    return f"{str(token)!r}"
+
+
+def _describe_expected(expected) -> str:
+    names = sorted({_TOKEN_NAMES.get(e, "") for e in expected} - {""})
+    return " or ".join(names[:4])
