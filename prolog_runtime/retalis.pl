@@ -1,0 +1,195 @@
+:- module(retalis,
+          [ rtl_program_loaded/1,       % +Module
+            rtl_main/0,
+            rtl_run_jsonl_file/1,       % +File
+            rtl_feed_lines/3,           % +Text, +FirstLineNo, -Output
+            rtl_feed_events/2,          % +Events, -Output
+            rtl_may_precede/1,          % +Start
+            rtl_action/1,               % :Goal
+            rtl_summary/1               % -Text
+          ]).
+:- reexport(rtl_ele).
+:- reexport(rtl_io).
+:- reexport(rtl_time).
+
+/** <module> Retalis runtime: the entry points of a compiled program
+
+A compiled program (`retalisc compile P.rtl -o P.pl`) loads this module. It then runs in
+two ways:
+
+  - as a script, `swipl P.pl EVENTS.jsonl [...]`: rtl_main/0 reads the event files (or
+    standard input for `-`) and writes the output JSON Lines to standard output, with
+    rejected lines and a summary on standard error;
+  - embedded (the Python driver): rtl_feed_lines/3 and rtl_feed_events/2 take a batch and
+    return the output lines as one string.
+*/
+
+:- meta_predicate rtl_action(0).
+
+%!  rtl_program_loaded(+Module) is det.
+%
+%   Called by a compiled program when it has been loaded.
+
+rtl_program_loaded(Module) :-
+    rtl_use_program(Module).
+
+%!  rtl_main is det.
+%
+%   Script entry: process the event files named on the command line, in order.
+%   Options: `--echo-input` also writes the input events; `--max-delay=SECONDS`.
+
+rtl_main :-
+    current_prolog_flag(argv, Argv),
+    set_stream(user_output, encoding(utf8)),
+    set_stream(user_error, encoding(utf8)),
+    catch(main_args(Argv, Files), error(Formal, _), (usage_error(Formal), halt(2))),
+    (   Files == []
+    ->  usage_error(no_event_file), halt(2)
+    ;   true
+    ),
+    catch(forall(member(File, Files), rtl_run_jsonl_file(File)),
+          Error,
+          ( print_message(error, Error), halt(1) )),
+    flush_output,
+    rtl_summary(Summary),
+    format(user_error, "~s~n", [Summary]),
+    halt(0).
+
+main_args([], []).
+main_args([Arg|Args], Files) :-
+    (   Arg == '--echo-input'
+    ->  rtl_set_flag(echo_input, true), Files = Rest
+    ;   atom_concat('--max-delay=', D, Arg)
+    ->  ( D == inf -> Delay = inf ; atom_number(D, Delay) ),
+        rtl_set_flag(max_delay, Delay), Files = Rest
+    ;   sub_atom(Arg, 0, _, _, '--'), Arg \== '--'
+    ->  domain_error(option, Arg)
+    ;   Files = [Arg|Rest]
+    ),
+    main_args(Args, Rest).
+
+usage_error(Formal) :-
+    (   Formal = domain_error(option, Opt)
+    ->  format(user_error, "error: unknown option ~w~n", [Opt])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] EVENTS.jsonl...~n", [])
+    ).
+
+%!  rtl_run_jsonl_file(+File) is det.
+%
+%   Process every line of an event file (`-` for standard input).
+
+rtl_run_jsonl_file(-) :- !,
+    set_stream(user_input, encoding(utf8)),
+    run_stream(user_input, '<stdin>').
+rtl_run_jsonl_file(File) :-
+    setup_call_cleanup(open(File, read, In, [encoding(utf8)]),
+                       run_stream(In, File),
+                       close(In)).
+
+run_stream(In, Name) :-
+    read_line_to_string(In, Line0),
+    run_lines(Line0, In, Name, 1).
+
+run_lines(end_of_file, _, _, _) :- !.
+run_lines(Line, In, Name, N) :-
+    process_line(Line, Name, N),
+    read_line_to_string(In, Next),
+    N1 is N + 1,
+    run_lines(Next, In, Name, N1).
+
+process_line(Line, Name, N) :-
+    rtl_parse_event_line(Line, Parsed),
+    (   Parsed = event(Op, Event, Start, End)
+    ->  process_event(Op, Event, Start, End)
+    ;   Parsed = error(Reason)
+    ->  rtl_count(rejected),
+        format(user_error, "~w:~w: rejected: ~s~n", [Name, N, Reason])
+    ;   true
+    ).
+
+process_event(add, Event, Start, End) :-
+    rtl_event(Event, Start, End).
+process_event(retract, Event, Start, End) :-
+    rtl_retract_event(Event, Start, End).
+
+%!  rtl_feed_lines(+Text:string, +FirstLineNo:integer, -Output:string) is det.
+%
+%   Process a batch of input JSON Lines. Output holds the output lines, each ended by a
+%   newline; a rejected input line shows up as `!N<TAB>Reason` with its line number N.
+
+rtl_feed_lines(Text, First, Output) :-
+    rtl_output_to(buffer),
+    split_string(Text, "\n", "", Lines),
+    feed_lines(Lines, First, Rejections),
+    rtl_take_output(Out),
+    append(Out, Rejections, All0),
+    exclude(==(""), All0, All),
+    atomic_list_concat(All, "\n", Joined),
+    (   All == [] -> Output = "" ; string_concat(Joined, "\n", Output) ).
+
+feed_lines([], _, []).
+feed_lines([Line|Lines], N, Rejections) :-
+    rtl_parse_event_line(Line, Parsed),
+    (   Parsed = event(Op, Event, Start, End)
+    ->  process_event(Op, Event, Start, End),
+        Rejections = Rest
+    ;   Parsed = error(Reason)
+    ->  rtl_count(rejected),
+        format(string(R), "!~w\t~s", [N, Reason]),
+        Rejections = [R|Rest]
+    ;   Rejections = Rest
+    ),
+    N1 is N + 1,
+    feed_lines(Lines, N1, Rest).
+
+%!  rtl_feed_events(+Events:list, -Output:string) is det.
+%
+%   Process a batch of `event(Op, Event, Start, End)` terms; Output as for rtl_feed_lines/3.
+
+rtl_feed_events(Events, Output) :-
+    rtl_output_to(buffer),
+    forall(member(event(Op, Event, Start, End), Events),
+           process_event(Op, Event, Start, End)),
+    rtl_take_output(Lines),
+    (   Lines == []
+    ->  Output = ""
+    ;   atomic_list_concat(Lines, "\n", Joined),
+        string_concat(Joined, "\n", Output)
+    ).
+
+%!  rtl_may_precede(+Start:number) is semidet.
+%
+%   True if an event ending before Start may still arrive: Start is later than the clock
+%   minus the delay bound. A sequence's right-hand event only waits for left-hand
+%   events while this holds.
+
+rtl_may_precede(Start) :-
+    rtl_flag(max_delay, Delay),
+    (   Delay == inf
+    ->  true
+    ;   rtl_clock(Clock),
+        Start > Clock - Delay
+    ).
+
+%!  rtl_action(:Goal) is det.
+%
+%   Run the action of a `Head do Goal <- Pattern` rule. An action that fails or raises
+%   an error is reported on standard error; event processing goes on.
+
+rtl_action(Goal) :-
+    (   catch(Goal, Error, (print_message(warning, Error), fail))
+    ->  true
+    ;   print_message(warning, format("action failed: ~q", [Goal]))
+    ).
+
+%!  rtl_summary(-Text:string) is det.
+
+rtl_summary(Text) :-
+    rtl_stat(events, Events),
+    rtl_stat(retracted, Retracted),
+    rtl_stat(derived, Derived),
+    rtl_stat(rejected, Rejected),
+    rtl_stat(late, Late),
+    format(string(Text),
+           "retalis: ~D events, ~D retracted, ~D rejected, ~D late, ~D derived",
+           [Events, Retracted, Rejected, Late, Derived]).

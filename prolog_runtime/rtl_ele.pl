@@ -1,0 +1,240 @@
+:- module(rtl_ele,
+          [ rtl_use_program/1,          % +Module
+            rtl_program/1,              % -Module
+            rtl_reset/0,
+            rtl_event/3,                % +Event, +Start, +End
+            rtl_retract_event/3,        % +Event, +Start, +End
+            rtl_derived/3,              % +Event, +Start, +End
+            rtl_underived/3,            % +Event, +Start, +End
+            rtl_clock/1,                % -Clock
+            rtl_set_flag/2,             % +Flag, +Value
+            rtl_flag/2,                 % ?Flag, ?Value
+            rtl_output_to/1,            % +Sink
+            rtl_take_output/1,          % -Lines
+            rtl_emit/5,                 % +Event, +Start, +End, +Consumer, +Op
+            rtl_stat/2,                 % ?Name, ?Value
+            rtl_count/1,                % +Name
+            rtl_store_size/1,           % -Clauses
+            rtl_collect_garbage/0
+          ]).
+
+/** <module> ELE runtime: event ingestion, derivation, output and forgetting
+
+A compiled program is a module holding, among others:
+
+  - `ele_trigger(Event, Start, End)`: one clause per (event pattern, rule step) that
+    reacts to Event. The runtime calls every matching clause for each event.
+  - `ele_untrigger(Event, Start, End)`: the same for deletion (thesis Algorithm 2).
+  - `ele_store(Name, Arity, Window)`: the dynamic predicates that hold partial matches
+    of windowed steps, with the window in seconds. The last two arguments of a stored
+    partial match are its start and end time.
+  - `ele_printed(Event)`: which derived events are written to the output (print_trigger).
+
+The clock is the largest end time processed so far (event time, so replayed data behaves
+like live data). A stored partial match whose start lies more than Window + max_delay
+before the clock can no longer be part of any match with an event that respects the
+delay bound, and is removed by the periodic sweep.
+*/
+
+:- use_module(rtl_io).
+
+:- dynamic rtl_output_line/1.
+:- dynamic flag_value/2.
+
+flag_default(max_delay, 1.0).               % seconds an event may arrive behind the clock
+flag_default(echo_input, false).            % write input events to the output too
+flag_default(event_consumption_policy, unrestricted).
+
+%!  rtl_use_program(+Module) is det.
+%
+%   Make Module (a compiled Retalis program) the program that processes events.
+
+rtl_use_program(Module) :-
+    nb_setval(rtl_program, Module),
+    rtl_reset.
+
+%!  rtl_program(-Module) is semidet.
+
+rtl_program(Module) :-
+    nb_current(rtl_program, Module),
+    Module \== [].
+
+%!  rtl_reset is det.
+%
+%   Forget the clock, statistics and pending output (not the partial matches).
+
+rtl_reset :-
+    nb_setval(rtl_clock, -inf),
+    nb_setval(rtl_next_sweep, inf),
+    forall(member(S, [events, retracted, derived, underived, late, rejected]),
+           nb_setval(S, 0)),
+    retractall(rtl_output_line(_)),
+    (   nb_current(rtl_output_sink, _) -> true ; nb_setval(rtl_output_sink, print) ),
+    schedule_sweep.
+
+%!  rtl_set_flag(+Flag, +Value) is det.
+%!  rtl_flag(?Flag, ?Value) is nondet.
+%
+%   Flags: `max_delay` (seconds; `inf` keeps every partial match), `echo_input` (true or
+%   false) and `event_consumption_policy`.
+
+rtl_set_flag(Flag, Value) :-
+    (   flag_default(Flag, _)
+    ->  true
+    ;   domain_error(retalis_flag, Flag)
+    ),
+    retractall(flag_value(Flag, _)),
+    assertz(flag_value(Flag, Value)),
+    (   Flag == max_delay -> schedule_sweep ; true ).
+
+rtl_flag(Flag, Value) :-
+    flag_default(Flag, Default),
+    (   flag_value(Flag, V) -> Value = V ; Value = Default ).
+
+%!  rtl_clock(-Clock:number) is det.
+
+rtl_clock(Clock) :-
+    nb_getval(rtl_clock, Clock).
+
+%!  rtl_event(+Event, +Start:number, +End:number) is det.
+%
+%   Process one input event: derive everything it completes, deliver the results.
+
+rtl_event(Event, Start, End) :-
+    nb_getval(rtl_clock, Clock0),
+    (   End > Clock0
+    ->  nb_setval(rtl_clock, End)
+    ;   late_check(End, Clock0)
+    ),
+    rtl_count(events),
+    (   rtl_flag(echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
+    nb_getval(rtl_program, M),
+    forall(M:ele_trigger(Event, Start, End), true),
+    nb_getval(rtl_next_sweep, Next),
+    (   End >= Next -> rtl_collect_garbage ; true ).
+
+late_check(End, Clock) :-
+    rtl_flag(max_delay, Delay),
+    (   End < Clock - Delay -> rtl_count(late) ; true ).
+
+%!  rtl_retract_event(+Event, +Start, +End) is det.
+%
+%   Delete a previously added input event and everything derived from it.
+
+rtl_retract_event(Event, Start, End) :-
+    rtl_count(retracted),
+    (   rtl_flag(echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
+    nb_getval(rtl_program, M),
+    forall(M:ele_untrigger(Event, Start, End), true).
+
+%!  rtl_derived(+Event, +Start, +End) is det.
+%
+%   Called by compiled rules when they derive Event: deliver it and feed it back in.
+
+rtl_derived(Event, Start, End) :-
+    rtl_count(derived),
+    nb_getval(rtl_program, M),
+    (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
+    forall(M:ele_trigger(Event, Start, End), true).
+
+%!  rtl_underived(+Event, +Start, +End) is det.
+%
+%   Called by compiled delete rules when a derived event loses its support.
+
+rtl_underived(Event, Start, End) :-
+    rtl_count(underived),
+    nb_getval(rtl_program, M),
+    (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, retract) ; true ),
+    forall(M:ele_untrigger(Event, Start, End), true).
+
+%!  rtl_output_to(+Sink) is det.
+%
+%   Sink is `print` (write each line to current output as it is produced) or `buffer`
+%   (keep lines until rtl_take_output/1).
+
+rtl_output_to(Sink) :-
+    must_be(oneof([print, buffer]), Sink),
+    nb_setval(rtl_output_sink, Sink).
+
+%!  rtl_emit(+Event, +Start, +End, +Consumer, +Op) is det.
+%
+%   Deliver one output line (SPEC section 11 format).
+
+rtl_emit(Event, Start, End, Consumer, Op) :-
+    rtl_event_json(Event, Start, End, Consumer, Op, Line),
+    nb_getval(rtl_output_sink, Sink),
+    (   Sink == print
+    ->  write(Line), nl
+    ;   assertz(rtl_output_line(Line))
+    ).
+
+%!  rtl_take_output(-Lines:list(string)) is det.
+%
+%   The buffered output lines in order; the buffer is emptied.
+
+rtl_take_output(Lines) :-
+    findall(L, retract(rtl_output_line(L)), Lines).
+
+%!  rtl_stat(?Name, ?Value) is nondet.
+%
+%   Counters: events, retracted, derived, underived, late, rejected.
+
+rtl_stat(Name, Value) :-
+    member(Name, [events, retracted, derived, underived, late, rejected]),
+    nb_getval(Name, Value).
+
+%!  rtl_count(+Name) is det.
+
+rtl_count(Name) :-
+    nb_getval(Name, N0),
+    N is N0 + 1,
+    nb_setval(Name, N).
+
+%!  rtl_store_size(-Clauses:integer) is det.
+%
+%   The number of partial matches currently stored by all steps of the program.
+
+rtl_store_size(Size) :-
+    nb_getval(rtl_program, M),
+    aggregate_all(sum(N),
+                  ( M:ele_partial_store(Name, Arity),
+                    functor(Head, Name, Arity),
+                    predicate_property(M:Head, number_of_clauses(N))
+                  ),
+                  Size).
+
+%!  rtl_collect_garbage is det.
+%
+%   Remove the partial matches of windowed steps that can no longer take part in a match
+%   (their start lies more than Window + max_delay before the clock).
+
+rtl_collect_garbage :-
+    nb_getval(rtl_program, M),
+    nb_getval(rtl_clock, Clock),
+    rtl_flag(max_delay, Delay),
+    (   Delay == inf
+    ->  true
+    ;   forall(M:ele_store(Name, Arity, Window),
+               sweep_store(M, Name, Arity, Clock - Window - Delay))
+    ),
+    schedule_sweep.
+
+sweep_store(M, Name, Arity, HorizonExpr) :-
+    Horizon is HorizonExpr,
+    functor(Head, Name, Arity),
+    StartArg is Arity - 1,
+    arg(StartArg, Head, Start),
+    forall(( clause(M:Head, true, Ref), Start < Horizon ), erase(Ref)).
+
+% The next sweep is due when the clock has moved on by half of the smallest window plus
+% the delay bound: every stored match is then at most 1.5 times as old as it needs to be.
+schedule_sweep :-
+    (   nb_current(rtl_program, M), M \== [],
+        rtl_flag(max_delay, Delay), Delay \== inf,
+        aggregate_all(min(W), M:ele_store(_, _, W), MinWindow), MinWindow \== inf
+    ->  nb_getval(rtl_clock, Clock),
+        Step is max((MinWindow + Delay) / 2, 1.0e-3),
+        (   Clock =:= -inf -> Next = -inf ; Next is Clock + Step )
+    ;   Next = inf
+    ),
+    nb_setval(rtl_next_sweep, Next).

@@ -1,0 +1,125 @@
+"""The Prolog backend: renders a compiled unit as one SWI-Prolog module.
+
+Layout lives in `templates/program.pl.j2`; this module only turns terms into text: each
+clause is written with operators, one body goal per line, and the `forall/2` loops of
+EDBC rules on two lines, so a user debugging a rule recognises it.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import List
+
+import jinja2
+
+from ...frontend.program import Directive, StaticClause
+from ...frontend.terms import Atom, Compound, Term, quote_atom
+from ...frontend.writer import write_term
+from ...passes.unit import GeneratedRule, Unit
+
+_ENV = jinja2.Environment(
+    loader=jinja2.FileSystemLoader(str(Path(__file__).with_name("templates"))),
+    keep_trailing_newline=True,
+    undefined=jinja2.StrictUndefined,
+)
+
+# Directives that only configure the compiler: they are compiled, not copied.
+_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3), ("op", 3)}
+
+
+def runtime_dir() -> Path:
+    override = os.environ.get("RETALIS_RUNTIME")
+    if override:
+        return Path(override).resolve()
+    return Path(__file__).resolve().parents[3] / "prolog_runtime"
+
+
+def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
+    stores = sorted({(name, arity) for g in unit.generated for name, arity, _ in g.stores})
+    windowed = sorted({(name, arity, _number_text(window))
+                       for g in unit.generated for name, arity, window in g.stores if window is not None})
+    printed = None
+    if unit.settings.printed is not None:
+        printed = [_functor_pattern(name, arity) for name, arity in unit.settings.printed]
+    template = _ENV.get_template("program.pl.j2")
+    return template.render(
+        source_file=unit.program.file,
+        output_name=output_name,
+        module=quote_atom(unit.module),
+        runtime_dir=quote_atom(str(runtime_dir())),
+        stores=stores,
+        windowed_stores=windowed,
+        printed=printed,
+        static_clauses=[_static_text(c) for c in unit.program.clauses if _is_copied(c)],
+        rules=[_RuleView(g) for g in unit.generated],
+    )
+
+
+def render_rule(rule: GeneratedRule) -> str:
+    view = _RuleView(rule)
+    return "\n".join([f"% {line}" for line in view.comment_lines] + view.clause_texts)
+
+
+class _RuleView:
+    def __init__(self, rule: GeneratedRule):
+        self.rule_id = rule.rule_id
+        self.comment_lines = rule.comment.splitlines()
+        self.clause_texts = [write_clause(c) for c in rule.triggers + rule.clauses]
+
+
+def _is_copied(clause) -> bool:
+    if isinstance(clause, StaticClause):
+        return True
+    if isinstance(clause, Directive):
+        goal = clause.goal
+        key = (goal.name, getattr(goal, "arity", 0)) if isinstance(goal, (Atom, Compound)) else None
+        return key not in _COMPILED_DIRECTIVES
+    return False
+
+
+def _static_text(clause) -> str:
+    if isinstance(clause, Directive):
+        return f":- {write_term(clause.goal, 1199)}."
+    return write_clause(clause.term)
+
+
+def write_clause(term: Term) -> str:
+    """A clause as text: `Head :-` then one goal per line, indented by four spaces."""
+    if isinstance(term, Compound) and term.name == ":-" and term.arity == 2:
+        head, body = term.args
+        goals = _conjuncts(body)
+        lines = [write_term(head, 1199) + " :-"]
+        for i, goal in enumerate(goals):
+            end = "." if i == len(goals) - 1 else ","
+            lines.append("    " + _goal_text(goal) + end)
+        return "\n".join(lines)
+    return write_term(term, 1199) + "."
+
+
+def _goal_text(goal: Term) -> str:
+    if isinstance(goal, Compound) and goal.name == "forall" and goal.arity == 2:
+        condition, action = goal.args
+        inner = ", ".join(write_term(g, 999) for g in _conjuncts(condition))
+        return f"forall(( {inner} ),\n           {write_term(action, 999)})"
+    if isinstance(goal, Compound) and goal.name == ";" and goal.arity == 2:
+        return f"( {write_term(goal.args[0], 1099)}\n    ; {write_term(goal.args[1], 1099)}\n    )"
+    return write_term(goal, 999)
+
+
+def _conjuncts(goal: Term) -> List[Term]:
+    goals = []
+    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
+        goals.append(goal.args[0])
+        goal = goal.args[1]
+    goals.append(goal)
+    return goals
+
+
+def _functor_pattern(name: str, arity: int) -> str:
+    if arity == 0:
+        return quote_atom(name)
+    return f"{quote_atom(name)}({', '.join('_' for _ in range(arity))})"
+
+
+def _number_text(value) -> str:
+    return str(int(value)) if float(value).is_integer() else repr(float(value))

@@ -1,0 +1,90 @@
+"""`retalisc compile`, `retalisc check` and `retalisc run`."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ..compiler import compile_file
+from ..frontend.errors import RetalisError
+from ..passes.pipeline import PASS_NAMES
+
+
+def report_program_error(error: RetalisError) -> None:
+    """Print `file:line:col: message` with the offending line and exit with status 2."""
+    click.echo(error.render(), err=True)
+    sys.exit(2)
+
+
+def compile_or_exit(program: str, **kwargs):
+    try:
+        result = compile_file(program, **kwargs)
+    except RetalisError as error:
+        report_program_error(error)
+    except UnicodeDecodeError as error:
+        click.echo(f"{program}: error: not a UTF-8 text file ({error.reason})", err=True)
+        sys.exit(2)
+    for warning in result.warnings:
+        click.echo(warning, err=True)
+    return result
+
+
+@click.command("compile")
+@click.argument("program", type=click.Path(exists=True, dir_okay=False))
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the Prolog program here "
+              "(default: standard output).")
+@click.option("--dump-after", type=click.Choice(PASS_NAMES), help="Print the program after this pass "
+              "and stop.")
+def compile_command(program: str, output: str, dump_after: str) -> None:
+    """Compile PROGRAM (.rtl) to a SWI-Prolog module.
+
+    Run the result with `swipl OUT.pl EVENTS.jsonl`: it prints the derived events as JSON Lines.
+    """
+    if dump_after:
+        compile_or_exit(program, dump_after=dump_after, dump=click.echo)
+        return
+    result = compile_or_exit(program, output_name=Path(output).name if output else "PROGRAM.pl")
+    if output:
+        Path(output).write_text(result.prolog, encoding="utf-8")
+    else:
+        click.echo(result.prolog, nl=False)
+
+
+@click.command("check")
+@click.argument("program", type=click.Path(exists=True, dir_okay=False))
+def check_command(program: str) -> None:
+    """Check PROGRAM for errors without writing anything (exit status 2 on errors)."""
+    result = compile_or_exit(program)
+    rules = len(result.unit.rules)
+    click.echo(f"{program}: ok ({rules} event rule{'s' if rules != 1 else ''})", err=True)
+
+
+@click.command("run")
+@click.argument("program", type=click.Path(exists=True, dir_okay=False))
+@click.option("--events", "events", required=True, type=click.Path(allow_dash=True, dir_okay=False),
+              help="Event JSON Lines file ('-' for standard input).")
+@click.option("--out", type=click.Path(dir_okay=False, allow_dash=True), default="-",
+              help="Write the output JSON Lines here (default: standard output).")
+@click.option("--echo-input", is_flag=True, help="Also write the input events to the output.")
+@click.option("--max-delay", type=float, default=None,
+              help="Seconds an event may arrive behind the latest one and still be matched in full "
+                   "(default 1.0).")
+@click.option("--batch-size", type=click.IntRange(1), default=2000, show_default=True,
+              help="Events handed to Prolog per call.")
+def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int) -> None:
+    """Run PROGRAM over an event file, printing derived events as JSON Lines."""
+    from ..driver.engine import Engine
+    from ..driver.run import run_event_file
+
+    result = compile_or_exit(program)
+    engine = Engine.from_compiled(result, program)
+    if echo_input:
+        engine.set_flag("echo_input", "true")
+    if max_delay is not None:
+        engine.set_flag("max_delay", repr(max_delay))
+    status = run_event_file(engine, events, out, batch_size=batch_size)
+    sys.exit(status)
+
+
+COMMANDS = [compile_command, check_command, run_command]

@@ -1,0 +1,335 @@
+"""The program model: what each clause of a Retalis program is.
+
+A `.rtl` file mixes event rules (`Head <- Pattern`), static rules and facts, directives and
+the start-up declarations of the original Retalis (`memorize(...)`, `subscribe(...)`...,
+written as facts, as in `goalPredicates.txt`). `build_program` sorts the clauses read by
+the parser into these dataclasses; patterns become `Pattern` trees.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import List, Optional, Union
+
+from .errors import RetalisSyntaxError
+from .parser import ReadClause, read_program
+from .terms import Atom, Compound, Number, Span, Term, Var, list_items, span_of, to_prolog
+
+
+# ---- patterns --------------------------------------------------------------------------
+
+BINARY_OPERATORS = ("seq", "and", "par", "or", "equals", "meets", "during", "starts", "finishes", "fnot")
+
+
+@dataclass
+class EventAtom:
+    """An event pattern atom; `start`/`end` name the variables bound by `E^T` / `E^[T1,T2]`."""
+
+    term: Term
+    span: Optional[Span] = None
+    start: Optional[Term] = None
+    end: Optional[Term] = None
+
+
+@dataclass
+class Binary:
+    op: str
+    left: "Pattern"
+    right: "Pattern"
+    span: Optional[Span] = None
+
+
+@dataclass
+class Where:
+    pattern: "Pattern"
+    condition: Term
+    span: Optional[Span] = None
+
+
+@dataclass
+class Check:
+    """ETALIS `P check C`: like where, and `t1(T)`/`t2(T)` in C name P's start and end."""
+
+    pattern: "Pattern"
+    condition: Term
+    span: Optional[Span] = None
+
+
+@dataclass
+class Window:
+    pattern: "Pattern"
+    length: float
+    span: Optional[Span] = None
+
+
+@dataclass
+class Negation:
+    """`not(negated).[first, second]`, ETALIS `(first seq second) cnot negated`."""
+
+    negated: "Pattern"
+    first: "Pattern"
+    second: "Pattern"
+    span: Optional[Span] = None
+
+
+@dataclass
+class Aggregate:
+    """ETALIS `aggregate(Function, Pattern, Value)`: Function is count, sum(X), min(X), max(X)."""
+
+    function: Term
+    pattern: "Pattern"
+    value: Term
+    span: Optional[Span] = None
+
+
+Pattern = Union[EventAtom, Binary, Where, Check, Window, Negation, Aggregate]
+
+AGGREGATE_FUNCTIONS = {("count", 0), ("sum", 1), ("min", 1), ("max", 1), ("avg", 1)}
+
+
+# ---- clauses ---------------------------------------------------------------------------
+
+
+@dataclass
+class EventRule:
+    head: Term                      # the derived event atom, or `null` for action-only rules
+    pattern: Pattern
+    span: Span
+    source: str
+    label: Optional[str] = None
+    action: Optional[Term] = None   # `Head do Action <- Pattern`
+    properties: dict = field(default_factory=dict)
+    synchronized: Optional[Compound] = None   # `synchronized(E, Q, SyncConds)` head
+
+
+@dataclass
+class StaticClause:
+    term: Term
+    span: Span
+    source: str
+
+    @property
+    def head(self) -> Term:
+        if isinstance(self.term, Compound) and self.term.name == ":-" and self.term.arity == 2:
+            return self.term.args[0]
+        return self.term
+
+    @property
+    def body(self) -> Optional[Term]:
+        if isinstance(self.term, Compound) and self.term.name == ":-" and self.term.arity == 2:
+            return self.term.args[1]
+        return None
+
+
+@dataclass
+class Directive:
+    goal: Term
+    span: Span
+    source: str
+
+
+@dataclass
+class Declaration:
+    """A Retalis start-up declaration written as a fact (memorize/5, subscribe/5, c_mem/4,
+    sub/5, set_etalis_flag/2, print_trigger/1, event_rule_property/3 ...): run at start."""
+
+    goal: Term
+    span: Span
+    source: str
+
+
+Clause = Union[EventRule, StaticClause, Directive, Declaration]
+
+
+@dataclass
+class Program:
+    file: str
+    clauses: List[Clause]
+    text: str = ""
+
+    @property
+    def event_rules(self) -> List[EventRule]:
+        return [c for c in self.clauses if isinstance(c, EventRule)]
+
+    @property
+    def static_clauses(self) -> List[StaticClause]:
+        return [c for c in self.clauses if isinstance(c, StaticClause)]
+
+    @property
+    def directives(self) -> List[Directive]:
+        return [c for c in self.clauses if isinstance(c, Directive)]
+
+    @property
+    def declarations(self) -> List[Declaration]:
+        return [c for c in self.clauses if isinstance(c, Declaration)]
+
+
+# Start-up declarations of the original Retalis and of the thesis, by name and arity.
+DECLARATIONS = {
+    ("memorize", 5), ("delete_memory", 1), ("subscribe", 5), ("delete_subscription", 2),
+    ("c_mem", 4), ("d_mem", 1), ("sub", 5), ("unsub", 2),
+    ("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3),
+    ("set_retalis_flag", 2),
+}
+
+
+# ---- building ---------------------------------------------------------------------------
+
+
+def parse_program(text: str, file: str) -> Program:
+    """Read and classify a whole program. Raises RetalisSyntaxError."""
+    return build_program(read_program(text, file), file, text)
+
+
+def build_program(clauses: List[ReadClause], file: str, text: str = "") -> Program:
+    return Program(file, [classify(c) for c in clauses], text)
+
+
+def classify(clause: ReadClause) -> Clause:
+    term = clause.term
+    if _is(term, ":-", 1) or _is(term, "?-", 1):
+        return Directive(term.args[0], clause.span, clause.text)
+    if _is(term, "rule:", 2):
+        label_term, rule = term.args
+        if not _is(rule, "<-", 2):
+            raise RetalisSyntaxError("a labelled rule must be an event rule 'Label 'rule:' Head <- Pattern'",
+                                     clause.span)
+        return _event_rule(rule, clause, label_term)
+    if _is(term, "<-", 2):
+        head = term.args[0]
+        if _is(head, ":", 2) and isinstance(head.args[0], (Atom, Compound)) and not _is(head.args[1], ":", 2):
+            return _event_rule(Compound("<-", (head.args[1], term.args[1]), term.span), clause, head.args[0])
+        return _event_rule(term, clause, None)
+    if isinstance(term, (Atom, Compound)) and (term.name, getattr(term, "arity", 0)) in DECLARATIONS:
+        return Declaration(term, clause.span, clause.text)
+    if isinstance(term, (Var, Number)) or (hasattr(term, "text") and not isinstance(term, (Atom, Compound))):
+        raise RetalisSyntaxError("a clause must be a rule, a fact or a directive", clause.span)
+    return StaticClause(term, clause.span, clause.text)
+
+
+def _event_rule(term: Compound, clause: ReadClause, label_term: Optional[Term]) -> EventRule:
+    head, body = term.args
+    label, properties = _label(label_term, clause.span)
+    action = None
+    if _is(head, "do", 2):
+        head, action = head.args
+    head = _strip_time(head)
+    synchronized = None
+    if isinstance(head, Compound) and head.name in ("synchronized", "syncronized") and head.arity == 3:
+        synchronized = head
+    if not isinstance(head, (Atom, Compound)):
+        raise RetalisSyntaxError("the head of an event rule must be an event atom", span_of(head) or clause.span)
+    pattern = to_pattern(body, clause.span)
+    return EventRule(head, pattern, clause.span, clause.text, label, action, properties, synchronized)
+
+
+def _label(term: Optional[Term], span: Span):
+    if term is None:
+        return None, {}
+    if isinstance(term, Atom):
+        return term.name, {}
+    if isinstance(term, Compound) and term.arity == 1:
+        items = list_items(term.args[0])
+        properties = {}
+        for item in items or []:
+            if _is(item, "property", 2) and isinstance(item.args[0], Atom):
+                properties[item.args[0].name] = item.args[1]
+            else:
+                raise RetalisSyntaxError("rule properties are written [property(Name, Value), ...]",
+                                         span_of(item) or span)
+        if items is None:
+            raise RetalisSyntaxError("rule properties are written [property(Name, Value), ...]", span)
+        return term.name, properties
+    if isinstance(term, Number):
+        return str(term.value), {}
+    raise RetalisSyntaxError("a rule label must be an atom or Label([property(Name, Value), ...])",
+                             span_of(term) or span)
+
+
+def _strip_time(head: Term) -> Term:
+    if _is(head, "^", 2):
+        return head.args[0]
+    return head
+
+
+def to_pattern(term: Term, span: Span) -> Pattern:
+    """Turn an event pattern term into a Pattern tree."""
+    where = span_of(term) or span
+    if isinstance(term, Compound):
+        if term.arity == 2 and term.name in BINARY_OPERATORS:
+            return Binary(term.name, to_pattern(term.args[0], span), to_pattern(term.args[1], span), where)
+        if term.arity == 2 and term.name == "where":
+            return Where(to_pattern(term.args[0], span), term.args[1], where)
+        if term.arity == 2 and term.name == "check":
+            return Check(to_pattern(term.args[0], span), term.args[1], where)
+        if term.arity == 2 and term.name == "cnot":
+            first = to_pattern(term.args[0], span)
+            if not (isinstance(first, Binary) and first.op == "seq"):
+                raise RetalisSyntaxError("'cnot' needs a sequence on its left: (A seq B) cnot C", where)
+            return Negation(to_pattern(term.args[1], span), first.left, first.right, where)
+        if term.arity == 2 and term.name == ".":
+            left, right = term.args
+            if _is(left, "not", 1):
+                items = list_items(right)
+                if items is None or len(items) != 2:
+                    raise RetalisSyntaxError("negation is written not(P).[P1, P2]", where)
+                return Negation(to_pattern(left.args[0], span), to_pattern(items[0], span),
+                                to_pattern(items[1], span), where)
+            if isinstance(right, Number):
+                if right.value < 0:
+                    raise RetalisSyntaxError("a window length must not be negative", where)
+                return Window(to_pattern(left, span), right.value, where)
+            raise RetalisSyntaxError("'(Pattern).Q' needs a number Q (the window length in seconds)", where)
+        if term.arity == 3 and term.name == "aggregate":
+            function = term.args[0]
+            key = (function.name, getattr(function, "arity", 0)) if isinstance(function, (Atom, Compound)) else None
+            if key in AGGREGATE_FUNCTIONS:
+                return Aggregate(function, to_pattern(term.args[1], span), term.args[2], where)
+        if term.arity == 2 and term.name == "^":
+            atom = to_pattern(term.args[0], span)
+            if not isinstance(atom, EventAtom):
+                raise RetalisSyntaxError("'^' attaches a time to an event atom: E^T or E^[T1, T2]", where)
+            times = list_items(term.args[1])
+            if times is not None and len(times) == 2:
+                return EventAtom(atom.term, where, times[0], times[1])
+            return EventAtom(atom.term, where, term.args[1], term.args[1])
+        return EventAtom(term, where)
+    if isinstance(term, Atom):
+        return EventAtom(term, where)
+    if isinstance(term, Var):
+        raise RetalisSyntaxError(f"a variable ({term.name}) cannot stand for an event pattern", where)
+    raise RetalisSyntaxError(f"{to_prolog(term)} is not an event pattern", where)
+
+
+def _is(term: Term, name: str, arity: int) -> bool:
+    return isinstance(term, Compound) and term.name == name and term.arity == arity
+
+
+# ---- writing patterns back (for dumps and comments in generated code) -----------------
+
+
+def pattern_text(pattern: Pattern) -> str:
+    from .writer import write_term
+
+    if isinstance(pattern, EventAtom):
+        text = write_term(pattern.term, 1024)
+        if pattern.start is not None:
+            if pattern.start == pattern.end:
+                text += "^" + write_term(pattern.start, 199)
+            else:
+                text += f"^[{write_term(pattern.start, 999)}, {write_term(pattern.end, 999)}]"
+        return text
+    if isinstance(pattern, Binary):
+        return f"({pattern_text(pattern.left)} {pattern.op} {pattern_text(pattern.right)})"
+    if isinstance(pattern, Where):
+        return f"({pattern_text(pattern.pattern)} where {write_term(pattern.condition, 1059)})"
+    if isinstance(pattern, Check):
+        return f"({pattern_text(pattern.pattern)} check {write_term(pattern.condition, 1049)})"
+    if isinstance(pattern, Window):
+        length = int(pattern.length) if float(pattern.length).is_integer() else pattern.length
+        return f"({pattern_text(pattern.pattern)}).{length}"
+    if isinstance(pattern, Negation):
+        return f"not({pattern_text(pattern.negated)}).[{pattern_text(pattern.first)}, {pattern_text(pattern.second)}]"
+    if isinstance(pattern, Aggregate):
+        return (f"aggregate({write_term(pattern.function, 999)}, {pattern_text(pattern.pattern)}, "
+                f"{write_term(pattern.value, 999)})")
+    raise TypeError(pattern)

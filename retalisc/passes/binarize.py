@@ -1,0 +1,127 @@
+"""binarize: split every event rule into binary steps (thesis 6.3.1, first step).
+
+Each operator node of a pattern becomes a step `e_<rule>_<n>(Vars) <- Left OP Right` whose
+intermediate event carries every variable of its sub-pattern. The last step derives the
+rule's head. A window `(P).Q` applies to every step inside P (a partial match of P never
+spans more than the whole match), so the steps can check it early and forget old partial
+matches. Where-conditions are checked on the step they follow (or on the event atom they
+were pushed to by push_conditions).
+"""
+from __future__ import annotations
+
+import re
+from typing import List, Optional, Set
+
+from ..frontend.errors import RetalisSemanticError
+from ..frontend.program import Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
+from ..frontend.terms import Compound, Term, Var, variables
+from .unit import BinaryRule, Operand, Step, Unit
+
+name = "binarize"
+
+SUPPORTED_OPERATORS = ("seq", "and", "or")
+
+
+def run(unit: Unit) -> Unit:
+    used: Set[str] = set()
+    unit.rules = []
+    for index, rule in enumerate(unit.program.event_rules, start=1):
+        rule_id = _rule_id(rule, index, used)
+        unit.rules.append(_Binarizer(rule, rule_id).binarize())
+    return unit
+
+
+def _rule_id(rule: EventRule, index: int, used: Set[str]) -> str:
+    base = rule.label if rule.label and re.fullmatch(r"[a-z][A-Za-z0-9_]*", rule.label) else f"r{index}"
+    rule_id, n = base, 2
+    while rule_id in used:
+        rule_id, n = f"{base}_{n}", n + 1
+    used.add(rule_id)
+    return rule_id
+
+
+class _Binarizer:
+    def __init__(self, rule: EventRule, rule_id: str):
+        self.rule = rule
+        self.rule_id = rule_id
+        self.steps: List[Step] = []
+
+    def binarize(self) -> BinaryRule:
+        top = self.lower(self.rule.pattern, None)
+        if top.step is None or top.step.derives_head:
+            step = self.new_step("pass", top, None, None)
+            top = Operand(step.output, step)
+        top.step.derives_head = True
+        return BinaryRule(self.rule_id, self.rule, self.steps)
+
+    def new_step(self, op: str, left: Operand, right: Optional[Operand], window: Optional[float]) -> Step:
+        step_name = f"e_{self.rule_id}_{len(self.steps) + 1}"
+        names = _operand_variables(left) + (_operand_variables(right) if right is not None else [])
+        output = Compound(step_name, tuple(_unique_vars(names)))
+        step = Step(step_name, op, left, right, output, window)
+        self.steps.append(step)
+        return step
+
+    def lower(self, pattern: Pattern, window: Optional[float]) -> Operand:
+        if isinstance(pattern, EventAtom):
+            return Operand(pattern.term, None, [], pattern.start, pattern.end, pattern.span)
+        if isinstance(pattern, Where):
+            operand = self.lower(pattern.pattern, window)
+            conjuncts = list(_conjuncts(pattern.condition))
+            if operand.step is None:
+                operand.filters.extend(conjuncts)
+                return operand
+            step = operand.step
+            step.conditions.extend(conjuncts)
+            # conditions may bind new variables (`where pos_avg(Ls, L)`): the step carries them on
+            extra = [v for c in conjuncts for v in variables(c)]
+            step.output = Compound(step.output.name, tuple(_unique_vars(list(step.output.args) + extra)))
+            return Operand(step.output, step)
+        if isinstance(pattern, Window):
+            inner_window = pattern.length if window is None else min(window, pattern.length)
+            operand = self.lower(pattern.pattern, inner_window)
+            if operand.step is not None and (operand.step.window is None or operand.step.window > inner_window):
+                operand.step.window = inner_window
+            if operand.step is None:
+                # a window around a single event: only derived (interval) events can exceed it
+                step = self.new_step("pass", operand, None, inner_window)
+                return Operand(step.output, step)
+            return operand
+        if isinstance(pattern, Binary):
+            if pattern.op not in SUPPORTED_OPERATORS:
+                raise RetalisSemanticError(f"the operator '{pattern.op}' is not supported yet", pattern.span)
+            left = self.lower(pattern.left, window)
+            right = self.lower(pattern.right, window)
+            step = self.new_step(pattern.op, left, right, window)
+            return Operand(step.output, step)
+        if isinstance(pattern, Negation):
+            raise RetalisSemanticError("negation not(P).[P1, P2] is not supported yet", pattern.span)
+        if isinstance(pattern, (Check, Aggregate)):
+            raise RetalisSemanticError(f"'{type(pattern).__name__.lower()}' is not supported yet", pattern.span)
+        raise TypeError(pattern)
+
+
+def _operand_variables(operand: Operand) -> List[Var]:
+    found = list(variables(operand.term))
+    for t in (operand.start, operand.end):
+        if t is not None:
+            found.extend(variables(t))
+    for f in operand.filters:
+        found.extend(variables(f))
+    return found
+
+
+def _unique_vars(found) -> List[Var]:
+    seen, result = set(), []
+    for v in found:
+        if isinstance(v, Var) and not v.is_anonymous and v.name not in seen:
+            seen.add(v.name)
+            result.append(Var(v.name))
+    return result
+
+
+def _conjuncts(goal: Term):
+    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
+        yield goal.args[0]
+        goal = goal.args[1]
+    yield goal

@@ -1,0 +1,120 @@
+"""push_conditions: check a where-condition as early as its variables allow.
+
+ETALIS evaluates a rule's `where` after the whole pattern has matched, so a selective
+condition on one event (`a(I, X) seq b(I, Y) where Y < K`) still stores and joins every `b`
+(thesis 3.5). Here each conjunct of a `where` whose variables all occur in one event atom of
+the pattern is moved onto that atom, and checked when the event arrives.
+
+Only conjuncts whose answer cannot depend on when they run are moved: arithmetic
+comparisons, unification and type tests, and calls of static predicates of the program.
+Atoms inside `or` branches and negated patterns are left alone.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import List, Optional, Set
+
+from ..frontend.program import Binary, EventAtom, Pattern, Where, Window
+from ..frontend.terms import Compound, Term, indicator, variables
+from .unit import Unit
+
+name = "push_conditions"
+
+_PURE_BUILTINS = {
+    ("<", 2), (">", 2), ("=<", 2), (">=", 2), ("=:=", 2), ("=\\=", 2), ("==", 2), ("\\==", 2),
+    ("=", 2), ("\\=", 2), ("@<", 2), ("@>", 2), ("@=<", 2), ("@>=", 2), ("is", 2),
+    ("atom", 1), ("number", 1), ("integer", 1), ("float", 1), ("atomic", 1), ("compound", 1),
+    ("is_list", 1), ("string", 1), ("ground", 1), ("between", 3), ("member", 2), ("memberchk", 2),
+}
+
+
+def run(unit: Unit) -> Unit:
+    static = {indicator(c.head) for c in unit.program.static_clauses}
+    clauses = []
+    for clause in unit.program.clauses:
+        if hasattr(clause, "pattern"):
+            clause = replace(clause, pattern=_push(clause.pattern, static))
+        clauses.append(clause)
+    unit.program = replace(unit.program, clauses=clauses)
+    return unit
+
+
+def _push(pattern: Pattern, static: Set) -> Pattern:
+    if isinstance(pattern, Where):
+        inner = _push(pattern.pattern, static)
+        kept: List[Term] = []
+        for conjunct in _conjuncts(pattern.condition):
+            target = _single_atom_for(conjunct, inner, static)
+            if target is None:
+                kept.append(conjunct)
+            else:
+                inner = _attach(inner, target, conjunct)
+        if not kept:
+            return inner
+        return Where(inner, _conjunction(kept), pattern.span)
+    if isinstance(pattern, Binary) and pattern.op != "or":
+        return replace(pattern, left=_push(pattern.left, static), right=_push(pattern.right, static))
+    if isinstance(pattern, Window):
+        return replace(pattern, pattern=_push(pattern.pattern, static))
+    return pattern
+
+
+def _single_atom_for(conjunct: Term, pattern: Pattern, static: Set) -> Optional[EventAtom]:
+    key = indicator(conjunct)
+    if key is None or not (key in _PURE_BUILTINS or key in static):
+        return None
+    needed = {v.name for v in variables(conjunct)}
+    if not needed:
+        return None
+    for atom in _reachable_atoms(pattern):
+        if needed <= _atom_variables(atom):
+            return atom
+    return None
+
+
+def _reachable_atoms(pattern: Pattern):
+    """Event atoms every match of `pattern` contains (not inside or / negation)."""
+    if isinstance(pattern, EventAtom):
+        yield pattern
+    elif isinstance(pattern, Binary) and pattern.op not in ("or", "fnot"):
+        yield from _reachable_atoms(pattern.left)
+        yield from _reachable_atoms(pattern.right)
+    elif isinstance(pattern, Where):
+        yield from _reachable_atoms(pattern.pattern)
+    elif isinstance(pattern, Window):
+        yield from _reachable_atoms(pattern.pattern)
+
+
+def _atom_variables(atom: EventAtom) -> Set[str]:
+    names = {v.name for v in variables(atom.term)}
+    for t in (atom.start, atom.end):
+        if t is not None:
+            names.update(v.name for v in variables(t))
+    return names
+
+
+def _attach(pattern: Pattern, target: EventAtom, conjunct: Term) -> Pattern:
+    if pattern is target:
+        return Where(target, conjunct, target.span)
+    if isinstance(pattern, Where) and pattern.pattern is target:
+        return Where(target, _conjunction(list(_conjuncts(pattern.condition)) + [conjunct]), pattern.span)
+    if isinstance(pattern, Binary):
+        return replace(pattern, left=_attach(pattern.left, target, conjunct),
+                       right=_attach(pattern.right, target, conjunct))
+    if isinstance(pattern, (Where, Window)):
+        return replace(pattern, pattern=_attach(pattern.pattern, target, conjunct))
+    return pattern
+
+
+def _conjuncts(goal: Term):
+    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
+        yield goal.args[0]
+        goal = goal.args[1]
+    yield goal
+
+
+def _conjunction(goals: List[Term]) -> Term:
+    result = goals[-1]
+    for g in reversed(goals[:-1]):
+        result = Compound(",", (g, result))
+    return result
