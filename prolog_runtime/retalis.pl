@@ -35,9 +35,13 @@ rtl_program_loaded(Module) :-
 
 %!  rtl_main is det.
 %
-%   Script entry: process the event files named on the command line, in order.
+%   Script entry: process the event files named on the command line, in order. Does
+%   nothing when the program is loaded by the Python driver (flag `retalis_embedded`).
 %   Options: `--echo-input` also writes the input events; `--max-delay=SECONDS`.
 
+rtl_main :-
+    current_prolog_flag(retalis_embedded, true),
+    !.
 rtl_main :-
     current_prolog_flag(argv, Argv),
     set_stream(user_output, encoding(utf8)),

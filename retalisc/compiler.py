@@ -25,10 +25,10 @@ def module_name(path: str) -> str:
 
 
 def compile_source(text: str, file: str, output_name: str = "PROGRAM.pl", dump_after: Optional[str] = None,
-                   dump: Callable[[str], None] = print) -> CompileResult:
+                   dump: Callable[[str], None] = print, module: Optional[str] = None) -> CompileResult:
     """Compile program text. Raises RetalisError (with a source location) on bad programs."""
     program = parse_program(text, file)
-    unit = run_pipeline(Unit(program, module_name(file)), dump_after, dump)
+    unit = run_pipeline(Unit(program, module or module_name(file)), dump_after, dump)
     return CompileResult(render_program(unit, output_name), unit, list(unit.warnings))
 
 

@@ -78,7 +78,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     from ..driver.run import run_event_file
 
     result = compile_or_exit(program)
-    engine = Engine.from_compiled(result, program)
+    engine = Engine.from_compiled(result)
     if echo_input:
         engine.set_flag("echo_input", "true")
     if max_delay is not None:

@@ -1,0 +1,180 @@
+"""The Python face of a running Retalis program.
+
+An `Engine` loads one compiled program into the in-process SWI-Prolog (through `Bridge`)
+and feeds it events, one at a time or in batches. Every output line the program produces
+(derived events, subscription deliveries, deletions) comes back as an `OutputEvent`, in
+processing order, and is also handed to the callbacks registered with `on_output`.
+Batches are the fast path: one Prolog call per batch, not per event.
+"""
+from __future__ import annotations
+
+import itertools
+import json
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterable, List, Optional, Sequence, Tuple, Union
+
+from ..compiler import CompileResult, compile_file, compile_source, module_name
+from .bridge import Bridge
+
+Number = Union[int, float]
+
+_loaded_modules = itertools.count(1)
+
+
+@dataclass(frozen=True)
+class OutputEvent:
+    """One output line: `event` is the term text (writeq), `consumer` is set for subscription
+    deliveries, `op` is "add" or "retract"."""
+
+    event: str
+    start: Number
+    end: Number
+    consumer: Optional[str] = None
+    op: str = "add"
+    line: str = ""
+
+    @classmethod
+    def from_line(cls, line: str) -> "OutputEvent":
+        data = json.loads(line)
+        return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line)
+
+
+@dataclass(frozen=True)
+class Rejection:
+    line: int
+    reason: str
+
+
+def prolog_string(text: str) -> str:
+    """`text` as a Prolog string literal."""
+    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n").replace("\r", "\\r")
+    return f'"{escaped}"'
+
+
+def _number_text(value: Number) -> str:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"a time must be a number of seconds, not {value!r}")
+    if isinstance(value, float) and value != value:
+        raise ValueError("a time must not be NaN")
+    text = repr(value)
+    return f"({text})" if text.startswith("-") else text
+
+
+class Engine:
+    """A loaded Retalis program fed with events from Python."""
+
+    def __init__(self, prolog_file: Union[str, Path], bridge: Optional[Bridge] = None, module: str = ""):
+        self.bridge = bridge or Bridge()
+        self.module = module
+        self._callbacks: List[Callable[[OutputEvent], None]] = []
+        self.bridge.once("set_prolog_flag(retalis_embedded, true)")
+        self.bridge.consult(str(prolog_file))
+        if module:
+            self.bridge.once(f"retalis:rtl_use_program({module})")
+        self.bridge.once("retalis:rtl_output_to(buffer)")
+
+    # ---- loading -------------------------------------------------------------------------
+
+    @classmethod
+    def from_compiled(cls, result: CompileResult, bridge: Optional[Bridge] = None) -> "Engine":
+        """Load an already compiled program. Programs loaded into one process need distinct
+        module names: `load` and `from_source` make them unique."""
+        return cls._load_text(result.prolog, result.unit.module, bridge)
+
+    @classmethod
+    def load(cls, program_path: Union[str, Path], bridge: Optional[Bridge] = None) -> "Engine":
+        """Compile and load a `.rtl` program file."""
+        path = str(program_path)
+        unique = f"{module_name(path)}_{next(_loaded_modules)}"
+        result = compile_file(path, module=unique)
+        return cls._load_text(result.prolog, unique, bridge)
+
+    @classmethod
+    def from_source(cls, text: str, name: str = "program.rtl", bridge: Optional[Bridge] = None) -> "Engine":
+        """Compile and load program text."""
+        unique = f"{module_name(name)}_{next(_loaded_modules)}"
+        result = compile_source(text, name, module=unique)
+        return cls._load_text(result.prolog, unique, bridge)
+
+    @classmethod
+    def _load_text(cls, prolog: str, module: str, bridge: Optional[Bridge]) -> "Engine":
+        directory = Path(tempfile.mkdtemp(prefix="retalisc-"))
+        path = directory / f"{module}.pl"
+        path.write_text(prolog, encoding="utf-8")
+        return cls(path, bridge, module)
+
+    # ---- configuration -------------------------------------------------------------------
+
+    def set_flag(self, name: str, value_text: str) -> None:
+        """Set a runtime flag (`max_delay`, `echo_input`); value_text is Prolog text."""
+        self.bridge.once(f"retalis:rtl_set_flag({name}, {value_text})")
+
+    def on_output(self, callback: Callable[[OutputEvent], None]) -> None:
+        """Call `callback(output_event)` for every output line, in processing order."""
+        self._callbacks.append(callback)
+
+    # ---- feeding -------------------------------------------------------------------------
+
+    def feed(self, event: str, start: Number, end: Optional[Number] = None, op: str = "add") -> List[OutputEvent]:
+        """Process one event (term text); return what it produced."""
+        return self.feed_batch([(event, start, end, op)])
+
+    def feed_batch(self, events: Iterable[Sequence]) -> List[OutputEvent]:
+        """Process `(event_text, start[, end[, op]])` tuples in order, in one Prolog call."""
+        items = []
+        for item in events:
+            event, start = item[0], item[1]
+            end = item[2] if len(item) > 2 and item[2] is not None else start
+            op = item[3] if len(item) > 3 else "add"
+            if op not in ("add", "retract"):
+                raise ValueError(f"op must be 'add' or 'retract', not {op!r}")
+            items.append(f"event({op}, {event}, {_number_text(start)}, {_number_text(end)})")
+        if not items:
+            return []
+        output = self.bridge.call_text(f"retalis:rtl_feed_events([{', '.join(items)}], Out)")
+        return self._deliver(output)
+
+    def feed_lines(self, text: str, first_line: int = 1) -> Tuple[List[OutputEvent], List[Rejection]]:
+        """Process event JSON Lines (SPEC section 11) exactly as `swipl PROGRAM.pl FILE` does;
+        return the output and the rejected lines with their reasons."""
+        output = self.bridge.call_text(f"retalis:rtl_feed_lines({prolog_string(text)}, {first_line}, Out)")
+        rejections = []
+        lines = []
+        for line in output.splitlines():
+            if line.startswith("!"):
+                number, _, reason = line[1:].partition("\t")
+                rejections.append(Rejection(int(number), reason))
+            elif line:
+                lines.append(line)
+        return self._deliver_lines(lines), rejections
+
+    def _deliver(self, output: str) -> List[OutputEvent]:
+        return self._deliver_lines([line for line in output.splitlines() if line])
+
+    def _deliver_lines(self, lines: List[str]) -> List[OutputEvent]:
+        events = [OutputEvent.from_line(line) for line in lines]
+        for callback in self._callbacks:
+            for event in events:
+                callback(event)
+        return events
+
+    # ---- inspection ----------------------------------------------------------------------
+
+    def stats(self) -> dict:
+        pairs = self.bridge.all("retalis:rtl_stat(Name, Value)", "Name-Value")
+        result = {}
+        for pair in pairs:
+            name, _, value = pair.partition("-")
+            result[name] = int(value)
+        return result
+
+    def summary(self) -> str:
+        return self.bridge.call_text("retalis:rtl_summary(Out)")
+
+    def store_size(self) -> int:
+        return int(self.bridge.once("retalis:rtl_store_size(N)", "N"))
+
+    def clock(self) -> float:
+        return float(self.bridge.once("retalis:rtl_clock(C)", "C"))

@@ -1,0 +1,62 @@
+"""Running a program over an event JSON Lines file through the Python driver: the same
+output and the same rejection messages as `swipl PROGRAM.pl FILE`."""
+from __future__ import annotations
+
+import os
+import sys
+from typing import IO, Iterator, List, Tuple
+
+import click
+
+from .engine import Engine
+
+
+def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str]]]:
+    first, batch = 1, []
+    for number, line in enumerate(stream, start=1):
+        batch.append(line.rstrip("\n"))
+        if len(batch) >= batch_size:
+            yield first, batch
+            first, batch = number + 1, []
+    if batch:
+        yield first, batch
+
+
+def run_event_file(engine: Engine, events: str, out: str = "-", batch_size: int = 2000) -> int:
+    """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
+    `out` ('-' for stdout). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`;
+    a summary closes the run. Returns the exit status."""
+    name = "<stdin>" if events == "-" else events
+    source = sys.stdin if events == "-" else open(events, encoding="utf-8")
+    sink = sys.stdout if out == "-" else open(out, "w", encoding="utf-8")
+    total = os.path.getsize(events) if events != "-" else 0
+    show_progress = total > 5_000_000 and sys.stderr.isatty()
+    try:
+        with click.progressbar(length=total, label="events", file=sys.stderr) if show_progress else _NoBar() as bar:
+            for first, lines in _batches(source, batch_size):
+                text = "\n".join(lines)
+                produced, rejected = engine.feed_lines(text, first)
+                for rejection in rejected:
+                    print(f"{name}:{rejection.line}: rejected: {rejection.reason}", file=sys.stderr)
+                for event in produced:
+                    sink.write(event.line + "\n")
+                bar.update(len(text.encode("utf-8")) + len(lines))
+        sink.flush()
+    finally:
+        if source is not sys.stdin:
+            source.close()
+        if sink is not sys.stdout:
+            sink.close()
+    print(engine.summary(), file=sys.stderr)
+    return 0
+
+
+class _NoBar:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def update(self, n: int) -> None:
+        pass
