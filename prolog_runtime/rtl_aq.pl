@@ -1,0 +1,708 @@
+/*  Retalis active queries: the runtime shared by the Naive, Optimized and
+    Tabled Optimized transformations (thesis chapter 6).
+
+    A program compiled by `retalisc compile --active-queries MODE` (or by
+    retalisc.backends.prolog.aq_backend.compile_active_queries/4) consists of
+    its dynamic facts plus, for every rule k and every body literal that waits
+    for answers (a *wait point*), generated clauses:
+
+      '$aq_act'(Head, T)            activation e_k0: rule k for table T
+      '$aq_go'(State, Literal)      resume State once Literal has an answer
+      '$aq_prev'(State, Prev, Kind, Literal, Check)   one-step derivation of State
+      '$aq_final'(Head, T, Prev, Kind, Literal, Check) one-step derivation of an answer
+
+    A *state* s<k>_<j>(T, Env...) is the binary-rule intermediate result
+    e_k(j-1) of the thesis: rule k, owned by table T, with every variable bound
+    by the head and the literals before literal j.  It waits for literal j,
+    either on stored facts (a fact record, "facts resolved in place") or on a
+    table of answers (a consumer record).  Together they are the one kind of
+    goal(a_i, e_ki) record of the Optimized approach.
+
+    Tables are keyed according to the mode:
+      tabled     variant of the sub-goal (or a subsuming table), shared by all
+                 queries, answer-invariant (an answer is propagated once);
+      optimized  a fresh table for every call, local to the query id;
+      naive      the most general sub-goal per predicate, local to the query
+                 id, facts copied into tables (EDBC initialisation); only the
+                 query's own goal keeps its bindings.
+
+    Addition propagates new facts and answers forward.  Deletion is basic DRed
+    on the binarized program: over-delete everything reachable from the
+    deleted facts (states and answers, against the old database), remove it,
+    then re-derive the over-deleted items that still have a one-step
+    derivation and propagate those forward again.
+*/
+
+:- module(rtl_aq,
+          [ aq_configure/1,         % +Options
+            aq_register/2,          % +Id, :Goal
+            aq_register/3,          % +Id, :Goal, -Answers
+            aq_unregister/1,        % +Id
+            aq_assert/1,            % +Fact
+            aq_retract/1,           % +Fact
+            aq_assert_all/1,        % +Facts
+            aq_retract_all/1,       % +Facts
+            aq_answers/2,           % +Id, -Answers
+            aq_query/2,             % :Goal, -Answers
+            aq_events/1,            % -Events
+            aq_set_notify/1,        % :Hook
+            aq_queries/1,           % -Ids
+            aq_stats/1,             % -Stats
+            aq_reset/0,
+            aq_run_script/1,        % +File
+            aq_wait_fact/2,         % +Literal, +State     (called by generated code)
+            aq_wait_call/2,         % +Literal, +State     (called by generated code)
+            aq_answer/2             % +Table, +Answer      (called by generated code)
+          ]).
+:- use_module(library(lists)).
+:- use_module(library(apply)).
+:- use_module(library(readutil)).
+
+:- meta_predicate aq_set_notify(2).
+
+:- dynamic
+    aq_tab/5,          % aq_tab(T, Goal, AnswerTrie, Owner, Key)
+    aq_tpred/3,        % aq_tpred(Name/Arity, Goal, T)   (subsumption index)
+    aq_c/3,            % aq_c(T, Literal, State)       consumer records
+    aq_dep/2,          % aq_dep(From, T)               From = T0 | root(Id)
+    aq_q/4,            % aq_q(Id, Goal, Kind, T)
+    aq_ev/3,           % aq_ev(Id, Op, Answer)         pending notifications
+    aq_conf/2,
+    aq_hook/1.
+
+aq_conf(mode, tabled).
+aq_conf(subsumption, false).
+
+:- initialization(init_globals).
+
+init_globals :-
+    nb_setval(aq_phase, insert),
+    nb_setval(aq_registering, '$none'),
+    trie_new(Sub), nb_setval(aq_subgoals, Sub),
+    trie_new(St), nb_setval(aq_cstates, St),
+    nb_setval(aq_dred, '$none').
+
+%!  aq_configure(+Options) is det.
+%
+%   Set the transformation the program was compiled with: mode(tabled),
+%   mode(optimized), mode(naive) and subsumption(true/false) (tabled only:
+%   reuse the table of a more general sub-goal when there is no variant).
+%   Generated programs call it; it must run before any query is registered.
+
+aq_configure(Options) :-
+    forall(member(Opt, Options), configure(Opt)).
+
+configure(mode(M)) :- !,
+    must_be(oneof([tabled, optimized, naive]), M),
+    retractall(aq_conf(mode, _)), assertz(aq_conf(mode, M)).
+configure(subsumption(B)) :- !,
+    must_be(boolean, B),
+    retractall(aq_conf(subsumption, _)), assertz(aq_conf(subsumption, B)).
+configure(Opt) :-
+    domain_error(aq_option, Opt).
+
+%!  aq_set_notify(:Hook) is det.
+%
+%   Call Hook(Id, Event) for every notification instead of queueing it, where
+%   Event is answer(A), add(A) or delete(A).  aq_set_notify(none) restores
+%   queueing (read the queue with aq_events/1).
+
+aq_set_notify(_:none) :- !, retractall(aq_hook(_)).
+aq_set_notify(Hook) :- retractall(aq_hook(_)), assertz(aq_hook(Hook)).
+
+%!  aq_events(-Events) is det.
+%
+%   Events is the list of pending notifications ev(Id, Op, Answer), Op one of
+%   answer, add, delete, in the order they were produced (sorted within one
+%   update); the queue is emptied.
+
+aq_events(Events) :-
+    findall(ev(Id, Op, A), aq_ev(Id, Op, A), Events),
+    retractall(aq_ev(_, _, _)).
+
+emit(Id, Op, A) :-
+    (   aq_hook(Hook)
+    ->  Ev =.. [Op, A], ignore(call(Hook, Id, Ev))
+    ;   assertz(aq_ev(Id, Op, A))
+    ).
+
+%!  aq_register(+Id, :Goal) is det.
+%!  aq_register(+Id, :Goal, -Answers) is det.
+%
+%   Register Goal as active query Id and evaluate it top-down.  Answers is the
+%   sorted list of its current answers (instances of Goal); they are also
+%   queued as answer notifications.  From now on assertions and retractions
+%   produce add/delete notifications for Id until aq_unregister(Id).
+
+aq_register(Id, Goal) :-
+    aq_register(Id, Goal, _).
+
+aq_register(Id, _:Goal0, Answers) :- !,
+    aq_register(Id, Goal0, Answers).
+aq_register(Id, Goal, Answers) :-
+    must_be(ground, Id),
+    (   aq_q(Id, _, _, _) -> permission_error(register, active_query, Id) ; true ),
+    goal_kind(Goal, Kind),
+    copy_term(Goal, G),
+    nb_setval(aq_registering, Id),
+    nb_setval(aq_phase, insert),
+    catch(register_root(Kind, Id, G), E, (nb_setval(aq_registering, '$none'), throw(E))),
+    nb_setval(aq_registering, '$none'),
+    findall(A, aq_ev(Id, answer, A), As0),
+    msort(As0, Answers),
+    (   aq_hook(_) -> true
+    ;   retractall(aq_ev(Id, answer, _)),
+        forall(member(A, Answers), assertz(aq_ev(Id, answer, A)))
+    ).
+
+register_root(call, Id, G) :-
+    assertz(aq_q(Id, G, call, pending)),
+    aq_wait_call(G, q(Id)),
+    trie_lookup_state(q(Id), T),
+    retract(aq_q(Id, G1, call, pending)),
+    assertz(aq_q(Id, G1, call, T)).
+register_root(fact, Id, G) :-
+    assertz(aq_q(Id, G, fact, none)),
+    aq_wait_fact(G, q(Id)).
+
+trie_lookup_state(S, T) :-
+    nb_getval(aq_cstates, St),
+    trie_lookup(St, S, T).
+
+goal_kind(Goal, Kind) :-
+    (   callable(Goal), user:'$aq_kind'(Goal, Kind0)
+    ->  (   aq_conf(mode, naive) -> Kind = call ; Kind = Kind0 )
+    ;   callable(Goal)
+    ->  functor(Goal, N, A),
+        existence_error(active_query_predicate, N/A)
+    ;   type_error(callable, Goal)
+    ).
+
+%!  aq_answers(+Id, -Answers) is det.
+%
+%   The current answers of active query Id, sorted.
+
+aq_answers(Id, Answers) :-
+    (   aq_q(Id, G, Kind, T) -> true ; existence_error(active_query, Id) ),
+    (   Kind == call
+    ->  aq_tab(T, _, Tr, _, _),
+        findall(G, trie_gen(Tr, G), As0)
+    ;   findall(G, user:G, As0)
+    ),
+    sort(As0, Answers).
+
+%!  aq_query(:Goal, -Answers) is det.
+%
+%   One-shot evaluation: register Goal, collect its answers, unregister.
+
+aq_query(_:Goal, Answers) :- !, aq_query(Goal, Answers).
+aq_query(Goal, Answers) :-
+    gensym('$aq_oneshot_', Id),
+    setup_call_cleanup(
+        aq_register(Id, Goal, Answers),
+        true,
+        ( aq_unregister(Id), retractall(aq_ev(Id, _, _)) )).
+
+%!  aq_queries(-Ids) is det.
+aq_queries(Ids) :- findall(Id, aq_q(Id, _, _, _), Ids).
+
+%!  aq_unregister(+Id) is det.
+%
+%   Remove active query Id and free every table, state record and dependency
+%   that no other registered query still needs.
+
+aq_unregister(Id) :-
+    (   retract(aq_q(Id, G, Kind, T)) -> true ; existence_error(active_query, Id) ),
+    (   Kind == call
+    ->  forall(clause(aq_c(T, _, q(Id)), true, Ref), erase(Ref)),
+        nb_getval(aq_cstates, St),
+        ignore(trie_delete(St, q(Id), _)),
+        retractall(aq_dep(root(Id), _))
+    ;   forall(user:'$aq_wref'(G, S, Ref), ( S == q(Id) -> erase(Ref) ; true ))
+    ),
+    retractall(aq_ev(Id, _, _)),
+    collect_garbage.
+
+%   Tables reachable from a registered query survive; everything else goes.
+collect_garbage :-
+    findall(T, aq_q(_, _, call, T), Roots),
+    reachable(Roots, [], Live0),
+    sort(Live0, Live),
+    findall(T, aq_tab(T, _, _, _, _), All),
+    ord_subtract_sorted(All, Live, Dead),
+    (   Dead == [] -> true ; free_tables(Dead) ).
+
+reachable([], Seen, Seen).
+reachable([T|Ts], Seen, Live) :-
+    (   memberchk(T, Seen)
+    ->  reachable(Ts, Seen, Live)
+    ;   findall(T2, aq_dep(T, T2), Next),
+        append(Next, Ts, Ts1),
+        reachable(Ts1, [T|Seen], Live)
+    ).
+
+ord_subtract_sorted(All, Live, Dead) :-
+    sort(All, AllS),
+    ord_subtract(AllS, Live, Dead).
+
+free_tables(Dead) :-
+    forall(member(T, Dead), assertz(aq_dead(T))),
+    nb_getval(aq_subgoals, Sub),
+    nb_getval(aq_cstates, St),
+    forall(member(T, Dead),
+           ( retract(aq_tab(T, _, Tr, _, Key)),
+             trie_destroy(Tr),
+             ( Key == none -> true ; ignore(trie_delete(Sub, Key, _)) ),
+             retractall(aq_tpred(_, _, T)),
+             retractall(aq_dep(T, _)),
+             forall(retract(aq_c(T, _, S)), ignore(trie_delete(St, S, _)))
+           )),
+    % states owned by dead tables, waiting on facts or on live tables
+    forall(( user:'$aq_wref'(_, S, Ref), state_owner(S, O), aq_dead(O) ), erase(Ref)),
+    forall(( clause(aq_c(_, _, S), true, Ref), state_owner(S, O), aq_dead(O) ),
+           ( erase(Ref), ignore(trie_delete(St, S, _)) )),
+    retractall(aq_dead(_)).
+
+:- dynamic aq_dead/1.
+
+state_owner(S, T) :- S \= q(_), arg(1, S, T).
+
+%!  aq_reset is det.
+%
+%   Unregister every query and drop every table (the facts stay).
+
+aq_reset :-
+    forall(aq_q(Id, _, _, _), aq_unregister(Id)),
+    forall(aq_tab(T, _, _, _, _), free_tables([T])),
+    forall(user:'$aq_wref'(_, _, Ref), erase(Ref)),
+    retractall(aq_c(_, _, _)), retractall(aq_dep(_, _)), retractall(aq_ev(_, _, _)),
+    nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
+    nb_getval(aq_cstates, St), trie_destroy(St),
+    init_globals.
+
+%!  aq_stats(-Stats) is det.
+%
+%   Stats is a list Key=Value: queries, tables, answers, consumers,
+%   fact_records, cstates, subgoals, deps.  All but the facts return to 0
+%   once every query is unregistered.
+
+aq_stats([queries=NQ, tables=NT, answers=NA, consumers=NC, fact_records=NF,
+          cstates=NS, subgoals=NG, deps=ND]) :-
+    aggregate_all(count, aq_q(_, _, _, _), NQ),
+    aggregate_all(count, aq_tab(_, _, _, _, _), NT),
+    aggregate_all(sum(C), (aq_tab(_, _, Tr, _, _), trie_count(Tr, C)), NA),
+    aggregate_all(count, aq_c(_, _, _), NC),
+    aggregate_all(count, user:'$aq_wref'(_, _, _), NF),
+    nb_getval(aq_cstates, St), trie_count(St, NS),
+    nb_getval(aq_subgoals, Sub), trie_count(Sub, NG),
+    aggregate_all(count, aq_dep(_, _), ND).
+
+trie_count(Tr, C) :-
+    (   trie_property(Tr, value_count(C)) -> true ; C = 0 ).
+
+		 /*******************************
+		 *     WAITING ON LITERALS      *
+		 *******************************/
+
+%!  aq_wait_fact(+Literal, +State) is det.
+%
+%   State waits for stored facts matching Literal: record it (so later
+%   assertions find it) and resolve Literal in place against the facts.
+
+aq_wait_fact(Lit, S) :-
+    nb_getval(aq_phase, P),
+    wait_fact(P, Lit, S).
+
+wait_fact(insert, Lit, S) :-
+    user:'$aq_wadd'(Lit, S),
+    forall(user:Lit, go(S, Lit)).
+wait_fact(delete, Lit, S) :-
+    (   mark(w(f, Lit, S))
+    ->  forall(user:Lit, go(S, Lit))
+    ;   true
+    ).
+wait_fact(restore, Lit, S) :-
+    (   has_fact_record(Lit, S)
+    ->  true
+    ;   wait_fact(insert, Lit, S)
+    ).
+
+has_fact_record(Lit, S) :-
+    copy_term(Lit-S, L2-S2),
+    user:'$aq_wrec'(L2, S2),
+    L2-S2 =@= Lit-S, !.
+
+%!  aq_wait_call(+Literal, +State) is det.
+%
+%   State waits for answers of the sub-goal Literal: find or create its table
+%   (according to the mode), record State as a consumer, activate the
+%   table's rules when it is new, and resume State on the answers it has.
+
+aq_wait_call(Lit, S) :-
+    nb_getval(aq_phase, P),
+    wait_call(P, Lit, S).
+
+wait_call(insert, Lit, S) :-
+    table_for(Lit, S, T, New),
+    consume(New, T, Lit, S).
+wait_call(delete, Lit, S) :-
+    nb_getval(aq_cstates, St),
+    (   trie_lookup(St, S, T),
+        mark(w(c(T), Lit, S))
+    ->  aq_tab(T, _, Tr, _, _),
+        forall(trie_gen(Tr, Lit), go(S, Lit))
+    ;   true
+    ).
+wait_call(restore, Lit, S) :-
+    nb_getval(aq_cstates, St),
+    (   trie_lookup(St, S, _)
+    ->  true
+    ;   wait_call(insert, Lit, S)
+    ).
+
+consume(New, T, Lit, S) :-
+    aq_tab(T, _, Tr, _, _),
+    (   New == true -> Snap = [] ; findall(Lit, trie_gen(Tr, Lit), Snap) ),
+    assertz(aq_c(T, Lit, S)),
+    nb_getval(aq_cstates, St),
+    (   trie_insert(St, S, T) -> true ; true ),
+    state_from(S, From),
+    (   aq_dep(From, T) -> true ; assertz(aq_dep(From, T)) ),
+    (   New == true -> activate(T) ; true ),
+    forall(member(Lit, Snap), go(S, Lit)).
+
+state_from(q(Id), From) :- !, From = root(Id).
+state_from(S, T) :- arg(1, S, T).
+
+go(q(Id), Lit) :- !,
+    notify(Id, Lit).
+go(S, Lit) :-
+    (   user:'$aq_go'(S, Lit) -> true ; true ).
+
+activate(T) :-
+    aq_tab(T, G, _, _, _),
+    forall(user:'$aq_act'(G, T), true).
+
+%!  aq_answer(+Table, +Answer) is det.
+%
+%   A rule of Table derived Answer.  Answer-invariant tabling: only a new
+%   answer (no variant in the table yet) is propagated to the consumers.
+
+aq_answer(T, A) :-
+    nb_getval(aq_phase, P),
+    answer(P, T, A).
+
+answer(insert, T, A) :-
+    aq_tab(T, _, Tr, _, _),
+    (   trie_insert(Tr, A)
+    ->  forall(aq_c(T, L, S), ( L = A -> go(S, L) ; true ))
+    ;   true
+    ).
+answer(restore, T, A) :-
+    answer(insert, T, A).
+answer(delete, T, A) :-
+    aq_tab(T, _, Tr, _, _),
+    (   trie_lookup(Tr, A, _),
+        mark(a(T, A))
+    ->  forall(aq_c(T, L, S), ( L = A -> go(S, L) ; true ))
+    ;   true
+    ).
+
+notify(Id, A) :-
+    nb_getval(aq_phase, P),
+    notify(P, Id, A).
+
+notify(insert, Id, A) :-
+    (   nb_getval(aq_registering, Id) -> Op = answer ; Op = add ),
+    emit(Id, Op, A).
+notify(delete, Id, A) :-
+    ignore(mark(n(Id, A))).
+notify(restore, _, _).
+
+		 /*******************************
+		 *            TABLES            *
+		 *******************************/
+
+table_for(Lit, S, T, New) :-
+    aq_conf(mode, Mode),
+    table_for(Mode, Lit, S, T, New).
+
+table_for(tabled, Lit, _, T, New) :-
+    nb_getval(aq_subgoals, Sub),
+    (   trie_lookup(Sub, Lit, T)
+    ->  New = false
+    ;   aq_conf(subsumption, true),
+        subsuming_table(Lit, T)
+    ->  New = false
+    ;   new_table(Lit, Lit, shared, T),
+        New = true
+    ).
+table_for(optimized, Lit, S, T, true) :-
+    owner_id(S, Id),
+    new_table(Lit, none, Id, T).
+table_for(naive, Lit, S, T, New) :-
+    owner_id(S, Id),
+    (   S = q(_)
+    ->  G = Lit
+    ;   functor(Lit, N, A), functor(G, N, A)
+    ),
+    Key = n(Id, G),
+    nb_getval(aq_subgoals, Sub),
+    (   trie_lookup(Sub, Key, T)
+    ->  New = false
+    ;   new_table(G, Key, Id, T),
+        New = true
+    ).
+
+subsuming_table(Lit, T) :-
+    functor(Lit, N, A),
+    aq_tpred(N/A, G, T),
+    subsumes_term(G, Lit), !.
+
+owner_id(q(Id), Id) :- !.
+owner_id(S, Id) :-
+    arg(1, S, T0),
+    aq_tab(T0, _, _, Id, _).
+
+new_table(Goal, Key, Owner, T) :-
+    flag(aq_table_id, T, T+1),
+    trie_new(Tr),
+    copy_term(Goal, G),
+    assertz(aq_tab(T, G, Tr, Owner, Key)),
+    (   Key == none
+    ->  true
+    ;   nb_getval(aq_subgoals, Sub),
+        trie_insert(Sub, Key, T)
+    ),
+    (   aq_conf(subsumption, true), Owner == shared
+    ->  functor(G, N, A), assertz(aq_tpred(N/A, G, T))
+    ;   true
+    ).
+
+		 /*******************************
+		 *     UPDATES: ADD, DELETE     *
+		 *******************************/
+
+%!  aq_assert(+Fact) is det.
+%
+%   Add Fact to the stored facts (nothing happens if an identical fact is
+%   there) and propagate it to every active query it affects.
+
+aq_assert(Fact) :-
+    check_fact(Fact),
+    (   has_fact(Fact)
+    ->  true
+    ;   assertz(user:Fact),
+        nb_setval(aq_phase, insert),
+        forall(user:'$aq_wrec'(Fact, S), go(S, Fact))
+    ).
+
+%!  aq_assert_all(+Facts) is det.
+aq_assert_all(Facts) :-
+    must_be(list, Facts),
+    maplist(aq_assert, Facts).
+
+%!  aq_retract(+Fact) is det.
+%
+%   Remove Fact (nothing happens if it is not stored) and update every active
+%   query: basic DRed.
+aq_retract(Fact) :-
+    aq_retract_all([Fact]).
+
+%!  aq_retract_all(+Facts) is det.
+%
+%   Remove all Facts in one DRed pass.
+aq_retract_all(Facts0) :-
+    must_be(list, Facts0),
+    maplist(check_fact, Facts0),
+    include(has_fact, Facts0, Facts1),
+    sort(Facts1, Facts),
+    (   Facts == [] -> true ; dred(Facts) ).
+
+check_fact(F) :-
+    (   callable(F), user:'$aq_fact_pred'(F)
+    ->  true
+    ;   callable(F)
+    ->  functor(F, N, A),
+        permission_error(modify, static_procedure, N/A)
+    ;   type_error(callable, F)
+    ).
+
+has_fact(F) :-
+    user:clause(F, true, Ref),
+    user:clause(H, true, Ref),
+    H =@= F, !.
+
+mark(Key) :-
+    nb_getval(aq_dred, D),
+    trie_insert(D, Key).
+
+dred(Facts) :-
+    trie_new(D),
+    nb_setval(aq_dred, D),
+    catch(dred(Facts, D), E, (dred_end(D), throw(E))),
+    dred_end(D).
+
+dred_end(D) :-
+    nb_setval(aq_phase, insert),
+    nb_setval(aq_dred, '$none'),
+    trie_destroy(D).
+
+dred(Facts, D) :-
+    % 1. over-delete against the old database
+    nb_setval(aq_phase, delete),
+    forall(member(F, Facts),
+           forall(user:'$aq_wrec'(F, S), go(S, F))),
+    % 2. remove what was marked, and the facts
+    forall(member(F, Facts),
+           forall(( user:clause(F, true, Ref), user:clause(H, true, Ref), H =@= F ), erase(Ref))),
+    findall(K, trie_gen(D, K), Marked),
+    forall(member(K, Marked), remove(K)),
+    % 3. re-derive what still has a derivation, propagate it forward
+    nb_setval(aq_phase, restore),
+    forall(member(K, Marked), ignore(rederive(K))),
+    nb_setval(aq_phase, insert),
+    findall(ev(Id, A), member(n(Id, A), Marked), Pending0),
+    msort(Pending0, Pending),
+    forall(member(ev(Id, A), Pending),
+           ( query_has(Id, A) -> true ; emit(Id, delete, A) )).
+
+remove(w(f, Lit, S)) :-
+    user:'$aq_whead'(Lit, S, H),
+    forall(( copy_term(H, H1), user:clause(H1, true, Ref),
+             user:clause(H2, true, Ref), H2 =@= H ),
+           erase(Ref)).
+remove(w(c(T), Lit, S)) :-
+    forall(( clause(aq_c(T, L1, S1), true, Ref), L1-S1 =@= Lit-S ), erase(Ref)),
+    nb_getval(aq_cstates, St),
+    ignore(trie_delete(St, S, _)).
+remove(a(T, A)) :-
+    (   aq_tab(T, _, Tr, _, _) -> ignore(trie_delete(Tr, A, _)) ; true ).
+remove(n(_, _)).
+
+rederive(w(f, Lit, S)) :-
+    \+ has_fact_record(Lit, S),
+    state_derivable(S),
+    wait_fact(restore, Lit, S).
+rederive(w(c(T), Lit, S)) :-
+    nb_getval(aq_cstates, St),
+    \+ trie_lookup(St, S, _),
+    aq_tab(T, _, _, _, _),
+    state_derivable(S),
+    consume(false, T, Lit, S).
+rederive(a(T, A)) :-
+    aq_tab(T, _, Tr, _, _),
+    \+ trie_lookup(Tr, A, _),
+    answer_derivable(T, A),
+    answer(restore, T, A).
+
+state_derivable(q(_)) :- !.
+state_derivable(S) :-
+    copy_term(S, S1),
+    user:'$aq_prev'(S1, P, Kind, Lit, Check),
+    premise(P, Kind, Lit),
+    call(Check), !.
+
+answer_derivable(T, A) :-
+    copy_term(A, A1),
+    user:'$aq_final'(A1, T, P, Kind, Lit, Check),
+    premise(P, Kind, Lit),
+    call(Check),
+    A1 =@= A, !.
+
+premise(act(T), none, _) :- !,
+    aq_tab(T, _, _, _, _).
+premise(P, fact, Lit) :-
+    user:'$aq_wrec'(Lit, P),
+    user:Lit.
+premise(P, call, Lit) :-
+    nb_getval(aq_cstates, St),
+    trie_gen(St, P, T),
+    aq_tab(T, _, Tr, _, _),
+    trie_gen(Tr, Lit).
+
+query_has(Id, A) :-
+    aq_q(Id, _, Kind, T),
+    (   Kind == call
+    ->  aq_tab(T, _, Tr, _, _),
+        trie_lookup(Tr, A, _)
+    ;   has_fact(A)
+    ), !.
+
+		 /*******************************
+		 *        UPDATE SCRIPTS        *
+		 *******************************/
+
+%!  aq_run_script(+File) is det.
+%
+%   Run an update script: lines `?Id Goal.` (register), `+Fact.` (assert),
+%   `-Fact.` (retract), `!Id.` (unregister); blank lines and lines starting
+%   with `%` are skipped.  Prints one JSON object per notification:
+%   {"query": Id, "op": "answer"|"add"|"delete", "answer": Text}, Text being
+%   the goal instance written with writeq.  Throws aq_script_error(Line,
+%   Message) on a malformed line.
+
+aq_run_script(File) :-
+    read_file_to_string(File, Text, []),
+    split_string(Text, "\n", "\r", Lines),
+    aq_set_notify(none),
+    foldl(run_line, Lines, 1, _).
+
+run_line(Line0, N, N1) :-
+    N1 is N + 1,
+    normalize_space(string(Line), Line0),
+    (   ( Line == "" ; sub_string(Line, 0, 1, _, "%") )
+    ->  true
+    ;   sub_string(Line, 0, 1, _, C),
+        sub_string(Line, 1, _, 0, Rest),
+        catch(term_string(T, Rest, [variable_names(_)]), E,
+              ( message_to_codes(E, Msg), throw(aq_script_error(N, Msg)) )),
+        run_command(C, T, N),
+        aq_events(Evs),
+        forall(member(ev(Id, Op, A), Evs), print_event(Id, Op, A))
+    ).
+
+message_to_codes(E, Msg) :-
+    message_to_codes(E, [], Codes) -> atom_codes(Msg, Codes)
+    ; term_string(E, Msg).
+
+run_command("?", T, N) :- !,
+    (   nonvar(T), T =.. [Id, Goal], atomic(Id) -> true
+    ;   nonvar(T), T = Id-Goal -> true
+    ;   throw(aq_script_error(N, 'expected ?Id Goal.'))
+    ),
+    aq_register(Id, Goal, _).
+run_command("+", F, _) :- !, aq_assert(F).
+run_command("-", F, _) :- !, aq_retract(F).
+run_command("!", Id, _) :- !, aq_unregister(Id).
+run_command(C, _, N) :-
+    format(atom(Msg), 'unknown command ~w (expected ?, +, - or !)', [C]),
+    throw(aq_script_error(N, Msg)).
+
+print_event(Id, Op, A) :-
+    format(string(AT), '~q', [A]),
+    json_text(Id, IdT),
+    json_string(AT, AJ),
+    format('{"query": ~w, "op": "~w", "answer": ~w}~n', [IdT, Op, AJ]).
+
+json_text(Id, T) :-
+    (   number(Id) -> format(string(T), '~w', [Id])
+    ;   format(string(S), '~w', [Id]), json_string(S, T)
+    ).
+
+json_string(S, J) :-
+    string_codes(S, Cs),
+    phrase(json_chars(Cs), Out),
+    string_codes(Body, Out),
+    string_concat("\"", Body, J0),
+    string_concat(J0, "\"", J).
+
+json_chars([]) --> [].
+json_chars([C|Cs]) --> json_char(C), json_chars(Cs).
+json_char(0'") --> !, "\\\"".
+json_char(0'\\) --> !, "\\\\".
+json_char(0'\n) --> !, "\\n".
+json_char(0'\t) --> !, "\\t".
+json_char(0'\r) --> !, "\\r".
+json_char(C) --> { C < 32 }, !, { format(codes(Hex), '\\u~|~`0t~16r~4+', [C]) }, Hex.
+json_char(C) --> [C].

@@ -1,0 +1,168 @@
+"""Prolog code for active queries: renders a transformed definite program (see
+`retalisc/passes/aq_*.py`) into plain SWI-Prolog that loads `prolog_runtime/rtl_aq.pl`.
+
+For rule k `H :- L1, ..., Ln` with wait points (non-builtin literals) w1 < ... < wm, and the
+state s<k>_<w>(T, Env) = e_k(w-1) of the binary rules (Env: the variables of H, L1..L(w-1)):
+
+    '$aq_act'(H, T)             :- builtins, aq_wait_*(L_w1, s<k>_<w1>(T, Env1)).   (e_k0)
+    '$aq_go'(s<k>_<wi>(..), L_wi) :- builtins, aq_wait_*(L_w(i+1), ...) | aq_answer(T, H).
+    '$aq_prev'(State, PrevState, Kind, Literal, Check)   one step back (DRed re-derivation)
+    '$aq_final'(H, T, LastState, Kind, Literal, Check)  how an answer is derived
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Dict, List, Optional
+
+import jinja2
+
+import retalisc
+
+from ...frontend.terms import Atom, Compound, Term, Var, quote_atom, to_prolog
+from ...passes import aq_naive, aq_optimized, aq_tabled
+from ...passes.aq_program import Literal, Program, Rule, load_program, term_vars
+
+MODES = {"naive": aq_naive, "optimized": aq_optimized, "tabled": aq_tabled}
+
+_ENV = jinja2.Environment(
+    loader=jinja2.FileSystemLoader(str(Path(__file__).with_name("templates"))),
+    keep_trailing_newline=True,
+    trim_blocks=False,
+    autoescape=False,
+)
+
+
+def runtime_dir() -> Path:
+    override = os.environ.get("RETALIS_RUNTIME")
+    if override:
+        return Path(override).resolve()
+    return Path(retalisc.__file__).resolve().parent.parent / "prolog_runtime"
+
+
+def transform(source_text: str, file: str, mode: str = "tabled", subsumption: bool = False) -> Program:
+    if mode not in MODES:
+        raise ValueError(f"unknown active-query mode {mode!r} (expected one of {', '.join(MODES)})")
+    program = load_program(source_text, file)
+    if mode == "tabled":
+        return aq_tabled.run(program, subsumption=subsumption)
+    return MODES[mode].run(program)
+
+
+def compile_active_queries(source_text: str, file: str, mode: str = "tabled", subsumption: bool = False) -> str:
+    """The complete generated Prolog text for a definite program (raises RetalisError subclasses
+    with `file:line:col` spans for invalid programs)."""
+    return render(transform(source_text, file, mode, subsumption))
+
+
+def _pattern(ind) -> str:
+    name, arity = ind
+    if arity == 0:
+        return quote_atom(name)
+    return f"{quote_atom(name)}({', '.join(f'A{i}' for i in range(1, arity + 1))})"
+
+
+def _record(ind) -> str:
+    name, arity = ind
+    rname = quote_atom(f"aq_w:{name}/{arity}")
+    args = [f"A{i}" for i in range(1, arity + 1)] + ["S"]
+    return f"{rname}({', '.join(args)})"
+
+
+def _table_var(rule: Rule) -> str:
+    used = set(term_vars([rule.head] + [l.term for l in rule.body]))
+    name, n = "T", 0
+    while name in used:
+        n += 1
+        name = f"T{n}"
+    return name
+
+
+def _conj(goals: List[str]) -> str:
+    return ", ".join(goals) if goals else "true"
+
+
+def _clause(head: str, goals: List[str]) -> str:
+    if not goals:
+        return f"{head}."
+    return f"{head} :-\n    " + ",\n    ".join(goals) + "."
+
+
+def rule_clauses(rule: Rule) -> List[str]:
+    t = _table_var(rule)
+    head = to_prolog(rule.head)
+    body = rule.body
+    waits = [i for i, lit in enumerate(body) if lit.kind != "builtin"]
+
+    def state(i: int) -> str:
+        env = term_vars([rule.head] + [l.term for l in body[:i]])
+        return f"s{rule.index}_{i + 1}({', '.join([t] + env)})"
+
+    def builtins(lo: int, hi: int) -> List[str]:
+        return [to_prolog_goal(body[j].term) for j in range(lo, hi)]
+
+    def enter(i: int) -> str:
+        pred = "aq_wait_call" if body[i].kind == "call" else "aq_wait_fact"
+        return f"{pred}({to_prolog(body[i].term)}, {state(i)})"
+
+    answer = f"aq_answer({t}, {head})"
+    clauses = []
+    first_hi = waits[0] if waits else len(body)
+    clauses.append(_clause(f"'$aq_act'({head}, {t})",
+                           builtins(0, first_hi) + [enter(waits[0]) if waits else answer]))
+    for n, i in enumerate(waits):
+        hi = waits[n + 1] if n + 1 < len(waits) else len(body)
+        nxt = enter(waits[n + 1]) if n + 1 < len(waits) else answer
+        clauses.append(_clause(f"'$aq_go'({state(i)}, {to_prolog(body[i].term)})", builtins(i + 1, hi) + [nxt]))
+    for n, i in enumerate(waits):
+        if n == 0:
+            prev = f"'$aq_prev'({state(i)}, act({t}), none, true, ({_conj(builtins(0, i))}))."
+        else:
+            j = waits[n - 1]
+            prev = (f"'$aq_prev'({state(i)}, {state(j)}, {body[j].kind}, {to_prolog(body[j].term)}, "
+                    f"({_conj(builtins(j + 1, i))})).")
+        clauses.append(prev)
+    if waits:
+        j = waits[-1]
+        clauses.append(f"'$aq_final'({head}, {t}, {state(j)}, {body[j].kind}, {to_prolog(body[j].term)}, "
+                       f"({_conj(builtins(j + 1, len(body)))})).")
+    else:
+        clauses.append(f"'$aq_final'({head}, {t}, act({t}), none, true, ({_conj(builtins(0, len(body)))})).")
+    return clauses
+
+
+_INFIX = {"<", ">", "=<", ">=", "=:=", "=\\=", "is", "=", "==", "\\=="}
+
+
+def to_prolog_goal(term: Term) -> str:
+    """Builtins are written infix (readable); their arguments canonically."""
+    if isinstance(term, Compound) and term.name in _INFIX and term.arity == 2:
+        return f"{to_prolog(term.args[0])} {term.name} {to_prolog(term.args[1])}"
+    return to_prolog(term)
+
+
+def render(program: Program) -> str:
+    kinds = []
+    rule_preds = set(program.rule_predicates) | {r.indicator for r in program.rules}
+    for ind in program.predicates():
+        kind = "call" if ind in rule_preds else "fact"
+        kinds.append(f"'$aq_kind'({_pattern(ind)}, {kind}).")
+    dynamic = []
+    for ind in program.dynamic:
+        name, arity = ind
+        dynamic.append({
+            "decl": f"{quote_atom(name)}/{arity}",
+            "record_decl": f"{quote_atom(f'aq_w:{name}/{arity}')}/{arity + 1}",
+            "pattern": _pattern(ind),
+            "record": _record(ind),
+        })
+    facts = [f"{to_prolog(f.term)}." for f in program.facts]
+    rules = []
+    for rule in program.rules:
+        where = str(rule.span) if rule.span else ""
+        text = " ".join(rule.text.split()) if rule.text else to_prolog(rule.head)
+        rules.append({"k": rule.index, "where": where, "text": text, "clauses": rule_clauses(rule)})
+    runtime = quote_atom(str(runtime_dir()))
+    return _ENV.get_template("aq_program.j2").render(
+        file=program.file, mode=program.mode, subsumption=program.subsumption, kinds=kinds,
+        dynamic=dynamic, facts=facts, rules=rules, runtime=runtime)
