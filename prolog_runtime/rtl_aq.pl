@@ -50,6 +50,7 @@
             aq_stats/1,             % -Stats
             aq_reset/0,
             aq_run_script/1,        % +File
+            aq_script_main/1,       % +File
             aq_wait_fact/2,         % +Literal, +State     (called by generated code)
             aq_wait_call/2,         % +Literal, +State     (called by generated code)
             aq_answer/2             % +Table, +Answer      (called by generated code)
@@ -654,23 +655,59 @@ run_line(Line0, N, N1) :-
     (   ( Line == "" ; sub_string(Line, 0, 1, _, "%") )
     ->  true
     ;   sub_string(Line, 0, 1, _, C),
-        sub_string(Line, 1, _, 0, Rest),
-        catch(term_string(T, Rest, [variable_names(_)]), E,
-              ( message_to_codes(E, Msg), throw(aq_script_error(N, Msg)) )),
-        run_command(C, T, N),
-        aq_events(Evs),
+        sub_string(Line, 1, _, 0, Rest0),
+        normalize_space(string(Rest), Rest0),
+        catch(parse_command(C, Rest, T), E, parse_error(N, E)),
+        catch(run_command(C, T, N), E2, line_error(N, E2)),
+        aq_events(Evs0),
+        msort(Evs0, Evs),
         forall(member(ev(Id, Op, A), Evs), print_event(Id, Op, A))
     ).
 
-message_to_codes(E, Msg) :-
-    message_to_codes(E, [], Codes) -> atom_codes(Msg, Codes)
-    ; term_string(E, Msg).
-
-run_command("?", T, N) :- !,
-    (   nonvar(T), T =.. [Id, Goal], atomic(Id) -> true
-    ;   nonvar(T), T = Id-Goal -> true
-    ;   throw(aq_script_error(N, 'expected ?Id Goal.'))
+%   `?Id Goal.`: the id is the text up to the first space.
+parse_command("?", Rest, Id-Goal) :- !,
+    (   sub_string(Rest, B, 1, _, " ")
+    ->  sub_string(Rest, 0, B, _, IdText),
+        sub_string(Rest, B, _, 0, GoalText),
+        term_string(Id, IdText),
+        term_string(Goal, GoalText)
+    ;   throw(aq_script_error(0, 'expected ?Id Goal.'))
     ),
+    (   atomic(Id) -> true ; throw(aq_script_error(0, 'the query id must be an atom or a number')) ).
+parse_command(_, Rest, T) :-
+    term_string(T, Rest).
+
+parse_error(N, aq_script_error(_, Msg)) :- !,
+    throw(aq_script_error(N, Msg)).
+parse_error(N, E) :-
+    message_to_codes(E, Msg0),
+    split_string(Msg0, "\n", " ", Parts),
+    atomic_list_concat(Parts, ' ', Msg),
+    throw(aq_script_error(N, Msg)).
+
+line_error(N, E) :-
+    (   E = aq_script_error(_, _) -> throw(E)
+    ;   E = error(Formal, _), script_usage_error(Formal)
+    ->  message_to_codes(E, Msg), throw(aq_script_error(N, Msg))
+    ;   throw(E)
+    ).
+
+script_usage_error(existence_error(active_query, _)).
+script_usage_error(existence_error(active_query_predicate, _)).
+script_usage_error(permission_error(_, _, _)).
+script_usage_error(type_error(_, _)).
+
+message_to_codes(E, Msg) :-
+    (   catch(message_to_chars(E, Msg0), _, fail)
+    ->  split_string(Msg0, "", " \n", [Msg])
+    ;   term_string(E, Msg)
+    ).
+
+message_to_chars(E, Msg) :-
+    '$messages':translate_message(E, Lines, []),
+    with_output_to(string(Msg), print_message_lines(current_output, '', Lines)).
+
+run_command("?", Id-Goal, _) :- !,
     aq_register(Id, Goal, _).
 run_command("+", F, _) :- !, aq_assert(F).
 run_command("-", F, _) :- !, aq_retract(F).
@@ -706,3 +743,21 @@ json_char(0'\t) --> !, "\\t".
 json_char(0'\r) --> !, "\\r".
 json_char(C) --> { C < 32 }, !, { format(codes(Hex), '\\u~|~`0t~16r~4+', [C]) }, Hex.
 json_char(C) --> [C].
+
+%!  aq_script_main(+File) is det.
+%
+%   Run aq_run_script/1 as a program: halt(0) on success, halt(2) with
+%   `File:Line: message` on a malformed script line, halt(1) with the
+%   message on any other error.
+
+aq_script_main(File) :-
+    catch(( aq_run_script(File), flush_output, Status = 0 ), E, script_error(File, E, Status)),
+    halt(Status).
+
+script_error(File, aq_script_error(Line, Msg), 2) :- !,
+    flush_output,
+    format(user_error, '~w:~w: error: ~w~n', [File, Line, Msg]).
+script_error(_, E, 1) :-
+    flush_output,
+    message_to_codes(E, Msg),
+    format(user_error, 'error: ~w~n', [Msg]).
