@@ -2,6 +2,7 @@
           [ rtl_use_program/1,          % +Module
             rtl_program/1,              % -Module
             rtl_reset/0,
+            rtl_clear/0,
             rtl_event/3,                % +Event, +Start, +End
             rtl_retract_event/3,        % +Event, +Start, +End
             rtl_derived/3,              % +Event, +Start, +End
@@ -72,6 +73,16 @@ rtl_reset :-
     (   nb_current(rtl_output_sink, _) -> true ; nb_setval(rtl_output_sink, print) ),
     schedule_sweep.
 
+%!  rtl_clear is det.
+%
+%   Forget everything the program has seen: partial matches, clock, statistics, output.
+
+rtl_clear :-
+    nb_getval(rtl_program, M),
+    forall(M:ele_partial_store(Name, Arity),
+           ( functor(Head, Name, Arity), retractall(M:Head) )),
+    rtl_reset.
+
 %!  rtl_set_flag(+Flag, +Value) is det.
 %!  rtl_flag(?Flag, ?Value) is nondet.
 %
@@ -115,7 +126,7 @@ rtl_event(Event, Start, End) :-
 
 late_check(End, Clock) :-
     rtl_flag(max_delay, Delay),
-    (   End < Clock - Delay -> rtl_count(late) ; true ).
+    (   Delay \== inf, End < Clock - Delay -> rtl_count(late) ; true ).
 
 %!  rtl_retract_event(+Event, +Start, +End) is det.
 %

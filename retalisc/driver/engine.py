@@ -160,6 +160,11 @@ class Engine:
                 callback(event)
         return events
 
+    def clear(self) -> None:
+        """Forget every event seen so far (partial matches, clock, statistics)."""
+        self.bridge.once("retalis:rtl_clear")
+        self.bridge.once("retalis:rtl_output_to(buffer)")
+
     # ---- inspection ----------------------------------------------------------------------
 
     def stats(self) -> dict:

@@ -1,0 +1,32 @@
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+
+def pytest_addoption(parser):
+    parser.addoption("--update-golden", action="store_true",
+                     help="Rewrite the expected output of golden tests (review the diff!)")
+
+
+@pytest.fixture
+def update_golden(request):
+    return request.config.getoption("--update-golden")
+
+
+@pytest.fixture(scope="session")
+def swipl():
+    path = shutil.which("swipl")
+    if path is None:
+        pytest.fail("swipl is not installed (apt-get install swi-prolog-nox)")
+    return path
+
+
+@pytest.fixture(scope="session")
+def retalisc_cmd():
+    """The retalisc command line, run with the interpreter running the tests."""
+    return [sys.executable, "-m", "retalisc"]

@@ -1,0 +1,48 @@
+"""Golden tests: a folder per case with a program, an event stream and the expected output.
+
+Each case runs twice, through standalone `swipl` on the compiled program and through the
+Python driver; both must print exactly the expected lines. `pytest --update-golden`
+rewrites the expectations from the standalone run (review the diff before committing).
+"""
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from retalisc.compiler import compile_file
+from retalisc.driver.engine import Engine
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _cases():
+    cases = []
+    for folder in sorted((ROOT / "tests" / "golden").iterdir()):
+        if (folder / "program.rtl").exists():
+            cases.append(pytest.param(folder / "program.rtl", folder, id=f"golden/{folder.name}"))
+    for folder in sorted((ROOT / "examples").iterdir()):
+        programs = sorted(folder.glob("*.rtl"))
+        if programs and (folder / "events.jsonl").exists():
+            cases.append(pytest.param(programs[0], folder, id=f"examples/{folder.name}"))
+    return cases
+
+
+@pytest.mark.parametrize("program, folder", _cases())
+def test_standalone_swipl(program, folder, tmp_path, swipl, update_golden):
+    compiled = tmp_path / "program.pl"
+    compiled.write_text(compile_file(str(program), output_name="program.pl").prolog)
+    run = subprocess.run([swipl, str(compiled), str(folder / "events.jsonl")], capture_output=True,
+                         text=True, cwd=tmp_path, timeout=120)
+    assert run.returncode == 0, run.stderr
+    expected = folder / "expected.jsonl"
+    if update_golden:
+        expected.write_text(run.stdout)
+    assert run.stdout == expected.read_text()
+
+
+@pytest.mark.parametrize("program, folder", _cases())
+def test_python_driver(program, folder):
+    engine = Engine.load(program)
+    produced, _ = engine.feed_lines((folder / "events.jsonl").read_text().rstrip("\n"))
+    expected = (folder / "expected.jsonl").read_text().splitlines()
+    assert [e.line for e in produced] == expected
