@@ -171,6 +171,8 @@ DECLARATIONS = {
     ("set_retalis_flag", 2),
 }
 
+DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
+
 
 # ---- building ---------------------------------------------------------------------------
 
@@ -199,7 +201,7 @@ def classify(clause: ReadClause) -> Clause:
         if _is(head, ":", 2) and isinstance(head.args[0], (Atom, Compound)) and not _is(head.args[1], ":", 2):
             return _event_rule(Compound("<-", (head.args[1], term.args[1]), term.span), clause, head.args[0])
         return _event_rule(term, clause, None)
-    if isinstance(term, (Atom, Compound)) and (term.name, getattr(term, "arity", 0)) in DECLARATIONS:
+    if isinstance(term, (Atom, Compound)) and term.name in DECLARATION_NAMES:
         return Declaration(term, clause.span, clause.text)
     if isinstance(term, (Var, Number)) or (hasattr(term, "text") and not isinstance(term, (Atom, Compound))):
         raise RetalisSyntaxError("a clause must be a rule, a fact or a directive", clause.span)

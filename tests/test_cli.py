@@ -1,0 +1,98 @@
+"""The command line as users script it (SPEC section 11): outputs, exit codes, messages."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+FIRE = ROOT / "examples" / "fire_alarm"
+
+
+def retalisc(*args, cwd=None, input=None):
+    return subprocess.run([sys.executable, "-m", "retalisc", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, input=input, timeout=120)
+
+
+def test_compile_then_swipl_from_another_directory(tmp_path, swipl):
+    out = tmp_path / "fire.pl"
+    assert retalisc("compile", FIRE / "fire_alarm.rtl", "-o", out).returncode == 0
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    run = subprocess.run([swipl, str(out), str(FIRE / "events.jsonl")], capture_output=True, text=True,
+                         cwd=elsewhere, timeout=60)
+    assert run.returncode == 0
+    assert run.stdout == (FIRE / "expected.jsonl").read_text()
+    assert "8 events" in run.stderr and "3 derived" in run.stderr
+
+
+def test_compile_is_deterministic(tmp_path):
+    first = retalisc("compile", FIRE / "fire_alarm.rtl").stdout
+    second = retalisc("compile", FIRE / "fire_alarm.rtl").stdout
+    assert first == second and "ele_trigger(smoke(S1)" in first
+    assert "% " + str(FIRE / "fire_alarm.rtl") in first or "fire_alarm.rtl" in first
+
+
+def test_run_prints_the_same_lines_as_swipl():
+    run = retalisc("run", FIRE / "fire_alarm.rtl", "--events", FIRE / "events.jsonl")
+    assert run.returncode == 0
+    assert run.stdout == (FIRE / "expected.jsonl").read_text()
+    for line in run.stdout.splitlines():
+        assert set(json.loads(line)) == {"event", "start", "end"}
+
+
+def test_run_echo_input_and_stdin():
+    events = '{"event": "smoke(smoke_1)", "t": 1}\n{"event": "high_temperature(temp_1)", "t": 2}\n'
+    run = retalisc("run", FIRE / "fire_alarm.rtl", "--events", "-", "--echo-input", input=events)
+    lines = [json.loads(line) for line in run.stdout.splitlines()]
+    assert [line["event"] for line in lines] == ["smoke(smoke_1)", "high_temperature(temp_1)",
+                                                "fire_alarm(smoke_1,temp_1)"]
+
+
+def test_bad_event_lines_are_counted_and_skipped(tmp_path):
+    events = tmp_path / "events.jsonl"
+    events.write_text('{"event": "smoke(smoke_1)", "t": 1}\nnot json\n{"event": "x(Y)", "t": 2}\n\n'
+                      '{"event": "high_temperature(temp_1)", "t": 3}\n')
+    run = retalisc("run", FIRE / "fire_alarm.rtl", "--events", events)
+    assert run.returncode == 0
+    assert json.loads(run.stdout)["event"] == "fire_alarm(smoke_1,temp_1)"
+    assert f"{events}:2: rejected: invalid JSON" in run.stderr
+    assert f"{events}:3: rejected: \"event\" must be ground" in run.stderr
+    assert "2 rejected" in run.stderr
+
+
+@pytest.mark.parametrize("program, where, message", [
+    ("h(X) <- a(X) seq.\n", "bad.rtl:1:14:", "syntax error"),
+    ("h(X) <- a(X) SEQ b(X).\n", "bad.rtl:1:14:", "'seq'"),
+    ("ok.\nh(X, Y) <- a(X).\n", "bad.rtl:2:6:", "does not occur in the pattern"),
+])
+def test_program_errors_exit_2_with_location(tmp_path, program, where, message):
+    path = tmp_path / "bad.rtl"
+    path.write_text(program)
+    for command in (["compile", path], ["check", path], ["run", path, "--events", path]):
+        result = retalisc(*command, cwd=tmp_path)
+        assert result.returncode == 2
+        assert result.stderr.startswith(str(path).replace("bad.rtl", "") + where) or where in result.stderr
+        assert message in result.stderr
+        assert "Traceback" not in result.stderr
+        assert result.stderr.splitlines()[-1].strip() == "^"
+
+
+def test_dump_after_binarize():
+    run = retalisc("compile", FIRE / "fire_alarm.rtl", "--dump-after", "binarize")
+    assert run.returncode == 0
+    assert "e_r1_1(S1, S2) <- smoke(S1) and high_temperature(S2) where nearby(S1, S2) within 300" in run.stdout
+
+
+def test_check_ok_and_usage_error(tmp_path):
+    assert retalisc("check", FIRE / "fire_alarm.rtl").returncode == 0
+    assert retalisc("compile", tmp_path / "missing.rtl").returncode == 2
+    assert retalisc("compile", FIRE / "fire_alarm.rtl", "--dump-after", "nonsense").returncode == 2
+
+
+def test_swipl_without_event_file_is_a_usage_error(tmp_path, swipl):
+    out = tmp_path / "fire.pl"
+    retalisc("compile", FIRE / "fire_alarm.rtl", "-o", out)
+    run = subprocess.run([swipl, str(out)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2 and "usage" in run.stderr

@@ -1,0 +1,136 @@
+"""Each pass on its own: what it changes in the compilation unit."""
+import pytest
+
+from retalisc.frontend.errors import RetalisSemanticError, RetalisSyntaxError
+from retalisc.frontend.program import Binary, EventAtom, Where, Window, parse_program, pattern_text
+from retalisc.frontend.writer import write_term
+from retalisc.passes import apply_rule_windows, binarize, collect_settings, edbc, push_conditions, validate
+from retalisc.passes.pipeline import PIPELINE, run_pipeline
+from retalisc.passes.unit import Unit
+
+
+def unit_of(text):
+    return Unit(parse_program(text, "t.rtl"), "rtl_prog_t")
+
+
+def through(text, last):
+    unit = unit_of(text)
+    for compiler_pass in PIPELINE:
+        unit = compiler_pass.run(unit)
+        if compiler_pass is last:
+            return unit
+    raise AssertionError(last)
+
+
+# ---- validate ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("text, message", [
+    ("h(X, Y) <- a(X).", "variable Y of the rule head does not occur in the pattern"),
+    ("h(X) <- a(X) where b(X).\nb(1) <- c.", "b/1 is an event predicate"),
+    ("h(X) <- a(X).\nh(1).", "h/1 is derived by event rules"),
+    ("h(X) <- a(X).\ng(X) <- h(X, Y).", "wrong arity: h/2 is used here, but the rules derive h/1"),
+    ("memorize(a, [], a, m).", "wrong arity: memorize/4"),
+])
+def test_validate_rejects(text, message):
+    with pytest.raises(RetalisSemanticError) as info:
+        validate.run(unit_of(text))
+    assert message in info.value.message
+    assert info.value.span.file == "t.rtl"
+
+
+def test_validate_accepts_head_variables_bound_by_conditions():
+    validate.run(unit_of("h(L) <- a(X) where pos(X, L).\npos(X, X)."))
+
+
+# ---- collect_settings and apply_rule_windows ----------------------------------------------
+
+def test_settings_from_directives_and_facts():
+    unit = through(":- set_etalis_flag(event_consumption_policy, recent).\nprint_trigger(h/1).\n"
+                   "event_rule_property(r1, event_rule_window, 4).\nr1 : h(X) <- a(X) seq b(X).",
+                   collect_settings)
+    assert unit.settings.consumption_policy == "recent"
+    assert unit.settings.printed == [("h", 1)]
+    assert unit.settings.rule_properties["r1"]["event_rule_window"].value == 4
+
+
+def test_unknown_etalis_flag_is_a_warning():
+    unit = through(":- set_etalis_flag(garbage_control, general).\nh <- a.", collect_settings)
+    assert "garbage_control" in unit.warnings[0]
+
+
+def test_rule_window_property_wraps_the_pattern():
+    unit = through("r([property(event_rule_window, 3)]) 'rule:' h(X) <- a(X) seq b(X).", apply_rule_windows)
+    pattern = unit.program.event_rules[0].pattern
+    assert isinstance(pattern, Window) and pattern.length == 3
+
+
+# ---- push_conditions ------------------------------------------------------------------------
+
+def test_single_event_conditions_move_onto_the_event():
+    unit = through("h(I) <- a(I, X) seq b(I, Y) where (Y < 5, X < Y, p(X)).\np(_).", push_conditions)
+    assert pattern_text(unit.program.event_rules[0].pattern) == \
+        "(((a(I, X) where p(X)) seq (b(I, Y) where Y < 5)) where X < Y)"
+
+
+def test_conditions_stay_put_across_or_and_for_unknown_predicates():
+    unit = through("h(X) <- (a(X) or b(X)) where X > 1.\ng(X) <- a(X) seq b(X) where q(X).", push_conditions)
+    first, second = unit.program.event_rules
+    assert isinstance(first.pattern, Where) and isinstance(first.pattern.pattern, Binary)
+    assert isinstance(second.pattern, Where)
+
+
+# ---- binarize -------------------------------------------------------------------------------
+
+def test_binarize_three_way_sequence():
+    unit = through("out(I, X, Y, Z) <- (a(I, X) seq b(I, Y) seq c(I, Z)).10.", binarize)
+    rule = unit.rules[0]
+    assert [s.name for s in rule.steps] == ["e_r1_1", "e_r1_2"]
+    first, last = rule.steps
+    assert write_term(first.output) == "e_r1_1(I, X, Y)"
+    assert first.window == 10 and last.window == 10
+    assert last.left.step is first and last.derives_head
+    assert rule.dump().splitlines()[1] == "e_r1_1(I, X, Y) <- a(I, X) seq b(I, Y) within 10"
+
+
+def test_binarize_single_event_rule_gets_a_pass_step():
+    unit = through("h(X) <- a(X) where X > 1.", binarize)
+    step = unit.rules[0].steps[0]
+    assert step.op == "pass" and step.derives_head and step.left.filters
+
+
+def test_labels_name_rules():
+    unit = through("fire 'rule:' h <- a seq b.\nh2 <- a.", binarize)
+    assert [r.rule_id for r in unit.rules] == ["fire", "r2"]
+
+
+# ---- edbc -------------------------------------------------------------------------------------
+
+def test_edbc_stores_are_keyed_by_join_variables():
+    unit = through("out(I, X, Y) <- (a(I, X) seq b(I, Y)).5.", edbc)
+    generated = unit.generated[0]
+    assert ("e_r1_1_lefts", 4, 5) in generated.stores and ("e_r1_1_rights", 4, 5) in generated.stores
+    texts = [write_term(c) for c in generated.clauses]
+    left = next(t for t in texts if t.startswith("e_r1_1_left("))
+    assert "e_r1_1_rights(I, Y, RStart, REnd)" in left and "LEnd < RStart" in left
+    assert "assertz(e_r1_1_lefts(I, X, LStart, LEnd))" in left
+    right = next(t for t in texts if t.startswith("e_r1_1_right("))
+    assert "rtl_may_precede(RStart)" in right
+
+
+def test_edbc_time_variables_do_not_capture_user_variables():
+    unit = through("h(Start, End) <- a(Start) and b(End).", edbc)
+    texts = " ".join(write_term(c) for c in unit.generated[0].clauses)
+    assert "Start_" in texts and "End_" in texts
+
+
+def test_pipeline_dump_after_every_pass():
+    for compiler_pass in PIPELINE:
+        dumps = []
+        run_pipeline(unit_of("h(X) <- a(X) seq b(X) where X > 1."), compiler_pass.name, dumps.append)
+        assert dumps and dumps[0].startswith(f"% retalisc: the program after pass '{compiler_pass.name}'")
+
+
+def test_unsupported_operator_reports_its_place():
+    with pytest.raises(RetalisSemanticError) as info:
+        through("h <- a.\nh2 <- x par y.", binarize)
+    assert info.value.span.line == 2
