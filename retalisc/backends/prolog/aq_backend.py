@@ -69,6 +69,12 @@ def _record(ind) -> str:
     return f"{rname}({', '.join(args)})"
 
 
+def _indicator(term: Term):
+    if isinstance(term, Compound):
+        return (term.name, term.arity)
+    return (term.name, 0)
+
+
 def _table_var(rule: Rule) -> str:
     used = set(term_vars([rule.head] + [l.term for l in rule.body]))
     name, n = "T", 0
@@ -156,7 +162,9 @@ def render(program: Program) -> str:
             "pattern": _pattern(ind),
             "record": _record(ind),
         })
-    facts = [f"{to_prolog(f.term)}." for f in program.facts]
+    order = {ind: n for n, ind in enumerate(program.dynamic)}
+    grouped = sorted(program.facts, key=lambda f: order.get(_indicator(f.term), len(order)))
+    facts = [f"{to_prolog(f.term)}." for f in grouped]
     rules = []
     for rule in program.rules:
         where = str(rule.span) if rule.span else ""

@@ -1,0 +1,114 @@
+"""Shared helpers of the active-query tests: run a program and an update sequence in `swipl`,
+(1) incrementally, (2) from scratch after every update (same transformation) and (3) with
+SWI-Prolog's own `:- table` as the oracle, and return the answer sets after every step."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Dict, List, Tuple
+
+from retalisc.backends.prolog.aq_backend import compile_active_queries
+from retalisc.frontend.terms import Atom, Compound, Term, Var, to_prolog
+from retalisc.passes.aq_program import load_program
+
+SWIPL = shutil.which("swipl") or "swipl"
+
+Step = Tuple[str, str]  # ("+", fact) | ("-", fact) | ("?", "")
+
+
+def _rename(term: Term, preds) -> Term:
+    if isinstance(term, Compound) and (term.name, term.arity) in preds:
+        return Compound("o_" + term.name, term.args)
+    if isinstance(term, Atom) and (term.name, 0) in preds:
+        return Atom("o_" + term.name)
+    return term
+
+
+def oracle_rules(source: str) -> str:
+    """The program's rules for SWI-Prolog tabling: every predicate with rules renamed o_p and
+    tabled; a predicate with rules and facts reads its stored facts through one more clause."""
+    program = load_program(source, "oracle.pl")
+    preds = set(program.rule_predicates)
+    lines = [":- style_check(-singleton)."]
+    for name, arity in sorted(preds):
+        lines.append(f":- table o_{name}/{arity}.")
+    for rule in program.rules:
+        body = [to_prolog(_rename(lit.term, preds)) for lit in rule.body] or ["true"]
+        lines.append(f"{to_prolog(_rename(rule.head, preds))} :- {', '.join(body)}.")
+    for name, arity in sorted(preds):
+        if (name, arity) in program.dynamic:
+            args = ", ".join(f"A{i}" for i in range(arity))
+            lines.append(f"o_{name}({args}) :- {name}({args}).")
+    return "\n".join(lines) + "\n"
+
+
+def oracle_goal(goal: str, source: str) -> str:
+    from retalisc.frontend.parser import read_term
+    program = load_program(source, "oracle.pl")
+    return to_prolog(_rename(read_term(goal), set(program.rule_predicates)))
+
+
+def _run(text: str) -> List[str]:
+    with tempfile.TemporaryDirectory(prefix="aqtest_") as tmp:
+        path = Path(tmp) / "run.pl"
+        path.write_text(text)
+        proc = subprocess.run([SWIPL, "--no-tty", "-q", "--no-packs", "-g", "main", "-t", "halt", str(path)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=300)
+    if proc.returncode != 0 or "Warning" in proc.stderr or "ERROR" in proc.stderr:
+        raise AssertionError(f"swipl failed ({proc.returncode}):\n{proc.stderr}\n{proc.stdout[-2000:]}")
+    return proc.stdout.splitlines()
+
+
+_PRINT = r"""
+print_state(K, Qs) :-
+    forall(nth1(I, Qs, _), ( aq_answers(I, L), format("~w ~w inc ~q~n", [K, I, L]) )).
+print_oracle(K, Os) :-
+    abolish_all_tables,
+    forall(nth1(I, Os, O-G), ( findall(G, O, L0), sort(L0, L), format("~w ~w oracle ~q~n", [K, I, L]) )).
+"""
+
+
+def _parse(lines: List[str], kind: str) -> Dict[Tuple[int, int], str]:
+    out = {}
+    for line in lines:
+        k, i, what, rest = line.split(" ", 3)
+        if what == kind:
+            out[(int(k), int(i))] = rest
+    return out
+
+
+def run_all(source: str, goals: List[str], steps: List[Step], mode: str, subsumption: bool = False,
+            scratch: bool = True):
+    """Answer sets (writeq text of the sorted list) after registration (step 0) and after every
+    step: incremental, oracle (SWI `:- table`), and scratch (fresh registration, same mode)."""
+    generated = compile_active_queries(source, "program.pl", mode=mode, subsumption=subsumption)
+    oracle = oracle_rules(source)
+    qlist = "[" + ", ".join(goals) + "]"
+    olist = "[" + ", ".join(f"({oracle_goal(g, source)})-({g})" for g in goals) + "]"
+    ops = {"+": "aq_assert", "-": "aq_retract"}
+    body = [f"    Qs = {qlist}, Os = {olist},",
+            "    forall(nth1(I, Qs, G), aq_register(I, G, _)),",
+            "    print_state(0, Qs), print_oracle(0, Os),"]
+    for k, (op, fact) in enumerate(steps, start=1):
+        if op in ops:
+            body.append(f"    {ops[op]}({fact}),")
+        body.append(f"    print_state({k}, Qs), print_oracle({k}, Os),")
+    body.append("    aq_events(_), forall(nth1(I, Qs, _), aq_unregister(I)), aq_stats(St), format('0 0 stats ~q~n', [St]).")
+    text = generated + oracle + _PRINT + "main :-\n" + "\n".join(body) + "\n"
+    lines = _run(text)
+    inc, orc = _parse(lines, "inc"), _parse(lines, "oracle")
+    stats = _parse(lines, "stats")[(0, 0)]
+    scr = {}
+    if scratch:
+        sbody = [f"    Qs = {qlist},", "    scratch(0, Qs),"]
+        for k, (op, fact) in enumerate(steps, start=1):
+            if op in ops:
+                sbody.append(f"    {ops[op]}({fact}),")
+            sbody.append(f"    scratch({k}, Qs),")
+        sbody.append("    true.")
+        stext = (generated + _PRINT + "scratch(K, Qs) :- forall(nth1(I, Qs, G), aq_register(I, G, _)), "
+                 "print_state(K, Qs), aq_reset.\n" + "main :-\n" + "\n".join(sbody) + "\n")
+        scr = _parse(_run(stext), "inc")
+    return inc, orc, scr, stats
