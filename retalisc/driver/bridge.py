@@ -1,0 +1,579 @@
+"""Text-level bridge between Python and an in-process SWI-Prolog.
+
+Every piece of Python code that talks to Prolog goes through :class:`Bridge`.
+Terms cross the boundary as *text* in both directions: goals are Prolog
+source text, answers come back as ``writeq`` text (or as plain text from
+:meth:`Bridge.call_text`).  Keeping the interface textual makes it identical
+for both backends and keeps the per-call cost predictable.
+
+Backends
+--------
+``janus``
+    Used when ``janus_swi`` imports (SWI-Prolog >= 9.1.12).  Calls go through
+    ``janus_swi.query_once``.
+``pyswip``
+    Fallback.  We use only pyswip's ctypes layer (``pyswip/core.py``) to find
+    and load ``libswipl``, and call the C foreign-language interface directly.
+
+Why not ``pyswip.Prolog``
+-------------------------
+``Prolog.query`` builds Python ``Atom``/``Term`` wrappers for every binding,
+registers atoms it never releases and opens a nested query per call, which
+makes it both slow (hundreds of microseconds per trivial query) and leaky in
+long runs.  Importing the ``pyswip`` *package* also initialises Prolog as an
+import side effect with fixed arguments (no ``--no-tty``, user init file
+loaded), so we load ``pyswip/core.py`` on its own and call ``PL_initialise``
+ourselves.  If some other code already imported ``pyswip`` we simply reuse the
+engine it started.
+
+Protocol
+--------
+All calls run the Prolog helper ``retalisc_bridge:bridge/6`` (source in
+``_HELPER_SRC``) which parses the goal text, runs it inside ``catch/3`` and
+reports ``Status`` (1 success, 0 failure, 2 error) plus a result string, so
+Prolog exceptions never escape into the C interface, never reach the debugger
+and are turned into :class:`PrologError` carrying Prolog's own message text.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.util
+import os
+import shutil
+import subprocess
+import sys
+import threading
+from types import ModuleType
+from typing import Any, ClassVar, Optional, Union
+
+__all__ = ["Bridge", "PrologError", "GoalFailed"]
+
+
+class PrologError(RuntimeError):
+    """A Prolog exception (or syntax error in goal text) raised by a bridge call.
+
+    ``str(err)`` is Prolog's own message text; ``err.term`` is the ``writeq``
+    text of the exception term (``None`` when there is no single term, e.g.
+    for errors collected while consulting a file).
+    """
+
+    def __init__(self, message: str, term: Optional[str] = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.term = term
+
+
+class GoalFailed(PrologError):
+    """Raised by :meth:`Bridge.call_text` when its goal fails."""
+
+
+# Call modes understood by retalisc_bridge:bridge/6.
+_MODE_BOOL, _MODE_ONCE, _MODE_ALL, _MODE_TEXT, _MODE_CONSULT = range(5)
+_OK, _FAILED, _ERROR = 1, 0, 2
+
+_HELPER_SRC = r"""
+:- module(retalisc_bridge, []).
+
+:- thread_local collecting/0, collected/1.
+
+%   bridge(+Mode, +GoalText, +Aux, -Status, -Out, -ErrTerm)
+%   Never raises: errors are reported as Status 2 with the printed
+%   message in Out and the writeq text of the error term in ErrTerm.
+%   Out and ErrTerm are always bound (janus cannot return unbound vars).
+bridge(Mode, GoalText, Aux, Status, Out, ErrTerm) :-
+    catch(run(Mode, GoalText, Aux, Status, Out), E,
+          caught(E, Status, Out, ErrTerm)),
+    !,
+    ( var(ErrTerm) -> ErrTerm = "" ; true ).
+
+run(0, GT, _, Status, "") :-
+    parse(GT, G, _),
+    ( user:G -> Status = 1 ; Status = 0 ).
+run(1, GT, TT, Status, Out) :-
+    parse(GT, G, VG),
+    parse(TT, T, VT),
+    share_vars(VT, VG),
+    ( user:G -> Status = 1, writeq_string(T, Out) ; Status = 0, Out = "" ).
+run(2, GT, TT, 1, Out) :-
+    parse(GT, G, VG),
+    parse(TT, T, VT),
+    share_vars(VT, VG),
+    findall(T, user:G, Ts),
+    maplist(writeq_string, Ts, Out).
+run(3, GT, VarName, Status, Out) :-
+    parse(GT, G, VG),
+    atom_string(Name, VarName),
+    (   memberchk(Name=V, VG)
+    ->  true
+    ;   throw(error(existence_error(variable, Name), context(bridge/6, GT)))
+    ),
+    ( user:G -> Status = 1, text_of(V, Out) ; Status = 0, Out = "" ).
+run(4, Path, _, 1, "") :-
+    consult_collecting(Path).
+
+parse(Text, Term, Bindings) :-
+    read_term_from_atom(Text, Term, [variable_names(Bindings)]).
+
+share_vars([], _).
+share_vars([Name=V|T], VG) :-
+    ( memberchk(Name=V0, VG) -> V = V0 ; true ),
+    share_vars(T, VG).
+
+writeq_string(T, S) :-
+    format(string(S), "~q", [T]).
+
+text_of(V, _) :-
+    var(V), !,
+    throw(error(instantiation_error, context(bridge/6, _))).
+text_of(V, S) :- string(V), !, S = V.
+text_of(V, S) :- atomic(V), !, atom_string(V, S).
+text_of(V, S) :- catch(text_to_string(V, S), _, fail), !.
+text_of(V, S) :- format(string(S), "~w", [V]).
+
+caught(bridge_load_errors(Msg), 2, Msg, "") :- !.
+caught(E, 2, Msg, Term) :-
+    catch(message_text(E, Msg), _, Msg = ""),
+    catch(writeq_string(E, Term), _, Term = "").
+
+message_text(bridge_load_errors(Msg), Msg) :- !.
+message_text(error(Formal, Context0), Msg) :-
+    own_context(Context0, Context),
+    phrase('$messages':translate_message(error(Formal, Context)), Lines), !,
+    lines_text(Lines, Msg).
+message_text(E, Msg) :-
+    format(string(Msg), "Unhandled exception: ~q", [E]).
+
+%   An unknown procedure called directly by the goal is reported with our
+%   helper as its caller; drop that so the message reads as for the user.
+own_context(Context, _) :-
+    nonvar(Context),
+    Context = context(Caller, _),
+    nonvar(Caller),
+    Caller = retalisc_bridge:_, !.
+own_context(Context, Context).
+
+lines_text(Lines, Text) :-
+    with_output_to(string(S),
+                   print_message_lines(current_output, '', Lines)),
+    split_string(S, "", "\n", [Text]).
+
+%   Errors printed while loading do not make load_files/2 fail; collect
+%   them through message_hook/3 and raise them together afterwards.
+consult_collecting(PathText) :-
+    atom_string(Path, PathText),
+    retractall(collected(_)),
+    setup_call_cleanup(assertz(collecting),
+                       load_files(user:Path, []),
+                       retractall(collecting)),
+    findall(M, retract(collected(M)), Msgs),
+    (   Msgs == []
+    ->  true
+    ;   atomic_list_concat(Msgs, '\n', Text),
+        throw(bridge_load_errors(Text))
+    ).
+
+:- multifile user:message_hook/3.
+user:message_hook(Term, error, Lines) :-
+    collecting,
+    lines_text(Lines, Text0),
+    with_location(Term, Text0, Text),
+    assertz(collected(Text)).
+
+with_location(error(syntax_error(_), _), Text, Text) :- !.
+with_location(_, Text0, Text) :-
+    source_location(File, Line), !,
+    format(string(Text), "~w:~w: ~w", [File, Line, Text0]).
+with_location(_, Text, Text).
+
+set_flags :-
+    forall(flag_value(Flag, Value),
+           catch(set_prolog_flag(Flag, Value), _, true)).
+
+flag_value(debug_on_error, false).
+flag_value(debug_on_interrupt, false).
+flag_value(report_error, true).
+flag_value(on_error, print).
+flag_value(on_warning, print).
+flag_value(tty_control, false).
+flag_value(user:unknown, error).
+"""
+
+_BOOT_GOAL = (
+    "setup_call_cleanup(open_string(Src, S),"
+    " load_files(retalisc_bridge, [stream(S), silent(true)]),"
+    " close(S)),"
+    " retalisc_bridge:set_flags"
+)
+
+
+# --------------------------------------------------------------------------
+# pyswip backend: direct foreign-language-interface calls
+# --------------------------------------------------------------------------
+
+_CVT_ATOM = 0x0001
+_CVT_STRING = 0x0002
+_CVT_LIST = 0x0004
+_REP_UTF8 = 0x00100000
+_BUF_DISCARDABLE = 0x0000
+_TEXT_FLAGS = _CVT_ATOM | _CVT_STRING | _CVT_LIST | _REP_UTF8 | _BUF_DISCARDABLE
+_PL_Q_NODEBUG = 0x0004
+_PL_Q_PASS_EXCEPTION = 0x0010
+
+_term_t = ctypes.c_size_t  # uintptr_t in SWI-Prolog.h
+_CORE_MODULE = "_retalisc_pyswip_core"
+
+
+def _load_pyswip_core() -> ModuleType:
+    """Return pyswip's ctypes layer without running pyswip's package init."""
+    for name in ("pyswip.core", _CORE_MODULE):
+        if name in sys.modules:
+            return sys.modules[name]
+    spec = importlib.util.find_spec("pyswip")
+    if spec is None or not spec.submodule_search_locations:
+        raise ImportError("neither janus_swi nor pyswip is installed")
+    core_path = os.path.join(list(spec.submodule_search_locations)[0], "core.py")
+    core_spec = importlib.util.spec_from_file_location(_CORE_MODULE, core_path)
+    assert core_spec is not None and core_spec.loader is not None
+    core = importlib.util.module_from_spec(core_spec)
+    core_spec.loader.exec_module(core)
+    sys.modules[_CORE_MODULE] = core
+    return core
+
+
+def _swipl_home(core: ModuleType) -> Optional[str]:
+    home = getattr(core, "SWI_HOME_DIR", None) or os.environ.get("SWI_HOME_DIR")
+    if home:
+        return home
+    exe = shutil.which("swipl")
+    if exe is None:
+        return None
+    out = subprocess.run([exe, "--dump-runtime-variables"], capture_output=True,
+                         text=True, check=False).stdout
+    for line in out.splitlines():
+        if line.startswith("PLBASE="):
+            return line.split("=", 1)[1].strip().strip(";").strip('"')
+    return None
+
+
+def _fn(lib: ctypes.CDLL, name: str, restype: Any, *argtypes: Any) -> Any:
+    # lib[name] makes a fresh function object, so setting argtypes here does
+    # not disturb the (differently typed) objects pyswip itself uses.
+    f = lib[name]
+    f.restype = restype
+    f.argtypes = list(argtypes)
+    return f
+
+
+class _ThreadEngine:
+    """Owner of the Prolog engine attached to one Python thread.
+
+    Kept in a ``threading.local``; CPython drops a thread's locals from the
+    exiting thread itself, so ``__del__`` detaches the engine in the thread
+    that owns it (otherwise ``PL_cleanup`` at exit warns about live threads).
+    """
+
+    def __init__(self, destroy: Any) -> None:
+        self._destroy = destroy
+
+    def __del__(self) -> None:
+        self._destroy()
+
+
+class _PyswipEngine:
+    name = "pyswip"
+
+    def __init__(self) -> None:
+        core = _load_pyswip_core()
+        lib: ctypes.CDLL = core._lib
+        self._string_type: int = core.PL_STRING  # version dependent, pyswip knows
+        # pyswip.core's CVT_WRITEQ (0xC0) is the pre-8.2 value; 8.2+ uses 0x200.
+        self._cvt_writeq = 0x200 if getattr(core, "PL_VERSION", 0) >= 80200 else 0xC0
+        self._init_prolog(lib, core)
+
+        self._open_frame = _fn(lib, "PL_open_foreign_frame", ctypes.c_size_t)
+        self._discard_frame = _fn(lib, "PL_discard_foreign_frame", None, ctypes.c_size_t)
+        self._new_refs = _fn(lib, "PL_new_term_refs", _term_t, ctypes.c_int)
+        self._new_ref = _fn(lib, "PL_new_term_ref", _term_t)
+        self._put_integer = _fn(lib, "PL_put_integer", ctypes.c_int, _term_t, ctypes.c_long)
+        self._put_chars = _fn(lib, "PL_put_chars", ctypes.c_int, _term_t, ctypes.c_int,
+                              ctypes.c_size_t, ctypes.c_char_p)
+        self._call_pred = _fn(lib, "PL_call_predicate", ctypes.c_int, ctypes.c_void_p,
+                              ctypes.c_int, ctypes.c_void_p, _term_t)
+        self._get_integer = _fn(lib, "PL_get_integer", ctypes.c_int, _term_t,
+                                ctypes.POINTER(ctypes.c_int))
+        self._get_nchars = _fn(lib, "PL_get_nchars", ctypes.c_int, _term_t,
+                               ctypes.POINTER(ctypes.c_size_t),
+                               ctypes.POINTER(ctypes.c_void_p), ctypes.c_uint)
+        self._get_list = _fn(lib, "PL_get_list", ctypes.c_int, _term_t, _term_t, _term_t)
+        self._copy_ref = _fn(lib, "PL_copy_term_ref", _term_t, _term_t)
+        self._exception = _fn(lib, "PL_exception", _term_t, ctypes.c_void_p)
+        self._clear_exception = _fn(lib, "PL_clear_exception", None)
+        self._thread_self = _fn(lib, "PL_thread_self", ctypes.c_int)
+        self._attach = _fn(lib, "PL_thread_attach_engine", ctypes.c_int, ctypes.c_void_p)
+        self._destroy_engine = _fn(lib, "PL_thread_destroy_engine", ctypes.c_int)
+        self._mark_strings = _fn(lib, "PL_mark_string_buffers", None,
+                                 ctypes.POINTER(ctypes.c_size_t))
+        self._release_strings = _fn(lib, "PL_release_string_buffers_from_mark", None,
+                                    ctypes.c_size_t)
+        self._mark = ctypes.c_size_t()
+        predicate = _fn(lib, "PL_predicate", ctypes.c_void_p, ctypes.c_char_p,
+                        ctypes.c_int, ctypes.c_char_p)
+        self._flags = _PL_Q_NODEBUG | _PL_Q_PASS_EXCEPTION
+        self._status = ctypes.c_int()
+        self._len = ctypes.c_size_t()
+        self._ptr = ctypes.c_void_p()
+        self._local = threading.local()
+
+        self._ensure_thread()
+        self._boot(lib)
+        self._pred = predicate(b"bridge", 6, b"retalisc_bridge")
+
+    @staticmethod
+    def _init_prolog(lib: ctypes.CDLL, core: ModuleType) -> None:
+        is_init = _fn(lib, "PL_is_initialised", ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)
+        if is_init(None, None):
+            return
+        args = ["swipl", "-q", "--no-signals", "--no-tty", "--no-packs", "-f", "none"]
+        home = _swipl_home(core)
+        if home:
+            args.append(f"--home={home}")
+        argv = (ctypes.c_char_p * (len(args) + 1))(*[a.encode() for a in args], None)
+        init = _fn(lib, "PL_initialise", ctypes.c_int, ctypes.c_int,
+                   ctypes.POINTER(ctypes.c_char_p))
+        if not init(len(args), argv):
+            raise PrologError(f"PL_initialise failed with arguments {args}")
+
+    def _boot(self, lib: ctypes.CDLL) -> None:
+        """Load the helper module: parse '$boot'(Src, Goal), bind Src, call Goal."""
+        from_chars = _fn(lib, "PL_put_term_from_chars", ctypes.c_int, _term_t, ctypes.c_int,
+                         ctypes.c_size_t, ctypes.c_char_p)
+        get_arg = _fn(lib, "PL_get_arg", ctypes.c_int, ctypes.c_int, _term_t, _term_t)
+        unify = _fn(lib, "PL_unify", ctypes.c_int, _term_t, _term_t)
+        call = _fn(lib, "PL_call", ctypes.c_int, _term_t, ctypes.c_void_p)
+        fid = self._open_frame()
+        try:
+            boot = f"'$boot'(Src, ({_BOOT_GOAL}))".encode()
+            t, src, arg = self._new_ref(), self._new_ref(), self._new_ref()
+            code = _HELPER_SRC.encode()
+            ok = (from_chars(t, _REP_UTF8, len(boot), boot)
+                  and self._put_chars(src, self._string_type | _REP_UTF8, len(code), code)
+                  and get_arg(1, t, arg) and unify(arg, src)
+                  and get_arg(2, t, arg) and call(arg, None))
+            if not ok:
+                raise self._pending_error("loading the bridge helper failed")
+        finally:
+            self._discard_frame(fid)
+
+    def _ensure_thread(self) -> None:
+        # Prolog engines are per OS thread; attach one to threads other than
+        # the one that initialised Prolog the first time they call in.
+        if not hasattr(self._local, "engine"):
+            engine = None
+            if self._thread_self() == -1:
+                if self._attach(None) < 0:
+                    raise PrologError("cannot attach a Prolog engine to this thread")
+                engine = _ThreadEngine(self._destroy_engine)
+            self._local.engine = engine
+
+    def _text(self, t: int) -> str:
+        if not self._get_nchars(t, ctypes.byref(self._len), ctypes.byref(self._ptr),
+                                _TEXT_FLAGS):
+            raise PrologError("bridge result is not text")
+        return ctypes.string_at(self._ptr.value or 0, self._len.value).decode("utf-8")
+
+    def _text_list(self, t: int) -> list[str]:
+        head, tail = self._new_ref(), self._copy_ref(t)
+        out: list[str] = []
+        while self._get_list(tail, head, tail):
+            out.append(self._text(head))
+        return out
+
+    def _pending_error(self, fallback: str) -> PrologError:
+        ex = self._exception(None)
+        if not ex:
+            return PrologError(fallback)
+        ok = self._get_nchars(ex, ctypes.byref(self._len), ctypes.byref(self._ptr),
+                              self._cvt_writeq | _REP_UTF8 | _BUF_DISCARDABLE)
+        text = (ctypes.string_at(self._ptr.value or 0, self._len.value).decode("utf-8")
+                if ok else fallback)
+        self._clear_exception()
+        return PrologError(text, text)
+
+    def run(self, mode: int, goal: str, aux: str) -> tuple[int, Any, str]:
+        self._ensure_thread()
+        # Even with BUF_DISCARDABLE, PL_get_nchars(REP_UTF8) pushes a buffer
+        # on the thread's string-buffer stack; outside a foreign predicate
+        # nobody pops it and SWI dies with "Too many stacked strings" after
+        # 2^20 results unless we release explicitly.
+        self._mark_strings(ctypes.byref(self._mark))
+        mark = self._mark.value
+        fid = self._open_frame()
+        try:
+            t = self._new_refs(6)
+            self._put_integer(t, mode)
+            g = goal.encode("utf-8")
+            self._put_chars(t + 1, self._string_type | _REP_UTF8, len(g), g)
+            if mode != _MODE_BOOL:
+                a = aux.encode("utf-8")
+                self._put_chars(t + 2, self._string_type | _REP_UTF8, len(a), a)
+            if not self._call_pred(None, self._flags, self._pred, t):
+                raise self._pending_error("bridge helper failed")
+            self._get_integer(t + 3, ctypes.byref(self._status))
+            status = self._status.value
+            if status == _ERROR:
+                return status, self._text(t + 4), self._text(t + 5)
+            if status == _FAILED or mode in (_MODE_BOOL, _MODE_CONSULT):
+                return status, None, ""
+            out = self._text_list(t + 4) if mode == _MODE_ALL else self._text(t + 4)
+            return status, out, ""
+        finally:
+            self._discard_frame(fid)
+            self._release_strings(mark)
+
+
+# --------------------------------------------------------------------------
+# janus backend
+# --------------------------------------------------------------------------
+
+class _JanusEngine:
+    name = "janus"
+    _QUERY = "retalisc_bridge:bridge(Mode, Goal, Aux, Status, Out, Err)"
+
+    def __init__(self) -> None:
+        import janus_swi
+
+        self._janus = janus_swi
+        self._error: type[BaseException] = getattr(janus_swi, "PrologError", RuntimeError)
+        janus_swi.consult("retalisc_bridge", data=_HELPER_SRC)
+        janus_swi.query_once("retalisc_bridge:set_flags")
+
+    def run(self, mode: int, goal: str, aux: str) -> tuple[int, Any, str]:
+        # query_once() stores 'truth' into its inputs dict: pass a fresh one.
+        try:
+            r = self._janus.query_once(self._QUERY,
+                                       {"Mode": mode, "Goal": goal, "Aux": aux})
+        except self._error as e:
+            raise PrologError(str(e)) from None
+        if not r.get("truth"):
+            raise PrologError("bridge helper failed")
+        status = r["Status"]
+        if status == _ERROR:
+            return status, r["Out"], r["Err"]
+        if status == _FAILED or mode in (_MODE_BOOL, _MODE_CONSULT):
+            return status, None, ""
+        return status, r["Out"], ""
+
+
+def _make_engine() -> Union[_JanusEngine, _PyswipEngine]:
+    choice = os.environ.get("RETALISC_BRIDGE_BACKEND", "").strip().lower()
+    if choice != "pyswip":
+        try:
+            return _JanusEngine()
+        except Exception:
+            # Import errors, or janus built against another libswipl.
+            if choice == "janus":
+                raise
+    return _PyswipEngine()
+
+
+_STATE_MODULE = "_retalisc_bridge_state"
+
+
+def _shared_state() -> ModuleType:
+    """Process-wide engine + lock.
+
+    Kept in ``sys.modules`` rather than in this module's globals so that
+    ``importlib.reload`` or importing this file under a second name still
+    finds the one engine: Prolog can be initialised only once per process.
+    """
+    state = sys.modules.get(_STATE_MODULE)
+    if state is None:
+        state = ModuleType(_STATE_MODULE)
+        state.engine = None
+        state.lock = threading.RLock()
+        state = sys.modules.setdefault(_STATE_MODULE, state)
+    return state
+
+
+# --------------------------------------------------------------------------
+# Public interface
+# --------------------------------------------------------------------------
+
+class Bridge:
+    """Process-wide handle on the embedded SWI-Prolog (one engine per process).
+
+    ``Bridge()`` always returns the same object; the environment variable
+    ``RETALISC_BRIDGE_BACKEND`` (``janus``/``pyswip``) forces a backend for
+    the first construction.  Calls are serialised by one re-entrant lock.
+    Goal text is parsed in module ``user`` and run there; a trailing full stop
+    is allowed, anything after the first term is ignored by the reader.
+
+    Each Python thread talks to its own Prolog engine (SWI binds engines to
+    OS threads): the clause database is shared, but global variables
+    (``nb_setval``) and ``thread_local`` predicates are per thread.
+    """
+
+    _instance: ClassVar[Optional["Bridge"]] = None
+
+    backend: str
+    _engine: Union[_JanusEngine, _PyswipEngine]
+    _lock: Any  # threading.RLock() returns a private type
+
+    def __new__(cls) -> "Bridge":
+        inst = cls._instance
+        if inst is None:
+            state = _shared_state()
+            with state.lock:
+                inst = cls._instance
+                if inst is None:
+                    if state.engine is None:
+                        state.engine = _make_engine()
+                    inst = super().__new__(cls)
+                    inst._engine = state.engine
+                    inst._lock = state.lock
+                    inst.backend = state.engine.name
+                    cls._instance = inst
+        return inst
+
+    @classmethod
+    def instance(cls) -> "Bridge":
+        return cls()
+
+    def _call(self, mode: int, goal: str, aux: str) -> tuple[int, Any]:
+        with self._lock:
+            status, out, term = self._engine.run(mode, goal, aux)
+        if status == _ERROR:
+            raise PrologError(out or term, term or None)
+        return status, out
+
+    def consult(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Load a Prolog file into ``user``; errors printed while loading are raised."""
+        self._call(_MODE_CONSULT, os.fspath(path), "")
+
+    def once(self, goal: str, template: Optional[str] = None) -> Union[str, bool, None]:
+        """Run ``goal`` once.
+
+        Without ``template``: True/False.  With ``template`` (text whose
+        variables are shared *by name* with ``goal``): the ``writeq`` text of
+        the template after success, None on failure.
+        """
+        if template is None:
+            return self._call(_MODE_BOOL, goal, "")[0] == _OK
+        status, out = self._call(_MODE_ONCE, goal, template)
+        return out if status == _OK else None
+
+    def all(self, goal: str, template: str) -> list[str]:
+        """``writeq`` text of ``template`` for every solution of ``goal`` (findall)."""
+        return self._call(_MODE_ALL, goal, template)[1]
+
+    def call_text(self, goal: str, result_var: str = "Out") -> str:
+        """Run ``goal`` once and return the text bound to variable ``result_var``.
+
+        Atoms, strings and code/char lists come back unquoted; other terms as
+        ``write`` text.  Raises :class:`GoalFailed` if the goal fails.
+        """
+        status, out = self._call(_MODE_TEXT, goal, result_var)
+        if status != _OK:
+            raise GoalFailed(f"goal failed: {goal[:200]}")
+        return out
