@@ -84,11 +84,14 @@ json_error_reason(Error, Reason) :-
 fields_event(Fields, Parsed) :-
     (   field_problem(Fields, Reason)
     ->  Parsed = error(Reason)
-    ;   Parsed = event(Op, Event, Start, End),
-        fields_op(Fields, Op),
-        memberchk("event"-Text, Fields),
-        text_event(Text, Event),
-        fields_interval(Fields, Start, End)
+    ;   memberchk("event"-Text, Fields),
+        text_event(Text, Event, Problem),
+        (   nonvar(Problem)
+        ->  Parsed = error(Problem)
+        ;   fields_op(Fields, Op),
+            fields_interval(Fields, Start, End),
+            Parsed = event(Op, Event, Start, End)
+        )
     ).
 
 field_problem(Fields, Reason) :-
@@ -96,25 +99,32 @@ field_problem(Fields, Reason) :-
     ->  Reason = "missing \"event\""
     ;   memberchk("event"-Text, Fields), \+ string(Text)
     ->  Reason = "\"event\" must be a string holding a Prolog term"
-    ;   memberchk("event"-Text, Fields), event_text_problem(Text, Reason)
-    ->  true
     ;   memberchk("op"-Op, Fields), \+ memberchk(Op, ["add", "retract"])
     ->  format(string(Reason), "unknown \"op\" ~q (expected \"add\" or \"retract\")", [Op])
     ;   interval_problem(Fields, Reason)
     ->  true
     ).
 
-event_text_problem(Text, Reason) :-
-    catch(term_string(Term, Text, [variable_names(Vars)]), error(syntax_error(E), _),
-          ( format(string(Reason), "\"event\" is not a Prolog term (syntax error: ~w)", [E]),
-            Term = '$bad' )),
-    (   Term == '$bad'
+% Read the event text once; Problem stays unbound when it is a ground callable term.
+text_event(Text, Event, Problem) :-
+    catch(term_string(Event, Text, [variable_names(Vars)]), error(syntax_error(E), _),
+          ( syntax_reason(E, Why),
+            format(string(Problem), "\"event\" is not a Prolog term (syntax error: ~w)", [Why]) )),
+    (   nonvar(Problem)
     ->  true
     ;   Vars \== []
-    ->  Reason = "\"event\" must be ground (it has variables)"
-    ;   \+ callable(Term)
-    ->  Reason = "\"event\" must be an atom or a compound term"
+    ->  Problem = "\"event\" must be ground (it has variables)"
+    ;   \+ callable(Event)
+    ->  Problem = "\"event\" must be an atom or a compound term"
+    ;   true
     ).
+
+syntax_reason(end_of_clause, "unexpected end of the term") :- !.
+syntax_reason(end_of_clause_expected, "unexpected text after the term") :- !.
+syntax_reason(operator_expected, "operator expected") :- !.
+syntax_reason(cannot_start_term, "unexpected character") :- !.
+syntax_reason(end_of_file, "unexpected end of the term") :- !.
+syntax_reason(E, E).
 
 interval_problem(Fields, Reason) :-
     (   memberchk("t"-_, Fields), ( memberchk("start"-_, Fields) ; memberchk("end"-_, Fields) )
@@ -138,9 +148,6 @@ fields_op(Fields, Op) :-
     ->  Op = retract
     ;   Op = add
     ).
-
-text_event(Text, Event) :-
-    term_string(Event, Text).
 
 fields_interval(Fields, Start, End) :-
     (   memberchk("t"-T, Fields)
