@@ -31,7 +31,22 @@ two ways:
 %   Called by a compiled program when it has been loaded.
 
 rtl_program_loaded(Module) :-
-    rtl_use_program(Module).
+    rtl_use_program(Module),
+    forall(Module:ele_declaration(Goal), run_declaration(Module, Goal)).
+
+%!  rtl_declaration_handler(?Name, ?Arity, ?Module) is nondet.
+%
+%   Multifile: runtime modules that implement a start-up declaration Name/Arity (written as
+%   a fact or directive in a program) add a clause; the goal is called as Module:Goal.
+
+:- multifile rtl_declaration_handler/3.
+
+run_declaration(Program, Goal) :-
+    functor(Goal, Name, Arity),
+    (   rtl_declaration_handler(Name, Arity, Handler)
+    ->  Handler:Goal
+    ;   print_message(error, format("~w/~w is not supported by this runtime (in ~w)", [Name, Arity, Program]))
+    ).
 
 %!  rtl_main is det.
 %

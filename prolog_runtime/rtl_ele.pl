@@ -16,7 +16,9 @@
             rtl_stat/2,                 % ?Name, ?Value
             rtl_count/1,                % +Name
             rtl_store_size/1,           % -Clauses
-            rtl_collect_garbage/0
+            rtl_collect_garbage/0,
+            rtl_add_output_hook/1,      % :Hook
+            rtl_remove_output_hook/1    % :Hook
           ]).
 
 /** <module> ELE runtime: event ingestion, derivation, output and forgetting
@@ -30,6 +32,11 @@ A compiled program is a module holding, among others:
     of windowed steps, with the window in seconds. The last two arguments of a stored
     partial match are its start and end time.
   - `ele_printed(Event)`: which derived events are written to the output (print_trigger).
+  - `ele_declaration(Goal)`: start-up declarations of the program (subscriptions...), run
+    in order when the program is loaded.
+
+Every processed event (input or derived, added or retracted) is also passed to the output
+hooks registered with rtl_add_output_hook/1 (subscriptions use this).
 
 The clock is the largest end time processed so far (event time, so replayed data behaves
 like live data). A stored partial match whose start lies more than Window + max_delay
@@ -40,6 +47,8 @@ delay bound, and is removed by the periodic sweep.
 :- use_module(rtl_io).
 
 :- dynamic rtl_output_line/1.
+:- dynamic output_hook/1.
+:- meta_predicate rtl_add_output_hook(4), rtl_remove_output_hook(4).
 :- dynamic flag_value/2.
 
 flag_default(max_delay, 1.0).               % seconds an event may arrive behind the clock
@@ -119,6 +128,7 @@ rtl_event(Event, Start, End) :-
     ),
     rtl_count(events),
     (   rtl_flag(echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
+    run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true),
     nb_getval(rtl_next_sweep, Next),
@@ -135,6 +145,7 @@ late_check(End, Clock) :-
 rtl_retract_event(Event, Start, End) :-
     rtl_count(retracted),
     (   rtl_flag(echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
+    run_output_hooks(Event, Start, End, retract),
     nb_getval(rtl_program, M),
     forall(M:ele_untrigger(Event, Start, End), true).
 
@@ -146,6 +157,7 @@ rtl_derived(Event, Start, End) :-
     rtl_count(derived),
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
+    run_output_hooks(Event, Start, End, add),
     forall(M:ele_trigger(Event, Start, End), true).
 
 %!  rtl_underived(+Event, +Start, +End) is det.
@@ -156,7 +168,28 @@ rtl_underived(Event, Start, End) :-
     rtl_count(underived),
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, retract) ; true ),
+    run_output_hooks(Event, Start, End, retract),
     forall(M:ele_untrigger(Event, Start, End), true).
+
+%!  rtl_add_output_hook(:Hook) is det.
+%!  rtl_remove_output_hook(:Hook) is det.
+%
+%   call(Hook, Event, Start, End, Op) runs for every processed event, input or derived,
+%   with Op `add` or `retract`, right after the event is delivered to the output.
+
+rtl_add_output_hook(Hook) :-
+    (   output_hook(Hook) -> true ; assertz(output_hook(Hook)) ),
+    nb_setval(rtl_output_hooks, true).
+
+rtl_remove_output_hook(Hook) :-
+    retractall(output_hook(Hook)),
+    (   output_hook(_) -> true ; nb_setval(rtl_output_hooks, false) ).
+
+run_output_hooks(Event, Start, End, Op) :-
+    (   nb_current(rtl_output_hooks, true)
+    ->  forall(output_hook(Hook), call(Hook, Event, Start, End, Op))
+    ;   true
+    ).
 
 %!  rtl_output_to(+Sink) is det.
 %

@@ -12,7 +12,7 @@ from typing import List
 
 import jinja2
 
-from ...frontend.program import Directive, StaticClause
+from ...frontend.program import Declaration, Directive, StaticClause
 from ...frontend.terms import Atom, Compound, Term, quote_atom
 from ...frontend.writer import write_term
 from ...passes.unit import GeneratedRule, Unit
@@ -51,6 +51,8 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
         windowed_stores=windowed,
         printed=printed,
         static_clauses=[_static_text(c) for c in unit.program.clauses if _is_copied(c)],
+        declarations=[write_term(c.goal, 999) for c in unit.program.clauses
+                      if isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES],
         rules=[_RuleView(g) for g in unit.generated],
     )
 
@@ -65,6 +67,10 @@ class _RuleView:
         self.rule_id = rule.rule_id
         self.comment_lines = rule.comment.splitlines()
         self.clause_texts = [write_clause(c) for c in rule.triggers + rule.clauses]
+
+
+def _declaration_key(goal: Term):
+    return (goal.name, getattr(goal, "arity", 0)) if isinstance(goal, (Atom, Compound)) else None
 
 
 def _is_copied(clause) -> bool:
