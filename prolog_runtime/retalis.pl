@@ -11,6 +11,10 @@
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
 :- reexport(rtl_time).
+:- reexport(rtl_raise).
+:- reexport(rtl_subscriptions).
+:- reexport(rtl_library).
+:- reexport(rtl_rules).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 
@@ -52,7 +56,8 @@ run_declaration(Program, Goal) :-
 %
 %   Script entry: process the event files named on the command line, in order. Does
 %   nothing when the program is loaded by the Python driver (flag `retalis_embedded`).
-%   Options: `--echo-input` also writes the input events; `--max-delay=SECONDS`.
+%   Options: `--echo-input` also writes the input events; `--max-delay=SECONDS`;
+%   `--consumer-dir=DIR` writes subscription deliveries to `DIR/<consumer>.jsonl`.
 
 rtl_main :-
     current_prolog_flag(retalis_embedded, true),
@@ -66,9 +71,11 @@ rtl_main :-
     ->  usage_error(no_event_file), halt(2)
     ;   true
     ),
-    catch(forall(member(File, Files), rtl_run_jsonl_file(File)),
+    catch(( rtl_flush_raised,
+            forall(member(File, Files), rtl_run_jsonl_file(File)) ),
           Error,
           ( print_message(error, Error), halt(1) )),
+    rtl_close_consumer_files,
     flush_output,
     rtl_summary(Summary),
     format(user_error, "~s~n", [Summary]),
@@ -78,6 +85,8 @@ main_args([], []).
 main_args([Arg|Args], Files) :-
     (   Arg == '--echo-input'
     ->  rtl_set_flag(echo_input, true), Files = Rest
+    ;   atom_concat('--consumer-dir=', Dir, Arg)
+    ->  rtl_consumer_dir(Dir), Files = Rest
     ;   atom_concat('--max-delay=', D, Arg)
     ->  ( D == inf -> Delay = inf ; atom_number(D, Delay) ),
         rtl_set_flag(max_delay, Delay), Files = Rest
@@ -90,7 +99,7 @@ main_args([Arg|Args], Files) :-
 usage_error(Formal) :-
     (   Formal = domain_error(option, Opt)
     ->  format(user_error, "error: unknown option ~w~n", [Opt])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] EVENTS.jsonl...~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--consumer-dir=DIR] EVENTS.jsonl...~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -126,10 +135,8 @@ process_line(Line, Name, N) :-
     ;   true
     ).
 
-process_event(add, Event, Start, End) :-
-    rtl_event(Event, Start, End).
-process_event(retract, Event, Start, End) :-
-    rtl_retract_event(Event, Start, End).
+process_event(Op, Event, Start, End) :-
+    rtl_input(Op, Event, Start, End).         % then the events raised meanwhile (rtl_raise)
 
 %!  rtl_feed_lines(+Text:string, +FirstLineNo:integer, -Output:string) is det.
 %

@@ -1,0 +1,120 @@
+:- module(rtl_raise,
+          [ new_event/1,                % +Event
+            new_event/2,                % +Event, +Time
+            new_event/3,                % +Event, +Secs, +NSecs
+            rtl_input/4,                % +Op, +Event, +Start, +End
+            rtl_flush_raised/0
+          ]).
+
+/** <module> Raising events from Prolog code (thesis Listing A.1)
+
+new_event/1,2,3 raise a new *input* event from an action (`Head do Goal <- Pattern`), a
+where condition, a static rule or a directive. The event is not processed on the spot:
+it is queued and processed after the event being processed has been handled completely
+(with everything it derived), in the order the events were raised. Events raised while
+queued events are processed go to the end of the queue.
+
+rtl_input/4 is the entry for events from outside (the JSON Lines readers, the Python
+driver): it processes one event and then the queue. An event raised while no event is
+being processed (at the top level, or by the Python driver) is processed at once; one
+raised while a program is being loaded waits for the first input event (or
+rtl_flush_raised/0).
+*/
+
+:- use_module(rtl_ele).
+:- use_module(rtl_time).
+
+:- dynamic raised/3.            % raised(Event, Start, End), oldest first
+
+%!  new_event(+Event) is det.
+%!  new_event(+Event, +Time) is det.
+%!  new_event(+Event, +Secs, +NSecs) is det.
+%
+%   Raise Event as an input event. Its time is the clock (the largest end time processed
+%   so far; 0 before the first event) for new_event/1; Time for new_event/2, either one
+%   time (an atomic event) or an interval `[T1, T2]`, each time a number of seconds, a
+%   ROS stamp `[Secs, NSecs]` or `datime/7`; the ROS stamp `Secs + NSecs/10^9` for
+%   new_event/3. Event must be ground.
+
+new_event(Event) :-
+    rtl_clock(Clock),
+    (   Clock =:= -inf -> T = 0 ; T = Clock ),
+    raise(Event, T, T).
+
+new_event(Event, Time) :-
+    (   time_interval(Time, Start, End)
+    ->  raise(Event, Start, End)
+    ;   type_error(event_time, Time)
+    ).
+
+new_event(Event, Secs, NSecs) :-
+    (   integer(Secs), integer(NSecs)
+    ->  rtl_time_seconds([Secs, NSecs], T),
+        raise(Event, T, T)
+    ;   type_error(ros_stamp, [Secs, NSecs])
+    ).
+
+% A list of two times is an interval; [Secs, NSecs] stamps are written new_event/3 or as
+% one element of an interval: new_event(E, [[S1, N1], [S2, N2]]).
+time_interval([T1, T2], Start, End) :- !,
+    rtl_time_seconds(T1, Start),
+    rtl_time_seconds(T2, End),
+    Start =< End.
+time_interval(T, Start, Start) :-
+    rtl_time_seconds(T, Start).
+
+raise(Event, Start, End) :-
+    (   ground(Event), callable(Event)
+    ->  true
+    ;   var(Event)
+    ->  instantiation_error(Event)
+    ;   callable(Event)
+    ->  throw(error(instantiation_error, context(new_event/1, 'an event must be ground')))
+    ;   type_error(event, Event)
+    ),
+    (   nb_current(rtl_raise_busy, true)
+    ->  assertz(raised(Event, Start, End))
+    ;   prolog_load_context(module, _)
+    ->  assertz(raised(Event, Start, End))
+    ;   rtl_input(add, Event, Start, End)
+    ).
+
+%!  rtl_input(+Op, +Event, +Start, +End) is det.
+%
+%   Process one input event (Op `add`) or deletion (Op `retract`), then every event raised
+%   meanwhile. Events raised before (at load time) are processed first.
+
+rtl_input(Op, Event, Start, End) :-
+    (   nb_current(rtl_raise_busy, true)
+    ->  process(Op, Event, Start, End)           % nested call from a rule: no draining here
+    ;   setup_call_cleanup(nb_setval(rtl_raise_busy, true),
+                           ( drain,
+                             process(Op, Event, Start, End),
+                             drain ),
+                           nb_setval(rtl_raise_busy, false))
+    ).
+
+%!  rtl_flush_raised is det.
+%
+%   Process the events raised and not yet processed (those raised while the program was
+%   being loaded).
+
+rtl_flush_raised :-
+    (   nb_current(rtl_raise_busy, true)
+    ->  true
+    ;   setup_call_cleanup(nb_setval(rtl_raise_busy, true),
+                           drain,
+                           nb_setval(rtl_raise_busy, false))
+    ).
+
+process(add, Event, Start, End) :-
+    rtl_event(Event, Start, End).
+process(retract, Event, Start, End) :-
+    rtl_retract_event(Event, Start, End).
+
+drain :-
+    (   retract(raised(Event, Start, End))
+    ->  rtl_event(Event, Start, End),
+        drain
+    ;   true
+    ).

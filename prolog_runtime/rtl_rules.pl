@@ -1,0 +1,272 @@
+:- module(rtl_rules,
+          [ ins_event_rule/1,           % :Rule
+            del_event_rule/1,           % :Label
+            rtl_install_rules/3,        % +Module, +ClausesText, -Ids
+            rtl_remove_rule/2,          % +Module, +Id
+            rtl_rule_exists/2,          % +Module, +Id
+            rtl_fresh_rule_prefix/2     % +Module, -Prefix
+          ]).
+
+/** <module> Adding and removing event rules while events flow (ETALIS ins_event_rule)
+
+ins_event_rule/1 compiles an event rule with the retalisc compiler (`retalisc
+compile-rules`, run as a subprocess) and adds the generated clauses to the running
+program; del_event_rule/1 removes every clause, trigger and stored partial match of a rule.
+The Python driver compiles in-process and calls rtl_install_rules/3 and
+rtl_remove_rule/2 directly.
+
+A rule added at runtime starts with empty stores: it sees only the events processed after
+it was added, as in ETALIS. A rule's generated predicates are those named `e_<Id>_<N>` and
+`e_<Id>_<N>_<suffix>` (N a step number); its triggers are the `ele_trigger/3` and
+`ele_untrigger/3` clauses whose body calls one of them. This holds for the rules of the
+program file too, so del_event_rule/1 removes those as well.
+*/
+
+:- use_module(library(process)).
+:- use_module(library(readutil)).
+:- use_module(rtl_ele).
+:- use_module(rtl_library, [rtl_target_program/2]).
+
+:- meta_predicate ins_event_rule(:), del_event_rule(:).
+
+:- dynamic added_rule/2.        % added_rule(Module, Id)
+
+%!  ins_event_rule(:Rule) is det.
+%
+%   Add an event rule to the running program. Rule is the rule's text (a string or an
+%   atom, in .rtl syntax, the final full stop optional), or the rule as a term
+%   (`Head <- Pattern`, `Label : (Head <- Pattern)`) when the event operators are
+%   declared where it is written. An unlabelled rule gets a fresh id. Raises a
+%   permission error when a rule with the same label exists, and a
+%   `retalis_compile_error` with the compiler's message for a bad rule.
+%
+%   The compiler is run as `PYTHON -m retalisc compile-rules`, PYTHON being the
+%   environment variable `RETALISC_PYTHON`, the Python that compiled the program, the
+%   `.venv` next to the runtime, or `python3`, whichever is found first.
+
+ins_event_rule(Caller:Rule) :-
+    rtl_target_program(Caller, M),
+    rule_text(Rule, Text),
+    rtl_fresh_rule_prefix(M, Prefix),
+    run_compiler(M, Prefix, Text, Clauses),
+    rtl_install_rules(M, Clauses, _).
+
+%!  del_event_rule(:Label) is det.
+%
+%   Remove the rule Label (added at runtime or compiled with the program): its triggers,
+%   its generated predicates and its stored partial matches. Raises an existence error
+%   when there is no such rule.
+
+del_event_rule(Caller:Label) :-
+    rtl_target_program(Caller, M),
+    must_be(atom, Label),
+    rtl_remove_rule(M, Label).
+
+%!  rtl_install_rules(+Module, +Text:string, -Ids:list(atom)) is det.
+%
+%   Add the rules in Text, the output of `retalisc compile-rules`, to Module. Nothing is
+%   added when one of their ids is in use.
+
+rtl_install_rules(M, Text, Ids) :-
+    read_rules(M, Text, Rules),
+    findall(Id, member(rule(Id, _, _), Rules), Ids),
+    forall(member(Id, Ids),
+           (   rtl_rule_exists(M, Id)
+           ->  throw(error(permission_error(add, event_rule, Id),
+                           context(ins_event_rule/1, 'a rule with this id exists; delete it first')))
+           ;   true
+           )),
+    forall(member(rule(Id, Stores, Clauses), Rules),
+           install_rule(M, Id, Stores, Clauses)),
+    rtl_collect_garbage.                 % reschedules the sweep for the new windows
+
+install_rule(M, Id, Stores, Clauses) :-
+    forall(member(store(Name, Arity, Window), Stores),
+           (   dynamic(M:Name/Arity),
+               assertz(M:ele_partial_store(Name, Arity)),
+               (   Window == none -> true ; assertz(M:ele_store(Name, Arity, Window)) )
+           )),
+    forall(member(Clause, Clauses), assertz(M:Clause)),
+    assertz(added_rule(M, Id)).
+
+read_rules(M, Text, Rules) :-
+    setup_call_cleanup(open_string(Text, In),
+                       read_terms(In, M, Terms),
+                       close(In)),
+    group_rules(Terms, Rules).
+
+read_terms(In, M, Terms) :-
+    read_term(In, Term, [module(M)]),
+    (   Term == end_of_file
+    ->  Terms = []
+    ;   Terms = [Term|Rest],
+        read_terms(In, M, Rest)
+    ).
+
+group_rules([], []).
+group_rules(['$rtl_rule'(Id, Stores)|Terms], [rule(Id, Stores, Clauses)|Rules]) :- !,
+    take_clauses(Terms, Clauses, Rest),
+    group_rules(Rest, Rules).
+group_rules([Term|_], _) :-
+    domain_error(compiled_rules, Term).
+
+take_clauses([], [], []).
+take_clauses([T|Ts], Clauses, Rest) :-
+    (   T = '$rtl_rule'(_, _)
+    ->  Clauses = [], Rest = [T|Ts]
+    ;   Clauses = [T|Cs],
+        take_clauses(Ts, Cs, Rest)
+    ).
+
+%!  rtl_remove_rule(+Module, +Id) is det.
+%
+%   Remove rule Id from Module (see del_event_rule/1).
+
+rtl_remove_rule(M, Id) :-
+    (   rtl_rule_exists(M, Id)
+    ->  true
+    ;   existence_error(event_rule, Id)
+    ),
+    forall(member(Trigger, [ele_trigger(_, _, _), ele_untrigger(_, _, _)]),
+           forall(( predicate_property(M:Trigger, dynamic),
+                    clause(M:Trigger, Body, Ref),
+                    calls_rule(Body, Id) ),
+                  erase(Ref))),
+    forall(( M:ele_partial_store(Name, Arity), rule_pred_name(Id, Name) ),
+           ( functor(Head, Name, Arity),
+             retractall(M:Head),
+             retractall(M:ele_partial_store(Name, Arity)),
+             retractall(M:ele_store(Name, Arity, _)) )),
+    forall(( current_predicate(M:Name/Arity), rule_pred_name(Id, Name),
+             functor(Head, Name, Arity),
+             \+ predicate_property(M:Head, imported_from(_)) ),
+           remove_predicate(M, Name, Arity)),
+    retractall(added_rule(M, Id)),
+    rtl_collect_garbage.
+
+remove_predicate(M, Name, Arity) :-
+    functor(Head, Name, Arity),
+    (   predicate_property(M:Head, dynamic)
+    ->  retractall(M:Head)
+    ;   catch(abolish(M:Name/Arity), _, true)
+    ).
+
+calls_rule(Body, Id) :-
+    sub_term(Goal, Body),
+    callable(Goal),
+    functor(Goal, Name, _),
+    rule_pred_name(Id, Name),
+    !.
+
+%!  rtl_rule_exists(+Module, +Id) is semidet.
+%
+%   Module has a rule Id: added at runtime, or with generated predicates of its name.
+
+rtl_rule_exists(M, Id) :-
+    (   added_rule(M, Id)
+    ->  true
+    ;   current_predicate(M:Name/_),
+        rule_pred_name(Id, Name)
+    ->  true
+    ).
+
+%   Name is `e_<Id>_<digits>` or `e_<Id>_<digits>_<suffix>`, the suffix not starting with
+%   a digit (`e_r1_2_1` belongs to rule `r1_2`, not `r1`).
+rule_pred_name(Id, Name) :-
+    atom(Name),
+    atomic_list_concat([e_, Id, '_'], Prefix),
+    atom_concat(Prefix, Tail, Name),
+    atom_codes(Tail, Codes),
+    digits(Codes, Rest),
+    (   Rest == []
+    ->  true
+    ;   Rest = [0'_, C|_],
+        \+ code_type(C, digit)
+    ).
+
+digits([C|Cs], Rest) :-
+    code_type(C, digit), !,
+    digits_(Cs, Rest).
+
+digits_([C|Cs], Rest) :-
+    code_type(C, digit), !,
+    digits_(Cs, Rest).
+digits_(Rest, Rest).
+
+%!  rtl_fresh_rule_prefix(+Module, -Prefix) is det.
+%
+%   A prefix `rt<N>` no rule of Module uses: unlabelled added rules are `rt<N>_<K>`.
+
+rtl_fresh_rule_prefix(M, Prefix) :-
+    (   nb_current(rtl_rule_counter, N0) -> true ; N0 = 0 ),
+    N is N0 + 1,
+    nb_setval(rtl_rule_counter, N),
+    atom_concat(rt, N, Candidate),
+    atomic_list_concat([e_, Candidate, '_'], Start),
+    (   ( added_rule(M, Id), sub_atom(Id, 0, _, _, Candidate)
+        ; current_predicate(M:Name/_), sub_atom(Name, 0, _, _, Start)
+        )
+    ->  rtl_fresh_rule_prefix(M, Prefix)
+    ;   Prefix = Candidate
+    ).
+
+% ---- the compiler subprocess -----------------------------------------------------------
+
+rule_text(Rule, Text) :-
+    (   var(Rule)
+    ->  instantiation_error(Rule)
+    ;   string(Rule) -> Text0 = Rule
+    ;   atom(Rule) -> atom_string(Rule, Text0)
+    ;   with_output_to(string(Text0),
+                       \+ \+ ( numbervars(Rule, 0, _),
+                               write_term(Rule, [quoted(true), ignore_ops(true), numbervars(true)]) ))
+    ),
+    split_string(Text0, "", " \t\n", [Trimmed]),
+    (   sub_string(Trimmed, _, 1, 0, ".")
+    ->  Text = Trimmed
+    ;   string_concat(Trimmed, ".", Text)
+    ).
+
+run_compiler(M, Prefix, Text, Clauses) :-
+    compiler_python(M, Python),
+    runtime_root(Root),
+    setup_call_cleanup(
+        process_create(Python, ['-m', retalisc, 'compile-rules', '--module', M,
+                                '--rule-prefix', Prefix, '--name', 'ins_event_rule'],
+                       [ stdin(pipe(In)), stdout(pipe(Out)), stderr(pipe(Err)),
+                         cwd(Root), process(Pid) ]),
+        ( set_stream(In, encoding(utf8)),
+          set_stream(Out, encoding(utf8)),
+          set_stream(Err, encoding(utf8)),
+          format(In, "~s~n", [Text]),
+          close(In),
+          read_string(Out, _, Clauses),
+          read_string(Err, _, Messages),
+          process_wait(Pid, Status) ),
+        ( close(Out, [force(true)]), close(Err, [force(true)]) )),
+    (   Status == exit(0)
+    ->  true
+    ;   split_string(Messages, "", "\n", [Message]),
+        throw(error(retalis_compile_error(Message), context(ins_event_rule/1, Text)))
+    ).
+
+:- multifile prolog:error_message//1.
+prolog:error_message(retalis_compile_error(Message)) -->
+    [ 'the event rule does not compile:~n~s'-[Message] ].
+
+compiler_python(M, Python) :-
+    (   getenv('RETALISC_PYTHON', P), P \== ''
+    ->  Python = P
+    ;   catch(M:ele_compiler_python(P), _, fail)
+    ->  Python = P
+    ;   runtime_root(Root),
+        directory_file_path(Root, '.venv/bin/python', P),
+        exists_file(P)
+    ->  Python = P
+    ;   Python = path(python3)
+    ).
+
+runtime_root(Root) :-
+    module_property(rtl_rules, file(File)),
+    file_directory_name(File, Runtime),
+    file_directory_name(Runtime, Root).

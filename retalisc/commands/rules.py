@@ -1,0 +1,33 @@
+"""`retalisc compile-rules`: compile event rules for a running program (ins_event_rule/1)."""
+from __future__ import annotations
+
+import sys
+
+import click
+
+from ..frontend.errors import RetalisError
+from ..runtime_rules import compile_rules
+
+
+@click.command("compile-rules")
+@click.option("--module", "module", required=True, help="Module of the running program.")
+@click.option("--rule-prefix", default="rt", show_default=True,
+              help="Unlabelled rules get the ids PREFIX_1, PREFIX_2, ...")
+@click.option("--name", default="<rules>", show_default=True, help="File name used in messages.")
+def compile_rules_command(module: str, rule_prefix: str, name: str) -> None:
+    """Compile the event rules read from standard input for program MODULE and write the
+    clauses to add to it, each rule introduced by `'$rtl_rule'(Id, Stores).` (used by the
+    runtime's ins_event_rule/1)."""
+    text = sys.stdin.read()
+    try:
+        result = compile_rules(text, module, rule_prefix, name)
+    except RetalisError as error:
+        click.echo(error.render(), err=True)
+        sys.exit(2)
+    except ValueError as error:
+        click.echo(f"error: {error}", err=True)
+        sys.exit(2)
+    click.echo(result.text, nl=False)
+
+
+COMMANDS = [compile_rules_command]
