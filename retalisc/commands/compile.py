@@ -72,7 +72,14 @@ def check_command(program: str) -> None:
                    "(default 1.0).")
 @click.option("--batch-size", type=click.IntRange(1), default=2000, show_default=True,
               help="Events handed to Prolog per call.")
-def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int) -> None:
+@click.option("--consumer-dir", type=click.Path(file_okay=False), default=None,
+              help="Write the subscription deliveries of each consumer to DIR/<consumer>.jsonl instead "
+                   "of the output.")
+@click.option("--subscribe", "subscriptions", multiple=True, metavar="'CONSUMER=QUERY[=>TEMPLATE]'",
+              help="Subscribe CONSUMER to the events matching QUERY (Event or Event-[Goals]), delivered "
+                   "as TEMPLATE (default: the event). Repeatable.")
+def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
+                consumer_dir, subscriptions) -> None:
     """Run PROGRAM over an event file, printing derived events as JSON Lines."""
     from ..driver.engine import Engine
     from ..driver.run import run_event_file
@@ -83,8 +90,27 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         engine.set_flag("echo_input", "true")
     if max_delay is not None:
         engine.set_flag("max_delay", repr(max_delay))
-    status = run_event_file(engine, events, out, batch_size=batch_size)
+    for spec in subscriptions:
+        add_cli_subscription(engine, spec)
+    status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir)
     sys.exit(status)
+
+
+def add_cli_subscription(engine, spec: str) -> None:
+    """`--subscribe 'CONSUMER=QUERY[=>TEMPLATE]'`: a usage error (exit 2) when it is malformed."""
+    from ..driver.bridge import PrologError
+    from ..driver.engine import prolog_string
+
+    consumer, sep, rest = spec.partition("=")
+    query, _, template = rest.partition("=>")
+    if not sep or not consumer.strip() or not query.strip():
+        raise click.UsageError(f"--subscribe {spec!r}: expected 'CONSUMER=QUERY' or 'CONSUMER=QUERY=>TEMPLATE'")
+    text = f"q(({query}), ({template or '_'}))"
+    try:
+        engine.bridge.once(f"term_string(T, {prolog_string(text)}), T = q(Q, Tmpl), "
+                           f"retalis:sub(_, {prolog_string(consumer.strip())}, Q, Tmpl, (-inf))")
+    except PrologError as error:
+        raise click.UsageError(f"--subscribe {spec!r}: {error}")
 
 
 COMMANDS = [compile_command, check_command, run_command]

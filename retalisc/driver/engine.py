@@ -13,7 +13,7 @@ import json
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterable, List, Optional, Sequence, Tuple, Union
+from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, module_name
 from .bridge import Bridge
@@ -53,6 +53,17 @@ def prolog_string(text: str) -> str:
     return f'"{escaped}"'
 
 
+def _bound_text(value, default: str) -> str:
+    """A subscription time bound as Prolog text: a number, "now", or the default."""
+    if value is None:
+        return default
+    if value in ("now", "inf"):
+        return value
+    if value == "-inf":
+        return "(-inf)"
+    return _number_text(value)
+
+
 def _number_text(value: Number) -> str:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TypeError(f"a time must be a number of seconds, not {value!r}")
@@ -69,6 +80,7 @@ class Engine:
         self.bridge = bridge or Bridge()
         self.module = module
         self._callbacks: List[Callable[[OutputEvent], None]] = []
+        self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")
         self.bridge.consult(str(prolog_file))
         if module:
@@ -158,7 +170,56 @@ class Engine:
         for callback in self._callbacks:
             for event in events:
                 callback(event)
+        if self._consumers:
+            for event in events:
+                for callback in self._consumers.get(event.consumer, []) if event.consumer is not None else []:
+                    callback(event)
         return events
+
+    # ---- subscriptions (thesis 3.4) and runtime rules --------------------------------------
+
+    def subscribe(self, consumer: str, pattern_text: str, template_text: Optional[str] = None,
+                  conditions_text: str = "[]", start: Union[Number, str, None] = None,
+                  end: Union[Number, str, None] = None,
+                  callback: Optional[Callable[[OutputEvent], None]] = None) -> str:
+        """Deliver every event matching `pattern_text` (term text) and `conditions_text` (a
+        Prolog list of goals) that occurs within [start, end] to `consumer`, as
+        `template_text` (default: the event itself). `start`/`end` are seconds or "now";
+        None means unbounded. Deliveries come back as OutputEvents with `consumer` set,
+        and go to `callback` if given. Returns the subscription id (text). A bad
+        subscription raises PrologError saying why; nothing is registered then."""
+        text = f"s(({pattern_text}), ({template_text or '_'}), ({conditions_text}))"
+        goal = (f"term_string(T, {prolog_string(text)}), T = s(P, Tmpl, Conds), "
+                f"retalis:rtl_subscribe(Id, {prolog_string(consumer)}, P, Conds, Tmpl, "
+                f"{_bound_text(start, '(-inf)')}, {_bound_text(end, 'inf')}), "
+                f"term_string(Id, IdText)")
+        subscription_id = self.bridge.call_text(goal, "IdText")
+        if callback is not None:
+            self._consumers.setdefault(consumer, []).append(callback)
+        return subscription_id
+
+    def unsubscribe(self, subscription_id: str, end: Union[Number, str, None] = None) -> None:
+        """Stop delivering the events of subscription `subscription_id` that end after `end`
+        (seconds; default "now", the clock)."""
+        self.bridge.once(f"term_string(Id, {prolog_string(str(subscription_id))}), "
+                         f"retalis:rtl_unsubscribe(Id, {_bound_text(end, 'now')})")
+
+    def add_rules(self, text: str) -> List[str]:
+        """Add the event rules in `text` (.rtl syntax) to the running program; they see only
+        the events processed from now on. Unlabelled rules get fresh ids. Returns the rule
+        ids. Raises RetalisError for a rule that does not compile, PrologError when a label
+        is already in use."""
+        from ..runtime_rules import compile_rules
+
+        prefix = self.bridge.call_text(f"retalis:rtl_fresh_rule_prefix({self.module}, P)", "P")
+        compiled = compile_rules(text, self.module, prefix)
+        self.bridge.once(f"retalis:rtl_install_rules({self.module}, {prolog_string(compiled.text)}, _)")
+        return compiled.rule_ids
+
+    def remove_rule(self, label: str) -> None:
+        """Remove the event rule `label` (added at runtime or compiled with the program), its
+        triggers and its stored partial matches."""
+        self.bridge.once(f"atom_string(Id, {prolog_string(label)}), retalis:rtl_remove_rule({self.module}, Id)")
 
     def clear(self) -> None:
         """Forget every event seen so far (partial matches, clock, statistics)."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import IO, Iterator, List, Tuple
+from typing import IO, Dict, Iterator, List, Optional, Tuple
 
 import click
 
@@ -22,14 +22,17 @@ def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str]]
         yield first, batch
 
 
-def run_event_file(engine: Engine, events: str, out: str = "-", batch_size: int = 2000) -> int:
+def run_event_file(engine: Engine, events: str, out: str = "-", batch_size: int = 2000,
+                   consumer_dir: Optional[str] = None) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`;
-    a summary closes the run. Returns the exit status."""
+    a summary closes the run. With `consumer_dir`, subscription deliveries go to
+    `consumer_dir/<consumer>.jsonl` instead of `out`. Returns the exit status."""
     name = "<stdin>" if events == "-" else events
     source = sys.stdin if events == "-" else open(events, encoding="utf-8")
     sink = sys.stdout if out == "-" else open(out, "w", encoding="utf-8")
     total = os.path.getsize(events) if events != "-" else 0
+    consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
     show_progress = total > 5_000_000 and sys.stderr.isatty()
     try:
         with click.progressbar(length=total, label="events", file=sys.stderr) if show_progress else _NoBar() as bar:
@@ -39,7 +42,10 @@ def run_event_file(engine: Engine, events: str, out: str = "-", batch_size: int 
                 for rejection in rejected:
                     print(f"{name}:{rejection.line}: rejected: {rejection.reason}", file=sys.stderr)
                 for event in produced:
-                    sink.write(event.line + "\n")
+                    if consumers is not None and event.consumer is not None:
+                        consumers.write(event)
+                    else:
+                        sink.write(event.line + "\n")
                 bar.update(len(text.encode("utf-8")) + len(lines))
         sink.flush()
     finally:
@@ -47,8 +53,38 @@ def run_event_file(engine: Engine, events: str, out: str = "-", batch_size: int 
             source.close()
         if sink is not sys.stdout:
             sink.close()
+        if consumers is not None:
+            consumers.close()
     print(engine.summary(), file=sys.stderr)
     return 0
+
+
+def consumer_file_name(consumer: str) -> str:
+    """The file of a consumer's deliveries: leading slashes dropped, every character other
+    than letters, digits, `_`, `-`, `.` written `_` (the runtime's rtl_consumer_dir/1 rule)."""
+    base = "".join(c if (c.isalnum() or c in "_-.") else "_" for c in consumer.lstrip("/"))
+    return (base or "_") + ".jsonl"
+
+
+class ConsumerFiles:
+    """One JSON Lines file per consumer in a directory, opened at its first delivery."""
+
+    def __init__(self, directory: str):
+        self.directory = directory
+        os.makedirs(directory, exist_ok=True)
+        self.files: Dict[str, IO[str]] = {}
+
+    def write(self, event) -> None:
+        stream = self.files.get(event.consumer)
+        if stream is None:
+            path = os.path.join(self.directory, consumer_file_name(event.consumer))
+            stream = self.files[event.consumer] = open(path, "w", encoding="utf-8")
+        stream.write(event.line + "\n")
+
+    def close(self) -> None:
+        for stream in self.files.values():
+            stream.close()
+        self.files.clear()
 
 
 class _NoBar:
