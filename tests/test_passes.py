@@ -114,7 +114,9 @@ def test_edbc_stores_are_keyed_by_join_variables():
     assert "e_r1_1_rights(I, Y, RStart, REnd)" in left and "LEnd < RStart" in left
     assert "assertz(e_r1_1_lefts(I, X, LStart, LEnd))" in left
     right = next(t for t in texts if t.startswith("e_r1_1_right("))
-    assert "rtl_may_precede(RStart)" in right
+    assert "assertz(e_r1_1_rights(I, Y, RStart, REnd))" in right
+    undo = next(t for t in texts if t.startswith("e_r1_1_left_retract("))
+    assert "retract(e_r1_1_lefts(I, X, LStart, LEnd))" in undo and "e_r1_1_retract(I, X, Y, LStart, REnd)" in undo
 
 
 def test_edbc_time_variables_do_not_capture_user_variables():
@@ -132,5 +134,5 @@ def test_pipeline_dump_after_every_pass():
 
 def test_unsupported_operator_reports_its_place():
     with pytest.raises(RetalisSemanticError) as info:
-        through("h <- a.\nh2 <- x par y.", binarize)
+        through("h <- a.\nh2(N) <- s seq aggregate(count, x, N).", binarize)
     assert info.value.span.line == 2

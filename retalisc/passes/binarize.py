@@ -14,12 +14,17 @@ from typing import List, Optional, Set
 
 from ..frontend.errors import RetalisSemanticError
 from ..frontend.program import Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
-from ..frontend.terms import Compound, Term, Var, variables
+from ..frontend.terms import Atom, Compound, Term, Var, variables
 from .unit import BinaryRule, Operand, Step, Unit
 
 name = "binarize"
 
-SUPPORTED_OPERATORS = ("seq", "and", "or")
+SUPPORTED_OPERATORS = ("seq", "and", "par", "or", "equals", "meets", "during", "starts", "finishes", "fnot")
+
+# `P check C`: t1(T) and t2(T) in C are P's start and end, written as these placeholders
+# until edbc knows the names of the time variables.
+START_MARK = Atom("$start")
+END_MARK = Atom("$end")
 
 
 def run(unit: Unit) -> Unit:
@@ -87,18 +92,42 @@ class _Binarizer:
                 step = self.new_step("pass", operand, None, inner_window)
                 return Operand(step.output, step)
             return operand
+        if isinstance(pattern, Check):
+            condition = _mark_times(pattern.condition)
+            return self.lower(Where(pattern.pattern, condition, pattern.span), window)
+        if isinstance(pattern, Binary) and pattern.op == "fnot":
+            left = self.lower(pattern.left, window)
+            negated = self.lower(pattern.right, window)
+            step = self.new_step("fnot", left, None, window)
+            step.negated = negated
+            return Operand(step.output, step)
         if isinstance(pattern, Binary):
             if pattern.op not in SUPPORTED_OPERATORS:
-                raise RetalisSemanticError(f"the operator '{pattern.op}' is not supported yet", pattern.span)
+                raise RetalisSemanticError(f"the operator '{pattern.op}' is not supported", pattern.span)
             left = self.lower(pattern.left, window)
             right = self.lower(pattern.right, window)
             step = self.new_step(pattern.op, left, right, window)
             return Operand(step.output, step)
         if isinstance(pattern, Negation):
-            raise RetalisSemanticError("negation not(P).[P1, P2] is not supported yet", pattern.span)
-        if isinstance(pattern, (Check, Aggregate)):
-            raise RetalisSemanticError(f"'{type(pattern).__name__.lower()}' is not supported yet", pattern.span)
+            left = self.lower(pattern.first, window)
+            right = self.lower(pattern.second, window)
+            negated = self.lower(pattern.negated, window)
+            step = self.new_step("cnot", left, right, window)
+            step.negated = negated
+            return Operand(step.output, step)
+        if isinstance(pattern, Aggregate):
+            raise RetalisSemanticError("aggregate/3 patterns are not supported by this version", pattern.span)
         raise TypeError(pattern)
+
+
+def _mark_times(condition: Term) -> Term:
+    """t1(T) -> T = '$start', t2(T) -> T = '$end' (ETALIS `check`)."""
+    if isinstance(condition, Compound):
+        if condition.name in ("t1", "t2") and condition.arity == 1:
+            mark = START_MARK if condition.name == "t1" else END_MARK
+            return Compound("=", (condition.args[0], mark))
+        return Compound(condition.name, tuple(_mark_times(a) for a in condition.args), condition.span)
+    return condition
 
 
 def _operand_variables(operand: Operand) -> List[Var]:

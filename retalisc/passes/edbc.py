@@ -1,42 +1,57 @@
 """edbc: generate the event-driven backward-chaining rules of every step (thesis 6.3.1,
-Algorithm 1) as Prolog clause terms.
+Algorithms 1 and 2) as Prolog clause terms.
 
-For a step `e <- L op R` the generated code is, per side (shown for the left side):
+For a step `e <- L op R` the add rules are, per side (shown for the left side):
 
-    e_left(LVars, S1, E1) :-                       % an instance of L has occurred
-        forall(( e_rights(Key, ROther, S2, E2),    % every R seen so far with the same key
+    e_left(LVars, LStart, LEnd) :-                  % an instance of L has occurred
+        forall(( e_rights(Key, ROther, RStart, REnd),  % every R seen so far with the same key
                  <temporal relation of op>, <window> ),
-               e(Vars, S, E)),                     % ... completes e
-        assertz(e_lefts(Key, LOther, S1, E1)).     % remember L for R's still to come
+               e(Vars, Start, End)),                 % ... completes e
+        assertz(e_lefts(Key, LOther, LStart, LEnd)). % remember L for R's still to come
 
-Stores are symmetric, so a match is found whichever of its events arrives last: the
-result does not depend on arrival order (thesis 3.3.2). The join variables come first in
-a stored partial match, so SWI-Prolog's just-in-time index finds the partners by key
-instead of scanning every pending match (the bottleneck of the original ETALIS).
-`e(Vars, S, E)` then checks the step's where-conditions and passes the match on to the
-step that consumes it, or derives the rule's head.
+and the delete rules (`e_left_retract`, ...) remove the stored instance and retract every
+result it took part in (`e_retract`). Stores are symmetric, so a match is found whichever
+of its events arrives last: the result does not depend on arrival order (thesis 3.3.2).
+The join variables come first in a stored partial match, so SWI-Prolog's just-in-time index
+finds the partners by key instead of scanning every pending match.
+
+Negation (`cnot`: no N between L and R; `fnot`: no N before L) derives eagerly and takes a
+result back when a blocking event arrives late; deleting the blocker derives it again.
+
+Under the `recent` and `chronological` consumption policies (ETALIS), an arriving event
+joins with the newest (or oldest) waiting partner only, and both are consumed.
 """
 from __future__ import annotations
 
-from typing import Dict, List, Optional, Set
+from typing import Dict, List, Optional, Set, Tuple
 
+from ..frontend.parser import read_term
 from ..frontend.program import pattern_text
-from ..frontend.terms import Atom, Compound, Number, Term, Var, variables
+from ..frontend.terms import Atom, Compound, Number, Term, Var, substitute, variables
 from ..frontend.writer import write_term
+from .binarize import END_MARK, START_MARK
 from .unit import BinaryRule, GeneratedRule, Operand, Step, Unit
 
 name = "edbc"
 
 # Temporal relation and result interval of each binary operator, on the intervals
-# [S1, E1] (left) and [S2, E2] (right). Interval operators come with the full ELE issue.
-_RELATIONS = {
+# [S1, E1] (left) and [S2, E2] (right). docs/language.md has the same table.
+RELATIONS: Dict[str, Tuple[Optional[str], str, str]] = {
     "seq": ("E1 < S2", "S1", "E2"),
     "and": (None, "min(S1, S2)", "max(E1, E2)"),
+    "par": ("S1 < E2, S2 < E1", "min(S1, S2)", "max(E1, E2)"),
+    "equals": ("S1 =:= S2, E1 =:= E2", "S1", "E1"),
+    "meets": ("E1 =:= S2", "S1", "E2"),
+    "during": ("S2 < S1, E1 < E2", "S2", "E2"),
+    "starts": ("S1 =:= S2, E1 < E2", "S1", "E2"),
+    "finishes": ("E1 =:= E2, S2 < S1", "S2", "E1"),
+    "cnot": ("E1 < S2", "S1", "E2"),
 }
 
 
 def run(unit: Unit) -> Unit:
-    unit.generated = [_RuleGenerator(rule).generate() for rule in unit.rules]
+    policy = unit.settings.consumption_policy
+    unit.generated = [_RuleGenerator(rule, policy).generate() for rule in unit.rules]
     return unit
 
 
@@ -48,7 +63,7 @@ def C(name_: str, *args: Term) -> Compound:
     return Compound(name_, tuple(args))
 
 
-def conj(goals: List[Term]) -> Term:
+def conj(goals: List[Optional[Term]]) -> Term:
     goals = [g for g in goals if g is not None]
     if not goals:
         return Atom("true")
@@ -58,156 +73,19 @@ def conj(goals: List[Term]) -> Term:
     return result
 
 
-def clause(head: Term, body: List[Term]) -> Term:
+def clause(head: Term, body: List[Optional[Term]]) -> Term:
     goals = [g for g in body if g is not None]
     return C(":-", head, conj(goals)) if goals else head
 
 
-class _RuleGenerator:
-    def __init__(self, rule: BinaryRule):
-        self.rule = rule
-        used: Set[str] = set()
-        source = rule.rule
-        for t in [source.head] + ([source.action] if source.action is not None else []):
-            used.update(v.name for v in variables(t))
-        for step in rule.steps:
-            for operand in (step.left, step.right):
-                if operand is not None:
-                    used.update(v.name for v in variables(operand.term))
-                    used.update(v.name for f in operand.filters for v in variables(f))
-            used.update(v.name for c in step.conditions for v in variables(c))
-        self.time_names: Dict[str, str] = {}
-        readable = {"S": "Start", "E": "End", "S1": "LStart", "E1": "LEnd", "S2": "RStart", "E2": "REnd"}
-        for base, fresh in readable.items():
-            while fresh in used:
-                fresh += "_"
-            self.time_names[base] = fresh
-        self.clauses: List[Term] = []
-        self.triggers: List[Term] = []
-        self.stores: List[tuple] = []
-
-    def t(self, base: str) -> Var:
-        return V(self.time_names[base])
-
-    def expr(self, text: str) -> Term:
-        """A small arithmetic expression over the time variables, e.g. `min(S1, S2)`."""
-        from ..frontend.parser import read_term
-
-        renamed = read_term(text)
-        mapping = {k: V(v) for k, v in self.time_names.items()}
-        from ..frontend.terms import substitute
-
-        return substitute(renamed, mapping)
-
-    def generate(self) -> GeneratedRule:
-        self.consumers: Dict[str, str] = {}
-        for step in self.rule.steps:
-            for side, operand in (("left", step.left), ("right", step.right)):
-                if operand is not None and operand.step is not None:
-                    self.consumers[operand.step.name] = f"{step.name}_{side}"
-        for step in self.rule.steps:
-            self.step_clauses(step)
-        source = self.rule.rule
-        comment = f"{source.span}: {source.source.strip()}"
-        return GeneratedRule(self.rule.rule_id, comment, self.clauses, self.triggers, self.stores)
-
-    # ---- arrivals ---------------------------------------------------------------------
-
-    def arrival(self, operand: Operand, handler: str, s: Var, e: Var) -> None:
-        """For an event atom: an `ele_trigger/3` clause that runs `handler(Vars, S, E)` when the
-        event occurs (after the where-conditions pushed onto it). A step's output reaches its
-        handler through the step's own clause (see step_output)."""
-        if not operand.is_event:
-            return
-        if isinstance(operand.end, Var) and operand.start == operand.end:
-            start, end = s, operand.end                      # E^T: T is the end time
-        else:
-            start = operand.start if isinstance(operand.start, Var) else s
-            end = operand.end if isinstance(operand.end, Var) else e
-        call = C(handler, *operand_vars(operand), start, end)
-        self.triggers.append(clause(C("ele_trigger", operand.term, start, end), list(operand.filters) + [call]))
-
-    # ---- steps ------------------------------------------------------------------------
-
-    def step_clauses(self, step: Step) -> None:
-        s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
-        if step.right is None or step.op == "or":
-            for side, operand in (("left", step.left), ("right", step.right)):
-                if operand is None:
-                    continue
-                handler = f"{step.name}_{side}"
-                self.arrival(operand, handler, s1, e1)
-                params = operand_vars(operand)
-                window = self.window_check(step, s1, e1)
-                self.clauses.append(clause(C(handler, *params, s1, e1),
-                                           [window, C(step.name, *step.output.args, s1, e1)]))
-        else:
-            self.join_clauses(step)
-        self.step_output(step)
-
-    def join_clauses(self, step: Step) -> None:
-        relation, start_expr, end_expr = _RELATIONS[step.op]
-        left_vars = operand_vars(step.left)
-        right_vars = operand_vars(step.right)
-        right_names = {v.name for v in right_vars}
-        key = [v for v in left_vars if v.name in right_names]
-        key_names = {v.name for v in key}
-        left_other = [v for v in left_vars if v.name not in key_names]
-        right_other = [v for v in right_vars if v.name not in key_names]
-        lefts, rights = f"{step.name}_lefts", f"{step.name}_rights"
-        s1, e1, s2, e2, s, e = (self.t(n) for n in ("S1", "E1", "S2", "E2", "S", "E"))
-        self.stores.append((lefts, len(key) + len(left_other) + 2, step.window))
-        self.stores.append((rights, len(key) + len(right_other) + 2, step.window))
-
-        interval = []
-        if start_expr in ("S1", "S2"):
-            s = self.t(start_expr)
-        else:
-            interval.append(C("is", s, self.expr(start_expr)))
-        if end_expr in ("E1", "E2"):
-            e = self.t(end_expr)
-        else:
-            interval.append(C("is", e, self.expr(end_expr)))
-        match = ([self.expr(relation)] if relation else []) + interval + [self.window_check(step, s, e)]
-        output = C(step.name, *step.output.args, s, e)
-
-        for side, own, own_other, other_store, other_other, own_store, (os, oe) in (
-                ("left", left_vars, left_other, rights, right_other, lefts, (s1, e1)),
-                ("right", right_vars, right_other, lefts, left_other, rights, (s2, e2))):
-            handler = f"{step.name}_{side}"
-            operand = step.left if side == "left" else step.right
-            self.arrival(operand, handler, os, oe)
-            ps, pe = (s2, e2) if side == "left" else (s1, e1)
-            partner = C(other_store, *key, *other_other, ps, pe)
-            remember = C("assertz", C(own_store, *key, *own_other, os, oe))
-            if step.op == "seq" and side == "right":
-                # a right-hand event only waits for left-hand events that may still arrive
-                remember = C("->", C("rtl_may_precede", os), remember)
-                remember = C(";", remember, Atom("true"))
-            self.clauses.append(clause(C(handler, *own, os, oe),
-                                       [C("forall", conj([partner] + [m for m in match if m is not None]), output),
-                                        remember]))
-
-    def window_check(self, step: Step, s: Var, e: Var) -> Optional[Term]:
-        if step.window is None:
-            return None
-        return C("=<", C("-", e, s), Number(_number(step.window)))
-
-    def step_output(self, step: Step) -> None:
-        s, e = self.t("S"), self.t("E")
-        head = C(step.name, *step.output.args, s, e)
-        if step.derives_head:
-            rule = self.rule.rule
-            action = C("rtl_action", rule.action) if rule.action is not None else None
-            derive = None if rule.head == Atom("null") else C("rtl_derived", rule.head, s, e)
-            then = conj([g for g in (action, derive) if g is not None])
-        else:
-            then = C(self.consumers[step.name], *step.output.args, s, e)
-        if step.conditions:
-            body = [C("forall", conj(step.conditions), then)]
-        else:
-            body = [then]
-        self.clauses.append(clause(head, body))
+def conjuncts(goal: Term) -> List[Term]:
+    goals = []
+    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
+        goals.append(goal.args[0])
+        goal = goal.args[1]
+    if goal != Atom("true"):
+        goals.append(goal)
+    return goals
 
 
 def operand_vars(operand: Operand) -> List[Var]:
@@ -215,17 +93,268 @@ def operand_vars(operand: Operand) -> List[Var]:
         return list(operand.step.output.args)
     found: List[Var] = []
     seen: Set[str] = set()
-    for t in [operand.term] + [x for x in (operand.start, operand.end) if isinstance(x, Var)]:
+    terms = [operand.term] + [x for x in (operand.start, operand.end) if isinstance(x, Var)] + list(operand.filters)
+    for t in terms:
         for v in variables(t):
             if v.name not in seen:
                 seen.add(v.name)
                 found.append(Var(v.name))
-    for f in operand.filters:
-        for v in variables(f):
-            if v.name not in seen:
-                seen.add(v.name)
-                found.append(Var(v.name))
     return found
+
+
+def _split(own: List[Var], other: List[Var]) -> Tuple[List[Var], List[Var]]:
+    """(key, rest): the variables of `own` shared with `other` (the join key), then the others."""
+    other_names = {v.name for v in other}
+    key = [v for v in own if v.name in other_names]
+    return key, [v for v in own if v.name not in other_names]
+
+
+class _RuleGenerator:
+    def __init__(self, rule: BinaryRule, policy: str):
+        self.rule = rule
+        self.policy = policy
+        used: Set[str] = set()
+        source = rule.rule
+        for t in [source.head] + ([source.action] if source.action is not None else []):
+            used.update(v.name for v in variables(t))
+        for step in rule.steps:
+            for operand in (step.left, step.right, step.negated):
+                if operand is not None:
+                    used.update(v.name for v in operand_vars(operand))
+            used.update(v.name for c in step.conditions for v in variables(c))
+        self.time_names: Dict[str, str] = {}
+        readable = {"S": "Start", "E": "End", "S1": "LStart", "E1": "LEnd", "S2": "RStart", "E2": "REnd",
+                    "SN": "NStart", "EN": "NEnd"}
+        for base, fresh in readable.items():
+            while fresh in used:
+                fresh += "_"
+            self.time_names[base] = fresh
+        self.clauses: List[Term] = []
+        self.triggers: List[Term] = []
+        self.stores: List[tuple] = []
+        self.consumers: Dict[str, str] = {}
+
+    def t(self, base: str) -> Var:
+        return V(self.time_names[base])
+
+    def expr(self, text: str) -> List[Term]:
+        """Goals over the time variables, e.g. "E1 < S2, S2 < E1", renamed to this rule's names."""
+        term = read_term(text)
+        return conjuncts(substitute(term, {k: V(v) for k, v in self.time_names.items()}))
+
+    def interval(self, expression: str, target: Var) -> Tuple[Var, List[Term]]:
+        """The variable holding an interval end: an operand's own, or `target is Expr`."""
+        if expression in self.time_names:
+            return self.t(expression), []
+        return target, [C("is", target, self.expr(expression)[0])]
+
+    def generate(self) -> GeneratedRule:
+        for step in self.rule.steps:
+            for side, operand in (("left", step.left), ("right", step.right), ("negated", step.negated)):
+                if operand is not None and operand.step is not None:
+                    self.consumers[operand.step.name] = f"{step.name}_{side}"
+        for step in self.rule.steps:
+            if step.op == "cnot":
+                self.negation_clauses(step)
+            elif step.op == "fnot":
+                self.fnot_clauses(step)
+            elif step.right is None or step.op == "or":
+                self.forward_clauses(step)
+            else:
+                self.join_clauses(step)
+            self.output_clauses(step)
+        source = self.rule.rule
+        comment = f"{source.span}: {source.source.strip()}"
+        return GeneratedRule(self.rule.rule_id, comment, self.clauses, self.triggers, self.stores)
+
+    # ---- arrivals ---------------------------------------------------------------------
+
+    def arrival(self, operand: Operand, handler: str, s: Var, e: Var) -> None:
+        """For an event atom: `ele_trigger/3` and `ele_untrigger/3` clauses that run
+        `handler(Vars, S, E)` / `handler_retract(...)` when the event occurs or is deleted."""
+        if not operand.is_event:
+            return
+        if isinstance(operand.end, Var) and operand.start == operand.end:
+            start, end = s, operand.end                      # E^T: T is the end time
+        else:
+            start = operand.start if isinstance(operand.start, Var) else s
+            end = operand.end if isinstance(operand.end, Var) else e
+        filters = [self.times(f, start, end) for f in operand.filters]
+        params = operand_vars(operand)
+        self.triggers.append(clause(C("ele_trigger", operand.term, start, end),
+                                    filters + [C(handler, *params, start, end)]))
+        self.triggers.append(clause(C("ele_untrigger", operand.term, start, end),
+                                    filters + [C(handler + "_retract", *params, start, end)]))
+
+    def times(self, goal: Term, start: Var, end: Var) -> Term:
+        """Replace the `check` placeholders for the start and end time."""
+        if goal == START_MARK:
+            return start
+        if goal == END_MARK:
+            return end
+        if isinstance(goal, Compound):
+            return Compound(goal.name, tuple(self.times(a, start, end) for a in goal.args))
+        return goal
+
+    def store(self, step: Step, suffix: str, args: List[Term]) -> Term:
+        name_ = f"{step.name}_{suffix}"
+        self.stores.append((name_, len(args), step.window))
+        return C(name_, *args)
+
+    def window_check(self, step: Step, s: Var, e: Var) -> Optional[Term]:
+        if step.window is None:
+            return None
+        return C("=<", C("-", e, s), Number(_number(step.window)))
+
+    def output(self, step: Step, s: Var, e: Var, retract: bool = False) -> Term:
+        return C(step.name + ("_retract" if retract else ""), *step.output.args, s, e)
+
+    # ---- steps ------------------------------------------------------------------------
+
+    def forward_clauses(self, step: Step) -> None:
+        """`or` and single-operand steps: every operand instance is a result."""
+        s1, e1 = self.t("S1"), self.t("E1")
+        for side, operand in (("left", step.left), ("right", step.right)):
+            if operand is None:
+                continue
+            handler = f"{step.name}_{side}"
+            self.arrival(operand, handler, s1, e1)
+            params = operand_vars(operand)
+            window = self.window_check(step, s1, e1)
+            for suffix, retract in (("", False), ("_retract", True)):
+                self.clauses.append(clause(C(handler + suffix, *params, s1, e1),
+                                           [window, self.output(step, s1, e1, retract)]))
+
+    def join_clauses(self, step: Step) -> None:
+        relation, start_expr, end_expr = RELATIONS[step.op]
+        s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
+        left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
+        key, left_other = _split(left_vars, right_vars)
+        _, right_other = _split(right_vars, left_vars)
+        lefts = self.store(step, "lefts", key + left_other + [s1, e1])
+        rights = self.store(step, "rights", key + right_other + [s2, e2])
+        s, start_goals = self.interval(start_expr, self.t("S"))
+        e, end_goals = self.interval(end_expr, self.t("E"))
+        match = (self.expr(relation) if relation else []) + start_goals + end_goals + [self.window_check(step, s, e)]
+        sides = (("left", step.left, left_vars, lefts, rights), ("right", step.right, right_vars, rights, lefts))
+        for side, operand, own_vars, own_store, partner_store in sides:
+            handler = f"{step.name}_{side}"
+            os_, oe = (s1, e1) if side == "left" else (s2, e2)
+            self.arrival(operand, handler, os_, oe)
+            found = conj([partner_store] + match)
+            if self.policy == "unrestricted":
+                add_body = [C("forall", found, self.output(step, s, e)), C("assertz", own_store)]
+            else:
+                add_body = [self.consuming_join(found, partner_store, own_store, self.output(step, s, e))]
+            self.clauses.append(clause(C(handler, *own_vars, os_, oe), add_body))
+            self.clauses.append(clause(C(handler + "_retract", *own_vars, os_, oe), [
+                C(";", C("->", C("retract", own_store), Atom("true")), Atom("true")),
+                C("forall", found, self.output(step, s, e, retract=True))]))
+
+    def consuming_join(self, found: Term, partner: Term, own: Term, output: Term) -> Term:
+        """recent/chronological: join with one waiting partner, the newest (recent: stores
+        are filled with asserta, so it comes first) or the oldest, and consume both; with no
+        partner, wait. Under `recent` a waiting twin of the same event is replaced."""
+        store = "asserta" if self.policy == "recent" else "assertz"
+        wait = C(store, own)
+        if self.policy == "recent":
+            twin = Compound(own.name, tuple(own.args[:-2]) + (Var("_"), Var("_")))
+            wait = C(",", C("retractall", twin), wait)
+        consume = C(",", C("retract", partner), output)
+        return C(";", C("->", C("once", found), consume), wait)
+
+    def negation_clauses(self, step: Step) -> None:
+        """not(N).[L, R]: L seq R with no N strictly between L's end and R's start."""
+        s1, e1, s2, e2, sn, en = (self.t(n) for n in ("S1", "E1", "S2", "E2", "SN", "EN"))
+        left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
+        negated_vars = operand_vars(step.negated)
+        key, left_other = _split(left_vars, right_vars)
+        _, right_other = _split(right_vars, left_vars)
+        pair_vars = _unique(left_vars + right_vars)
+        negated_key, negated_other = _split(negated_vars, pair_vars)
+        lefts = self.store(step, "lefts", key + left_other + [s1, e1])
+        rights = self.store(step, "rights", key + right_other + [s2, e2])
+        negs = self.store(step, "negs", negated_key + negated_other + [sn, en])
+        blocked_name = f"{step.name}_blocked"
+        blocked = C(blocked_name, *negated_key, e1, s2)
+        self.clauses.append(clause(blocked, [negs, C("<", e1, sn), C("<", en, s2), Atom("!")]))
+        window = self.window_check(step, s1, e2)
+        pair = [C("<", e1, s2), window, C("\\+", blocked)]
+        for side, operand, own_vars, own_store, partner_store in (
+                ("left", step.left, left_vars, lefts, rights), ("right", step.right, right_vars, rights, lefts)):
+            handler = f"{step.name}_{side}"
+            os_, oe = (s1, e1) if side == "left" else (s2, e2)
+            self.arrival(operand, handler, os_, oe)
+            found = conj([partner_store] + pair)
+            self.clauses.append(clause(C(handler, *own_vars, os_, oe), [
+                C("forall", found, self.output(step, s1, e2)), C("assertz", own_store)]))
+            self.clauses.append(clause(C(handler + "_retract", *own_vars, os_, oe), [
+                C(";", C("->", C("retract", own_store), Atom("true")), Atom("true")),
+                C("forall", found, self.output(step, s1, e2, retract=True))]))
+        # a blocker takes back the results it falls inside of; deleting it restores them
+        handler = f"{step.name}_negated"
+        self.arrival(step.negated, handler, sn, en)
+        inside = conj([lefts, C("<", e1, sn), rights, C("<", en, s2), window, C("\\+", blocked)])
+        self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
+            C("forall", inside, self.output(step, s1, e2, retract=True)), C("assertz", negs)]))
+        self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
+            C(";", C("->", C("retract", negs), Atom("true")), Atom("true")),
+            C("forall", inside, self.output(step, s1, e2))]))
+
+    def fnot_clauses(self, step: Step) -> None:
+        """L fnot N: L, unless an N ended before L started (within the window, if any)."""
+        s1, e1, sn, en = (self.t(n) for n in ("S1", "E1", "SN", "EN"))
+        left_vars, negated_vars = operand_vars(step.left), operand_vars(step.negated)
+        negated_key, negated_other = _split(negated_vars, left_vars)
+        left_key, left_other = _split(left_vars, negated_vars)
+        lefts = self.store(step, "lefts", left_key + left_other + [s1, e1])
+        negs = self.store(step, "negs", negated_key + negated_other + [sn, en])
+        blocked = C(f"{step.name}_blocked", *negated_key, s1, e1)
+        self.clauses.append(clause(blocked, [negs, C("<", en, s1), self.window_check(step, sn, e1), Atom("!")]))
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        unblocked = conj([C("\\+", blocked), self.window_check(step, s1, e1)])
+        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [
+            C(";", C("->", unblocked, self.output(step, s1, e1)), Atom("true")), C("assertz", lefts)]))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
+            C(";", C("->", C("retract", lefts), Atom("true")), Atom("true")),
+            C(";", C("->", unblocked, self.output(step, s1, e1, retract=True)), Atom("true"))]))
+        handler = f"{step.name}_negated"
+        self.arrival(step.negated, handler, sn, en)
+        after = conj([lefts, C("<", en, s1), self.window_check(step, sn, e1), C("\\+", blocked)])
+        self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
+            C("forall", after, self.output(step, s1, e1, retract=True)), C("assertz", negs)]))
+        self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
+            C(";", C("->", C("retract", negs), Atom("true")), Atom("true")),
+            C("forall", after, self.output(step, s1, e1))]))
+
+    def output_clauses(self, step: Step) -> None:
+        """`e(Vars, S, E)`: check the step's conditions, then pass the result on (or derive
+        the head); `e_retract(Vars, S, E)` takes it back the same way."""
+        s, e = self.t("S"), self.t("E")
+        conditions = [self.times(c, s, e) for c in step.conditions]
+        for retract in (False, True):
+            head = self.output(step, s, e, retract)
+            if step.derives_head:
+                rule = self.rule.rule
+                derive = "rtl_underived" if retract else "rtl_derived"
+                action = C("rtl_action", rule.action) if rule.action is not None and not retract else None
+                result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
+                then = conj([action, result]) if (action or result) else Atom("true")
+            else:
+                consumer = self.consumers[step.name] + ("_retract" if retract else "")
+                then = C(consumer, *step.output.args, s, e)
+            body = [C("forall", conj(conditions), then)] if conditions else [then]
+            self.clauses.append(clause(head, body))
+
+
+def _unique(found: List[Var]) -> List[Var]:
+    seen, result = set(), []
+    for v in found:
+        if v.name not in seen:
+            seen.add(v.name)
+            result.append(v)
+    return result
 
 
 def _number(value: float):

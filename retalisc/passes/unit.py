@@ -45,13 +45,15 @@ class Step:
     where-conditions checked on its result and the window its matches must fit in."""
 
     name: str                       # e_<rule>_<n>
-    op: str                         # seq, and, or, pass, ...
+    op: str                         # seq, and, par, or, equals, ..., cnot, fnot, pass
     left: Operand
     right: Optional[Operand]
     output: Term                    # e_<rule>_<n>(Vars...) or, for the last step, the head
     window: Optional[float] = None
     conditions: List[Term] = field(default_factory=list)
     derives_head: bool = False
+    negated: Optional[Operand] = None   # cnot: no `negated` between left and right;
+                                        # fnot: no `negated` before left
 
 
 @dataclass
@@ -67,6 +69,10 @@ class BinaryRule:
         lines = [f"% {self.rule_id}: {write_term(self.rule.head)} <- {pattern_text(self.rule.pattern)}"]
         for step in self.steps:
             right = f" {step.op} {_operand_text(step.right)}" if step.right is not None else ""
+            if step.op == "cnot":
+                right = f" seq {_operand_text(step.right)} with no {_operand_text(step.negated)} between"
+            elif step.op == "fnot":
+                right = f" fnot {_operand_text(step.negated)}"
             cond = f" where {', '.join(write_term(c, 999) for c in step.conditions)}" if step.conditions else ""
             window = f" within {step.window:g}" if step.window is not None else ""
             lines.append(f"{write_term(step.output)} <- {_operand_text(step.left)}{right}{cond}{window}")
