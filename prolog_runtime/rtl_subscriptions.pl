@@ -38,6 +38,8 @@ one failed index lookup.
 :- use_module(rtl_ele).
 :- use_module(rtl_time).
 :- use_module(rtl_io).
+:- use_module(library(occurs)).
+
 
 % subscription(Program, Id, Consumer, Pattern, Conds, Template, Ts, Te)
 :- dynamic subscription/8.
@@ -103,6 +105,7 @@ subscribe_between(Consumer, Query, Template, Ts, Te) :-
 %!  rtl_subscribe(?Id, +Consumer, +Pattern, +Conds:list, ?Template, +Ts, +Te) is det.
 %
 %   Register a subscription of the running program. Id is a fresh integer when unbound.
+%   A Template that is a variable not occurring in Pattern or Conds stands for the event.
 %   Consumer is an atom or string; Ts and Te are `now`, `inf` (Te), `-inf` (Ts) or times.
 %   Raises a type, domain or permission error (with the subscription in its context) for a
 %   bad subscription: nothing is registered then.
@@ -118,7 +121,10 @@ rtl_subscribe(Id, Consumer, Pattern, Conds, Template, Ts0, Te0) :-
     ->  permission_error(create, subscription, Consumer/Id)
     ;   true
     ),
-    (   var(Template) -> Template = Pattern ; true ),
+    (   var(Template), \+ sub_var(Template, Pattern-Conds)
+    ->  Template = Pattern                 % no template: the event itself
+    ;   true
+    ),
     atom_string(ConsumerAtom, Consumer),
     functor(Pattern, Name, Arity),
     assertz(subscription(M, Id, ConsumerAtom, Pattern, Conds, Template, Ts, Te)),
