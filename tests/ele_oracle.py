@@ -7,6 +7,7 @@ Events are (term, start, end) with ground terms from `retalisc.frontend.terms`. 
 """
 from __future__ import annotations
 
+from collections import Counter
 from typing import Dict, List, Optional, Tuple
 
 from retalisc.frontend.program import Binary, Check, EventAtom, Negation, Pattern, Where, Window
@@ -138,3 +139,12 @@ def substitute_ground(term: Term, bindings: Dict[str, Term]) -> Term:
     if isinstance(term, Compound):
         return Compound(term.name, tuple(substitute_ground(a, bindings) for a in term.args))
     return term
+
+
+def net_output(outputs) -> Counter:
+    """The engine's output as a multiset of `event@start-end`: additions minus retractions.
+    Negation derives eagerly and takes back, so only the net result is order-independent."""
+    result = Counter()
+    for o in outputs:
+        result[f"{o.event}@{o.start}-{o.end}"] += 1 if o.op == "add" else -1
+    return +result if all(v >= 0 for v in result.values()) else result

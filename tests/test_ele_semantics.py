@@ -15,7 +15,7 @@ from retalisc.frontend.parser import read_term
 from retalisc.frontend.program import parse_program
 from retalisc.frontend.writer import write_term
 
-from ele_oracle import matches, substitute_ground
+from ele_oracle import matches, net_output, substitute_ground
 
 OPERATORS = ["seq", "and", "par", "equals", "meets", "during", "starts", "finishes"]
 
@@ -54,14 +54,6 @@ def oracle(events):
         for bindings, start, end in matches(rule.pattern, parsed):
             result[f"{write_term(substitute_ground(rule.head, bindings), 999).replace(' ', '')}@{start}-{end}"] += 1
     return result
-
-
-def net_output(outputs):
-    result = Counter()
-    for o in outputs:
-        key = f"{o.event}@{o.start}-{o.end}"
-        result[key] += 1 if o.op == "add" else -1
-    return +result if all(v >= 0 for v in result.values()) else result
 
 
 def feed(engine, ops):
