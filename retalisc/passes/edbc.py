@@ -264,7 +264,8 @@ class _RuleGenerator:
         return C(";", C("->", C("once", found), consume), wait)
 
     def negation_clauses(self, step: Step) -> None:
-        """not(N).[L, R]: L seq R with no N strictly between L's end and R's start."""
+        """not(N).[L, R]: L seq R with no N strictly between L's end and R's start. Under a
+        consumption policy, L and R pair up as in a join and a later N takes nothing back."""
         s1, e1, s2, e2, sn, en = (self.t(n) for n in ("S1", "E1", "S2", "E2", "SN", "EN"))
         left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
         negated_vars = operand_vars(step.negated)
@@ -286,8 +287,11 @@ class _RuleGenerator:
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
             self.arrival(operand, handler, os_, oe)
             found = conj([partner_store] + pair)
-            self.clauses.append(clause(C(handler, *own_vars, os_, oe), [
-                C("forall", found, self.output(step, s1, e2)), C("assertz", own_store)]))
+            if self.policy == "unrestricted":
+                add_body = [C("forall", found, self.output(step, s1, e2)), C("assertz", own_store)]
+            else:
+                add_body = [self.consuming_join(found, partner_store, own_store, self.output(step, s1, e2))]
+            self.clauses.append(clause(C(handler, *own_vars, os_, oe), add_body))
             self.clauses.append(clause(C(handler + "_retract", *own_vars, os_, oe), [
                 C(";", C("->", C("retract", own_store), Atom("true")), Atom("true")),
                 C("forall", found, self.output(step, s1, e2, retract=True))]))
@@ -295,6 +299,11 @@ class _RuleGenerator:
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
         inside = conj([lefts, C("<", e1, sn), rights, C("<", en, s2), window, C("\\+", blocked)])
+        if self.policy != "unrestricted":
+            self.clauses.append(clause(C(handler, *negated_vars, sn, en), [C("assertz", negs)]))
+            self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
+                C(";", C("->", C("retract", negs), Atom("true")), Atom("true"))]))
+            return
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
             C("forall", inside, self.output(step, s1, e2, retract=True)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
