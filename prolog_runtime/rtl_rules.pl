@@ -78,7 +78,7 @@ rtl_install_rules(M, Text, Ids) :-
            )),
     forall(member(rule(Id, Stores, Clauses), Rules),
            install_rule(M, Id, Stores, Clauses)),
-    rtl_collect_garbage.                 % reschedules the sweep for the new windows
+    reschedule_sweep.
 
 install_rule(M, Id, Stores, Clauses) :-
     forall(member(store(Name, Arity, Window), Stores),
@@ -142,14 +142,19 @@ rtl_remove_rule(M, Id) :-
              \+ predicate_property(M:Head, imported_from(_)) ),
            remove_predicate(M, Name, Arity)),
     retractall(added_rule(M, Id)),
-    rtl_collect_garbage.
+    reschedule_sweep.
+
+%   The sweep of windowed stores is scheduled from the smallest window: setting the delay
+%   bound (to its current value) schedules it again for the rules now present.
+reschedule_sweep :-
+    rtl_flag(max_delay, Delay),
+    rtl_set_flag(max_delay, Delay).
 
 remove_predicate(M, Name, Arity) :-
     functor(Head, Name, Arity),
-    (   predicate_property(M:Head, dynamic)
-    ->  retractall(M:Head)
-    ;   catch(abolish(M:Name/Arity), _, true)
-    ).
+    (   predicate_property(M:Head, dynamic) -> retractall(M:Head) ; true ),
+    catch(abolish(M:Name/Arity), E,
+          print_message(warning, format("del_event_rule: ~w/~w kept: ~q", [Name, Arity, E]))).
 
 calls_rule(Body, Id) :-
     sub_term(Goal, Body),
