@@ -11,6 +11,10 @@ The baseline, measured in the same run on the same stream, is a program whose on
 never matches: the floor cost of reading and dispatching an event. Ratios are
 events/s of the pattern divided by events/s of the baseline on the same path.
 
+Every pattern runs again under ETALIS's `recent` consumption policy without a window (the
+setting ETALIS is usually benchmarked in). Streams named "intervals" give each event a
+duration of 0..20 time units (ending at its time unit), so that par and during can match.
+
 Usage: python benchmarks/cep_throughput.py [--events N] [--out-dir DIR]
 Writes DIR/cep_throughput.json and DIR/cep_throughput.png.
 """
@@ -32,22 +36,46 @@ from retalisc.compiler import compile_source  # noqa: E402
 
 IDS = 100
 
-# name -> (rule text, event kinds, window)
+# name -> (rules, event kinds, window, stream). `{w}` is the window.
 PATTERNS = {
-    "baseline (no match)": ("never <- zzz_never.", "abc", None),
-    "a seq b seq c": ("out(I, X, Y, Z) <- (a(I, X) seq b(I, Y) seq c(I, Z)).{w}.", "abc", 300),
-    "a and b and c": ("out(I, X, Y, Z) <- (a(I, X) and b(I, Y) and c(I, Z)).{w}.", "abc", 150),
-    "(a seq b) or c": ("out(I, X, Y) <- ((a(I, X) seq b(I, Y)) or c(I, X)).{w}.", "abc", 300),
-    "a seq b where Y<K (10%)": ("out(I, X, Y) <- (a(I, X) seq b(I, Y) where Y < 11).{w}.", "ab", 300),
-    "a seq b where Y<K (50%)": ("out(I, X, Y) <- (a(I, X) seq b(I, Y) where Y < 51).{w}.", "ab", 300),
-    "a seq b where Y<K (100%)": ("out(I, X, Y) <- (a(I, X) seq b(I, Y) where Y < 101).{w}.", "ab", 300),
+    "baseline (no match)": ("never <- zzz_never.", "abc", None, "atomic"),
+    "a seq b seq c": ("out(I, X, Y, Z) <- (a(I, X) seq b(I, Y) seq c(I, Z)).{w}.", "abc", 300, "atomic"),
+    "a and b and c": ("out(I, X, Y, Z) <- (a(I, X) and b(I, Y) and c(I, Z)).{w}.", "abc", 150, "atomic"),
+    "(a seq b) or c": ("out(I, X, Y) <- ((a(I, X) seq b(I, Y)) or c(I, X)).{w}.", "abc", 300, "atomic"),
+    "a seq b where Y<K (10%)": ("out(I, X, Y) <- (a(I, X) seq b(I, Y) where Y < 11).{w}.", "ab", 300, "atomic"),
+    "a seq b where Y<K (50%)": ("out(I, X, Y) <- (a(I, X) seq b(I, Y) where Y < 51).{w}.", "ab", 300, "atomic"),
+    "a seq b where Y<K (100%)": ("out(I, X, Y) <- (a(I, X) seq b(I, Y) where Y < 101).{w}.", "ab", 300, "atomic"),
+    "not(c).[a, b]": ("out(I, X, Y) <- (not(c(I, _)).[a(I, X), b(I, Y)]).{w}.", "abc", 300, "atomic"),
+    "a par b": ("out(I, X, Y) <- (a(I, X) par b(I, Y)).{w}.", "ab", 300, "intervals"),
+    "a during b": ("out(I, X, Y) <- (a(I, X) during b(I, Y)).{w}.", "ab", 300, "intervals"),
+    "3-level hierarchy": ("l1(I, X, Y) <- (a(I, X) seq b(I, Y)).{w}.\n"
+                          "l2(I, X, Z) <- (l1(I, X, _) seq c(I, Z)).{w}.\n"
+                          "l3(I, X) <- (l2(I, X, _) and a(I, _)).{w}.", "abc", 200, "atomic"),
 }
+RECENT = ":- set_etalis_flag(event_consumption_policy, recent).\n"
+
+
+def variants():
+    """Every pattern with its window and unrestricted policy, then under `recent` unwindowed."""
+    for name, (rule, kinds, window, stream) in PATTERNS.items():
+        yield name, rule.replace(".{w}", ".{w}" if window else "").format(w=window), kinds, window, stream
+    for name, (rule, kinds, window, stream) in PATTERNS.items():
+        if window is None:
+            continue
+        unwindowed = _strip_window(rule)
+        yield f"{name} [recent]", RECENT + unwindowed, kinds, None, stream
+
+
+def _strip_window(rule: str) -> str:
+    """`head <- (P).{w}.` -> `head <- (P).` for every rule of the text."""
+    return rule.replace(").{w}.", ").")
+
 
 ENGINE_GOAL = """
 retalis:rtl_output_to(buffer),
 read_file_to_terms('{events}', Terms, []),
 statistics(cputime, T0),
-forall(member(ev(E, T), Terms), retalis:rtl_event(E, T, T)),
+forall(member(ev(E, S, T), Terms), retalis:rtl_event(E, S, T)),
 statistics(cputime, T1),
 retalis:rtl_stat(derived, D),
 Elapsed is T1 - T0,
@@ -56,21 +84,22 @@ halt.
 """
 
 
-def make_stream(kinds: str, n: int, seed: int = 7):
+def make_stream(kinds: str, n: int, intervals: bool, seed: int = 7):
     rng = random.Random(seed)
     events = []
     for t in range(1, n + 1):
         kind = rng.choice(kinds)
-        events.append((f"{kind}({rng.randint(1, IDS)}, {rng.randint(1, 100)})", t))
+        start = t - rng.randint(0, 20) if intervals else t
+        events.append((f"{kind}({rng.randint(1, IDS)}, {rng.randint(1, 100)})", start, t))
     return events
 
 
-def write_streams(directory: Path, kinds: str, n: int):
-    events = make_stream(kinds, n)
-    jsonl = directory / f"events_{kinds}.jsonl"
-    terms = directory / f"events_{kinds}.pl"
-    jsonl.write_text("".join(json.dumps({"event": e, "t": t}) + "\n" for e, t in events))
-    terms.write_text("".join(f"ev({e}, {t}).\n" for e, t in events))
+def write_streams(directory: Path, kinds: str, stream: str, n: int):
+    events = make_stream(kinds, n, stream == "intervals")
+    jsonl = directory / f"events_{kinds}_{stream}.jsonl"
+    terms = directory / f"events_{kinds}_{stream}.pl"
+    jsonl.write_text("".join(json.dumps({"event": e, "start": s, "end": t}) + "\n" for e, s, t in events))
+    terms.write_text("".join(f"ev({e}, {s}, {t}).\n" for e, s, t in events))
     return jsonl, terms
 
 
@@ -105,18 +134,22 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--events", type=int, default=100_000)
     parser.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
+    parser.add_argument("--only", help="run only the patterns whose name contains this text")
     args = parser.parse_args()
     args.out_dir.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix="cep-bench-"))
-    streams = {kinds: write_streams(work, kinds, args.events) for kinds in {k for _, k, _ in PATTERNS.values()}}
+    wanted = {(k, st) for _, k, _, st in PATTERNS.values()}
+    streams = {key: write_streams(work, key[0], key[1], args.events) for key in sorted(wanted)}
+    runs = list(variants())
+    if args.only:
+        runs = [r for r in runs if args.only in r[0] or r[0].startswith("baseline")]
 
     results = []
-    for index, (name, (rule, kinds, window)) in enumerate(PATTERNS.items(), start=1):
-        print(f"[{index}/{len(PATTERNS)}] {name} ...", file=sys.stderr, flush=True)
-        source = rule.format(w=window)
+    for index, (name, source, kinds, window, stream) in enumerate(runs, start=1):
+        print(f"[{index}/{len(runs)}] {name} ...", file=sys.stderr, flush=True)
         program = work / f"p{index}.pl"
         program.write_text(compile_source(source, f"p{index}.rtl", output_name=program.name).prolog)
-        jsonl, terms = streams[kinds]
+        jsonl, terms = streams[(kinds, stream)]
         row = {"pattern": name, "window": window, "rule": source}
         for path, measure in (("engine", lambda: measure_engine(program, terms)),
                               ("swipl", lambda: measure_swipl(program, jsonl)),
@@ -128,7 +161,7 @@ def main() -> int:
     base = results[0]
     print(f"\n{args.events:,} events, one per time unit, ids 1..{IDS}; events/s (ratio to the baseline "
           "on the same path)\n")
-    header = f"{'pattern':26} {'window':>6} {'derived':>8} {'engine':>18} {'swipl jsonl':>18} {'python':>18}"
+    header = f"{'pattern':36} {'window':>6} {'derived':>8} {'engine':>18} {'swipl jsonl':>18} {'python':>18}"
     print(header)
     print("-" * len(header))
     for row in results:
@@ -138,7 +171,7 @@ def main() -> int:
             ratio = rate / base[path]["events_per_s"]
             cells.append(f"{rate:>10,.0f} ({ratio:4.2f})")
         window = "-" if row["window"] is None else str(row["window"])
-        print(f"{row['pattern']:26} {window:>6} {row['engine']['derived']:>8,} {cells[0]:>18} {cells[1]:>18} "
+        print(f"{row['pattern']:36} {window:>6} {row['engine']['derived']:>8,} {cells[0]:>18} {cells[1]:>18} "
               f"{cells[2]:>18}")
     seq = next(r for r in results if r["pattern"] == "a seq b seq c")
     target = 100_000
