@@ -73,6 +73,7 @@ def test_unlabelled_rules_get_fresh_ids_and_labels_must_be_free():
 
 def test_an_added_windowed_rule_is_garbage_collected():
     engine = load("never <- zzz.\n")                              # no windowed store in the program
+    engine.set_flag("max_delay", "1.0")                             # flags are per process
     engine.add_rules("w : p(X) <- (a(X) seq b(X)).1.")
     engine.feed_batch([(f"a({i})", float(i)) for i in range(200)])
     assert engine.store_size() < 20                                 # (window + max_delay) worth of a's
