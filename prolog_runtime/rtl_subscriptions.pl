@@ -172,8 +172,20 @@ deliver(M, Id, Consumer, Event, Start, End, Op) :-
         Pattern = Event
     ->  forall(conditions_hold(M, Conds, subscription(Id, Consumer)),
                emit(Template, Start, End, Consumer, Op))
+    ;   expired(M, Id, Consumer)
+    ->  remove(M, Id, Consumer)
     ;   true
     ).
+
+%   An ended subscription is removed once no event it could still match can arrive: its
+%   end lies more than the delay bound before the clock.
+expired(M, Id, Consumer) :-
+    subscription(M, Id, Consumer, _, _, _, _, Te),
+    Te \== inf,
+    rtl_flag(max_delay, Delay),
+    Delay \== inf,
+    rtl_clock(Clock),
+    Clock - Delay > Te.
 
 conditions_hold(M, Conds, Which) :-
     catch(all_goals(Conds, M), Error,

@@ -179,3 +179,12 @@ def test_cli_run_consumer_dir_and_subscribe_option(tmp_path, retalisc_cmd):
     bad = subprocess.run(retalisc_cmd + ["run", str(program), "--events", str(events), "--subscribe", "oops"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "CONSUMER=QUERY" in bad.stderr
+
+
+def test_an_ended_subscription_is_dropped_once_the_clock_has_passed_its_end():
+    engine = load(RULES)
+    engine.set_flag("max_delay", "1.0")
+    engine.subscribe("c", "smoke(X)", end=5)
+    out = engine.feed_batch([("smoke(a)", 1), ("smoke(b)", 7)])
+    assert deliveries(out) == [("smoke(a)", 1, 1, "add")]
+    assert engine.bridge.all("retalis:rtl_subscription(I, C, _, _, _, _, _)", "I-C") == []
