@@ -134,5 +134,5 @@ def test_pipeline_dump_after_every_pass():
 
 def test_unsupported_operator_reports_its_place():
     with pytest.raises(RetalisSemanticError) as info:
-        through("h <- a.\nh2(N) <- s seq aggregate(count, x, N).", binarize)
+        through("h <- a.\nh2(N) <- aggregate(count, x, N).", binarize)
     assert info.value.span.line == 2

@@ -15,7 +15,7 @@ from typing import List, Optional, Set
 from ..frontend.errors import RetalisSemanticError
 from ..frontend.program import Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
 from ..frontend.terms import Atom, Compound, Term, Var, variables
-from .unit import BinaryRule, Operand, Step, Unit
+from .unit import BinaryRule, Operand, Step, Unit  # noqa: F401
 
 name = "binarize"
 
@@ -95,6 +95,18 @@ class _Binarizer:
         if isinstance(pattern, Check):
             condition = _mark_times(pattern.condition)
             return self.lower(Where(pattern.pattern, condition, pattern.span), window)
+        if isinstance(pattern, Binary) and pattern.op == "seq" and isinstance(pattern.right, Aggregate):
+            aggregate = pattern.right
+            if not isinstance(aggregate.value, Var):
+                raise RetalisSemanticError("the value of aggregate(F, P, V) must be a variable", aggregate.span)
+            left = self.lower(pattern.left, window)
+            right = self.lower(aggregate.pattern, window)
+            step_name = f"e_{self.rule_id}_{len(self.steps) + 1}"
+            output = Compound(step_name, tuple(_unique_vars(_operand_variables(left) + [aggregate.value])))
+            step = Step(step_name, "aggregate", left, right, output, window, aggregate=(aggregate.function,
+                                                                                         aggregate.value))
+            self.steps.append(step)
+            return Operand(step.output, step)
         if isinstance(pattern, Binary) and pattern.op == "fnot":
             left = self.lower(pattern.left, window)
             negated = self.lower(pattern.right, window)
@@ -116,7 +128,8 @@ class _Binarizer:
             step.negated = negated
             return Operand(step.output, step)
         if isinstance(pattern, Aggregate):
-            raise RetalisSemanticError("aggregate/3 patterns are not supported by this version", pattern.span)
+            raise RetalisSemanticError("aggregate(F, P, V) counts from a start event: write Start seq "
+                                       "aggregate(F, P, V)", pattern.span)
         raise TypeError(pattern)
 
 

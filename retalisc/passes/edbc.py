@@ -158,6 +158,8 @@ class _RuleGenerator:
                 self.negation_clauses(step)
             elif step.op == "fnot":
                 self.fnot_clauses(step)
+            elif step.op == "aggregate":
+                self.aggregate_clauses(step)
             elif step.right is None or step.op == "or":
                 self.forward_clauses(step)
             else:
@@ -336,6 +338,39 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
             C(";", C("->", C("retract", negs), Atom("true")), Atom("true")),
             C("forall", after, self.output(step, s1, e1))]))
+
+    def aggregate_clauses(self, step: Step) -> None:
+        """L seq aggregate(F, R, V): each L starts an accumulator; every later R updates the
+        accumulators of the L's before it (within the window) and yields their new value V.
+        Values follow the order R's are processed in; deleting an R does not undo them."""
+        function, value = step.aggregate
+        s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
+        acc0, acc = V(self.fresh("Acc0")), V(self.fresh("Acc"))
+        left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
+        key, left_other = _split(left_vars, right_vars)
+        # the accumulator sits before the times: the last two arguments of a store are its interval
+        lefts = self.store(step, "lefts", key + left_other + [acc0, s1, e1])
+        updated = C(lefts.name, *key, *left_other, acc, s1, e1)
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        initial = C(lefts.name, *key, *left_other, Atom("none"), s1, e1)
+        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [C("assertz", initial)]))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [C("retractall", initial)]))
+        handler = f"{step.name}_right"
+        self.arrival(step.right, handler, s2, e2)
+        found = conj([lefts, C("<", e1, s2), self.window_check(step, s1, e2)])
+        update = conj([C("rtl_aggregate", function, acc0, acc, value), C("retract", lefts),
+                       C("assertz", updated), self.output(step, s1, e2)])
+        self.clauses.append(clause(C(handler, *right_vars, s2, e2), [C("forall", found, update)]))
+        self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), []))
+
+    def fresh(self, base: str) -> str:
+        name_ = base
+        used = set(self.time_names.values()) | {v.name for s in self.rule.steps for o in (s.left, s.right)
+                                                if o is not None for v in operand_vars(o)}
+        while name_ in used:
+            name_ += "_"
+        return name_
 
     def output_clauses(self, step: Step) -> None:
         """`e(Vars, S, E)`: check the step's conditions, then pass the result on (or derive

@@ -54,6 +54,7 @@ class Step:
     derives_head: bool = False
     negated: Optional[Operand] = None   # cnot: no `negated` between left and right;
                                         # fnot: no `negated` before left
+    aggregate: Optional[tuple] = None   # (function, value variable) of `left seq aggregate(F, right, V)`
 
 
 @dataclass
@@ -73,6 +74,10 @@ class BinaryRule:
                 right = f" seq {_operand_text(step.right)} with no {_operand_text(step.negated)} between"
             elif step.op == "fnot":
                 right = f" fnot {_operand_text(step.negated)}"
+            elif step.op == "aggregate":
+                function, value = step.aggregate
+                right = (f" seq aggregate({write_term(function, 999)}, {_operand_text(step.right)}, "
+                         f"{write_term(value, 999)})")
             cond = f" where {', '.join(write_term(c, 999) for c in step.conditions)}" if step.conditions else ""
             window = f" within {step.window:g}" if step.window is not None else ""
             lines.append(f"{write_term(step.output)} <- {_operand_text(step.left)}{right}{cond}{window}")
