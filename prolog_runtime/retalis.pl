@@ -4,8 +4,8 @@
             rtl_run_jsonl_file/1,       % +File
             rtl_feed_lines/3,           % +Text, +FirstLineNo, -Output
             rtl_feed_events/2,          % +Events, -Output
-            rtl_may_precede/1,          % +Start
             rtl_action/1,               % :Goal
+            rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
             rtl_summary/1               % -Text
           ]).
 :- reexport(rtl_ele).
@@ -183,20 +183,6 @@ rtl_feed_events(Events, Output) :-
         string_concat(Joined, "\n", Output)
     ).
 
-%!  rtl_may_precede(+Start:number) is semidet.
-%
-%   True if an event ending before Start may still arrive: Start is later than the clock
-%   minus the delay bound. A sequence's right-hand event only waits for left-hand
-%   events while this holds.
-
-rtl_may_precede(Start) :-
-    rtl_flag(max_delay, Delay),
-    (   Delay == inf
-    ->  true
-    ;   rtl_clock(Clock),
-        Start > Clock - Delay
-    ).
-
 %!  rtl_action(:Goal) is det.
 %
 %   Run the action of a `Head do Goal <- Pattern` rule. An action that fails or raises
@@ -207,6 +193,26 @@ rtl_action(Goal) :-
     ->  true
     ;   print_message(warning, format("action failed: ~q", [Goal]))
     ).
+
+%!  rtl_aggregate(+Function, +Acc0, -Acc, -Value) is det.
+%
+%   One step of an ETALIS aggregate: Function is `count`, `sum(X)`, `min(X)`, `max(X)` or
+%   `avg(X)` with X bound to the new occurrence's value; Acc0 is `none` at the start.
+
+rtl_aggregate(count, Acc0, N, N) :-
+    ( Acc0 == none -> N = 1 ; N is Acc0 + 1 ).
+rtl_aggregate(sum(X), Acc0, S, S) :-
+    ( Acc0 == none -> S = X ; S is Acc0 + X ).
+rtl_aggregate(min(X), Acc0, M, M) :-
+    ( Acc0 == none -> M = X ; M is min(Acc0, X) ).
+rtl_aggregate(max(X), Acc0, M, M) :-
+    ( Acc0 == none -> M = X ; M is max(Acc0, X) ).
+rtl_aggregate(avg(X), Acc0, Sum-N, Avg) :-
+    (   Acc0 == none
+    ->  Sum = X, N = 1
+    ;   Acc0 = Sum0-N0, Sum is Sum0 + X, N is N0 + 1
+    ),
+    Avg is Sum / N.
 
 %!  rtl_summary(-Text:string) is det.
 
