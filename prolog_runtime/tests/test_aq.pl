@@ -1,0 +1,44 @@
+/*  plunit tests of rtl_aq.pl.  Load a program compiled from Program 4 of the thesis
+    (left recursion) whose path is in the environment variable AQ_TEST_PROGRAM:
+
+        AQ_TEST_PROGRAM=/tmp/p4.pl swipl -g run_tests -t halt prolog_runtime/tests/test_aq.pl
+*/
+:- use_module(library(plunit)).
+
+:- getenv('AQ_TEST_PROGRAM', File) -> consult(File) ; throw(error(existence_error(environment_variable, 'AQ_TEST_PROGRAM'), _)).
+
+:- begin_tests(rtl_aq, [cleanup(rtl_aq:aq_reset)]).
+
+test(left_recursion_terminates, [setup(aq_reset), cleanup(aq_reset), true(As == [path(0,1), path(0,2)])]) :-
+    aq_register(q, path(0, _), As).
+
+test(add_then_delete, [setup(aq_reset), cleanup((aq_reset, retractall(edge(2,3))))]) :-
+    aq_register(q, path(0, _), _), aq_events(_),
+    aq_assert(edge(2, 3)),
+    aq_events(E1), assertion(E1 == [ev(q, add, path(0,3))]),
+    aq_retract(edge(2, 3)),
+    aq_events(E2), assertion(E2 == [ev(q, delete, path(0,3))]).
+
+test(cycle_rederives, [setup(aq_reset), cleanup((aq_reset, retractall(edge(2,0)), retractall(edge(0,2))))]) :-
+    aq_register(q, path(0, _), _),
+    aq_assert(edge(2, 0)), aq_assert(edge(0, 2)), aq_events(_),
+    aq_retract(edge(1, 2)),          % path(0,2) still holds through edge(0,2)
+    aq_events(E), assertion(E == []),
+    aq_answers(q, As), assertion(As == [path(0,0), path(0,1), path(0,2)]),
+    aq_assert(edge(1, 2)).
+
+test(unregister_frees_everything, [setup(aq_reset)]) :-
+    aq_register(a, path(_, _), _),
+    aq_register(b, path(1, _), _),
+    aq_unregister(a), aq_unregister(b),
+    aq_stats(S),
+    forall(member(_=V, S), assertion(V == 0)).
+
+test(duplicate_id, [setup(aq_reset), cleanup(aq_reset), error(permission_error(register, active_query, q))]) :-
+    aq_register(q, path(0, _), _),
+    aq_register(q, path(1, _), _).
+
+test(not_dynamic, [error(permission_error(modify, static_procedure, path/2))]) :-
+    aq_assert(path(5, 6)).
+
+:- end_tests(rtl_aq).

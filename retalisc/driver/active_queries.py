@@ -1,0 +1,149 @@
+"""Python API for active queries (thesis chapter 6) over the in-process SWI-Prolog bridge.
+
+    aq = ActiveQueries.from_source(text, "shop.pl", mode="tabled")
+    aq.on_add(lambda qid, answer: ...)
+    aq.on_delete(lambda qid, answer: ...)
+    answers = aq.register("q1", "accessible(O, S)")   # current answers (writeq text, sorted)
+    aq.assert_fact("offers(s1, o7, 3)")                # callbacks fire for the changes
+    aq.retract_facts(["offers(s1, o7, 3)", "seller(s1, t1)"])   # one DRed pass
+    aq.unregister("q1")                                # frees its tables, goals and records
+
+Answers and facts cross the boundary as Prolog text; answers are goal instances written with
+writeq.  One program is loaded per process (the bridge has one Prolog engine): loading another
+program unloads the previous one and drops every query.
+"""
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+from typing import Callable, Dict, Iterable, List, Optional, Union
+
+from ..backends.prolog.aq_backend import compile_active_queries
+from ..frontend.terms import quote_atom
+from .bridge import Bridge
+
+QueryId = Union[str, int]
+Callback = Callable[[QueryId, str], None]
+
+_loaded: Dict[str, Optional[str]] = {"path": None}
+
+
+def _id_text(qid: QueryId) -> str:
+    if isinstance(qid, bool) or not isinstance(qid, (str, int)):
+        raise TypeError(f"query ids are str or int, not {type(qid).__name__}")
+    return str(qid) if isinstance(qid, int) else quote_atom(qid)
+
+
+def _strip(text: str) -> str:
+    text = text.strip()
+    return text[:-1] if text.endswith(".") else text
+
+
+class ActiveQueries:
+    """Register queries, update facts, receive add/delete notifications."""
+
+    def __init__(self, bridge: Optional[Bridge] = None):
+        self.bridge = bridge or Bridge()
+        self._on_add: List[Callback] = []
+        self._on_delete: List[Callback] = []
+        self._ids: Dict[str, QueryId] = {}
+        self._tmp = tempfile.TemporaryDirectory(prefix="retalisc_aq_")
+
+    # -- loading ---------------------------------------------------------------------------
+    @classmethod
+    def from_source(cls, source_text: str, file: str = "<program>", mode: str = "tabled",
+                    subsumption: bool = False, bridge: Optional[Bridge] = None) -> "ActiveQueries":
+        aq = cls(bridge)
+        aq.load(source_text, file, mode, subsumption)
+        return aq
+
+    @classmethod
+    def from_file(cls, path: Union[str, Path], mode: str = "tabled", subsumption: bool = False,
+                  bridge: Optional[Bridge] = None) -> "ActiveQueries":
+        text = Path(path).read_text(encoding="utf-8")
+        return cls.from_source(text, str(path), mode, subsumption, bridge)
+
+    def load(self, source_text: str, file: str = "<program>", mode: str = "tabled",
+             subsumption: bool = False) -> None:
+        """Compile the definite program and load it (replacing a previously loaded one)."""
+        prolog = compile_active_queries(source_text, file, mode=mode, subsumption=subsumption)
+        out = Path(self._tmp.name) / f"aq_program_{abs(hash(prolog)) % 10**12}.pl"
+        out.write_text(prolog, encoding="utf-8")
+        previous = _loaded["path"]
+        if previous is not None:
+            if self.bridge.once("current_predicate(rtl_aq:aq_reset/0)"):
+                self.bridge.once("rtl_aq:aq_reset")
+            # drop the facts asserted at run time too (reloading keeps them otherwise)
+            self.bridge.once("forall(catch(user:'$aq_fact_pred'(F), _, fail), retractall(user:F))")
+            self.bridge.once(f"unload_file({quote_atom(previous)})")
+        self.bridge.consult(out)
+        _loaded["path"] = str(out)
+        self._ids.clear()
+
+    # -- callbacks -------------------------------------------------------------------------
+    def on_add(self, callback: Callback) -> None:
+        self._on_add.append(callback)
+
+    def on_delete(self, callback: Callback) -> None:
+        self._on_delete.append(callback)
+
+    def _events(self) -> List[tuple]:
+        text = self.bridge.call_text(
+            "rtl_aq:aq_events(Es), with_output_to(string(Out), "
+            "forall(member(ev(I, O, A), Es), format('~q\\t~w\\t~q~n', [I, O, A])))")
+        events = []
+        for line in text.splitlines():
+            qtext, op, answer = line.split("\t", 2)
+            events.append((self._ids.get(qtext, qtext), op, answer))
+        return events
+
+    def _dispatch(self) -> None:
+        for qid, op, answer in self._events():
+            if op == "add":
+                for cb in self._on_add:
+                    cb(qid, answer)
+            elif op == "delete":
+                for cb in self._on_delete:
+                    cb(qid, answer)
+
+    # -- queries ---------------------------------------------------------------------------
+    def register(self, query_id: QueryId, goal: str) -> List[str]:
+        """Register `goal` as active query `query_id`; returns its current answers."""
+        idt = _id_text(query_id)
+        text = self.bridge.call_text(
+            f"rtl_aq:aq_register({idt}, ({_strip(goal)}), As), rtl_aq:aq_events(_), "
+            "with_output_to(string(Out), forall(member(A, As), format('~q~n', [A])))")
+        self._ids[self.bridge.call_text(f"format(string(Out), '~q', [{idt}])")] = query_id
+        return text.splitlines()
+
+    def unregister(self, query_id: QueryId) -> None:
+        self.bridge.once(f"rtl_aq:aq_unregister({_id_text(query_id)})")
+        self._dispatch()
+
+    def answers(self, query_id: QueryId) -> List[str]:
+        return self.bridge.all(f"rtl_aq:aq_answers({_id_text(query_id)}, As), member(A, As)", "A")
+
+    # -- updates ---------------------------------------------------------------------------
+    def assert_fact(self, fact: str) -> None:
+        self.bridge.once(f"rtl_aq:aq_assert(({_strip(fact)}))")
+        self._dispatch()
+
+    def retract_fact(self, fact: str) -> None:
+        self.bridge.once(f"rtl_aq:aq_retract(({_strip(fact)}))")
+        self._dispatch()
+
+    def assert_facts(self, facts: Iterable[str]) -> None:
+        items = ", ".join(f"({_strip(f)})" for f in facts)
+        self.bridge.once(f"rtl_aq:aq_assert_all([{items}])")
+        self._dispatch()
+
+    def retract_facts(self, facts: Iterable[str]) -> None:
+        """Retract several facts in one DRed pass."""
+        items = ", ".join(f"({_strip(f)})" for f in facts)
+        self.bridge.once(f"rtl_aq:aq_retract_all([{items}])")
+        self._dispatch()
+
+    def stats(self) -> Dict[str, int]:
+        text = self.bridge.call_text(
+            "rtl_aq:aq_stats(S), with_output_to(string(Out), forall(member(K=V, S), format('~w ~w~n', [K, V])))")
+        return {k: int(v) for k, v in (line.split() for line in text.splitlines())}
