@@ -91,3 +91,11 @@ def test_deleting_events_retracts_what_was_derived_from_them(engine, events, dat
         ops.insert(position, ("retract", arrival[index]))
     remaining = [e for i, e in enumerate(arrival) if i not in doomed]
     assert feed(engine, ops) == oracle(remaining)
+
+
+def test_deleting_an_event_that_was_never_added_changes_nothing(engine):
+    engine.clear()
+    engine.set_flag("max_delay", "inf")
+    engine.feed_batch([("a(1, 1)", 1), ("b(1, 2)", 3)])
+    assert engine.feed("b(1, 2)", 4, op="retract") == []          # never added at t=4
+    assert [o.op for o in engine.feed("b(1, 2)", 3, op="retract") if o.event.startswith("seq_r")] == ["retract"]

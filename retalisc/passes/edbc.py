@@ -250,8 +250,12 @@ class _RuleGenerator:
                 add_body = [self.consuming_join(found, partner_store, own_store, self.output(step, s, e))]
             self.clauses.append(clause(C(handler, *own_vars, os_, oe), add_body))
             self.clauses.append(clause(C(handler + "_retract", *own_vars, os_, oe), [
-                C(";", C("->", C("retract", own_store), Atom("true")), Atom("true")),
-                C("forall", found, self.output(step, s, e, retract=True))]))
+                self.if_stored(own_store, C("forall", found, self.output(step, s, e, retract=True)))]))
+
+    def if_stored(self, stored: Term, then: Term) -> Term:
+        """Delete one stored instance and, only if there was one, take back what it made: a
+        deletion of an event that was never added (or was already forgotten) changes nothing."""
+        return C(";", C("->", C("retract", stored), then), Atom("true"))
 
     def consuming_join(self, found: Term, partner: Term, own: Term, output: Term) -> Term:
         """recent/chronological: join with one waiting partner, the newest (recent: stores
@@ -295,8 +299,7 @@ class _RuleGenerator:
                 add_body = [self.consuming_join(found, partner_store, own_store, self.output(step, s1, e2))]
             self.clauses.append(clause(C(handler, *own_vars, os_, oe), add_body))
             self.clauses.append(clause(C(handler + "_retract", *own_vars, os_, oe), [
-                C(";", C("->", C("retract", own_store), Atom("true")), Atom("true")),
-                C("forall", found, self.output(step, s1, e2, retract=True))]))
+                self.if_stored(own_store, C("forall", found, self.output(step, s1, e2, retract=True)))]))
         # a blocker takes back the results it falls inside of; deleting it restores them
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
@@ -309,8 +312,7 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
             C("forall", inside, self.output(step, s1, e2, retract=True)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            C(";", C("->", C("retract", negs), Atom("true")), Atom("true")),
-            C("forall", inside, self.output(step, s1, e2))]))
+            self.if_stored(negs, C("forall", inside, self.output(step, s1, e2)))]))
 
     def fnot_clauses(self, step: Step) -> None:
         """L fnot N: L, unless an N ended before L started (within the window, if any)."""
@@ -328,16 +330,14 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler, *left_vars, s1, e1), [
             C(";", C("->", unblocked, self.output(step, s1, e1)), Atom("true")), C("assertz", lefts)]))
         self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
-            C(";", C("->", C("retract", lefts), Atom("true")), Atom("true")),
-            C(";", C("->", unblocked, self.output(step, s1, e1, retract=True)), Atom("true"))]))
+            self.if_stored(lefts, C(";", C("->", unblocked, self.output(step, s1, e1, retract=True)), Atom("true")))]))
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
         after = conj([lefts, C("<", en, s1), self.window_check(step, sn, e1), C("\\+", blocked)])
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
             C("forall", after, self.output(step, s1, e1, retract=True)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            C(";", C("->", C("retract", negs), Atom("true")), Atom("true")),
-            C("forall", after, self.output(step, s1, e1))]))
+            self.if_stored(negs, C("forall", after, self.output(step, s1, e1)))]))
 
     def aggregate_clauses(self, step: Step) -> None:
         """L seq aggregate(F, R, V): each L starts an accumulator; every later R updates the
