@@ -613,9 +613,9 @@ answer_derivable(T, A) :-
 
 premise(act(T), none, _) :- !,
     aq_tab(T, _, _, _, _).
-premise(P, fact, Lit) :-
-    user:'$aq_wrec'(Lit, P),
-    user:Lit.
+premise(P, fact, Lit) :-          % the fact first: stored facts are indexed on their
+    user:Lit,                       % bound arguments, goal records often are not
+    user:'$aq_wrec'(Lit, P).
 premise(P, call, Lit) :-
     nb_getval(aq_cstates, St),
     trie_gen(St, P, T),
