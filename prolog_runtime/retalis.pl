@@ -126,13 +126,44 @@ run_lines(Line, In, Name, N) :-
     run_lines(Next, In, Name, N1).
 
 process_line(Line, Name, N) :-
+    handle_line(Line, Reason),
+    (   var(Reason)
+    ->  true
+    ;   format(user_error, "~w:~w: rejected: ~s~n", [Name, N, Reason])
+    ).
+
+%   handle_line(+Line, -Reason) is det.
+%
+%   Process one input line: an event, its deletion, or a rule change. Reason stays unbound
+%   unless the line is rejected (then it is counted).
+
+handle_line(Line, Reason) :-
     rtl_parse_event_line(Line, Parsed),
     (   Parsed = event(Op, Event, Start, End)
     ->  process_event(Op, Event, Start, End)
+    ;   Parsed = rule(Change, Text)
+    ->  change_rules(Change, Text, Reason)
     ;   Parsed = error(Reason)
-    ->  rtl_count(rejected),
-        format(user_error, "~w:~w: rejected: ~s~n", [Name, N, Reason])
+    ->  true
     ;   true
+    ),
+    (   nonvar(Reason) -> rtl_count(rejected) ; true ).
+
+change_rules(Change, Text, Reason) :-
+    rtl_program(M),
+    catch(( Change == add -> ins_event_rule(M:Text) ; atom_string(Label, Text), del_event_rule(M:Label) ),
+          Error,
+          error_text(Error, Reason)).
+
+% One line of text for an error term, as print_message/2 would say it.
+error_text(Error, Text) :-
+    (   catch('$messages':translate_message(Error, Lines, []), _, fail)
+    ->  with_output_to(string(S), print_message_lines(current_output, '', Lines)),
+        split_string(S, "\n", " ", Parts0),
+        exclude(==(""), Parts0, Parts),
+        atomic_list_concat(Parts, " ", Text0),
+        atom_string(Text0, Text)
+    ;   format(string(Text), "~q", [Error])
     ).
 
 process_event(Op, Event, Start, End) :-
@@ -155,15 +186,11 @@ rtl_feed_lines(Text, First, Output) :-
 
 feed_lines([], _, []).
 feed_lines([Line|Lines], N, Rejections) :-
-    rtl_parse_event_line(Line, Parsed),
-    (   Parsed = event(Op, Event, Start, End)
-    ->  process_event(Op, Event, Start, End),
-        Rejections = Rest
-    ;   Parsed = error(Reason)
-    ->  rtl_count(rejected),
-        format(string(R), "!~w\t~s", [N, Reason]),
+    handle_line(Line, Reason),
+    (   var(Reason)
+    ->  Rejections = Rest
+    ;   format(string(R), "!~w\t~s", [N, Reason]),
         Rejections = [R|Rest]
-    ;   Rejections = Rest
     ),
     N1 is N + 1,
     feed_lines(Lines, N1, Rest).

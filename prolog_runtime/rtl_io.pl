@@ -23,7 +23,9 @@ input) go through library(http/json), which also names the reason of a rejection
 
 %!  rtl_parse_event_line(+Line:string, -Parsed) is det.
 %
-%   Parsed is `blank`, `event(Op, Event, Start, End)` with Op `add` or `retract`, or
+%   Parsed is `blank`, `event(Op, Event, Start, End)` with Op `add` or `retract`,
+%   `rule(add, RuleText)` or `rule(delete, Label)` for the control lines
+%   `{"op": "add_rule", "rule": TEXT}` and `{"op": "delete_rule", "rule": LABEL}`, or
 %   `error(Reason)` with Reason a string saying what is wrong with the line.
 
 rtl_parse_event_line(Line, Parsed) :-
@@ -39,6 +41,9 @@ rtl_parse_event_line(Line, Parsed) :-
         )
     ;   Parsed = error("not a JSON object")
     ).
+
+rule_change("add_rule", add).
+rule_change("delete_rule", delete).
 
 blank_line(Line) :-
     split_string(Line, "", " \t\r\n", [""]).
@@ -82,6 +87,16 @@ json_error_reason(Error, Reason) :-
     format(string(Reason), "invalid JSON (~q)", [Error]).
 
 fields_event(Fields, Parsed) :-
+    memberchk("op"-Op, Fields),
+    rule_change(Op, Change),
+    !,
+    (   memberchk("rule"-Text, Fields), string(Text)
+    ->  Parsed = rule(Change, Text)
+    ;   format(string(Reason), "\"op\": ~q needs \"rule\": the rule text (add_rule) or label (delete_rule)",
+               [Op]),
+        Parsed = error(Reason)
+    ).
+fields_event(Fields, Parsed) :-
     (   field_problem(Fields, Reason)
     ->  Parsed = error(Reason)
     ;   memberchk("event"-Text, Fields),
@@ -100,7 +115,7 @@ field_problem(Fields, Reason) :-
     ;   memberchk("event"-Text, Fields), \+ string(Text)
     ->  Reason = "\"event\" must be a string holding a Prolog term"
     ;   memberchk("op"-Op, Fields), \+ memberchk(Op, ["add", "retract"])
-    ->  format(string(Reason), "unknown \"op\" ~q (expected \"add\" or \"retract\")", [Op])
+    ->  format(string(Reason), "unknown \"op\" ~q (expected \"add\", \"retract\", \"add_rule\" or \"delete_rule\")", [Op])
     ;   interval_problem(Fields, Reason)
     ->  true
     ).

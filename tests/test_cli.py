@@ -96,3 +96,12 @@ def test_swipl_without_event_file_is_a_usage_error(tmp_path, swipl):
     retalisc("compile", FIRE / "fire_alarm.rtl", "-o", out)
     run = subprocess.run([swipl, str(out)], capture_output=True, text=True, timeout=60)
     assert run.returncode == 2 and "usage" in run.stderr
+
+
+def test_rule_changes_in_the_event_stream_report_bad_lines():
+    case = ROOT / "tests" / "golden" / "stream_rule_changes"
+    run = retalisc("run", case / "program.rtl", "--events", case / "events.jsonl")
+    assert run.returncode == 0
+    assert ":6: rejected: " in run.stderr and "does not occur in the pattern" in run.stderr
+    assert ":10: rejected: event_rule `nosuch' does not exist" in run.stderr
+    assert ":11: rejected: \"op\": \"add_rule\" needs \"rule\"" in run.stderr
