@@ -105,3 +105,19 @@ def test_rule_changes_in_the_event_stream_report_bad_lines():
     assert ":6: rejected: " in run.stderr and "does not occur in the pattern" in run.stderr
     assert ":10: rejected: event_rule `nosuch' does not exist" in run.stderr
     assert ":11: rejected: \"op\": \"add_rule\" needs \"rule\"" in run.stderr
+
+
+@pytest.mark.parametrize("mode", ["naive", "optimized", "tabled"])
+def test_compile_active_queries_runs_in_plain_swipl(tmp_path, swipl, mode):
+    program = tmp_path / "path.pl"
+    program.write_text("edge(1,2).\nedge(2,3).\npath(X,Y) :- edge(X,Y).\npath(X,Y) :- edge(X,Z), path(Z,Y).\n")
+    out = tmp_path / "path_aq.pl"
+    assert retalisc("compile", program, "--active-queries", mode, "-o", out).returncode == 0
+    goal = ("aq_register(q, path(1,X)), aq_events(E1), aq_assert(edge(3,4)), aq_events(E2), "
+            "aq_retract(edge(1,2)), aq_events(E3), print([E1, E2, E3]), nl")
+    run = subprocess.run([swipl, "-g", goal, "-t", "halt", str(out)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    initial, added, deleted = run.stdout.strip()[2:-2].split("],[")
+    assert "path(1,2)" in initial and "path(1,3)" in initial
+    assert added == "ev(q,add,path(1,4))"
+    assert all(p in deleted for p in ("path(1,2)", "path(1,3)", "path(1,4)")) and "delete" in deleted

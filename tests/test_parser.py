@@ -26,6 +26,9 @@ def term(text):
     ("'it''s'", "'it\\'s'"),
     ("0x1F + 0b101 + 0o17", "+(+(31, 5), 15)"),
     ("E^[T1, T2]", "^(E, [T1, T2])"),
+    ("D is (X-1)*(X-1)", "is(D, *(-(X, 1), -(X, 1)))"),
+    ("X = (a)-(b)-(c)", "=(X, -(-(a, b), c))"),
+    ("f(-(1))", "f(-(1))"),
 ])
 def test_prolog_terms(text, expected):
     assert to_prolog(term(text)) == expected

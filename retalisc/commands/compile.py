@@ -36,11 +36,30 @@ def compile_or_exit(program: str, **kwargs):
               "(default: standard output).")
 @click.option("--dump-after", type=click.Choice(PASS_NAMES), help="Print the program after this pass "
               "and stop.")
-def compile_command(program: str, output: str, dump_after: str) -> None:
+@click.option("--active-queries", "active_queries", type=click.Choice(["naive", "optimized", "tabled"]),
+              help="Compile PROGRAM as a definite program for active queries with this transformation "
+                   "(aq_register/2, aq_assert/1, ...; see docs/active_queries.md).")
+@click.option("--subsumption", is_flag=True, help="With --active-queries tabled: reuse tables by subsumption.")
+def compile_command(program: str, output: str, dump_after: str, active_queries: str, subsumption: bool) -> None:
     """Compile PROGRAM (.rtl) to a SWI-Prolog module.
 
     Run the result with `swipl OUT.pl EVENTS.jsonl`: it prints the derived events as JSON Lines.
+    With --active-queries, PROGRAM is a definite program (rules and facts) compiled for
+    active queries instead.
     """
+    if active_queries:
+        from ..backends.prolog.aq_backend import compile_active_queries
+
+        try:
+            text = compile_active_queries(Path(program).read_text(encoding="utf-8"), program, active_queries,
+                                          subsumption)
+        except RetalisError as error:
+            report_program_error(error)
+        if output:
+            Path(output).write_text(text, encoding="utf-8")
+        else:
+            click.echo(text, nl=False)
+        return
     if dump_after:
         compile_or_exit(program, dump_after=dump_after, dump=click.echo)
         return

@@ -41,6 +41,7 @@ class _Operand:
     term: Term
     start: int
     end: int
+    functional: bool = False     # written in functional notation, name( glued to its name
 
 
 @dataclass
@@ -104,6 +105,19 @@ class _Resolver:
     def parse_infix(self, left: Term, left_priority: int, max_priority: int) -> Tuple[Term, int]:
         while True:
             item = self.peek()
+            if isinstance(item, _Operand) and self._is_glued_infix(item):
+                # `(X-1)*(X-1)`: the lexer read `*(X-1)` as functional notation; after a
+                # complete term it can only be the infix operator with a bracketed operand
+                # (SWI-Prolog reads it so too).
+                priority, kind = self.ops.infix_op(item.term.name)
+                left_max = priority if kind == "yfx" else priority - 1
+                if priority <= max_priority and left_priority <= left_max:
+                    self.pos += 1
+                    right, right_priority = item.term.args[0], 0
+                    right, _ = self.parse_infix(right, right_priority, priority if kind == "xfy" else priority - 1)
+                    left = Compound(item.term.name, (left, right), _span_of(left))
+                    left_priority = priority
+                    continue
             if not isinstance(item, _Name):
                 return left, left_priority
             op = self.ops.infix_op(item.name)
@@ -160,6 +174,11 @@ class _Resolver:
         if self.ops.is_operator(name) and nxt is not None and not isinstance(nxt, _Operand):
             atom_priority = 0
         return Atom(name, item.span), atom_priority
+
+    def _is_glued_infix(self, item: "_Operand") -> bool:
+        term = item.term
+        return (isinstance(term, Compound) and term.arity == 1 and item.functional
+                and self.ops.infix_op(term.name) is not None)
 
     def _can_take_argument(self, nxt) -> bool:
         if nxt is None:
@@ -280,7 +299,7 @@ class _Builder:
             name = _unescape(text[1:-1], "'") if quoted else text
             return _Name(name, self.span(token), token.start_pos, token.end_pos, quoted)
         term = self.operand(node)
-        return _Operand(term, node.meta.start_pos, node.meta.end_pos)
+        return _Operand(term, node.meta.start_pos, node.meta.end_pos, node.data == "compound")
 
     def operand(self, node: Tree) -> Term:
         kind = node.data
