@@ -127,6 +127,24 @@ def is_ground(term: Term) -> bool:
     return not any(isinstance(t, Var) for t in walk(term))
 
 
+def conjuncts(goal: Term) -> list:
+    """The goals of a conjunction `(A, B, ...)`, in order."""
+    goals = []
+    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
+        goals.append(goal.args[0])
+        goal = goal.args[1]
+    goals.append(goal)
+    return goals
+
+
+def conjunction(goals: list) -> Term:
+    """`(G1, G2, ...)` from a non-empty list of goals."""
+    result = goals[-1]
+    for g in reversed(goals[:-1]):
+        result = Compound(",", (g, result))
+    return result
+
+
 def substitute(term: Term, mapping: dict) -> Term:
     """Replace variables by name according to `mapping` (name -> term)."""
     if isinstance(term, Var):

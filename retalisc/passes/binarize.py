@@ -14,7 +14,7 @@ from typing import List, Optional, Set
 
 from ..frontend.errors import RetalisSemanticError
 from ..frontend.program import Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
-from ..frontend.terms import Atom, Compound, Term, Var, variables
+from ..frontend.terms import Atom, Compound, Term, Var, conjuncts, variables
 from .unit import BinaryRule, Operand, Step, Unit  # noqa: F401
 
 name = "binarize"
@@ -72,14 +72,14 @@ class _Binarizer:
             return Operand(pattern.term, None, [], pattern.start, pattern.end, pattern.span)
         if isinstance(pattern, Where):
             operand = self.lower(pattern.pattern, window)
-            conjuncts = list(_conjuncts(pattern.condition))
+            goals = conjuncts(pattern.condition)
             if operand.step is None:
-                operand.filters.extend(conjuncts)
+                operand.filters.extend(goals)
                 return operand
             step = operand.step
-            step.conditions.extend(conjuncts)
+            step.conditions.extend(goals)
             # conditions may bind new variables (`where pos_avg(Ls, L)`): the step carries them on
-            extra = [v for c in conjuncts for v in variables(c)]
+            extra = [v for c in goals for v in variables(c)]
             step.output = Compound(step.output.name, tuple(_unique_vars(list(step.output.args) + extra)))
             return Operand(step.output, step)
         if isinstance(pattern, Window):
@@ -160,10 +160,3 @@ def _unique_vars(found) -> List[Var]:
             seen.add(v.name)
             result.append(Var(v.name))
     return result
-
-
-def _conjuncts(goal: Term):
-    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
-        yield goal.args[0]
-        goal = goal.args[1]
-    yield goal

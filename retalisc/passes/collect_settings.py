@@ -8,7 +8,7 @@ accepted with a warning.
 from __future__ import annotations
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.terms import Atom, Compound, Number, Term, span_of
+from ..frontend.terms import Atom, Compound, Number, Term, conjuncts, span_of
 from ..frontend.writer import write_term
 from .unit import Unit
 
@@ -20,7 +20,7 @@ CONSUMPTION_POLICIES = ("unrestricted", "recent", "chronological")
 def run(unit: Unit) -> Unit:
     settings = unit.settings
     for item in unit.program.directives + unit.program.declarations:
-        for goal in _conjuncts(item.goal):
+        for goal in conjuncts(item.goal):
             if _is(goal, "set_etalis_flag", 2):
                 flag, value = goal.args
                 if flag == Atom("event_consumption_policy"):
@@ -49,12 +49,6 @@ def run(unit: Unit) -> Unit:
                 settings.rule_properties.setdefault(label.name, {})[prop.name] = value
     return unit
 
-
-def _conjuncts(goal: Term):
-    while _is(goal, ",", 2):
-        yield goal.args[0]
-        goal = goal.args[1]
-    yield goal
 
 
 def _is(term: Term, name_: str, arity: int) -> bool:

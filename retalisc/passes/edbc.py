@@ -27,7 +27,7 @@ from typing import Dict, List, Optional, Set, Tuple
 
 from ..frontend.parser import read_term
 from ..frontend.program import pattern_text
-from ..frontend.terms import Atom, Compound, Number, Term, Var, substitute, variables
+from ..frontend.terms import Atom, Compound, Number, Term, Var, conjuncts, substitute, variables
 from ..frontend.writer import write_term
 from .binarize import END_MARK, START_MARK
 from .unit import BinaryRule, GeneratedRule, Operand, Step, Unit
@@ -77,15 +77,6 @@ def clause(head: Term, body: List[Optional[Term]]) -> Term:
     goals = [g for g in body if g is not None]
     return C(":-", head, conj(goals)) if goals else head
 
-
-def conjuncts(goal: Term) -> List[Term]:
-    goals = []
-    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
-        goals.append(goal.args[0])
-        goal = goal.args[1]
-    if goal != Atom("true"):
-        goals.append(goal)
-    return goals
 
 
 def operand_vars(operand: Operand) -> List[Var]:
@@ -140,7 +131,8 @@ class _RuleGenerator:
     def expr(self, text: str) -> List[Term]:
         """Goals over the time variables, e.g. "E1 < S2, S2 < E1", renamed to this rule's names."""
         term = read_term(text)
-        return conjuncts(substitute(term, {k: V(v) for k, v in self.time_names.items()}))
+        goals = conjuncts(substitute(term, {k: V(v) for k, v in self.time_names.items()}))
+        return [g for g in goals if g != Atom("true")]
 
     def interval(self, expression: str, target: Var) -> Tuple[Var, List[Term]]:
         """The variable holding an interval end: an operand's own, or `target is Expr`."""

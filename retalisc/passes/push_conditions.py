@@ -15,7 +15,7 @@ from dataclasses import replace
 from typing import List, Optional, Set
 
 from ..frontend.program import Binary, EventAtom, Pattern, Where, Window
-from ..frontend.terms import Compound, Term, indicator, variables
+from ..frontend.terms import Compound, Term, conjunction, conjuncts, indicator, variables
 from .unit import Unit
 
 name = "push_conditions"
@@ -43,7 +43,7 @@ def _push(pattern: Pattern, static: Set) -> Pattern:
     if isinstance(pattern, Where):
         inner = _push(pattern.pattern, static)
         kept: List[Term] = []
-        for conjunct in _conjuncts(pattern.condition):
+        for conjunct in conjuncts(pattern.condition):
             target = _single_atom_for(conjunct, inner, static)
             if target is None:
                 kept.append(conjunct)
@@ -51,7 +51,7 @@ def _push(pattern: Pattern, static: Set) -> Pattern:
                 inner = _attach(inner, target, conjunct)
         if not kept:
             return inner
-        return Where(inner, _conjunction(kept), pattern.span)
+        return Where(inner, conjunction(kept), pattern.span)
     if isinstance(pattern, Binary) and pattern.op != "or":
         return replace(pattern, left=_push(pattern.left, static), right=_push(pattern.right, static))
     if isinstance(pattern, Window):
@@ -97,24 +97,10 @@ def _attach(pattern: Pattern, target: EventAtom, conjunct: Term) -> Pattern:
     if pattern is target:
         return Where(target, conjunct, target.span)
     if isinstance(pattern, Where) and pattern.pattern is target:
-        return Where(target, _conjunction(list(_conjuncts(pattern.condition)) + [conjunct]), pattern.span)
+        return Where(target, conjunction(list(conjuncts(pattern.condition)) + [conjunct]), pattern.span)
     if isinstance(pattern, Binary):
         return replace(pattern, left=_attach(pattern.left, target, conjunct),
                        right=_attach(pattern.right, target, conjunct))
     if isinstance(pattern, (Where, Window)):
         return replace(pattern, pattern=_attach(pattern.pattern, target, conjunct))
     return pattern
-
-
-def _conjuncts(goal: Term):
-    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
-        yield goal.args[0]
-        goal = goal.args[1]
-    yield goal
-
-
-def _conjunction(goals: List[Term]) -> Term:
-    result = goals[-1]
-    for g in reversed(goals[:-1]):
-        result = Compound(",", (g, result))
-    return result

@@ -13,7 +13,7 @@ from typing import List
 import jinja2
 
 from ...frontend.program import Declaration, Directive, StaticClause
-from ...frontend.terms import Atom, Compound, Term, quote_atom
+from ...frontend.terms import Atom, Compound, Term, conjuncts, quote_atom
 from ...frontend.writer import write_term
 from ...passes.unit import GeneratedRule, Unit
 
@@ -93,7 +93,7 @@ def write_clause(term: Term) -> str:
     """A clause as text: `Head :-` then one goal per line, indented by four spaces."""
     if isinstance(term, Compound) and term.name == ":-" and term.arity == 2:
         head, body = term.args
-        goals = _conjuncts(body)
+        goals = conjuncts(body)
         lines = [write_term(head, 1199) + " :-"]
         for i, goal in enumerate(goals):
             end = "." if i == len(goals) - 1 else ","
@@ -105,20 +105,12 @@ def write_clause(term: Term) -> str:
 def _goal_text(goal: Term) -> str:
     if isinstance(goal, Compound) and goal.name == "forall" and goal.arity == 2:
         condition, action = goal.args
-        inner = ", ".join(write_term(g, 999) for g in _conjuncts(condition))
+        inner = ", ".join(write_term(g, 999) for g in conjuncts(condition))
         return f"forall(( {inner} ),\n           {write_term(action, 999)})"
     if isinstance(goal, Compound) and goal.name == ";" and goal.arity == 2:
         return f"( {write_term(goal.args[0], 1099)}\n    ; {write_term(goal.args[1], 1099)}\n    )"
     return write_term(goal, 999)
 
-
-def _conjuncts(goal: Term) -> List[Term]:
-    goals = []
-    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
-        goals.append(goal.args[0])
-        goal = goal.args[1]
-    goals.append(goal)
-    return goals
 
 
 def _functor_pattern(name: str, arity: int) -> str:
