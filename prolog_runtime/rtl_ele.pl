@@ -105,6 +105,7 @@ rtl_set_flag(Flag, Value) :-
     ),
     retractall(flag_value(Flag, _)),
     assertz(flag_value(Flag, Value)),
+    (   Flag == echo_input -> nb_setval(rtl_echo_input, Value) ; true ),   % read on every event
     (   Flag == max_delay -> schedule_sweep ; true ).
 
 rtl_flag(Flag, Value) :-
@@ -127,7 +128,7 @@ rtl_event(Event, Start, End) :-
     ;   late_check(End, Clock0)
     ),
     rtl_count(events),
-    (   rtl_flag(echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
+    (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true),
@@ -144,7 +145,7 @@ late_check(End, Clock) :-
 
 rtl_retract_event(Event, Start, End) :-
     rtl_count(retracted),
-    (   rtl_flag(echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
+    (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
     run_output_hooks(Event, Start, End, retract),
     nb_getval(rtl_program, M),
     forall(M:ele_untrigger(Event, Start, End), true).

@@ -204,7 +204,7 @@ json_number(N, N).
 %!  rtl_json_string_escape(+Text, -Escaped:string) is det.
 %
 %   Text as the inside of a JSON string: `"` and `\` escaped, control characters as
-%   `\uXXXX`.
+%   `\u` and four hex digits.
 
 rtl_json_string_escape(Text, Escaped) :-
     (   \+ sub_string(Text, _, _, _, "\""),
