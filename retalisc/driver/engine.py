@@ -23,6 +23,11 @@ Number = Union[int, float]
 _loaded_modules = itertools.count(1)
 
 
+def _unique_module(program_name: str) -> str:
+    """A module name for the program no other program of this process has."""
+    return f"{module_name(program_name)}_{next(_loaded_modules)}"
+
+
 @dataclass(frozen=True)
 class OutputEvent:
     """One output line: `event` is the term text (writeq), `consumer` is set for subscription
@@ -99,16 +104,14 @@ class Engine:
     def load(cls, program_path: Union[str, Path], bridge: Optional[Bridge] = None) -> "Engine":
         """Compile and load a `.rtl` program file."""
         path = str(program_path)
-        unique = f"{module_name(path)}_{next(_loaded_modules)}"
-        result = compile_file(path, module=unique)
-        return cls._load_text(result.prolog, unique, bridge)
+        result = compile_file(path, module=_unique_module(path))
+        return cls.from_compiled(result, bridge)
 
     @classmethod
     def from_source(cls, text: str, name: str = "program.rtl", bridge: Optional[Bridge] = None) -> "Engine":
         """Compile and load program text."""
-        unique = f"{module_name(name)}_{next(_loaded_modules)}"
-        result = compile_source(text, name, module=unique)
-        return cls._load_text(result.prolog, unique, bridge)
+        result = compile_source(text, name, module=_unique_module(name))
+        return cls.from_compiled(result, bridge)
 
     @classmethod
     def _load_text(cls, prolog: str, module: str, bridge: Optional[Bridge]) -> "Engine":

@@ -86,18 +86,6 @@ class _Resolver:
             raise self.error("operator expected")
         return term
 
-    def starts_term(self, item) -> bool:
-        if item is None:
-            return False
-        if isinstance(item, _Operand):
-            return True
-        if item.name in (",", "|"):
-            return False
-        if self.ops.infix_op(item.name) and not self.ops.prefix_op(item.name):
-            nxt = self.items[self.items.index(item) + 1] if self.items.index(item) + 1 < len(self.items) else None
-            return nxt is None
-        return True
-
     def parse(self, max_priority: int) -> Tuple[Term, int]:
         left, left_priority = self.parse_primary(max_priority)
         return self.parse_infix(left, left_priority, max_priority)
@@ -158,7 +146,7 @@ class _Resolver:
                 and nxt.start == item.end:
             self.pos += 1
             return Number(-nxt.term.value, item.span), 0
-        prefix = self.ops.prefix_op(name) if not item.quoted or True else None
+        prefix = self.ops.prefix_op(name)
         if prefix is not None and self._can_take_argument(nxt):
             priority, kind = prefix
             if priority > max_priority:
@@ -170,10 +158,7 @@ class _Resolver:
                 return Compound(name, (arg,), item.span), priority
             except RetalisSyntaxError:
                 self.pos = saved
-        atom_priority = 0
-        if self.ops.is_operator(name) and nxt is not None and not isinstance(nxt, _Operand):
-            atom_priority = 0
-        return Atom(name, item.span), atom_priority
+        return Atom(name, item.span), 0
 
     def _is_glued_infix(self, item: "_Operand") -> bool:
         term = item.term

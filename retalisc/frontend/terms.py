@@ -123,6 +123,16 @@ def variables(term: Term) -> list:
     return list(seen.values())
 
 
+def distinct_variables(found) -> list:
+    """The named variables among `found`, each once, in order, without spans."""
+    seen, result = set(), []
+    for v in found:
+        if isinstance(v, Var) and not v.is_anonymous and v.name not in seen:
+            seen.add(v.name)
+            result.append(Var(v.name))
+    return result
+
+
 def is_ground(term: Term) -> bool:
     return not any(isinstance(t, Var) for t in walk(term))
 

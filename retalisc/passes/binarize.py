@@ -14,8 +14,8 @@ from typing import List, Optional, Set
 
 from ..frontend.errors import RetalisSemanticError
 from ..frontend.program import Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
-from ..frontend.terms import Atom, Compound, Term, Var, conjuncts, variables
-from .unit import BinaryRule, Operand, Step, Unit  # noqa: F401
+from ..frontend.terms import Atom, Compound, Term, Var, conjuncts, distinct_variables, variables
+from .unit import BinaryRule, Operand, Step, Unit
 
 name = "binarize"
 
@@ -62,7 +62,7 @@ class _Binarizer:
     def new_step(self, op: str, left: Operand, right: Optional[Operand], window: Optional[float]) -> Step:
         step_name = f"e_{self.rule_id}_{len(self.steps) + 1}"
         names = _operand_variables(left) + (_operand_variables(right) if right is not None else [])
-        output = Compound(step_name, tuple(_unique_vars(names)))
+        output = Compound(step_name, tuple(distinct_variables(names)))
         step = Step(step_name, op, left, right, output, window)
         self.steps.append(step)
         return step
@@ -80,7 +80,7 @@ class _Binarizer:
             step.conditions.extend(goals)
             # conditions may bind new variables (`where pos_avg(Ls, L)`): the step carries them on
             extra = [v for c in goals for v in variables(c)]
-            step.output = Compound(step.output.name, tuple(_unique_vars(list(step.output.args) + extra)))
+            step.output = Compound(step.output.name, tuple(distinct_variables(list(step.output.args) + extra)))
             return Operand(step.output, step)
         if isinstance(pattern, Window):
             inner_window = pattern.length if window is None else min(window, pattern.length)
@@ -101,11 +101,10 @@ class _Binarizer:
                 raise RetalisSemanticError("the value of aggregate(F, P, V) must be a variable", aggregate.span)
             left = self.lower(pattern.left, window)
             right = self.lower(aggregate.pattern, window)
-            step_name = f"e_{self.rule_id}_{len(self.steps) + 1}"
-            output = Compound(step_name, tuple(_unique_vars(_operand_variables(left) + [aggregate.value])))
-            step = Step(step_name, "aggregate", left, right, output, window, aggregate=(aggregate.function,
-                                                                                         aggregate.value))
-            self.steps.append(step)
+            step = self.new_step("aggregate", left, right, window)
+            # the result carries the start event's variables and the value, not the P's
+            step.output = Compound(step.name, tuple(distinct_variables(_operand_variables(left) + [aggregate.value])))
+            step.aggregate = (aggregate.function, aggregate.value)
             return Operand(step.output, step)
         if isinstance(pattern, Binary) and pattern.op == "fnot":
             left = self.lower(pattern.left, window)
@@ -152,11 +151,3 @@ def _operand_variables(operand: Operand) -> List[Var]:
         found.extend(variables(f))
     return found
 
-
-def _unique_vars(found) -> List[Var]:
-    seen, result = set(), []
-    for v in found:
-        if isinstance(v, Var) and not v.is_anonymous and v.name not in seen:
-            seen.add(v.name)
-            result.append(Var(v.name))
-    return result

@@ -26,9 +26,7 @@ from __future__ import annotations
 from typing import Dict, List, Optional, Set, Tuple
 
 from ..frontend.parser import read_term
-from ..frontend.program import pattern_text
-from ..frontend.terms import Atom, Compound, Number, Term, Var, conjuncts, substitute, variables
-from ..frontend.writer import write_term
+from ..frontend.terms import Atom, Compound, Number, Term, Var, conjuncts, distinct_variables, substitute, variables
 from .binarize import END_MARK, START_MARK
 from .unit import BinaryRule, GeneratedRule, Operand, Step, Unit
 
@@ -82,15 +80,8 @@ def clause(head: Term, body: List[Optional[Term]]) -> Term:
 def operand_vars(operand: Operand) -> List[Var]:
     if operand.step is not None:
         return list(operand.step.output.args)
-    found: List[Var] = []
-    seen: Set[str] = set()
-    terms = [operand.term] + [x for x in (operand.start, operand.end) if isinstance(x, Var)] + list(operand.filters)
-    for t in terms:
-        for v in variables(t):
-            if v.name not in seen:
-                seen.add(v.name)
-                found.append(Var(v.name))
-    return found
+    times = [x for x in (operand.start, operand.end) if isinstance(x, Var)]
+    return distinct_variables(v for t in [operand.term, *times, *operand.filters] for v in variables(t))
 
 
 def _split(own: List[Var], other: List[Var]) -> Tuple[List[Var], List[Var]]:
@@ -116,10 +107,9 @@ class _RuleGenerator:
         self.time_names: Dict[str, str] = {}
         readable = {"S": "Start", "E": "End", "S1": "LStart", "E1": "LEnd", "S2": "RStart", "E2": "REnd",
                     "SN": "NStart", "EN": "NEnd"}
-        for base, fresh in readable.items():
-            while fresh in used:
-                fresh += "_"
-            self.time_names[base] = fresh
+        self.used = used
+        for base, name_ in readable.items():
+            self.time_names[base] = self.fresh(name_)
         self.clauses: List[Term] = []
         self.triggers: List[Term] = []
         self.stores: List[tuple] = []
@@ -269,7 +259,7 @@ class _RuleGenerator:
         negated_vars = operand_vars(step.negated)
         key, left_other = _split(left_vars, right_vars)
         _, right_other = _split(right_vars, left_vars)
-        pair_vars = _unique(left_vars + right_vars)
+        pair_vars = distinct_variables(left_vars + right_vars)
         negated_key, negated_other = _split(negated_vars, pair_vars)
         lefts = self.store(step, "lefts", key + left_other + [s1, e1])
         rights = self.store(step, "rights", key + right_other + [s2, e2])
@@ -357,11 +347,11 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), []))
 
     def fresh(self, base: str) -> str:
+        """A variable name no source variable of the rule uses (and reserve it)."""
         name_ = base
-        used = set(self.time_names.values()) | {v.name for s in self.rule.steps for o in (s.left, s.right)
-                                                if o is not None for v in operand_vars(o)}
-        while name_ in used:
+        while name_ in self.used:
             name_ += "_"
+        self.used.add(name_)
         return name_
 
     def output_clauses(self, step: Step) -> None:
@@ -384,14 +374,6 @@ class _RuleGenerator:
             self.clauses.append(clause(head, body))
 
 
-def _unique(found: List[Var]) -> List[Var]:
-    seen, result = set(), []
-    for v in found:
-        if v.name not in seen:
-            seen.add(v.name)
-            result.append(v)
-    return result
-
 
 def _number(value: float):
     return int(value) if float(value).is_integer() else value
@@ -401,7 +383,3 @@ def dump(unit: Unit) -> str:
     from ..backends.prolog.render import render_rule
 
     return "\n\n".join(render_rule(g) for g in unit.generated)
-
-
-def describe(rule: BinaryRule) -> str:
-    return f"{rule.rule_id}: {write_term(rule.rule.head)} <- {pattern_text(rule.rule.pattern)}"
