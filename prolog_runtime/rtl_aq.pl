@@ -8,7 +8,6 @@
 
       '$aq_act'(Head, T)            activation e_k0: rule k for table T
       '$aq_go'(State, Literal)      resume State once Literal has an answer
-      '$aq_prev'(State, Prev, Kind, Literal, Check)   one-step derivation of State
       '$aq_final'(Head, T, Prev, Kind, Literal, Check) one-step derivation of an answer
 
     A *state* s<k>_<j>(T, Env...) is the binary-rule intermediate result
@@ -27,10 +26,10 @@
                  query's own goal keeps its bindings.
 
     Addition propagates new facts and answers forward.  Deletion is basic DRed
-    on the binarized program: over-delete everything reachable from the
-    deleted facts (states and answers, against the old database), remove it,
-    then re-derive the over-deleted items that still have a one-step
-    derivation and propagate those forward again.
+    on the binarized program: over-delete (and remove) everything reachable
+    from the deleted facts (states and answers), then re-derive the
+    over-deleted answers that had more than one derivation and still have a
+    one-step derivation, and propagate those forward again.
 */
 
 :- module(rtl_aq,
@@ -66,6 +65,7 @@
     aq_tpred/3,        % aq_tpred(Name/Arity, Goal, T)   (subsumption index)
     aq_c/3,            % aq_c(T, Literal, State)       consumer records
     aq_dep/2,          % aq_dep(From, T)               From = T0 | root(Id)
+    aq_agenda/2,       % aq_agenda(T, Answer)          new answers still to propagate
     aq_q/4,            % aq_q(Id, Goal, Kind, T)
     aq_ev/3,           % aq_ev(Id, Op, Answer)         pending notifications
     aq_conf/2,
@@ -81,6 +81,7 @@ init_globals :-
     nb_setval(aq_registering, '$none'),
     trie_new(Sub), nb_setval(aq_subgoals, Sub),
     trie_new(St), nb_setval(aq_cstates, St),
+    trie_new(M), nb_setval(aq_multi, M),
     nb_setval(aq_dred, '$none').
 
 %!  aq_configure(+Options) is det.
@@ -147,24 +148,23 @@ aq_register(Id, Goal, Answers) :-
     copy_term(Goal, G),
     nb_setval(aq_registering, Id),
     nb_setval(aq_phase, insert),
-    catch(register_root(Kind, Id, G), E, (nb_setval(aq_registering, '$none'), throw(E))),
+    catch(register_root(Kind, Id, G), E,
+          ( nb_setval(aq_registering, '$none'), retractall(aq_agenda(_, _)), throw(E) )),
     nb_setval(aq_registering, '$none'),
-    findall(A, aq_ev(Id, answer, A), As0),
-    msort(As0, Answers),
-    (   aq_hook(_) -> true
-    ;   retractall(aq_ev(Id, answer, _)),
-        forall(member(A, Answers), assertz(aq_ev(Id, answer, A)))
-    ).
+    aq_answers(Id, Answers),
+    forall(member(A, Answers), emit(Id, answer, A)).
 
 register_root(call, Id, G) :-
     assertz(aq_q(Id, G, call, pending)),
     aq_wait_call(G, q(Id)),
+    drain,
     trie_lookup_state(q(Id), T),
     retract(aq_q(Id, G1, call, pending)),
     assertz(aq_q(Id, G1, call, T)).
 register_root(fact, Id, G) :-
     assertz(aq_q(Id, G, fact, none)),
-    aq_wait_fact(G, q(Id)).
+    aq_wait_fact(G, q(Id)),
+    drain.
 
 trie_lookup_state(S, T) :-
     nb_getval(aq_cstates, St),
@@ -252,6 +252,7 @@ free_tables(Dead) :-
     nb_getval(aq_cstates, St),
     forall(member(T, Dead),
            ( retract(aq_tab(T, _, Tr, _, Key)),
+             forget_multi(Tr),
              trie_destroy(Tr),
              ( Key == none -> true ; ignore(trie_delete(Sub, Key, _)) ),
              retractall(aq_tpred(_, _, T)),
@@ -266,6 +267,11 @@ free_tables(Dead) :-
 
 :- dynamic aq_dead/1.
 
+forget_multi(T) :-
+    nb_getval(aq_multi, M),
+    findall(A, trie_gen(M, T-A), As),
+    forall(member(A, As), trie_delete(M, T-A, _)).
+
 state_owner(S, T) :- S \= q(_), arg(1, S, T).
 
 %!  aq_reset is det.
@@ -277,8 +283,10 @@ aq_reset :-
     forall(aq_tab(T, _, _, _, _), free_tables([T])),
     forall(user:'$aq_wref'(_, _, Ref), erase(Ref)),
     retractall(aq_c(_, _, _)), retractall(aq_dep(_, _)), retractall(aq_ev(_, _, _)),
+    retractall(aq_agenda(_, _)),
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
     nb_getval(aq_cstates, St), trie_destroy(St),
+    nb_getval(aq_multi, M), trie_destroy(M),
     init_globals.
 
 %!  aq_stats(-Stats) is det.
@@ -288,7 +296,7 @@ aq_reset :-
 %   once every query is unregistered.
 
 aq_stats([queries=NQ, tables=NT, answers=NA, consumers=NC, fact_records=NF,
-          cstates=NS, subgoals=NG, deps=ND]) :-
+          cstates=NS, subgoals=NG, deps=ND, multi=NM]) :-
     aggregate_all(count, aq_q(_, _, _, _), NQ),
     aggregate_all(count, aq_tab(_, _, _, _, _), NT),
     aggregate_all(sum(C), (aq_tab(_, _, Tr, _, _), trie_count(Tr, C)), NA),
@@ -296,7 +304,8 @@ aq_stats([queries=NQ, tables=NT, answers=NA, consumers=NC, fact_records=NF,
     aggregate_all(count, user:'$aq_wref'(_, _, _), NF),
     nb_getval(aq_cstates, St), trie_count(St, NS),
     nb_getval(aq_subgoals, Sub), trie_count(Sub, NG),
-    aggregate_all(count, aq_dep(_, _), ND).
+    aggregate_all(count, aq_dep(_, _), ND),
+    nb_getval(aq_multi, M), trie_count(M, NM).
 
 trie_count(Tr, C) :-
     (   trie_property(Tr, value_count(C)) -> true ; C = 0 ).
@@ -318,7 +327,7 @@ wait_fact(insert, Lit, S) :-
     user:'$aq_wadd'(Lit, S),
     forall(user:Lit, go(S, Lit)).
 wait_fact(delete, Lit, S) :-
-    (   mark(w(f, Lit, S))
+    (   take_fact_record(Lit, S)
     ->  forall(user:Lit, go(S, Lit))
     ;   true
     ).
@@ -327,6 +336,14 @@ wait_fact(restore, Lit, S) :-
     ->  true
     ;   wait_fact(insert, Lit, S)
     ).
+
+take_fact_record(Lit, S) :-
+    user:'$aq_whead'(Lit, S, H),
+    copy_term(H, H1),
+    user:clause(H1, true, Ref),
+    user:clause(H2, true, Ref),
+    H2 =@= H, !,
+    erase(Ref).
 
 has_fact_record(Lit, S) :-
     copy_term(Lit-S, L2-S2),
@@ -348,10 +365,10 @@ wait_call(insert, Lit, S) :-
     consume(New, T, Lit, S).
 wait_call(delete, Lit, S) :-
     nb_getval(aq_cstates, St),
-    (   trie_lookup(St, S, T),
-        mark(w(c(T), Lit, S))
-    ->  aq_tab(T, _, Tr, _, _),
-        forall(trie_gen(Tr, Lit), go(S, Lit))
+    (   trie_delete(St, S, T)
+    ->  forall(( clause(aq_c(T, L1, S1), true, Ref), L1-S1 =@= Lit-S ), erase(Ref)),
+        findall(Lit, trie_gen(T, Lit), Answers),
+        forall(member(Lit, Answers), go(S, Lit))
     ;   true
     ).
 wait_call(restore, Lit, S) :-
@@ -393,19 +410,62 @@ aq_answer(T, A) :-
     nb_getval(aq_phase, P),
     answer(P, T, A).
 
+%   The trie aq_multi holds T-A for every answer A of table T that was
+%   derived more than once (or restored by DRed, whose re-derivation does not
+%   enumerate every derivation).  DRed re-derives only those: an answer with a
+%   single derivation that was over-deleted lost that derivation, and comes
+%   back only if the forward propagation of a restored item derives it again.
 answer(insert, T, A) :-
-    aq_tab(T, _, Tr, _, _),
-    (   trie_insert(Tr, A)
-    ->  forall(aq_c(T, L, S), ( L = A -> go(S, L) ; true ))
-    ;   true
+    (   trie_insert(T, A)
+    ->  schedule(T, A)
+    ;   nb_getval(aq_multi, M),
+        ( trie_insert(M, T-A) -> true ; true )
     ).
 answer(restore, T, A) :-
-    answer(insert, T, A).
+    (   trie_insert(T, A)
+    ->  nb_getval(aq_multi, M),
+        ( trie_insert(M, T-A) -> true ; true ),
+        schedule(T, A)
+    ;   true
+    ).
 answer(delete, T, A) :-
-    aq_tab(T, _, Tr, _, _),
-    (   trie_lookup(Tr, A, _),
-        mark(a(T, A))
-    ->  forall(aq_c(T, L, S), ( L = A -> go(S, L) ; true ))
+    (   trie_delete(T, A, _)
+    ->  nb_getval(aq_multi, M),
+        (   trie_delete(M, T-A, _)
+        ->  mark(a(T, A))
+        ;   true
+        ),
+        schedule(T, A)
+    ;   true
+    ).
+
+%   A new answer is propagated at once (depth-first) unless the propagation
+%   is already deep in the local stack (about 4 MB): then it waits on an
+%   agenda that the update drains at its end (drain/0), so that a long chain
+%   of derivations (left recursion over a long path) does not grow the
+%   stacks by frames per answer.  prolog_current_frame/1 is the cheapest
+%   depth measure there is (a counter in a global variable costs twice as
+%   much per answer).
+schedule(T, A) :-
+    prolog_current_frame(F),
+    (   F > 500000
+    ->  assertz(aq_agenda(T, A))
+    ;   propagate(T, A)
+    ).
+
+drain :-
+    (   retract(aq_agenda(T, A))
+    ->  propagate(T, A),
+        drain
+    ;   true
+    ).
+
+%   Resume every consumer of table T whose literal unifies with answer A.
+propagate(T, A) :-
+    (   aq_c(T, L, S),
+        L = A,
+        go(S, L),
+        fail
     ;   true
     ).
 
@@ -413,9 +473,11 @@ notify(Id, A) :-
     nb_getval(aq_phase, P),
     notify(P, Id, A).
 
-notify(insert, Id, A) :-
-    (   nb_getval(aq_registering, Id) -> Op = answer ; Op = add ),
-    emit(Id, Op, A).
+notify(insert, Id, A) :-            % answers found while registering are
+    (   nb_getval(aq_registering, Id)   % read from the table afterwards
+    ->  true
+    ;   emit(Id, add, A)
+    ).
 notify(delete, Id, A) :-
     ignore(mark(n(Id, A))).
 notify(restore, _, _).
@@ -465,11 +527,12 @@ owner_id(S, Id) :-
     arg(1, S, T0),
     aq_tab(T0, _, _, Id, _).
 
+%   A table is identified by its answer trie: states carry the trie itself,
+%   so propagating an answer needs no table lookup.
 new_table(Goal, Key, Owner, T) :-
-    flag(aq_table_id, T, T+1),
-    trie_new(Tr),
+    trie_new(T),
     copy_term(Goal, G),
-    assertz(aq_tab(T, G, Tr, Owner, Key)),
+    assertz(aq_tab(T, G, T, Owner, Key)),
     (   Key == none
     ->  true
     ;   nb_getval(aq_subgoals, Sub),
@@ -495,7 +558,8 @@ aq_assert(Fact) :-
     ->  true
     ;   assertz(user:Fact),
         nb_setval(aq_phase, insert),
-        forall(user:'$aq_wrec'(Fact, S), go(S, Fact))
+        forall(user:'$aq_wrec'(Fact, S), go(S, Fact)),
+        drain
     ).
 
 %!  aq_assert_all(+Facts) is det.
@@ -545,64 +609,46 @@ dred(Facts) :-
     dred_end(D).
 
 dred_end(D) :-
+    retractall(aq_agenda(_, _)),
     nb_setval(aq_phase, insert),
     nb_setval(aq_dred, '$none'),
     trie_destroy(D).
 
+%   Phase 1 removes what it over-deletes at once (states, goal and consumer
+%   records, answers): removing an item is also what stops a second visit.
+%   A derivation whose two premises are both over-deleted is followed from
+%   whichever of them goes first, while the other is still there.  D keeps
+%   the over-deleted answers that had more than one derivation (a(T, A)) and
+%   the answers lost by registered queries (n(Id, A)).
 dred(Facts, D) :-
-    % 1. over-delete against the old database
+    % 1. over-delete
     nb_setval(aq_phase, delete),
     forall(member(F, Facts),
            forall(user:'$aq_wrec'(F, S), go(S, F))),
-    % 2. remove what was marked, and the facts
+    drain,
     forall(member(F, Facts),
            forall(( user:clause(F, true, Ref), user:clause(H, true, Ref), H =@= F ), erase(Ref))),
-    findall(K, trie_gen(D, K), Marked),
-    forall(member(K, Marked), remove(K)),
-    % 3. re-derive what still has a derivation, propagate it forward
+    % 2. re-derive the answers that may have another derivation, propagate
+    %    them forward: that also restores the states and single-derivation
+    %    answers that depend on them
     nb_setval(aq_phase, restore),
-    forall(member(K, Marked), ignore(rederive(K))),
+    forall(trie_gen(D, a(T, A)), ignore(rederive(T, A))),
+    drain,
     nb_setval(aq_phase, insert),
-    findall(ev(Id, A), member(n(Id, A), Marked), Pending0),
+    findall(ev(Id, A), trie_gen(D, n(Id, A)), Pending0),
     msort(Pending0, Pending),
     forall(member(ev(Id, A), Pending),
            ( query_has(Id, A) -> true ; emit(Id, delete, A) )).
 
-remove(w(f, Lit, S)) :-
-    user:'$aq_whead'(Lit, S, H),
-    forall(( copy_term(H, H1), user:clause(H1, true, Ref),
-             user:clause(H2, true, Ref), H2 =@= H ),
-           erase(Ref)).
-remove(w(c(T), Lit, S)) :-
-    forall(( clause(aq_c(T, L1, S1), true, Ref), L1-S1 =@= Lit-S ), erase(Ref)),
-    nb_getval(aq_cstates, St),
-    ignore(trie_delete(St, S, _)).
-remove(a(T, A)) :-
-    (   aq_tab(T, _, Tr, _, _) -> ignore(trie_delete(Tr, A, _)) ; true ).
-remove(n(_, _)).
-
-rederive(w(f, Lit, S)) :-
-    \+ has_fact_record(Lit, S),
-    state_derivable(S),
-    wait_fact(restore, Lit, S).
-rederive(w(c(T), Lit, S)) :-
-    nb_getval(aq_cstates, St),
-    \+ trie_lookup(St, S, _),
+%   A state has exactly one derivation (its previous state and the answer
+%   of the literal it consumed, both recorded in the state), so an
+%   over-deleted state is never re-derived on its own: it comes back when
+%   the forward propagation of a restored item reaches it.
+rederive(T, A) :-
     aq_tab(T, _, _, _, _),
-    state_derivable(S),
-    consume(false, T, Lit, S).
-rederive(a(T, A)) :-
-    aq_tab(T, _, Tr, _, _),
-    \+ trie_lookup(Tr, A, _),
+    \+ trie_lookup(T, A, _),
     answer_derivable(T, A),
     answer(restore, T, A).
-
-state_derivable(q(_)) :- !.
-state_derivable(S) :-
-    copy_term(S, S1),
-    user:'$aq_prev'(S1, P, Kind, Lit, Check),
-    premise(P, Kind, Lit),
-    call(Check), !.
 
 answer_derivable(T, A) :-
     copy_term(A, A1),
@@ -619,8 +665,7 @@ premise(P, fact, Lit) :-          % the fact first: stored facts are indexed on 
 premise(P, call, Lit) :-
     nb_getval(aq_cstates, St),
     trie_gen(St, P, T),
-    aq_tab(T, _, Tr, _, _),
-    trie_gen(Tr, Lit).
+    trie_gen(T, Lit).
 
 query_has(Id, A) :-
     aq_q(Id, _, Kind, T),

@@ -47,7 +47,7 @@ def test_register_notify_unregister(mode):
     aq.unregister(7)
     after = aq.stats()
     # memory returns to the baseline: no table, answer, goal record or dependency is left
-    for key in ("queries", "tables", "answers", "consumers", "fact_records", "cstates", "subgoals", "deps"):
+    for key in ("queries", "tables", "answers", "consumers", "fact_records", "cstates", "subgoals", "deps", "multi"):
         assert after[key] == baseline[key] == 0, (key, after)
 
 

@@ -3,6 +3,8 @@ the maintained answers equal (a) recomputation from scratch with the same transf
 (b) SWI-Prolog's own `:- table` answers, for all three transformations."""
 from __future__ import annotations
 
+import os
+
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -64,7 +66,7 @@ def check(source, goals, steps, mode, subsumption=False):
     assert "tables=0" in stats and "consumers=0" in stats and "fact_records=0" in stats, stats
 
 
-SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+SETTINGS = settings(max_examples=int(os.environ.get("AQ_EXAMPLES", "25")), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
 @SETTINGS

@@ -6,8 +6,8 @@ state s<k>_<w>(T, Env) = e_k(w-1) of the binary rules (Env: the variables of H, 
 
     '$aq_act'(H, T)             :- builtins, aq_wait_*(L_w1, s<k>_<w1>(T, Env1)).   (e_k0)
     '$aq_go'(s<k>_<wi>(..), L_wi) :- builtins, aq_wait_*(L_w(i+1), ...) | aq_answer(T, H).
-    '$aq_prev'(State, PrevState, Kind, Literal, Check)   one step back (DRed re-derivation)
-    '$aq_final'(H, T, LastState, Kind, Literal, Check)  how an answer is derived
+    '$aq_final'(H, T, LastState, Kind, Literal, Check)  how an answer is derived (DRed
+                                                         re-derivation of an answer)
 """
 from __future__ import annotations
 
@@ -120,14 +120,6 @@ def rule_clauses(rule: Rule) -> List[str]:
         hi = waits[n + 1] if n + 1 < len(waits) else len(body)
         nxt = enter(waits[n + 1]) if n + 1 < len(waits) else answer
         clauses.append(_clause(f"'$aq_go'({state(i)}, {to_prolog(body[i].term)})", builtins(i + 1, hi) + [nxt]))
-    for n, i in enumerate(waits):
-        if n == 0:
-            prev = f"'$aq_prev'({state(i)}, act({t}), none, true, ({_conj(builtins(0, i))}))."
-        else:
-            j = waits[n - 1]
-            prev = (f"'$aq_prev'({state(i)}, {state(j)}, {body[j].kind}, {to_prolog(body[j].term)}, "
-                    f"({_conj(builtins(j + 1, i))})).")
-        clauses.append(prev)
     if waits:
         j = waits[-1]
         clauses.append(f"'$aq_final'({head}, {t}, {state(j)}, {body[j].kind}, {to_prolog(body[j].term)}, "
