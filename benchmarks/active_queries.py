@@ -2,10 +2,13 @@
 terminate) beside SWI-Prolog 9's own tabling (`table`, `as incremental`, `as monotonic`,
 `as subsumptive`), measured in the same run, with ratios.
 
-    python benchmarks/active_queries.py [--quick] [--png out.png]
+    python benchmarks/active_queries.py [--quick] [--skip-2apl] [--png out.png]
 
 Every figure is CPU seconds inside one fresh `swipl` process per (scenario, system); the
-`recompute` baseline is `abolish_all_tables` + re-evaluation after the update.
+`recompute` baseline is `abolish_all_tables` + re-evaluation after the update; `point` is a
+fresh evaluation of path(0, N) after the updates; `peak MB` is the process's peak resident memory
+(VmHWM) after the initial query, the add and the delete.  After the table, every target of the
+issue is printed with its ratio and met/MISSED; then the 2APL usecases (benchmarks/aq_2apl.py).
 """
 from __future__ import annotations
 
@@ -35,8 +38,11 @@ NOTIFY = """notify(User, Artist, Price, [LX, LY]) :-
 TIMER = """
 t(G, T) :- garbage_collect, statistics(cputime, T0), ( call(G) -> true ; true ), statistics(cputime, T1), T is T1 - T0.
 report(Name, T) :- format("~w ~6f~n", [Name, T]), flush_output.
+report_peak :- read_file_to_string('/proc/self/status', S, []), split_string(S, "\\n", "", Ls),
+    ( member(L, Ls), sub_string(L, 0, _, _, "VmHWM:") -> split_string(L, " \\t", " \\t", Ps),
+      include([X]>>(X \\== ""), Ps, [_, Kb|_]), number_string(K, Kb), M is K / 1024, report(peak_mb, M)
+    ; true ).
 """
-
 
 def chain(n):
     return [f"edge({i}, {i + 1})." for i in range(n)]
@@ -51,7 +57,7 @@ def random_graph(nodes, edges, seed=7):
     return sorted(out)
 
 
-def program6(seed=42):
+def program6(seed=42, users=500):
     rng = random.Random(seed)
     facts = []
     for artist in range(1, 101):
@@ -60,7 +66,7 @@ def program6(seed=42):
             spots.add((rng.randint(0, 10), rng.randint(0, 10)))
         for x, y in sorted(spots):
             facts.append(f"show({artist}, {rng.randint(1, 10)}, [{x}, {y}]).")
-    for user in range(1, 501):
+    for user in range(1, users + 1):
         facts.append(f"loc({user}, [{rng.randint(0, 10)}, {rng.randint(0, 10)}]).")
         for artist in rng.sample(range(1, 101), 30):
             facts.append(f"likes({user}, {artist}, {rng.randint(1, 10)}, {rng.randint(1, 15)}).")
@@ -83,23 +89,26 @@ def run_swipl(text: str, timeout=3600):
     return out
 
 
-def ours(rules, facts, goal, add, delete, mode="tabled", extra_goals=()):
+def ours(rules, facts, goals, add, delete, mode="tabled", point=None):
+    """goals: one goal, or a list of goals registered as separate queries."""
+    goals = [goals] if isinstance(goals, str) else goals
     gen = compile_active_queries(rules + "\n".join(facts) + "\n", "bench.pl", mode=mode)
+    register = ", ".join(f"aq_register(q{n}, {g}, _)" for n, g in enumerate(goals))
     main = [
-        f"main :- t(aq_register(q, {goal}, _), T1), report(initial, T1),",
+        f"main :- t(({register}), T1), report(initial, T1),",
         f"    t(aq_assert({add}), T2), report(add, T2),",
-        f"    t(aq_retract({delete}), T3), report(delete, T3),",
-        "    statistics(globalused, _), garbage_collect, statistics(memory, _),",
+        f"    t(aq_retract({delete}), T3), report(delete, T3), report_peak,",
         "    t(aq_reset, T4), report(unregister, T4),",
     ]
-    for n, g in enumerate(extra_goals):
-        main.append(f"    t(aq_register(p{n}, {g}, _), T{5 + n}), report(point{n}, T{5 + n}),")
+    if point:
+        main.append(f"    t(aq_register(p, {point}, _), T5), report(point, T5),")
     main.append("    true.")
     return run_swipl(gen + TIMER + "\n".join(main) + "\n")
 
 
-def swi(rules, facts, goal, add, delete, how, preds):
+def swi(rules, facts, goals, add, delete, how, preds, point=None):
     """how: table | incremental | monotonic | subsumptive."""
+    goals = [goals] if isinstance(goals, str) else goals
     decls = []
     dyn = preds["dynamic"]
     tabled = preds["tabled"]
@@ -111,34 +120,55 @@ def swi(rules, facts, goal, add, delete, how, preds):
         decls += [f":- table {p} as incremental." for p in tabled] + [f":- dynamic {p} as incremental." for p in dyn]
     elif how == "monotonic":
         decls += [f":- table {p} as monotonic." for p in tabled] + [f":- dynamic {p} as monotonic." for p in dyn]
-    update = how in ("incremental", "monotonic")
-    if update:
-        add_g = f"(assertz({add}), findall(x, {goal}, _))"
-        del_g = f"(retract({delete}), findall(x, {goal}, _))"
+    evaluate = ", ".join(f"findall(x, {g}, _)" for g in goals)
+    if how in ("incremental", "monotonic"):
+        add_g = f"(assertz({add}), {evaluate})"
+        del_g = f"(retract({delete}), {evaluate})"
     else:
-        add_g = f"(assertz({add}), abolish_all_tables, findall(x, {goal}, _))"
-        del_g = f"(retract({delete}), abolish_all_tables, findall(x, {goal}, _))"
-    main = (f"main :- t(findall(x, {goal}, _), T1), report(initial, T1),\n"
-            f"    t({add_g}, T2), report(add, T2),\n    t({del_g}, T3), report(delete, T3),\n"
-            f"    statistics(table_space_used, S), report(table_space, S).\n")
-    return run_swipl("\n".join(decls) + "\n" + rules + "\n".join(facts) + "\n" + TIMER + main)
+        add_g = f"(assertz({add}), abolish_all_tables, {evaluate})"
+        del_g = f"(retract({delete}), abolish_all_tables, {evaluate})"
+    main = (f"main :- t(({evaluate}), T1), report(initial, T1),\n"
+            f"    t({add_g}, T2), report(add, T2),\n    t({del_g}, T3), report(delete, T3), report_peak,\n"
+            f"    statistics(table_space_used, S), report(table_space, S)")
+    if point:
+        main += f",\n    abolish_all_tables, t(findall(x, {point}, _), T5), report(point, T5)"
+    return run_swipl("\n".join(decls) + "\n" + rules + "\n".join(facts) + "\n" + TIMER + main + ".\n")
 
 
-def scenario(name, rules, facts, goal, add, delete, preds, systems, rows, progress):
-    progress(f"{name}: ours")
-    rows.append((name, "tabled (ours)", ours(rules, facts, goal, add, delete)))
+def scenario(name, rules, facts, goals, add, delete, preds, systems, rows, progress, modes=("tabled",),
+             point=None):
+    for mode in modes:
+        progress(f"{name}: ours ({mode})")
+        try:
+            rows.append((name, f"{mode} (ours)", ours(rules, facts, goals, add, delete, mode, point)))
+        except Exception as exc:
+            rows.append((name, f"{mode} (ours)", {"error": str(exc).strip().splitlines()[-1][:60]}))
     for how in systems:
         progress(f"{name}: SWI {how}")
         try:
-            rows.append((name, f"SWI {how}", swi(rules, facts, goal, add, delete, how, preds)))
+            rows.append((name, f"SWI {how}", swi(rules, facts, goals, add, delete, how, preds, point)))
         except Exception as exc:  # a baseline that fails is reported, not hidden
-            rows.append((name, f"SWI {how}", {"error": str(exc).splitlines()[-1][:60]}))
+            rows.append((name, f"SWI {how}", {"error": str(exc).strip().splitlines()[-1][:60]}))
+
+
+def reachable(edges, start):
+    succ = {}
+    for a, b in edges:
+        succ.setdefault(a, []).append(b)
+    seen, todo = {start}, [start]
+    while todo:
+        for b in succ.get(todo.pop(), []):
+            if b not in seen:
+                seen.add(b)
+                todo.append(b)
+    return seen
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="smaller sizes (smoke run)")
-    ap.add_argument("--png", default="benchmarks/active_queries.png")
+    ap.add_argument("--png", default="benchmarks/results/active_queries.png")
+    ap.add_argument("--skip-2apl", action="store_true", help="leave out the 2APL usecases")
     args = ap.parse_args(argv)
     t0 = time.time()
 
@@ -147,43 +177,108 @@ def main(argv=None):
 
     rows = []
     path_preds = {"dynamic": ["edge/2"], "tabled": ["path/2"]}
-    systems = ["table", "incremental", "monotonic", "subsumptive"]
     n = 200 if args.quick else 1000
-    scenario("chain-right", RIGHT, chain(n), "path(0, _)", f"edge({n}, {n + 1})", f"edge({n // 2}, {n // 2 + 1})",
-             path_preds, systems, rows, progress)
+    scenario(f"chain-right-{n}", RIGHT, chain(n), "path(0, _)", f"edge({n}, {n + 1})",
+             f"edge({n // 2}, {n // 2 + 1})", path_preds, ["table", "incremental", "monotonic", "subsumptive"],
+             rows, progress, modes=("tabled", "optimized", "naive"), point=f"path(0, {n})")
     big = 10000 if args.quick else 100000
-    scenario("chain-left-100k" if not args.quick else "chain-left-10k", LEFT, chain(big), "path(0, _)",
-             f"edge({big}, {big + 1})", f"edge({big // 2}, {big // 2 + 1})", path_preds,
-             ["table", "incremental", "monotonic"], rows, progress)
-    scenario("random-graph", LEFT, random_graph(2000, 6000), "path(0, _)", "edge(1, 2)", "edge(0, 1)" if False else
-             random_graph(2000, 6000)[0][:-1], path_preds, ["table", "incremental", "monotonic"], rows, progress)
-    if not args.quick:
-        facts6 = program6()
-        victim = next(f for f in facts6 if f.startswith("likes(1,"))[:-1]
-        scenario("program6", NOTIFY, facts6, "notify(_, _, _, _)", "loc(1, [2, 3])", victim,
-                 {"dynamic": ["loc/2", "show/3", "likes/4"], "tabled": ["notify/4"]},
-                 ["table", "incremental", "monotonic"], rows, progress)
+    scenario(f"chain-left-{big // 1000}k", LEFT, chain(big), "path(0, _)", f"edge({big}, {big + 1})",
+             f"edge({big // 2}, {big // 2 + 1})", path_preds, ["table", "incremental", "monotonic"], rows, progress,
+             point=f"path(0, {big})")
+    nodes, n_edges = (300, 900) if args.quick else (1000, 3000)
+    rng = random.Random(7)
+    edges = set()
+    while len(edges) < n_edges:
+        edges.add((rng.randrange(nodes), rng.randrange(nodes)))
+    edges = sorted(edges)
+    reach = reachable(edges, 0)
+    # an edge that changes no answer: from 0 to a node 0 already reaches
+    useless = next(b for b in sorted(reach) if b != 0 and (0, b) not in edges)
+    victim = edges[len(edges) // 2]
+    scenario(f"random-{nodes}x{n_edges}", RIGHT, [f"edge({a}, {b})." for a, b in edges], "path(0, _)",
+             f"edge(0, {useless})", f"edge({victim[0]}, {victim[1]})", path_preds, ["table", "incremental", "monotonic"],
+             rows, progress)
+    facts6 = program6(users=50 if args.quick else 500)
+    victim6 = next(f for f in facts6 if f.startswith("likes(1,"))[:-1]
+    preds6 = {"dynamic": ["loc/2", "show/3", "likes/4"], "tabled": ["notify/4"]}
+    scenario("program6", NOTIFY, facts6, "notify(_, _, _, _)", "loc(1, [2, 3])", victim6, preds6,
+             ["table", "incremental", "monotonic"], rows, progress, modes=("tabled", "optimized"))
+    users = 50 if args.quick else 500
+    scenario(f"program6-{users}q", NOTIFY, facts6, [f"notify({u}, _, _, _)" for u in range(1, users + 1)],
+             "loc(1, [2, 3])", victim6, preds6, ["table", "incremental", "monotonic"], rows, progress)
     print_table(rows)
+    print()
+    print_targets(rows, n, big, nodes, n_edges, users)
+    apl_rows = []
+    if not args.skip_2apl:
+        import aq_2apl
+        print()
+        apl_rows = aq_2apl.run(quick=args.quick, progress=progress)
+        aq_2apl.print_table(apl_rows)
+        for text, met in aq_2apl.targets(apl_rows):
+            print(f"  target {text}: {'met' if met else 'MISSED' if met is not None else 'no figure'}")
+        aq_2apl.plot(apl_rows, str(Path(args.png).with_name("aq_2apl.png")))
     plot(rows, args.png)
+    progress(f"done; plots in {Path(args.png).parent}")
+
+
+def figure(rows, scen, system, key):
+    for s, sy, res in rows:
+        if s == scen and sy == system and "error" not in res:
+            return res.get(key)
+    return None
+
+
+def print_targets(rows, n, big, nodes, n_edges, users):
+    ours = "tabled (ours)"
+
+    def ratio(scen, system, key, system2=None):
+        a, b = figure(rows, scen, ours, key), figure(rows, scen, system, key)
+        return None if a is None or not b else a / b
+
+    checks = []
+    chain_r, chain_l, rand = f"chain-right-{n}", f"chain-left-{big // 1000}k", f"random-{nodes}x{n_edges}"
+    checks.append(("chain-right add <= 0.1x incremental", ratio(chain_r, "SWI incremental", "add"), 0.1))
+    checks.append(("chain-right add <= 1x monotonic", ratio(chain_r, "SWI monotonic", "add"), 1.0))
+    checks.append((f"{chain_l} add <= 0.1x incremental", ratio(chain_l, "SWI incremental", "add"), 0.1))
+    checks.append((f"{rand} add <= 0.01x incremental", ratio(rand, "SWI incremental", "add"), 0.01))
+    for scen in (chain_r, chain_l, rand):
+        checks.append((f"{scen} delete <= 0.5x recompute (table)", ratio(scen, "SWI table", "delete"), 0.5))
+        checks.append((f"{scen} delete <= 0.25x monotonic", ratio(scen, "SWI monotonic", "delete"), 0.25))
+    for scen in ("program6", f"program6-{users}q"):
+        checks.append((f"{scen} retract <= 0.1x incremental", ratio(scen, "SWI incremental", "delete"), 0.1))
+        checks.append((f"{scen} add <= 0.05x incremental", ratio(scen, "SWI incremental", "add"), 0.05))
+        checks.append((f"{scen} initial <= 1.5x table", ratio(scen, "SWI table", "initial"), 1.5))
+        checks.append((f"{scen} peak memory <= 1.5x table", ratio(scen, "SWI table", "peak_mb"), 1.5))
+    checks.append((f"{chain_r} initial <= 1x table", ratio(chain_r, "SWI table", "initial"), 1.0))
+    checks.append((f"{chain_r} point query path(0,{n}) <= 1x table", ratio(chain_r, "SWI table", "point"), 1.0))
+    print("targets (ratio ours / SWI in this run):")
+    for text, value, limit in checks:
+        verdict = "no figure" if value is None else ("met" if value <= limit else "MISSED")
+        shown = "-" if value is None else f"{value:.3g}"
+        print(f"  {text:<52} {shown:>8}  {verdict}")
 
 
 def print_table(rows):
     by = {}
     for scen, system, res in rows:
         by.setdefault(scen, {})[system] = res
-    print(f"{'scenario':<16} {'system':<18} {'initial':>9} {'add':>9} {'delete':>9}   ratios ours/system (init, add, del)")
+    keys = ("initial", "add", "delete", "point", "peak_mb")
+    print(f"{'scenario':<18} {'system':<18} {'initial':>9} {'add':>9} {'delete':>9} {'point':>9} {'peak MB':>8}"
+          f"   ours(tabled)/system: initial, add, delete, point, peak")
     for scen, systems in by.items():
         mine = systems.get("tabled (ours)", {})
         for system, res in systems.items():
             if "error" in res:
-                print(f"{scen:<16} {system:<18} {'error: ' + res['error']}")
+                print(f"{scen:<18} {system:<18} error: {res['error']}")
                 continue
-            cells = " ".join(f"{res.get(k, float('nan')):9.4f}" for k in ("initial", "add", "delete"))
+            cells = " ".join(f"{res[k]:9.4f}" if k in res else f"{'-':>9}" for k in keys[:4])
+            cells += f" {res['peak_mb']:8.0f}" if "peak_mb" in res else f" {'-':>8}"
             ratio = ""
             if system != "tabled (ours)":
-                ratio = "  " + ", ".join(
-                    f"{mine.get(k, float('nan')) / res[k]:.3g}" if res.get(k) else "-" for k in ("initial", "add", "delete"))
-            print(f"{scen:<16} {system:<18} {cells}{ratio}")
+                ratio = "   " + ", ".join(
+                    f"{mine[k] / res[k]:.3g}" if res.get(k) and k in mine else "-" for k in keys)
+            print(f"{scen:<18} {system:<18} {cells}{ratio}")
 
 
 def plot(rows, png):
@@ -207,6 +302,7 @@ def plot(rows, png):
         ax.set_xscale("log")
         ax.set_title(f"{key} (CPU s, log)")
     fig.tight_layout()
+    Path(png).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(png, dpi=120)
 
 
