@@ -278,10 +278,14 @@ state_owner(S, T) :- S \= q(_), arg(1, S, T).
 %
 %   Unregister every query and drop every table (the facts stay).
 
+%   Everything goes at once: unregistering the queries one by one would
+%   scan the goal records once per query.
 aq_reset :-
-    forall(aq_q(Id, _, _, _), aq_unregister(Id)),
-    forall(aq_tab(T, _, _, _, _), free_tables([T])),
-    forall(user:'$aq_wref'(_, _, Ref), erase(Ref)),
+    retractall(aq_q(_, _, _, _)),
+    forall(retract(aq_tab(T, _, _, _, _)), trie_destroy(T)),
+    retractall(aq_tpred(_, _, _)),
+    forall(user:'$aq_fact_pred'(F),
+           ( user:'$aq_whead'(F, _, H), retractall(user:H) )),
     retractall(aq_c(_, _, _)), retractall(aq_dep(_, _)), retractall(aq_ev(_, _, _)),
     retractall(aq_agenda(_, _)),
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
