@@ -14,9 +14,7 @@ from __future__ import annotations
 
 import argparse
 import random
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -24,6 +22,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from retalisc.backends.prolog.aq_backend import compile_active_queries  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import swipl_run  # noqa: E402
 
 RIGHT = "path(X, Y) :- edge(X, Z), path(Z, Y).\npath(X, Y) :- edge(X, Y).\n"
 LEFT = "path(X, Y) :- path(X, Z), edge(Z, Y).\npath(X, Y) :- edge(X, Y).\n"
@@ -74,19 +75,7 @@ def program6(seed=42, users=500):
 
 
 def run_swipl(text: str, timeout=3600):
-    with tempfile.TemporaryDirectory(prefix="aqbench_") as tmp:
-        path = Path(tmp) / "bench.pl"
-        path.write_text(text)
-        proc = subprocess.run(["swipl", "--no-tty", "-q", "--stack-limit=8g", "--table-space=8g", "-g", "main",
-                               "-t", "halt", str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True, timeout=timeout)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr[-3000:])
-    out = {}
-    for line in proc.stdout.splitlines():
-        name, value = line.split()
-        out[name] = float(value)
-    return out
+    return {key: float(value) for key, value in swipl_run.run_swipl(text, timeout).items()}
 
 
 def ours(rules, facts, goals, add, delete, mode="tabled", point=None):

@@ -77,7 +77,6 @@ import functools
 import random
 import subprocess
 import sys
-import tempfile
 import time
 from collections import Counter, deque
 from pathlib import Path
@@ -86,6 +85,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from retalisc.backends.prolog.aq_backend import compile_active_queries  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import swipl_run  # noqa: E402
 
 SEED = 2013
 RULE = "accessible(O, S) :- seller(S, T), has(T, O), offers(S, O, P).\n"
@@ -381,19 +383,7 @@ def program(sc, approach):
 
 
 def run_swipl(text, timeout):
-    with tempfile.TemporaryDirectory(prefix="aq2apl_") as tmp:
-        path = Path(tmp) / "bench.pl"
-        path.write_text(text)
-        proc = subprocess.run(["swipl", "--no-tty", "-q", "--stack-limit=8g", "--table-space=8g", "-g", "main",
-                               "-t", "halt", str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True, timeout=timeout)
-    if proc.returncode != 0 or not proc.stdout.strip():
-        raise RuntimeError((proc.stderr or proc.stdout or f"exit {proc.returncode}")[-3000:])
-    out = {}
-    for line in proc.stdout.splitlines():
-        key, value = line.split()
-        out[key] = value
-    return out
+    return swipl_run.run_swipl(text, timeout)
 
 
 def run(quick: bool = False, progress=lambda msg: None, usecases=None, approaches=None, timeout=300):
