@@ -126,18 +126,17 @@ def swi(rules, facts, goals, add, delete, how, preds, point=None):
 
 def scenario(name, rules, facts, goals, add, delete, preds, systems, rows, progress, modes=("tabled",),
              point=None):
+    def measure(system, run):
+        progress(f"{name}: {system}")
+        try:
+            rows.append((name, system, run()))
+        except Exception as exc:  # a run that fails is reported, not hidden
+            rows.append((name, system, {"error": str(exc).strip().splitlines()[-1][:60]}))
+
     for mode in modes:
-        progress(f"{name}: ours ({mode})")
-        try:
-            rows.append((name, f"{mode} (ours)", ours(rules, facts, goals, add, delete, mode, point)))
-        except Exception as exc:
-            rows.append((name, f"{mode} (ours)", {"error": str(exc).strip().splitlines()[-1][:60]}))
+        measure(f"{mode} (ours)", lambda: ours(rules, facts, goals, add, delete, mode, point))
     for how in systems:
-        progress(f"{name}: SWI {how}")
-        try:
-            rows.append((name, f"SWI {how}", swi(rules, facts, goals, add, delete, how, preds, point)))
-        except Exception as exc:  # a baseline that fails is reported, not hidden
-            rows.append((name, f"SWI {how}", {"error": str(exc).strip().splitlines()[-1][:60]}))
+        measure(f"SWI {how}", lambda: swi(rules, facts, goals, add, delete, how, preds, point))
 
 
 def reachable(edges, start):
@@ -221,7 +220,7 @@ def figure(rows, scen, system, key):
 def print_targets(rows, n, big, nodes, n_edges, users):
     ours = "tabled (ours)"
 
-    def ratio(scen, system, key, system2=None):
+    def ratio(scen, system, key):
         a, b = figure(rows, scen, ours, key), figure(rows, scen, system, key)
         return None if a is None or not b else a / b
 

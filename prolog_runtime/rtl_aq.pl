@@ -57,6 +57,7 @@
 :- use_module(library(lists)).
 :- use_module(library(apply)).
 :- use_module(library(readutil)).
+:- use_module(rtl_io, [rtl_json_string_escape/2]).
 
 :- meta_predicate aq_set_notify(2).
 
@@ -341,18 +342,20 @@ wait_fact(restore, Lit, S) :-
     ;   wait_fact(insert, Lit, S)
     ).
 
-take_fact_record(Lit, S) :-
+%   The goal record of State waiting on Literal (a variant, not an instance).
+fact_record(Lit, S, Ref) :-
     user:'$aq_whead'(Lit, S, H),
     copy_term(H, H1),
     user:clause(H1, true, Ref),
     user:clause(H2, true, Ref),
-    H2 =@= H, !,
+    H2 =@= H, !.
+
+take_fact_record(Lit, S) :-
+    fact_record(Lit, S, Ref),
     erase(Ref).
 
 has_fact_record(Lit, S) :-
-    copy_term(Lit-S, L2-S2),
-    user:'$aq_wrec'(L2, S2),
-    L2-S2 =@= Lit-S, !.
+    fact_record(Lit, S, _).
 
 %!  aq_wait_call(+Literal, +State) is det.
 %
@@ -785,22 +788,9 @@ json_text(Id, T) :-
     ;   format(string(S), '~w', [Id]), json_string(S, T)
     ).
 
-json_string(S, J) :-
-    string_codes(S, Cs),
-    phrase(json_chars(Cs), Out),
-    string_codes(Body, Out),
-    string_concat("\"", Body, J0),
-    string_concat(J0, "\"", J).
-
-json_chars([]) --> [].
-json_chars([C|Cs]) --> json_char(C), json_chars(Cs).
-json_char(0'") --> !, "\\\"".
-json_char(0'\\) --> !, "\\\\".
-json_char(0'\n) --> !, "\\n".
-json_char(0'\t) --> !, "\\t".
-json_char(0'\r) --> !, "\\r".
-json_char(C) --> { C < 32 }, !, { format(codes(Hex), '\\u~|~`0t~16r~4+', [C]) }, Hex.
-json_char(C) --> [C].
+json_string(Text, J) :-
+    rtl_json_string_escape(Text, Escaped),
+    format(string(J), '"~w"', [Escaped]).
 
 %!  aq_script_main(+File) is det.
 %
