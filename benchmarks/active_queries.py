@@ -79,9 +79,12 @@ def run_swipl(text: str, timeout=3600):
 
 
 def ours(rules, facts, goals, add, delete, mode="tabled", point=None):
-    """goals: one goal, or a list of goals registered as separate queries."""
+    """goals: one goal, or a list of goals registered as separate queries.  mode: a
+    transformation, optionally with a DRed variant (`tabled:basic`; the default is primary)."""
     goals = [goals] if isinstance(goals, str) else goals
+    mode, _, dred = mode.partition(":")
     gen = compile_active_queries(rules + "\n".join(facts) + "\n", "bench.pl", mode=mode)
+    gen += f":- aq_configure([dred({dred or 'primary'})]).\n"
     register = ", ".join(f"aq_register(q{n}, {g}, _)" for n, g in enumerate(goals))
     main = [
         f"main :- t(({register}), T1), report(initial, T1),",
@@ -134,7 +137,8 @@ def scenario(name, rules, facts, goals, add, delete, preds, systems, rows, progr
             rows.append((name, system, {"error": str(exc).strip().splitlines()[-1][:60]}))
 
     for mode in modes:
-        measure(f"{mode} (ours)", lambda: ours(rules, facts, goals, add, delete, mode, point))
+        label = mode.replace(":basic", ", basic DRed")
+        measure(f"{label} (ours)", lambda: ours(rules, facts, goals, add, delete, mode, point))
     for how in systems:
         measure(f"SWI {how}", lambda: swi(rules, facts, goals, add, delete, how, preds, point))
 
@@ -168,11 +172,11 @@ def main(argv=None):
     n = 200 if args.quick else 1000
     scenario(f"chain-right-{n}", RIGHT, chain(n), "path(0, _)", f"edge({n}, {n + 1})",
              f"edge({n // 2}, {n // 2 + 1})", path_preds, ["table", "incremental", "monotonic", "subsumptive"],
-             rows, progress, modes=("tabled", "optimized", "naive"), point=f"path(0, {n})")
+             rows, progress, modes=("tabled", "tabled:basic", "optimized", "naive"), point=f"path(0, {n})")
     big = 10000 if args.quick else 100000
     scenario(f"chain-left-{big // 1000}k", LEFT, chain(big), "path(0, _)", f"edge({big}, {big + 1})",
              f"edge({big // 2}, {big // 2 + 1})", path_preds, ["table", "incremental", "monotonic"], rows, progress,
-             point=f"path(0, {big})")
+             modes=("tabled", "tabled:basic"), point=f"path(0, {big})")
     nodes, n_edges = (300, 900) if args.quick else (1000, 3000)
     rng = random.Random(7)
     edges = set()
@@ -185,18 +189,20 @@ def main(argv=None):
     victim = edges[len(edges) // 2]
     scenario(f"random-{nodes}x{n_edges}", RIGHT, [f"edge({a}, {b})." for a, b in edges], "path(0, _)",
              f"edge(0, {useless})", f"edge({victim[0]}, {victim[1]})", path_preds, ["table", "incremental", "monotonic"],
-             rows, progress)
+             rows, progress, modes=("tabled", "tabled:basic"))
     facts6 = program6(users=50 if args.quick else 500)
     victim6 = next(f for f in facts6 if f.startswith("likes(1,"))[:-1]
     preds6 = {"dynamic": ["loc/2", "show/3", "likes/4"], "tabled": ["notify/4"]}
     scenario("program6", NOTIFY, facts6, "notify(_, _, _, _)", "loc(1, [2, 3])", victim6, preds6,
-             ["table", "incremental", "monotonic"], rows, progress, modes=("tabled", "optimized"))
+             ["table", "incremental", "monotonic"], rows, progress, modes=("tabled", "tabled:basic", "optimized"))
     users = 50 if args.quick else 500
     scenario(f"program6-{users}q", NOTIFY, facts6, [f"notify({u}, _, _, _)" for u in range(1, users + 1)],
              "loc(1, [2, 3])", victim6, preds6, ["table", "incremental", "monotonic"], rows, progress)
     print_table(rows)
     print()
     print_targets(rows, n, big, nodes, n_edges, users)
+    print()
+    print_dred(rows)
     apl_rows = []
     if not args.skip_2apl:
         import aq_2apl
@@ -245,6 +251,17 @@ def print_targets(rows, n, big, nodes, n_edges, users):
         verdict = "no figure" if value is None else ("met" if value <= limit else "MISSED")
         shown = "-" if value is None else f"{value:.3g}"
         print(f"  {text:<52} {shown:>8}  {verdict}")
+
+
+def print_dred(rows):
+    """The two DRed variants side by side (both compute ranks: only deletion differs)."""
+    print("DRed variants (tabled): primary = over-delete an answer only along a derivation that may have"
+          " created it; basic = along every derivation")
+    print(f"  {'scenario':<18} {'delete primary':>15} {'delete basic':>13} {'basic/primary':>14}")
+    for scen in dict.fromkeys(r[0] for r in rows):
+        p, b = figure(rows, scen, "tabled (ours)", "delete"), figure(rows, scen, "tabled, basic DRed (ours)", "delete")
+        if p is not None and b is not None:
+            print(f"  {scen:<18} {p:15.4f} {b:13.4f} {b / max(p, 1e-9):14.3g}")
 
 
 def print_table(rows):

@@ -7,7 +7,8 @@
     for answers (a *wait point*), generated clauses:
 
       '$aq_act'(Head, T)            activation e_k0: rule k for table T
-      '$aq_go'(State, Literal)      resume State once Literal has an answer
+      '$aq_go'(State, Literal, R)   resume State once Literal has an answer
+                                    of rank R (see Ranks below)
       '$aq_final'(Head, T, Prev, Kind, Literal, Check) one-step derivation of an answer
 
     A *state* s<k>_<j>(T, Env...) is the binary-rule intermediate result
@@ -50,9 +51,9 @@
             aq_reset/0,
             aq_run_script/1,        % +File
             aq_script_main/1,       % +File
-            aq_wait_fact/2,         % +Literal, +State     (called by generated code)
-            aq_wait_call/2,         % +Literal, +State     (called by generated code)
-            aq_answer/2             % +Table, +Answer      (called by generated code)
+            aq_wait_fact/2,         % +Literal, +State         (called by generated code)
+            aq_wait_call/2,         % +Literal, +State         (called by generated code)
+            aq_answer/3             % +Table, +Answer, +Rank   (called by generated code)
           ]).
 :- use_module(library(lists)).
 :- use_module(library(apply)).
@@ -66,7 +67,7 @@
     aq_tpred/3,        % aq_tpred(Name/Arity, Goal, T)   (subsumption index)
     aq_c/3,            % aq_c(T, Literal, State)       consumer records
     aq_dep/2,          % aq_dep(From, T)               From = T0 | root(Id)
-    aq_agenda/2,       % aq_agenda(T, Answer)          new answers still to propagate
+    aq_agenda/3,       % aq_agenda(T, Answer, Rank)    new answers still to propagate
     aq_q/4,            % aq_q(Id, Goal, Kind, T)
     aq_ev/3,           % aq_ev(Id, Op, Answer)         pending notifications
     aq_conf/2,
@@ -74,6 +75,7 @@
 
 aq_conf(mode, tabled).
 aq_conf(subsumption, false).
+aq_conf(dred, primary).
 
 :- initialization(init_globals).
 
@@ -101,6 +103,9 @@ configure(mode(M)) :- !,
 configure(subsumption(B)) :- !,
     must_be(boolean, B),
     retractall(aq_conf(subsumption, _)), assertz(aq_conf(subsumption, B)).
+configure(dred(D)) :- !,
+    must_be(oneof([primary, basic]), D),
+    retractall(aq_conf(dred, _)), assertz(aq_conf(dred, D)).
 configure(Opt) :-
     domain_error(aq_option, Opt).
 
@@ -150,7 +155,7 @@ aq_register(Id, Goal, Answers) :-
     nb_setval(aq_registering, Id),
     nb_setval(aq_phase, insert),
     catch(register_root(Kind, Id, G), E,
-          ( nb_setval(aq_registering, '$none'), retractall(aq_agenda(_, _)), throw(E) )),
+          ( nb_setval(aq_registering, '$none'), retractall(aq_agenda(_, _, _)), throw(E) )),
     nb_setval(aq_registering, '$none'),
     aq_answers(Id, Answers),
     forall(member(A, Answers), emit(Id, answer, A)).
@@ -288,7 +293,7 @@ aq_reset :-
     forall(user:'$aq_fact_pred'(F),
            ( user:'$aq_whead'(F, _, H), retractall(user:H) )),
     retractall(aq_c(_, _, _)), retractall(aq_dep(_, _)), retractall(aq_ev(_, _, _)),
-    retractall(aq_agenda(_, _)),
+    retractall(aq_agenda(_, _, _)),
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
     nb_getval(aq_cstates, St), trie_destroy(St),
     nb_getval(aq_multi, M), trie_destroy(M),
@@ -319,6 +324,14 @@ trie_count(Tr, C) :-
 		 *     WAITING ON LITERALS      *
 		 *******************************/
 
+%   Ranks.  Every answer has a rank, stored with it in its table's trie.
+%   A derivation (a state resumed with an answer or a fact) has the rank of
+%   the answer it consumed (0 for a fact), and the answer it creates gets
+%   rank R+1: the derivation that created an answer always has a smaller
+%   rank than the answer.  DRed uses this (see dred/2): an answer is
+%   over-deleted only when a deleted derivation of smaller rank reaches it,
+%   which always includes the one that created it.
+
 %!  aq_wait_fact(+Literal, +State) is det.
 %
 %   State waits for stored facts matching Literal: record it (so later
@@ -330,10 +343,10 @@ aq_wait_fact(Lit, S) :-
 
 wait_fact(insert, Lit, S) :-
     user:'$aq_wadd'(Lit, S),
-    forall(user:Lit, go(S, Lit)).
+    forall(user:Lit, go(S, Lit, 0)).
 wait_fact(delete, Lit, S) :-
     (   take_fact_record(Lit, S)
-    ->  forall(user:Lit, go(S, Lit))
+    ->  forall(user:Lit, go(S, Lit, 0))
     ;   true
     ).
 wait_fact(restore, Lit, S) :-
@@ -362,6 +375,7 @@ has_fact_record(Lit, S) :-
 %   State waits for answers of the sub-goal Literal: find or create its table
 %   (according to the mode), record State as a consumer, activate the
 %   table's rules when it is new, and resume State on the answers it has.
+%   The cstates trie maps every consumer state to the table it waits on.
 
 aq_wait_call(Lit, S) :-
     nb_getval(aq_phase, P),
@@ -374,8 +388,8 @@ wait_call(delete, Lit, S) :-
     nb_getval(aq_cstates, St),
     (   trie_delete(St, S, T)
     ->  forall(( clause(aq_c(T, L1, S1), true, Ref), L1-S1 =@= Lit-S ), erase(Ref)),
-        findall(Lit, trie_gen(T, Lit), Answers),
-        forall(member(Lit, Answers), go(S, Lit))
+        findall(Lit-RA, trie_gen(T, Lit, RA), Answers),
+        forall(member(Lit-RA, Answers), go(S, Lit, RA))
     ;   true
     ).
 wait_call(restore, Lit, S) :-
@@ -387,64 +401,81 @@ wait_call(restore, Lit, S) :-
 
 consume(New, T, Lit, S) :-
     aq_tab(T, _, Tr, _, _),
-    (   New == true -> Snap = [] ; findall(Lit, trie_gen(Tr, Lit), Snap) ),
+    (   New == true -> Snap = [] ; findall(Lit-RA, trie_gen(Tr, Lit, RA), Snap) ),
     assertz(aq_c(T, Lit, S)),
     nb_getval(aq_cstates, St),
     (   trie_insert(St, S, T) -> true ; true ),
     state_from(S, From),
     (   aq_dep(From, T) -> true ; assertz(aq_dep(From, T)) ),
     (   New == true -> activate(T) ; true ),
-    forall(member(Lit, Snap), go(S, Lit)).
+    forall(member(Lit-RA, Snap), go(S, Lit, RA)).
 
 state_from(q(Id), From) :- !, From = root(Id).
 state_from(S, T) :- arg(1, S, T).
 
-go(q(Id), Lit) :- !,
+go(q(Id), Lit, _) :- !,
     notify(Id, Lit).
-go(S, Lit) :-
-    (   user:'$aq_go'(S, Lit) -> true ; true ).
+go(S, Lit, R) :-
+    (   user:'$aq_go'(S, Lit, R) -> true ; true ).
 
 activate(T) :-
     aq_tab(T, G, _, _, _),
     forall(user:'$aq_act'(G, T), true).
 
-%!  aq_answer(+Table, +Answer) is det.
+%!  aq_answer(+Table, +Answer, +Rank) is det.
 %
-%   A rule of Table derived Answer.  Answer-invariant tabling: only a new
-%   answer (no variant in the table yet) is propagated to the consumers.
+%   A rule of Table derived Answer by a derivation of rank Rank (the rank
+%   of the answer its last state consumed, 0 for a fact).
+%   Answer-invariant tabling: only a new answer (no variant in the table yet)
+%   is propagated to the consumers.
 
-aq_answer(T, A) :-
+aq_answer(T, A, R) :-
     nb_getval(aq_phase, P),
-    answer(P, T, A).
+    RA is R + 1,
+    answer(P, T, A, RA).
 
-%   The trie aq_multi holds T-A for every answer A of table T that was
-%   derived more than once (or restored by DRed, whose re-derivation does not
-%   enumerate every derivation).  DRed re-derives only those: an answer with a
-%   single derivation that was over-deleted lost that derivation, and comes
-%   back only if the forward propagation of a restored item derives it again.
-answer(insert, T, A) :-
-    (   trie_insert(T, A)
-    ->  schedule(T, A)
-    ;   nb_getval(aq_multi, M),
+%   The answer trie of a table maps every answer to its rank.  The trie
+%   aq_multi holds T-A for every answer A of table T that was derived more
+%   than once (or restored by DRed, whose re-derivation does not enumerate
+%   every derivation).  DRed re-derives only those: an answer with a single
+%   derivation that was over-deleted lost that derivation, and comes back
+%   only if the forward propagation of a restored item derives it again.
+%   (trie_insert/3 raises an error rather than fail for a key that has
+%   another value, hence the lookup first.)
+answer(insert, T, A, RA) :-
+    (   trie_lookup(T, A, _)
+    ->  nb_getval(aq_multi, M),
         ( trie_insert(M, T-A) -> true ; true )
+    ;   trie_insert(T, A, RA),
+        schedule(T, A, RA)
     ).
-answer(restore, T, A) :-
-    (   trie_insert(T, A)
-    ->  nb_getval(aq_multi, M),
+answer(restore, T, A, RA) :-
+    (   trie_lookup(T, A, _)
+    ->  true
+    ;   trie_insert(T, A, RA),
+        nb_getval(aq_multi, M),
         ( trie_insert(M, T-A) -> true ; true ),
-        schedule(T, A)
+        schedule(T, A, RA)
+    ).
+%   RD is one more than the rank of the deleted derivation: it can have
+%   created A only if RD =< the rank of A.  A derivation of higher rank was
+%   not the first one, so A keeps the derivation that created it.
+answer(delete, T, A, RD) :-
+    (   trie_delete(T, A, RA)
+    ->  (   ( RD =< RA -> true ; aq_conf(dred, basic) )
+        ->  over_delete(T, A, RA)
+        ;   trie_insert(T, A, RA)       % cheaper than a lookup first: most
+        )                               % deletions do reach the creator
     ;   true
     ).
-answer(delete, T, A) :-
-    (   trie_delete(T, A, _)
-    ->  nb_getval(aq_multi, M),
-        (   trie_delete(M, T-A, _)
-        ->  mark(a(T, A))
-        ;   true
-        ),
-        schedule(T, A)
+
+over_delete(T, A, RA) :-
+    nb_getval(aq_multi, M),
+    (   trie_delete(M, T-A, _)
+    ->  mark(a(T, A))
     ;   true
-    ).
+    ),
+    schedule(T, A, RA).
 
 %   A new answer is propagated at once (depth-first) unless the propagation
 %   is already deep in the local stack (about 4 MB): then it waits on an
@@ -453,25 +484,25 @@ answer(delete, T, A) :-
 %   stacks by frames per answer.  prolog_current_frame/1 is the cheapest
 %   depth measure there is (a counter in a global variable costs twice as
 %   much per answer).
-schedule(T, A) :-
+schedule(T, A, RA) :-
     prolog_current_frame(F),
     (   F > 500000
-    ->  assertz(aq_agenda(T, A))
-    ;   propagate(T, A)
+    ->  assertz(aq_agenda(T, A, RA))
+    ;   propagate(T, A, RA)
     ).
 
 drain :-
-    (   retract(aq_agenda(T, A))
-    ->  propagate(T, A),
+    (   retract(aq_agenda(T, A, RA))
+    ->  propagate(T, A, RA),
         drain
     ;   true
     ).
 
 %   Resume every consumer of table T whose literal unifies with answer A.
-propagate(T, A) :-
+propagate(T, A, RA) :-
     (   aq_c(T, L, S),
         L = A,
-        go(S, L),
+        go(S, L, RA),
         fail
     ;   true
     ).
@@ -566,7 +597,7 @@ aq_assert(Fact) :-
     ->  true
     ;   assertz(user:Fact),
         nb_setval(aq_phase, insert),
-        forall(user:'$aq_wrec'(Fact, S), go(S, Fact)),
+        forall(user:'$aq_wrec'(Fact, S), go(S, Fact, 0)),
         drain
     ).
 
@@ -625,7 +656,7 @@ dred(Facts) :-
     dred_end(D).
 
 dred_end(D) :-
-    retractall(aq_agenda(_, _)),
+    retractall(aq_agenda(_, _, _)),
     nb_setval(aq_phase, insert),
     nb_setval(aq_dred, '$none'),
     trie_destroy(D).
@@ -640,7 +671,7 @@ dred(Facts, D) :-
     % 1. over-delete
     nb_setval(aq_phase, delete),
     forall(member(F, Facts),
-           forall(user:'$aq_wrec'(F, S), go(S, F))),
+           forall(user:'$aq_wrec'(F, S), go(S, F, 0))),
     drain,
     forall(member(F, Facts),
            forall(( user:clause(F, true, Ref), user:clause(H, true, Ref), H =@= F ), erase(Ref))),
@@ -663,25 +694,27 @@ dred(Facts, D) :-
 rederive(T, A) :-
     aq_tab(T, _, _, _, _),
     \+ trie_lookup(T, A, _),
-    answer_derivable(T, A),
-    answer(restore, T, A).
+    answer_derivable(T, A, R),
+    RA is R + 1,
+    answer(restore, T, A, RA).
 
-answer_derivable(T, A) :-
+%   R is the rank of the derivation found.
+answer_derivable(T, A, R) :-
     copy_term(A, A1),
     user:'$aq_final'(A1, T, P, Kind, Lit, Check),
-    premise(P, Kind, Lit),
+    premise(P, Kind, Lit, R),
     call(Check),
     A1 =@= A, !.
 
-premise(act(T), none, _) :- !,
+premise(act(T), none, _, 0) :- !,
     aq_tab(T, _, _, _, _).
-premise(P, fact, Lit) :-          % the fact first: stored facts are indexed on their
+premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on their
     user:Lit,                       % bound arguments, goal records often are not
     user:'$aq_wrec'(Lit, P).
-premise(P, call, Lit) :-
+premise(P, call, Lit, R) :-
     nb_getval(aq_cstates, St),
     trie_gen(St, P, T),
-    trie_gen(T, Lit).
+    trie_gen(T, Lit, R).
 
 query_has(Id, A) :-
     aq_q(Id, _, Kind, T),

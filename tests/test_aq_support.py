@@ -80,10 +80,12 @@ def _parse(lines: List[str], kind: str) -> Dict[Tuple[int, int], str]:
 
 
 def run_all(source: str, goals: List[str], steps: List[Step], mode: str, subsumption: bool = False,
-            scratch: bool = True):
+            scratch: bool = True, dred: str = "primary"):
     """Answer sets (writeq text of the sorted list) after registration (step 0) and after every
-    step: incremental, oracle (SWI `:- table`), and scratch (fresh registration, same mode)."""
+    step: incremental, oracle (SWI `:- table`), and scratch (fresh registration, same mode).
+    dred: the DRed variant (primary or basic, see docs/active_queries.md)."""
     generated = compile_active_queries(source, "program.pl", mode=mode, subsumption=subsumption)
+    generated += f":- aq_configure([dred({dred})]).\n"
     oracle = oracle_rules(source)
     qlist = "[" + ", ".join(goals) + "]"
     olist = "[" + ", ".join(f"({oracle_goal(g, source)})-({g})" for g in goals) + "]"

@@ -4,8 +4,11 @@
 For rule k `H :- L1, ..., Ln` with wait points (non-builtin literals) w1 < ... < wm, and the
 state s<k>_<w>(T, Env) = e_k(w-1) of the binary rules (Env: the variables of H, L1..L(w-1)):
 
-    '$aq_act'(H, T)             :- builtins, aq_wait_*(L_w1, s<k>_<w1>(T, Env1)).   (e_k0)
-    '$aq_go'(s<k>_<wi>(..), L_wi) :- builtins, aq_wait_*(L_w(i+1), ...) | aq_answer(T, H).
+    '$aq_act'(H, T)                  :- builtins, aq_wait_*(L_w1, s<k>_<w1>(T, Env1)).   (e_k0)
+    '$aq_go'(s<k>_<wi>(..), L_wi, R) :- builtins, aq_wait_*(L_w(i+1), ...) | aq_answer(T, H, R).
+
+R is the rank of the answer L_wi (0 for a fact); the answer H gets rank R+1 (see
+prolog_runtime/rtl_aq.pl: DRed uses it).
     '$aq_final'(H, T, LastState, Kind, Literal, Check)  how an answer is derived (DRed
                                                          re-derivation of an answer)
 """
@@ -75,12 +78,12 @@ def _indicator(term: Term):
     return (term.name, 0)
 
 
-def _table_var(rule: Rule) -> str:
-    used = set(term_vars([rule.head] + [l.term for l in rule.body]))
-    name, n = "T", 0
+def _fresh_var(rule: Rule, base: str, taken=()) -> str:
+    used = set(term_vars([rule.head] + [l.term for l in rule.body])) | set(taken)
+    name, n = base, 0
     while name in used:
         n += 1
-        name = f"T{n}"
+        name = f"{base}{n}"
     return name
 
 
@@ -95,7 +98,8 @@ def _clause(head: str, goals: List[str]) -> str:
 
 
 def rule_clauses(rule: Rule) -> List[str]:
-    t = _table_var(rule)
+    t = _fresh_var(rule, "T")
+    r = _fresh_var(rule, "R", taken=[t])
     head = to_prolog(rule.head)
     body = rule.body
     waits = [i for i, lit in enumerate(body) if lit.kind != "builtin"]
@@ -111,15 +115,19 @@ def rule_clauses(rule: Rule) -> List[str]:
         pred = "aq_wait_call" if body[i].kind == "call" else "aq_wait_fact"
         return f"{pred}({to_prolog(body[i].term)}, {state(i)})"
 
-    answer = f"aq_answer({t}, {head})"
+    def answer(rank: str) -> str:
+        return f"aq_answer({t}, {head}, {rank})"
+
     clauses = []
     first_hi = waits[0] if waits else len(body)
     clauses.append(_clause(f"'$aq_act'({head}, {t})",
-                           builtins(0, first_hi) + [enter(waits[0]) if waits else answer]))
+                           builtins(0, first_hi) + [enter(waits[0]) if waits else answer("0")]))
     for n, i in enumerate(waits):
         hi = waits[n + 1] if n + 1 < len(waits) else len(body)
-        nxt = enter(waits[n + 1]) if n + 1 < len(waits) else answer
-        clauses.append(_clause(f"'$aq_go'({state(i)}, {to_prolog(body[i].term)})", builtins(i + 1, hi) + [nxt]))
+        last = n + 1 == len(waits)
+        nxt = answer(r) if last else enter(waits[n + 1])
+        clauses.append(_clause(f"'$aq_go'({state(i)}, {to_prolog(body[i].term)}, {r if last else '_'})",
+                               builtins(i + 1, hi) + [nxt]))
     if waits:
         j = waits[-1]
         clauses.append(f"'$aq_final'({head}, {t}, {state(j)}, {body[j].kind}, {to_prolog(body[j].term)}, "
