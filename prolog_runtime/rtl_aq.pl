@@ -138,12 +138,14 @@ emit(Id, Op, A) :-
 %!  aq_register(+Id, :Goal, -Answers) is det.
 %
 %   Register Goal as active query Id and evaluate it top-down.  Answers is the
-%   sorted list of its current answers (instances of Goal); they are also
-%   queued as answer notifications.  From now on assertions and retractions
-%   produce add/delete notifications for Id until aq_unregister(Id).
+%   sorted list of its current answers (instances of Goal); aq_register/2
+%   queues them as answer notifications instead (or passes them to the
+%   notify hook).  From now on assertions and retractions produce add/delete
+%   notifications for Id until aq_unregister(Id).
 
 aq_register(Id, Goal) :-
-    aq_register(Id, Goal, _).
+    aq_register(Id, Goal, Answers),
+    forall(member(A, Answers), emit(Id, answer, A)).
 
 aq_register(Id, _:Goal0, Answers) :- !,
     aq_register(Id, Goal0, Answers).
@@ -157,8 +159,8 @@ aq_register(Id, Goal, Answers) :-
     catch(register_root(Kind, Id, G), E,
           ( nb_setval(aq_registering, '$none'), retractall(aq_agenda(_, _, _)), throw(E) )),
     nb_setval(aq_registering, '$none'),
-    aq_answers(Id, Answers),
-    forall(member(A, Answers), emit(Id, answer, A)).
+    warm_fact_indexes,
+    aq_answers(Id, Answers).
 
 register_root(call, Id, G) :-
     assertz(aq_q(Id, G, call, pending)),
@@ -171,6 +173,14 @@ register_root(fact, Id, G) :-
     assertz(aq_q(Id, G, fact, none)),
     aq_wait_fact(G, q(Id)),
     drain.
+
+%   SWI-Prolog builds the index of a dynamic predicate on its first call
+%   with bound arguments.  Calling the goal records the way an update will
+%   (with a stored fact) builds it now, so that the first update after a
+%   registration does not pay for indexing every goal record.
+warm_fact_indexes :-
+    forall(user:'$aq_fact_pred'(F),
+           ignore(( once(user:F), \+ \+ once(user:'$aq_wrec'(F, _)) ))).
 
 trie_lookup_state(S, T) :-
     nb_getval(aq_cstates, St),
@@ -802,7 +812,7 @@ message_to_chars(E, Msg) :-
     with_output_to(string(Msg), print_message_lines(current_output, '', Lines)).
 
 run_command("?", Id-Goal, _) :- !,
-    aq_register(Id, Goal, _).
+    aq_register(Id, Goal).
 run_command("+", F, _) :- !, aq_assert(F).
 run_command("-", F, _) :- !, aq_retract(F).
 run_command("!", Id, _) :- !, aq_unregister(Id).

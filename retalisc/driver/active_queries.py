@@ -111,7 +111,7 @@ class ActiveQueries:
         """Register `goal` as active query `query_id`; returns its current answers."""
         idt = _id_text(query_id)
         text = self.bridge.call_text(
-            f"rtl_aq:aq_register({idt}, ({_strip(goal)}), As), rtl_aq:aq_events(_), "
+            f"rtl_aq:aq_register({idt}, ({_strip(goal)}), As), "
             "with_output_to(string(Out), forall(member(A, As), format('~q~n', [A])))")
         self._ids[self.bridge.call_text(f"format(string(Out), '~q', [{idt}])")] = query_id
         return text.splitlines()
