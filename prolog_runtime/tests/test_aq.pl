@@ -12,14 +12,14 @@
 test(left_recursion_terminates, [setup(aq_reset), cleanup(aq_reset), true(As == [path(0,1), path(0,2)])]) :-
     aq_register(q, path(0, _), As).
 
-test(add_then_delete, [setup(aq_reset), cleanup((aq_reset, retractall(edge(2,3))))]) :-
+test(add_then_delete, [setup(aq_reset), cleanup((aq_reset, user:retractall(edge(2,3))))]) :-
     aq_register(q, path(0, _), _), aq_events(_),
     aq_assert(edge(2, 3)),
     aq_events(E1), assertion(E1 == [ev(q, add, path(0,3))]),
     aq_retract(edge(2, 3)),
     aq_events(E2), assertion(E2 == [ev(q, delete, path(0,3))]).
 
-test(cycle_rederives, [setup(aq_reset), cleanup((aq_reset, retractall(edge(2,0)), retractall(edge(0,2))))]) :-
+test(cycle_rederives, [setup(aq_reset), cleanup((aq_reset, user:retractall(edge(2,0)), user:retractall(edge(0,2))))]) :-
     aq_register(q, path(0, _), _),
     aq_assert(edge(2, 0)), aq_assert(edge(0, 2)), aq_events(_),
     aq_retract(edge(1, 2)),          % path(0,2) still holds through edge(0,2)
@@ -37,6 +37,23 @@ test(unregister_frees_everything, [setup(aq_reset)]) :-
 test(duplicate_id, [setup(aq_reset), cleanup(aq_reset), error(permission_error(register, active_query, q))]) :-
     aq_register(q, path(0, _), _),
     aq_register(q, path(1, _), _).
+
+% A non-ground stored fact: retracting a ground instance of it changes nothing,
+% retracting a ground fact leaves the non-ground one alone.
+test(non_ground_facts, [setup(aq_reset), cleanup(aq_reset)]) :-
+    aq_register(q, path(0, _), _),
+    aq_retract(edge(0, 7)),                    % ground and absent: nothing
+    aq_answers(q, A0), assertion(A0 == [path(0,1), path(0,2)]),
+    aq_assert(edge(2, _)),
+    aq_answers(q, A1), assertion(A1 = [path(0,_), path(0,1), path(0,2)]),
+    aq_retract(edge(2, 7)),
+    aq_answers(q, A2), assertion(A2 =@= A1),
+    aq_retract(edge(1, 2)),
+    aq_answers(q, A3), assertion(A3 == [path(0,1)]),
+    assertion(( user:clause(edge(2, X), true), var(X) )),
+    aq_retract(edge(2, _)),
+    aq_assert(edge(1, 2)),
+    aq_answers(q, A4), assertion(A4 == [path(0,1), path(0,2)]).
 
 test(not_dynamic, [error(permission_error(modify, static_procedure, path/2))]) :-
     aq_assert(path(5, 6)).
