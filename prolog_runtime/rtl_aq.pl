@@ -26,11 +26,13 @@
                  id, facts copied into tables (EDBC initialisation); only the
                  query's own goal keeps its bindings.
 
-    Addition propagates new facts and answers forward.  Deletion is basic DRed
-    on the binarized program: over-delete (and remove) everything reachable
-    from the deleted facts (states and answers), then re-derive the
-    over-deleted answers that had more than one derivation and still have a
-    one-step derivation, and propagate those forward again.
+    Addition propagates new facts and answers forward.  Deletion is DRed on
+    the binarized program: over-delete (and remove) what is reachable from
+    the deleted facts (states, and answers whose creating derivation may be
+    among the deleted ones: see Ranks), then re-derive the over-deleted
+    answers that had more than one derivation and still have a one-step
+    derivation, and propagate those forward again.  aq_configure([dred(basic)])
+    over-deletes every reachable answer instead.
 */
 
 :- module(rtl_aq,
@@ -94,8 +96,10 @@ init_globals :-
 %   mode(optimized), mode(naive) and subsumption(true/false) (tabled only:
 %   reuse the table of a more general sub-goal when there is no variant).
 %   Generated programs call it; it must run before any query is registered.
+%   dred(primary) (default) or dred(basic) chooses the DRed variant.
 
 aq_configure(Options) :-
+    retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
     forall(member(Opt, Options), configure(Opt)).
 
 configure(mode(M)) :- !,
@@ -309,6 +313,7 @@ aq_reset :-
            ( user:'$aq_whead'(F, _, H), retractall(user:H) )),
     retractall(aq_c(_, _, _)), retractall(aq_dep(_, _)), retractall(aq_ev(_, _, _)),
     retractall(aq_agenda(_, _, _)),
+    retractall(aq_ground_facts(_, _, _)),       % recomputed when needed
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
     nb_getval(aq_cstates, St), trie_destroy(St),
     nb_getval(aq_multi, M), trie_destroy(M),
@@ -624,7 +629,7 @@ aq_assert_all(Facts) :-
 %!  aq_retract(+Fact) is det.
 %
 %   Remove Fact (nothing happens if it is not stored) and update every active
-%   query: basic DRed.
+%   query by DRed.
 aq_retract(Fact) :-
     aq_retract_all([Fact]).
 
@@ -708,6 +713,8 @@ dred_end(D) :-
 
 %   Phase 1 removes what it over-deletes at once (states, goal and consumer
 %   records, answers): removing an item is also what stops a second visit.
+%   An answer reached by a deleted derivation of higher rank keeps the one
+%   that created it and stays (answer/4); nothing behind it is visited.
 %   A derivation whose two premises are both over-deleted is followed from
 %   whichever of them goes first, while the other is still there.  D keeps
 %   the over-deleted answers that had more than one derivation (a(T, A)) and
