@@ -87,7 +87,6 @@ init_globals :-
     nb_setval(aq_registering, '$none'),
     trie_new(Sub), nb_setval(aq_subgoals, Sub),
     trie_new(St), nb_setval(aq_cstates, St),
-    trie_new(M), nb_setval(aq_multi, M),
     nb_setval(aq_dred, '$none').
 
 %!  aq_configure(+Options) is det.
@@ -277,7 +276,6 @@ free_tables(Dead) :-
     nb_getval(aq_cstates, St),
     forall(member(T, Dead),
            ( retract(aq_tab(T, _, Tr, _, Key)),
-             forget_multi(Tr),
              trie_destroy(Tr),
              ( Key == none -> true ; ignore(trie_delete(Sub, Key, _)) ),
              retractall(aq_tpred(_, _, T)),
@@ -291,11 +289,6 @@ free_tables(Dead) :-
     retractall(aq_dead(_)).
 
 :- dynamic aq_dead/1.
-
-forget_multi(T) :-
-    nb_getval(aq_multi, M),
-    findall(A, trie_gen(M, T-A), As),
-    forall(member(A, As), trie_delete(M, T-A, _)).
 
 state_owner(S, T) :- S \= q(_), arg(1, S, T).
 
@@ -316,14 +309,13 @@ aq_reset :-
     retractall(aq_ground_facts(_, _, _)),       % recomputed when needed
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
     nb_getval(aq_cstates, St), trie_destroy(St),
-    nb_getval(aq_multi, M), trie_destroy(M),
     init_globals.
 
 %!  aq_stats(-Stats) is det.
 %
 %   Stats is a list Key=Value: queries, tables, answers, consumers,
-%   fact_records, cstates, subgoals, deps.  All but the facts return to 0
-%   once every query is unregistered.
+%   fact_records, cstates, subgoals, deps, multi (answers derived more than
+%   once).  All but the facts return to 0 once every query is unregistered.
 
 aq_stats([queries=NQ, tables=NT, answers=NA, consumers=NC, fact_records=NF,
           cstates=NS, subgoals=NG, deps=ND, multi=NM]) :-
@@ -335,7 +327,7 @@ aq_stats([queries=NQ, tables=NT, answers=NA, consumers=NC, fact_records=NF,
     nb_getval(aq_cstates, St), trie_count(St, NS),
     nb_getval(aq_subgoals, Sub), trie_count(Sub, NG),
     aggregate_all(count, aq_dep(_, _), ND),
-    nb_getval(aq_multi, M), trie_count(M, NM).
+    aggregate_all(count, ( aq_tab(_, _, Tr, _, _), trie_gen(Tr, _, V), V < 0 ), NM).
 
 trie_count(Tr, C) :-
     (   trie_property(Tr, value_count(C)) -> true ; C = 0 ).
@@ -408,7 +400,7 @@ wait_call(delete, Lit, S) :-
     nb_getval(aq_cstates, St),
     (   trie_delete(St, S, T)
     ->  forall(( clause(aq_c(T, L1, S1), true, Ref), L1-S1 =@= Lit-S ), erase(Ref)),
-        findall(Lit-RA, trie_gen(T, Lit, RA), Answers),
+        findall(Lit-RA, answer_rank(T, Lit, RA), Answers),
         forall(member(Lit-RA, Answers), go(S, Lit, RA))
     ;   true
     ).
@@ -421,7 +413,7 @@ wait_call(restore, Lit, S) :-
 
 consume(New, T, Lit, S) :-
     aq_tab(T, _, Tr, _, _),
-    (   New == true -> Snap = [] ; findall(Lit-RA, trie_gen(Tr, Lit, RA), Snap) ),
+    (   New == true -> Snap = [] ; findall(Lit-RA, answer_rank(Tr, Lit, RA), Snap) ),
     assertz(aq_c(T, Lit, S)),
     nb_getval(aq_cstates, St),
     (   trie_insert(St, S, T) -> true ; true ),
@@ -454,48 +446,49 @@ aq_answer(T, A, R) :-
     RA is R + 1,
     answer(P, T, A, RA).
 
-%   The answer trie of a table maps every answer to its rank.  The trie
-%   aq_multi holds T-A for every answer A of table T that was derived more
-%   than once (or restored by DRed, whose re-derivation does not enumerate
-%   every derivation).  DRed re-derives only those: an answer with a single
-%   derivation that was over-deleted lost that derivation, and comes back
-%   only if the forward propagation of a restored item derives it again.
-%   (trie_insert/3 raises an error rather than fail for a key that has
-%   another value, hence the lookup first.)
+%   The answer trie of a table maps every answer to its rank R, stored as
+%   -R once the answer was derived more than once (or restored by DRed,
+%   whose re-derivation does not enumerate every derivation).  DRed
+%   re-derives only those: an answer with a single derivation that was
+%   over-deleted lost that derivation, and comes back only if the forward
+%   propagation of a restored item derives it again.  (trie_insert/3 raises
+%   an error rather than fail for a key that has another value, hence the
+%   lookup first.)
 answer(insert, T, A, RA) :-
-    (   trie_lookup(T, A, _)
-    ->  nb_getval(aq_multi, M),
-        ( trie_insert(M, T-A) -> true ; true )
+    (   trie_lookup(T, A, V)
+    ->  (   V > 0
+        ->  NV is -V,
+            trie_update(T, A, NV)
+        ;   true
+        )
     ;   trie_insert(T, A, RA),
         schedule(T, A, RA)
     ).
 answer(restore, T, A, RA) :-
     (   trie_lookup(T, A, _)
     ->  true
-    ;   trie_insert(T, A, RA),
-        nb_getval(aq_multi, M),
-        ( trie_insert(M, T-A) -> true ; true ),
+    ;   NV is -RA,
+        trie_insert(T, A, NV),
         schedule(T, A, RA)
     ).
 %   RD is one more than the rank of the deleted derivation: it can have
 %   created A only if RD =< the rank of A.  A derivation of higher rank was
 %   not the first one, so A keeps the derivation that created it.
 answer(delete, T, A, RD) :-
-    (   trie_delete(T, A, RA)
-    ->  (   ( RD =< RA -> true ; aq_conf(dred, basic) )
-        ->  over_delete(T, A, RA)
-        ;   trie_insert(T, A, RA)       % cheaper than a lookup first: most
+    (   trie_delete(T, A, V)
+    ->  RA is abs(V),
+        (   ( RD =< RA -> true ; aq_conf(dred, basic) )
+        ->  ( V < 0 -> mark(a(T, A)) ; true ),
+            schedule(T, A, RA)
+        ;   trie_insert(T, A, V)        % cheaper than a lookup first: most
         )                               % deletions do reach the creator
     ;   true
     ).
 
-over_delete(T, A, RA) :-
-    nb_getval(aq_multi, M),
-    (   trie_delete(M, T-A, _)
-    ->  mark(a(T, A))
-    ;   true
-    ),
-    schedule(T, A, RA).
+%   The answers of a table with their ranks.
+answer_rank(Tr, A, RA) :-
+    trie_gen(Tr, A, V),
+    RA is abs(V).
 
 %   A new answer is propagated at once (depth-first) unless the propagation
 %   is already deep in the local stack (about 4 MB): then it waits on an
@@ -765,7 +758,7 @@ premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on 
 premise(P, call, Lit, R) :-
     nb_getval(aq_cstates, St),
     trie_gen(St, P, T),
-    trie_gen(T, Lit, R).
+    answer_rank(T, Lit, R).
 
 query_has(Id, A) :-
     aq_q(Id, _, Kind, T),
