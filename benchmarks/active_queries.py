@@ -14,6 +14,7 @@ issue is printed with its ratio and met/MISSED; then the 2APL usecases (benchmar
 from __future__ import annotations
 
 import argparse
+import functools
 import random
 import sys
 import time
@@ -79,12 +80,18 @@ def run_swipl(text: str, timeout=3600):
     return {key: float(value) for key, value in swipl_run.run_swipl(text, timeout).items()}
 
 
+@functools.lru_cache(maxsize=2)
+def compiled(source, mode):
+    """The generated program (compiling 100k facts takes the front end a minute: once per mode)."""
+    return compile_active_queries(source, "bench.pl", mode=mode)
+
+
 def ours(rules, facts, goals, add, delete, mode="tabled", point=None):
     """goals: one goal, or a list of goals registered as separate queries.  mode: a
     transformation, optionally with a DRed variant (`tabled:basic`; the default is primary)."""
     goals = [goals] if isinstance(goals, str) else goals
     mode, _, dred = mode.partition(":")
-    gen = compile_active_queries(rules + "\n".join(facts) + "\n", "bench.pl", mode=mode)
+    gen = compiled(rules + "\n".join(facts) + "\n", mode)
     gen += f":- aq_configure([dred({dred or 'primary'})]).\n"
     register = ", ".join(f"aq_register(q{n}, {g}, _)" for n, g in enumerate(goals))
     main = [
