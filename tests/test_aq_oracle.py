@@ -124,6 +124,7 @@ def graph_case(draw):
 
 
 @SETTINGS
-@given(graph_case(), st.sampled_from(["primary", "basic"]))
-def test_graph_deletions_match_oracles(case, dred):
-    check(*case, mode="tabled", dred=dred)
+@given(graph_case(), st.sampled_from([("tabled", "primary"), ("tabled", "basic"), ("naive", "primary")]))
+def test_graph_deletions_match_oracles(case, variant):
+    mode, dred = variant
+    check(*case, mode=mode, dred=dred)
