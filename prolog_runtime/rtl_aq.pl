@@ -654,26 +654,31 @@ implied_fact(F) :-
     ).
 
 has_fact(F) :-
-    (   ground(F), ground_facts(F)
+    (   ground_fact(F)
     ->  once(user:F)
-    ;   user:clause(F, true, Ref),
-        user:clause(H, true, Ref),
-        H =@= F
-    ->  true
+    ;   once(stored_copy(F, _))
     ).
 
 %   Remove the stored copies of Fact (a variant of it).
 erase_fact(F) :-
-    (   ground(F), ground_facts(F)
+    (   ground_fact(F)
     ->  retractall(user:F)
-    ;   forall(( user:clause(F, true, Ref), user:clause(H, true, Ref), H =@= F ), erase(Ref))
+    ;   forall(stored_copy(F, Ref), erase(Ref))
     ).
 
-%   While every stored fact of a predicate is ground, a ground fact is stored
-%   exactly when calling it succeeds, and retractall/1 removes exactly its
-%   copies: twice as fast as looking for a variant clause by clause.
-%   Known per predicate after a first scan; a non-ground aq_assert ends it.
-ground_facts(F) :-
+%   Ref is a stored clause that is a variant of fact F.
+stored_copy(F, Ref) :-
+    user:clause(F, true, Ref),
+    user:clause(H, true, Ref),
+    H =@= F.
+
+%   F is ground and so is every stored fact of its predicate: then F is
+%   stored exactly when calling it succeeds, and retractall/1 removes
+%   exactly its copies, twice as fast as looking for a variant clause by
+%   clause.  Known per predicate after a first scan; a non-ground aq_assert
+%   ends it.
+ground_fact(F) :-
+    ground(F),
     functor(F, N, A),
     (   aq_ground_facts(N, A, B)
     ->  B == true
