@@ -25,25 +25,38 @@ from __future__ import annotations
 
 from typing import Dict, List, Optional, Set, Tuple
 
-from ..frontend.parser import read_term
-from ..frontend.terms import Atom, Compound, Number, Term, Var, conjuncts, distinct_variables, substitute, variables
+from ..frontend.terms import Atom, Compound, Number, Term, Var, distinct_variables, substitute, variables
 from .binarize import END_MARK, START_MARK
 from .unit import BinaryRule, GeneratedRule, Operand, Step, Unit
 
 name = "edbc"
 
 # Temporal relation and result interval of each binary operator, on the intervals
-# [S1, E1] (left) and [S2, E2] (right). docs/language.md has the same table.
-RELATIONS: Dict[str, Tuple[Optional[str], str, str]] = {
-    "seq": ("E1 < S2", "S1", "E2"),
-    "and": (None, "min(S1, S2)", "max(E1, E2)"),
-    "par": ("S1 < E2, S2 < E1", "min(S1, S2)", "max(E1, E2)"),
-    "equals": ("S1 =:= S2, E1 =:= E2", "S1", "E1"),
-    "meets": ("E1 =:= S2", "S1", "E2"),
-    "during": ("S2 < S1, E1 < E2", "S2", "E2"),
-    "starts": ("S1 =:= S2, E1 < E2", "S1", "E2"),
-    "finishes": ("E1 =:= E2, S2 < S1", "S2", "E1"),
-    "cnot": ("E1 < S2", "S1", "E2"),
+# [S1, E1] (left) and [S2, E2] (right), as terms over these variable names (renamed per rule).
+# docs/language.md has the same table.
+_S1, _E1, _S2, _E2 = Var("S1"), Var("E1"), Var("S2"), Var("E2")
+
+
+def _lt(a: Term, b: Term) -> Term:
+    return Compound("<", (a, b))
+
+
+def _eq(a: Term, b: Term) -> Term:
+    return Compound("=:=", (a, b))
+
+
+_MIN, _MAX = Compound("min", (_S1, _S2)), Compound("max", (_E1, _E2))
+
+RELATIONS: Dict[str, Tuple[List[Term], Term, Term]] = {
+    "seq": ([_lt(_E1, _S2)], _S1, _E2),
+    "and": ([], _MIN, _MAX),
+    "par": ([_lt(_S1, _E2), _lt(_S2, _E1)], _MIN, _MAX),
+    "equals": ([_eq(_S1, _S2), _eq(_E1, _E2)], _S1, _E1),
+    "meets": ([_eq(_E1, _S2)], _S1, _E2),
+    "during": ([_lt(_S2, _S1), _lt(_E1, _E2)], _S2, _E2),
+    "starts": ([_eq(_S1, _S2), _lt(_E1, _E2)], _S1, _E2),
+    "finishes": ([_eq(_E1, _E2), _lt(_S2, _S1)], _S2, _E1),
+    "cnot": ([_lt(_E1, _S2)], _S1, _E2),
 }
 
 
@@ -118,17 +131,18 @@ class _RuleGenerator:
     def t(self, base: str) -> Var:
         return V(self.time_names[base])
 
-    def expr(self, text: str) -> List[Term]:
-        """Goals over the time variables, e.g. "E1 < S2, S2 < E1", renamed to this rule's names."""
-        term = read_term(text)
-        goals = conjuncts(substitute(term, {k: V(v) for k, v in self.time_names.items()}))
-        return [g for g in goals if g != Atom("true")]
+    def expr(self, goals: List[Term]) -> List[Term]:
+        """Goals over the time variables (`RELATIONS`), renamed to this rule's names."""
+        return [self.renamed(g) for g in goals]
 
-    def interval(self, expression: str, target: Var) -> Tuple[Var, List[Term]]:
+    def renamed(self, term: Term) -> Term:
+        return substitute(term, {k: V(v) for k, v in self.time_names.items()})
+
+    def interval(self, expression: Term, target: Var) -> Tuple[Var, List[Term]]:
         """The variable holding an interval end: an operand's own, or `target is Expr`."""
-        if expression in self.time_names:
-            return self.t(expression), []
-        return target, [C("is", target, self.expr(expression)[0])]
+        if isinstance(expression, Var):
+            return self.renamed(expression), []
+        return target, [C("is", target, self.renamed(expression))]
 
     def generate(self) -> GeneratedRule:
         for step in self.rule.steps:
@@ -219,7 +233,7 @@ class _RuleGenerator:
         rights = self.store(step, "rights", key + right_other + [s2, e2])
         s, start_goals = self.interval(start_expr, self.t("S"))
         e, end_goals = self.interval(end_expr, self.t("E"))
-        match = (self.expr(relation) if relation else []) + start_goals + end_goals + [self.window_check(step, s, e)]
+        match = self.expr(relation) + start_goals + end_goals + [self.window_check(step, s, e)]
         sides = (("left", step.left, left_vars, lefts, rights), ("right", step.right, right_vars, rights, lefts))
         for side, operand, own_vars, own_store, partner_store in sides:
             handler = f"{step.name}_{side}"
