@@ -23,7 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from retalisc.backends.prolog.aq_backend import compile_active_queries  # noqa: E402
+from retalisc.compiler import AqOptions, compile_source  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import swipl_run  # noqa: E402
@@ -83,7 +83,7 @@ def run_swipl(text: str, timeout=3600):
 @functools.lru_cache(maxsize=2)
 def compiled(source, mode):
     """The generated program (compiling 100k facts takes the front end a minute: once per mode)."""
-    return compile_active_queries(source, "bench.pl", mode=mode)
+    return compile_source(source, "bench.pl", active_queries=AqOptions(mode)).prolog
 
 
 def ours(rules, facts, goals, add, delete, mode="tabled", point=None):

@@ -84,7 +84,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from retalisc.backends.prolog.aq_backend import compile_active_queries  # noqa: E402
+from retalisc.compiler import AqOptions, compile_source  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import swipl_run  # noqa: E402
@@ -366,7 +366,7 @@ def aq_head(mode):
     """The generated program for the rule; the facts are appended to it (the declarations make
     the predicates dynamic, so this is the same program as with the facts in the source, without
     compiling 10,000 facts through the front end for every run)."""
-    return compile_active_queries(DYNAMIC + RULE, "shop.pl", mode=mode)
+    return compile_source(DYNAMIC + RULE, "shop.pl", active_queries=AqOptions(mode)).prolog
 
 
 def program(sc, approach):

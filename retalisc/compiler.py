@@ -1,21 +1,42 @@
-"""Compiling a Retalis program: frontend, passes, backend, in that order."""
+"""Compiling Retalis programs: frontend, passes, backend, in that order, for every kind of program.
+
+    kind                        frontend                     passes (passes/pipeline.py)  backend
+    event program (.rtl)        frontend/program.py          EVENT_PIPELINE               render.py, program.pl.j2
+    active queries (definite)   frontend/definite.py         ACTIVE_QUERY_PIPELINE        aq_backend.py, aq_program.j2
+
+Commands and drivers compile through this module only.
+"""
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, List, Optional
+from typing import Callable, List, Optional, Union
 
+from .backends.prolog.aq_backend import render_active_queries
+from .backends.prolog.dump import dump_unit
 from .backends.prolog.render import render_program
+from .frontend.definite import read_definite_program
 from .frontend.program import parse_program
-from .passes.pipeline import run_pipeline
-from .passes.unit import Unit
+from .passes.pipeline import AQ_MODES, EVENT_PIPELINE, active_query_passes, run_pipeline
+from .passes.unit import AqUnit, Unit
+
+__all__ = ["AQ_MODES", "AqOptions", "CompileResult", "compile_file", "compile_source", "module_name", "pass_names"]
+
+@dataclass(frozen=True)
+class AqOptions:
+    """Compile a definite program for active queries (thesis chapter 6) instead of an event
+    program: `mode` is one of `AQ_MODES`; `subsumption` lets tabled mode reuse the table of a
+    subsuming sub-goal."""
+
+    mode: str = "tabled"
+    subsumption: bool = False
 
 
 @dataclass
 class CompileResult:
     prolog: str
-    unit: Unit
+    unit: Union[Unit, AqUnit]
     warnings: List[str]
 
 
@@ -25,12 +46,44 @@ def module_name(path: str) -> str:
 
 
 def compile_source(text: str, file: str, output_name: str = "PROGRAM.pl", dump_after: Optional[str] = None,
-                   dump: Callable[[str], None] = print, module: Optional[str] = None) -> CompileResult:
-    """Compile program text. Raises RetalisError (with a source location) on bad programs."""
-    program = parse_program(text, file)
-    unit = run_pipeline(Unit(program, module or module_name(file)), dump_after, dump)
+                   dump: Callable[[str], None] = print, module: Optional[str] = None,
+                   active_queries: Optional[AqOptions] = None) -> CompileResult:
+    """Compile program text: an event program, or with `active_queries` a definite program for
+    active queries. With `dump_after`, hand the text of the unit after that pass to `dump`.
+    Raises RetalisError (with a source location) on bad programs, ValueError for an unknown
+    mode or a `dump_after` pass this compilation does not run."""
+    _check_dump_after(dump_after, active_queries)
+    if active_queries is not None:
+        passes = active_query_passes(active_queries.mode)
+        unit = AqUnit(read_definite_program(text, file), active_queries.mode, active_queries.subsumption)
+        unit = run_pipeline(unit, passes, _dumper(dump_after, dump))
+        return CompileResult(render_active_queries(unit), unit, list(unit.warnings))
+    unit = Unit(parse_program(text, file), module or module_name(file))
+    unit = run_pipeline(unit, EVENT_PIPELINE, _dumper(dump_after, dump))
     return CompileResult(render_program(unit, output_name), unit, list(unit.warnings))
 
 
 def compile_file(path: str, **kwargs) -> CompileResult:
     return compile_source(Path(path).read_text(encoding="utf-8"), str(path), **kwargs)
+
+
+def pass_names(active_queries: Optional[AqOptions] = None) -> List[str]:
+    """The passes `compile_source` runs, in order, for an event program or with these options."""
+    passes = EVENT_PIPELINE if active_queries is None else active_query_passes(active_queries.mode)
+    return [p.name for p in passes]
+
+
+def _check_dump_after(dump_after: Optional[str], active_queries: Optional[AqOptions]) -> None:
+    names = pass_names(active_queries)
+    if dump_after is not None and dump_after not in names:
+        raise ValueError(f"pass {dump_after!r} does not run in this compilation (its passes: {', '.join(names)})")
+
+
+def _dumper(dump_after: Optional[str], dump: Callable[[str], None]):
+    if dump_after is None:
+        return None
+
+    def after_pass(name: str, unit) -> None:
+        if name == dump_after:
+            dump(dump_unit(unit, name))
+    return after_pass

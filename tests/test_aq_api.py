@@ -97,9 +97,9 @@ def test_errors_are_reported():
 
 def test_plunit_runtime(tmp_path):
     import os
-    from retalisc.backends.prolog.aq_backend import compile_active_queries
+    from retalisc.compiler import AqOptions, compile_source
     program = tmp_path / "p4.pl"
-    program.write_text(compile_active_queries(PROGRAM4, "program4.pl"))
+    program.write_text(compile_source(PROGRAM4, "program4.pl", active_queries=AqOptions()).prolog)
     proc = subprocess.run(["swipl", "--no-tty", "-q", "-g", "run_tests", "-t", "halt",
                            str(ROOT / "prolog_runtime" / "tests" / "test_aq.pl")],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120,

@@ -9,9 +9,9 @@ import tempfile
 from pathlib import Path
 from typing import Dict, List, Tuple
 
-from retalisc.backends.prolog.aq_backend import compile_active_queries
+from retalisc.compiler import AqOptions, compile_source
+from retalisc.frontend.definite import read_definite_program as load_program
 from retalisc.frontend.terms import Atom, Compound, Term, Var, to_prolog
-from retalisc.passes.aq_program import load_program
 
 SWIPL = shutil.which("swipl") or "swipl"
 
@@ -84,7 +84,7 @@ def run_all(source: str, goals: List[str], steps: List[Step], mode: str, subsump
     """Answer sets (writeq text of the sorted list) after registration (step 0) and after every
     step: incremental, oracle (SWI `:- table`), and scratch (fresh registration, same mode).
     dred: the DRed variant (primary or basic, see docs/active_queries.md)."""
-    generated = compile_active_queries(source, "program.pl", mode=mode, subsumption=subsumption)
+    generated = compile_source(source, "program.pl", active_queries=AqOptions(mode, subsumption)).prolog
     generated += f":- aq_configure([dred({dred})]).\n"
     oracle = oracle_rules(source)
     qlist = "[" + ", ".join(goals) + "]"

@@ -85,6 +85,20 @@ def test_dump_after_binarize():
     assert "e_r1_1(S1, S2) <- smoke(S1) and high_temperature(S2) where nearby(S1, S2) within 300" in run.stdout
 
 
+def test_dump_after_an_active_query_pass(tmp_path):
+    program = tmp_path / "path.pl"
+    program.write_text("edge(1,2).\npath(X,Y) :- edge(X,Y).\npath(X,Y) :- edge(X,Z), path(Z,Y).\n")
+    run = retalisc("compile", program, "--active-queries", "naive", "--dump-after", "aq_naive")
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.startswith("% retalisc: the program after pass 'aq_naive'\n\n% transformation: naive\n")
+    assert "    path(Z, Y).  % call" in run.stdout and "% rule 3 (added by the transformation)" in run.stdout
+    run = retalisc("compile", program, "--active-queries", "tabled", "--dump-after", "aq_program")
+    assert run.returncode == 0 and "    edge(X, Y).  % fact" in run.stdout
+    for wrong in (["--active-queries", "tabled", "--dump-after", "aq_naive"], ["--dump-after", "aq_tabled"]):
+        run = retalisc("compile", program, *wrong)
+        assert run.returncode == 2 and "this compilation runs the passes" in run.stderr
+
+
 def test_check_ok_and_usage_error(tmp_path):
     assert retalisc("check", FIRE / "fire_alarm.rtl").returncode == 0
     assert retalisc("compile", tmp_path / "missing.rtl").returncode == 2

@@ -1,11 +1,17 @@
 """Each pass on its own: what it changes in the compilation unit."""
 import pytest
 
+import ast
+from pathlib import Path
+
+from retalisc.backends.prolog.dump import dump_binary_rule
+from retalisc.compiler import AQ_MODES, AqOptions, compile_source, pass_names
 from retalisc.frontend.errors import RetalisSemanticError, RetalisSyntaxError
 from retalisc.frontend.program import Binary, EventAtom, Where, Window, parse_program, pattern_text
 from retalisc.frontend.writer import write_term
 from retalisc.passes import apply_rule_windows, binarize, collect_settings, edbc, push_conditions, validate
-from retalisc.passes.pipeline import PIPELINE, run_pipeline
+from retalisc.passes.pipeline import (ACTIVE_QUERY_PIPELINE, EVENT_PIPELINE, PIPELINE, active_query_passes,
+                                      run_pipeline)
 from retalisc.passes.unit import Unit
 
 
@@ -89,7 +95,7 @@ def test_binarize_three_way_sequence():
     assert write_term(first.output) == "e_r1_1(I, X, Y)"
     assert first.window == 10 and last.window == 10
     assert last.left.step is first and last.derives_head
-    assert rule.dump().splitlines()[1] == "e_r1_1(I, X, Y) <- a(I, X) seq b(I, Y) within 10"
+    assert dump_binary_rule(rule).splitlines()[1] == "e_r1_1(I, X, Y) <- a(I, X) seq b(I, Y) within 10"
 
 
 def test_binarize_single_event_rule_gets_a_pass_step():
@@ -126,10 +132,87 @@ def test_edbc_time_variables_do_not_capture_user_variables():
 
 
 def test_pipeline_dump_after_every_pass():
-    for compiler_pass in PIPELINE:
+    for compiler_pass in EVENT_PIPELINE:
         dumps = []
-        run_pipeline(unit_of("h(X) <- a(X) seq b(X) where X > 1."), compiler_pass.name, dumps.append)
-        assert dumps and dumps[0].startswith(f"% retalisc: the program after pass '{compiler_pass.name}'")
+        compile_source("h(X) <- a(X) seq b(X) where X > 1.", "t.rtl", dump_after=compiler_pass.name,
+                       dump=dumps.append)
+        assert len(dumps) == 1 and dumps[0].startswith(f"% retalisc: the program after pass '{compiler_pass.name}'")
+
+
+def test_run_pipeline_shows_the_unit_after_each_pass():
+    seen = []
+    run_pipeline(unit_of("h(X) <- a(X)."), PIPELINE, lambda name, unit: seen.append(name))
+    assert seen == [p.name for p in EVENT_PIPELINE] == pass_names()
+
+
+# ---- the active-query pipeline ----------------------------------------------------------------
+
+PATH = "edge(1, 2).\npath(X, Y) :- edge(X, Y).\npath(X, Y) :- edge(X, Z), path(Z, Y), X < Y.\n"
+
+
+def test_active_query_pipeline_pass_names():
+    assert [p.name for p in ACTIVE_QUERY_PIPELINE] == ["aq_program", "aq_naive", "aq_optimized", "aq_tabled"]
+    assert AQ_MODES == ["naive", "optimized", "tabled"]
+    for mode in AQ_MODES:
+        assert [p.name for p in active_query_passes(mode)] == ["aq_program", f"aq_{mode}"]
+        assert pass_names(AqOptions(mode)) == ["aq_program", f"aq_{mode}"]
+    with pytest.raises(ValueError):
+        active_query_passes("eager")
+
+
+def test_aq_program_marks_literal_kinds_and_the_transformation_its_mode():
+    result = compile_source(PATH, "path.pl", active_queries=AqOptions("optimized"))
+    rule = result.unit.program.rules[1]
+    assert [lit.kind for lit in rule.body] == ["fact", "call", "builtin"]
+    assert result.unit.program.mode == "optimized" and "aq_configure([mode(optimized)" in result.prolog
+    naive = compile_source(PATH, "path.pl", active_queries=AqOptions("naive")).unit.program
+    assert [lit.kind for lit in naive.rules[1].body] == ["call", "call", "builtin"]
+    assert naive.rules[-1].synthetic
+
+
+@pytest.mark.parametrize("mode", AQ_MODES)
+def test_dump_after_an_active_query_pass(mode):
+    for name in pass_names(AqOptions(mode)):
+        dumps = []
+        compile_source(PATH, "path.pl", dump_after=name, dump=dumps.append, active_queries=AqOptions(mode))
+        assert len(dumps) == 1 and dumps[0].startswith(f"% retalisc: the program after pass '{name}'")
+        assert "    path(Z, Y),  % call" in dumps[0]
+    with pytest.raises(ValueError, match="does not run"):
+        compile_source(PATH, "path.pl", dump_after="edbc", active_queries=AqOptions(mode))
+
+
+def test_aq_program_rejects_what_is_not_definite():
+    with pytest.raises(RetalisSemanticError) as info:
+        compile_source("q(1).\np(X) :- q(X), \\+ q(2).\n", "neg.pl", active_queries=AqOptions())
+    assert "negation" in info.value.message and (info.value.span.line, info.value.span.column) == (2, 15)
+
+
+# ---- passes only transform dataclasses ----------------------------------------------------------
+
+PASSES_DIR = Path(__file__).resolve().parent.parent / "retalisc" / "passes"
+PARSER_NAMES = {"parse_program", "build_program", "read_program", "read_term", "read_definite_program"}
+
+
+@pytest.mark.parametrize("path", sorted(PASSES_DIR.glob("*.py")), ids=lambda p: p.name)
+def test_passes_neither_render_nor_parse(path):
+    """A pass imports nothing from the backends and never calls the parser: the frontend reads
+    text, the backend writes it."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            module = node.module or ""
+            assert "backends" not in module and not module.endswith("parser"), f"{path.name}: from {module} import"
+            assert not PARSER_NAMES & {alias.name for alias in node.names}, f"{path.name}: imports a parser"
+        elif isinstance(node, ast.Import):
+            assert not any("backends" in a.name or a.name.endswith("parser") for a in node.names), path.name
+        elif isinstance(node, (ast.Name, ast.Attribute)):
+            name = node.id if isinstance(node, ast.Name) else node.attr
+            assert name not in PARSER_NAMES, f"{path.name}:{node.lineno}: uses {name}"
+
+
+def test_every_pass_has_a_name_and_run():
+    for compiler_pass in EVENT_PIPELINE + ACTIVE_QUERY_PIPELINE:
+        assert isinstance(compiler_pass.name, str) and callable(compiler_pass.run)
 
 
 def test_unsupported_operator_reports_its_place():

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import click
 
-from ..backends.prolog.aq_backend import MODES, compile_active_queries
+from ..compiler import AQ_MODES, AqOptions, compile_source
 from ..frontend.errors import RetalisError
 
 
@@ -34,7 +34,7 @@ def compile_program_or_exit(program: str, mode: str, subsumption: bool) -> str:
         click.echo(f"{program}: error: not a UTF-8 text file ({error.reason})", err=True)
         sys.exit(2)
     try:
-        return compile_active_queries(text, program, mode=mode, subsumption=subsumption)
+        return compile_source(text, program, active_queries=AqOptions(mode, subsumption)).prolog
     except RetalisError as error:
         click.echo(error.render(text), err=True)
         sys.exit(2)
@@ -48,7 +48,7 @@ def _prolog_atom(text: str) -> str:
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 @click.option("--script", "script", required=True, type=click.Path(exists=True, dir_okay=False),
               help="Update script: `?Id Goal.` register, `+Fact.` assert, `-Fact.` retract, `!Id.` unregister.")
-@click.option("--mode", type=click.Choice(list(MODES)), default="tabled", show_default=True,
+@click.option("--mode", type=click.Choice(AQ_MODES), default="tabled", show_default=True,
               help="Active-query transformation (thesis 6.4, 6.5, 6.6).")
 @click.option("--subsumption", is_flag=True, help="Tabled mode: reuse the table of a subsuming sub-goal.")
 def aq_command(program: str, script: str, mode: str, subsumption: bool) -> None:

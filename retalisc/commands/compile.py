@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..compiler import compile_file
+from ..compiler import AQ_MODES, AqOptions, compile_file, pass_names
 from ..frontend.errors import RetalisError
 from ..passes.pipeline import PASS_NAMES
 
@@ -35,8 +35,8 @@ def compile_or_exit(program: str, **kwargs):
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the Prolog program here "
               "(default: standard output).")
 @click.option("--dump-after", type=click.Choice(PASS_NAMES), help="Print the program after this pass "
-              "and stop.")
-@click.option("--active-queries", "active_queries", type=click.Choice(["naive", "optimized", "tabled"]),
+              "and stop (with --active-queries: aq_program or the pass of the transformation).")
+@click.option("--active-queries", "active_queries", type=click.Choice(AQ_MODES),
               help="Compile PROGRAM as a definite program for active queries with this transformation "
                    "(aq_register/2, aq_assert/1, ...; see docs/active_queries.md).")
 @click.option("--subsumption", is_flag=True, help="With --active-queries tabled: reuse tables by subsumption.")
@@ -47,23 +47,15 @@ def compile_command(program: str, output: str, dump_after: str, active_queries: 
     With --active-queries, PROGRAM is a definite program (rules and facts) compiled for
     active queries instead.
     """
-    if active_queries:
-        from ..backends.prolog.aq_backend import compile_active_queries
-
-        try:
-            text = compile_active_queries(Path(program).read_text(encoding="utf-8"), program, active_queries,
-                                          subsumption)
-        except RetalisError as error:
-            report_program_error(error)
-        if output:
-            Path(output).write_text(text, encoding="utf-8")
-        else:
-            click.echo(text, nl=False)
-        return
+    options = AqOptions(active_queries, subsumption) if active_queries else None
     if dump_after:
-        compile_or_exit(program, dump_after=dump_after, dump=click.echo)
+        if dump_after not in pass_names(options):
+            raise click.UsageError(f"--dump-after {dump_after}: this compilation runs the passes "
+                                   f"{', '.join(pass_names(options))}")
+        compile_or_exit(program, dump_after=dump_after, dump=click.echo, active_queries=options)
         return
-    result = compile_or_exit(program, output_name=Path(output).name if output else "PROGRAM.pl")
+    result = compile_or_exit(program, output_name=Path(output).name if output else "PROGRAM.pl",
+                             active_queries=options)
     if output:
         Path(output).write_text(result.prolog, encoding="utf-8")
     else:

@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 from typing import Callable, Dict, Iterable, List, Optional, Union
 
-from ..backends.prolog.aq_backend import compile_active_queries
+from ..compiler import AqOptions, compile_source
 from ..frontend.terms import quote_atom
 from .bridge import Bridge
 
@@ -66,7 +66,7 @@ class ActiveQueries:
     def load(self, source_text: str, file: str = "<program>", mode: str = "tabled",
              subsumption: bool = False) -> None:
         """Compile the definite program and load it (replacing a previously loaded one)."""
-        prolog = compile_active_queries(source_text, file, mode=mode, subsumption=subsumption)
+        prolog = compile_source(source_text, file, active_queries=AqOptions(mode, subsumption)).prolog
         out = Path(self._tmp.name) / f"aq_program_{abs(hash(prolog)) % 10**12}.pl"
         out.write_text(prolog, encoding="utf-8")
         previous = _loaded["path"]

@@ -10,13 +10,14 @@ tables and goal records.
 from __future__ import annotations
 
 from .aq_optimized import classify_literals
-from .aq_program import Program
+from .unit import AqUnit
 
 name = "aq_naive"
+mode = "naive"  # runs only when this transformation is asked for
 
 
-def run(program: Program) -> Program:
-    program = classify_literals(program, facts_as_tables=True)
-    program.mode = "naive"
+def run(unit: AqUnit) -> AqUnit:
+    program = unit.program = classify_literals(unit.program, facts_as_tables=True)
+    program.mode = mode
     program.subsumption = False
-    return program
+    return unit

@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import copy
 
+from ..frontend.definite import Literal, Program, Rule
 from ..frontend.terms import Atom, Compound, Var
-from .aq_program import Literal, Program, Rule
+from .unit import AqUnit
 
 name = "aq_optimized"
+mode = "optimized"  # runs only when this transformation is asked for
 
 
 def classify_literals(program: Program, facts_as_tables: bool) -> Program:
@@ -40,8 +42,8 @@ def classify_literals(program: Program, facts_as_tables: bool) -> Program:
     return program
 
 
-def run(program: Program) -> Program:
-    program = classify_literals(program, facts_as_tables=False)
-    program.mode = "optimized"
+def run(unit: AqUnit) -> AqUnit:
+    program = unit.program = classify_literals(unit.program, facts_as_tables=False)
+    program.mode = mode
     program.subsumption = False
-    return program
+    return unit

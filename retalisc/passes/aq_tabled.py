@@ -8,14 +8,15 @@ propagates additions and deletes with basic DRed.
 """
 from __future__ import annotations
 
-from .aq_program import Program
 from .aq_optimized import classify_literals
+from .unit import AqUnit
 
 name = "aq_tabled"
+mode = "tabled"  # runs only when this transformation is asked for
 
 
-def run(program: Program, subsumption: bool = False) -> Program:
-    program = classify_literals(program, facts_as_tables=False)
-    program.mode = "tabled"
-    program.subsumption = subsumption
-    return program
+def run(unit: AqUnit) -> AqUnit:
+    program = unit.program = classify_literals(unit.program, facts_as_tables=False)
+    program.mode = mode
+    program.subsumption = unit.subsumption
+    return unit

@@ -391,9 +391,3 @@ class _RuleGenerator:
 
 def _number(value: float):
     return int(value) if float(value).is_integer() else value
-
-
-def dump(unit: Unit) -> str:
-    from ..backends.prolog.render import render_rule
-
-    return "\n\n".join(render_rule(g) for g in unit.generated)

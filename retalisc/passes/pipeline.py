@@ -1,47 +1,49 @@
-"""The pass pipeline: the whole compilation, in order, as one list."""
+"""The pass pipelines: the whole compilation of each kind of program, in order, one list each.
+
+A pass is a module with a `name` and `run(unit) -> unit`; it changes dataclasses and terms only
+(no parsing, no Prolog text). To add a pass, write its module and put it in the list at its
+place: `retalisc.compiler` runs the lists, and `retalisc compile --dump-after NAME` shows the
+unit after any pass.
+"""
 from __future__ import annotations
 
-from typing import Callable, List, Optional
+from typing import Callable, List, Optional, TypeVar
 
-from ..frontend.program import Program, pattern_text
-from ..frontend.writer import write_term
-from . import apply_rule_windows, binarize, collect_settings, edbc, push_conditions, validate
-from .unit import Unit
+from . import (apply_rule_windows, aq_naive, aq_optimized, aq_program, aq_tabled, binarize, collect_settings,
+               edbc, push_conditions, validate)
 
-PIPELINE = [validate, collect_settings, apply_rule_windows, push_conditions, binarize, edbc]
+#: Event programs (`.rtl`, read by `frontend/program.py`), rendered by `backends/prolog/render.py`.
+EVENT_PIPELINE = [validate, collect_settings, apply_rule_windows, push_conditions, binarize, edbc]
 
-PASS_NAMES = [p.name for p in PIPELINE]
+#: Definite programs for active queries (read by `frontend/definite.py`), rendered by
+#: `backends/prolog/aq_backend.py`. A pass with a `mode` attribute is one transformation
+#: (thesis 6.4-6.6) and runs only when that mode is asked for; see `active_query_passes`.
+ACTIVE_QUERY_PIPELINE = [aq_program, aq_naive, aq_optimized, aq_tabled]
+
+PIPELINE = EVENT_PIPELINE  # the name used before there were several lists
+
+#: The active-query transformations, in the order of the list.
+AQ_MODES = [p.mode for p in ACTIVE_QUERY_PIPELINE if getattr(p, "mode", None)]
+
+#: Every pass `retalisc compile` can run, for `--dump-after`.
+PASS_NAMES = list(dict.fromkeys(p.name for p in EVENT_PIPELINE + ACTIVE_QUERY_PIPELINE))
+
+U = TypeVar("U")
 
 
-def run_pipeline(unit: Unit, dump_after: Optional[str] = None, dump: Callable[[str], None] = print) -> Unit:
-    """Run every pass in order; after the pass named `dump_after`, hand its result to `dump`."""
-    for compiler_pass in PIPELINE:
+def active_query_passes(mode: str) -> list:
+    """The passes that compile a definite program with transformation `mode`."""
+    if mode not in AQ_MODES:
+        raise ValueError(f"unknown active-query mode {mode!r} (expected one of {', '.join(AQ_MODES)})")
+    return [p for p in ACTIVE_QUERY_PIPELINE if getattr(p, "mode", mode) == mode]
+
+
+def run_pipeline(unit: U, passes: Optional[List] = None,
+                 after_pass: Optional[Callable[[str, U], None]] = None) -> U:
+    """Run `passes` (default: the event pipeline) in order; `after_pass(name, unit)` sees the
+    unit after each one."""
+    for compiler_pass in EVENT_PIPELINE if passes is None else passes:
         unit = compiler_pass.run(unit)
-        if compiler_pass.name == dump_after:
-            dump(dump_unit(unit, compiler_pass.name))
+        if after_pass is not None:
+            after_pass(compiler_pass.name, unit)
     return unit
-
-
-def dump_unit(unit: Unit, after: str) -> str:
-    header = f"% retalisc: the program after pass '{after}'"
-    if after == "edbc":
-        return header + "\n\n" + edbc.dump(unit)
-    if after == "binarize":
-        return header + "\n\n" + "\n\n".join(rule.dump() for rule in unit.rules)
-    return header + "\n\n" + dump_program(unit.program)
-
-
-def dump_program(program: Program) -> str:
-    lines: List[str] = []
-    for clause in program.clauses:
-        kind = type(clause).__name__
-        if hasattr(clause, "pattern"):
-            label = f"{clause.label} 'rule:' " if clause.label else ""
-            action = f" do {write_term(clause.action, 1149)}" if clause.action is not None else ""
-            lines.append(f"{label}{write_term(clause.head, 1149)}{action} <- {pattern_text(clause.pattern)}.")
-        elif kind == "StaticClause":
-            lines.append(write_term(clause.term, 1200) + ".")
-        else:
-            prefix = ":- " if kind == "Directive" else ""
-            lines.append(prefix + write_term(clause.goal, 1199) + ".")
-    return "\n".join(lines)

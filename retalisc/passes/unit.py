@@ -1,17 +1,24 @@
-"""What the passes work on: the compilation unit and the intermediate forms it carries.
+"""What the passes work on: the compilation units and the intermediate forms they carry.
 
-The program model (`retalisc.frontend.program.Program`) comes in; `binarize` adds the
-binary steps of every event rule (thesis 6.3.1, first step); `edbc` adds the generated
-Prolog clauses (Algorithms 1 and 2). Every form can `dump()` itself for `--dump-after`.
+`Unit` (event programs): the program model (`retalisc.frontend.program.Program`) comes in;
+`binarize` adds the binary steps of every event rule (thesis 6.3.1, first step); `edbc` adds
+the generated Prolog clauses as terms (Algorithms 1 and 2). A form is None until the pass that
+makes it has run.
+
+`AqUnit` (active queries): a definite program (`retalisc.frontend.definite.Program`) and the
+transformation asked for.
+
+Passes only build dataclasses and terms; the text of a unit, for the output or for
+`--dump-after`, is made by the backend (`retalisc/backends/prolog/`).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
 
-from ..frontend.program import EventRule, Program, pattern_text
+from ..frontend import definite
+from ..frontend.program import EventRule, Program
 from ..frontend.terms import Span, Term
-from ..frontend.writer import write_term
 
 
 @dataclass
@@ -66,30 +73,6 @@ class BinaryRule:
     rule: EventRule
     steps: List[Step]
 
-    def dump(self) -> str:
-        lines = [f"% {self.rule_id}: {write_term(self.rule.head)} <- {pattern_text(self.rule.pattern)}"]
-        for step in self.steps:
-            right = f" {step.op} {_operand_text(step.right)}" if step.right is not None else ""
-            if step.op == "cnot":
-                right = f" seq {_operand_text(step.right)} with no {_operand_text(step.negated)} between"
-            elif step.op == "fnot":
-                right = f" fnot {_operand_text(step.negated)}"
-            elif step.op == "aggregate":
-                function, value = step.aggregate
-                right = (f" seq aggregate({write_term(function, 999)}, {_operand_text(step.right)}, "
-                         f"{write_term(value, 999)})")
-            cond = f" where {', '.join(write_term(c, 999) for c in step.conditions)}" if step.conditions else ""
-            window = f" within {step.window:g}" if step.window is not None else ""
-            lines.append(f"{write_term(step.output)} <- {_operand_text(step.left)}{right}{cond}{window}")
-        return "\n".join(lines)
-
-
-def _operand_text(operand: Operand) -> str:
-    text = write_term(operand.term, 999)
-    if operand.filters:
-        text += " {" + ", ".join(write_term(f, 999) for f in operand.filters) + "}"
-    return text
-
 
 @dataclass
 class GeneratedRule:
@@ -107,6 +90,17 @@ class Unit:
     program: Program
     module: str
     settings: Settings = field(default_factory=Settings)
-    rules: List[BinaryRule] = field(default_factory=list)
-    generated: List[GeneratedRule] = field(default_factory=list)
+    rules: Optional[List[BinaryRule]] = None          # set by binarize
+    generated: Optional[List[GeneratedRule]] = None   # set by edbc
+    warnings: List[str] = field(default_factory=list)
+
+
+@dataclass
+class AqUnit:
+    """A definite program compiled for active queries with transformation `mode` (a pass of
+    `ACTIVE_QUERY_PIPELINE` names the mode it implements)."""
+
+    program: definite.Program
+    mode: str = "tabled"
+    subsumption: bool = False   # tabled: reuse the table of a subsuming sub-goal
     warnings: List[str] = field(default_factory=list)

@@ -1,5 +1,6 @@
 """Prolog code for active queries: renders a transformed definite program (see
-`retalisc/passes/aq_*.py`) into plain SWI-Prolog that loads `prolog_runtime/rtl_aq.pl`.
+`retalisc/passes/aq_*.py`) into plain SWI-Prolog that loads `prolog_runtime/rtl_aq.pl`,
+through `templates/aq_program.j2`.
 
 For rule k `H :- L1, ..., Ln` with wait points (non-builtin literals) w1 < ... < wm, and the
 state s<k>_<w>(T, Env) = e_k(w-1) of the binary rules (Env: the variables of H, L1..L(w-1)):
@@ -14,19 +15,15 @@ prolog_runtime/rtl_aq.pl: DRed uses it).
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import List
 
 import jinja2
 
-import retalisc
-
-from ...frontend.terms import Atom, Compound, Term, Var, quote_atom, to_prolog
-from ...passes import aq_naive, aq_optimized, aq_tabled
-from ...passes.aq_program import Literal, Program, Rule, load_program, term_vars
-
-MODES = {"naive": aq_naive, "optimized": aq_optimized, "tabled": aq_tabled}
+from ...frontend.definite import Program, Rule, term_vars
+from ...frontend.terms import Compound, Term, quote_atom, to_prolog
+from ...passes.unit import AqUnit
+from .render import runtime_dir
 
 _ENV = jinja2.Environment(
     loader=jinja2.FileSystemLoader(str(Path(__file__).with_name("templates"))),
@@ -36,26 +33,12 @@ _ENV = jinja2.Environment(
 )
 
 
-def runtime_dir() -> Path:
-    override = os.environ.get("RETALIS_RUNTIME")
-    if override:
-        return Path(override).resolve()
-    return Path(retalisc.__file__).resolve().parent.parent / "prolog_runtime"
-
-
-def transform(source_text: str, file: str, mode: str = "tabled", subsumption: bool = False) -> Program:
-    if mode not in MODES:
-        raise ValueError(f"unknown active-query mode {mode!r} (expected one of {', '.join(MODES)})")
-    program = load_program(source_text, file)
-    if mode == "tabled":
-        return aq_tabled.run(program, subsumption=subsumption)
-    return MODES[mode].run(program)
-
-
-def compile_active_queries(source_text: str, file: str, mode: str = "tabled", subsumption: bool = False) -> str:
-    """The complete generated Prolog text for a definite program (raises RetalisError subclasses
-    with `file:line:col` spans for invalid programs)."""
-    return render(transform(source_text, file, mode, subsumption))
+def render_active_queries(unit: AqUnit) -> str:
+    """The complete generated Prolog text of a definite program after its transformation pass."""
+    program = unit.program
+    if not program.mode:
+        raise ValueError("no active-query transformation has run on this program")
+    return _render(program)
 
 
 def _pattern(ind) -> str:
@@ -147,7 +130,7 @@ def to_prolog_goal(term: Term) -> str:
     return to_prolog(term)
 
 
-def render(program: Program) -> str:
+def _render(program: Program) -> str:
     kinds = []
     rule_preds = set(program.rule_predicates) | {r.indicator for r in program.rules}
     for ind in program.predicates():
