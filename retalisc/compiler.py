@@ -2,9 +2,10 @@
 
     kind                        frontend                     passes (passes/pipeline.py)  backend
     event program (.rtl)        frontend/program.py          EVENT_PIPELINE               render.py, program.pl.j2
+    rules for a running program frontend/program.py          ADDED_RULES_PIPELINE         render.py, added_rules.pl.j2
     active queries (definite)   frontend/definite.py         ACTIVE_QUERY_PIPELINE        aq_backend.py, aq_program.j2
 
-Commands and drivers compile through this module only.
+Commands, drivers and `runtime_rules.py` compile through this module only.
 """
 from __future__ import annotations
 
@@ -15,13 +16,17 @@ from typing import Callable, List, Optional, Union
 
 from .backends.prolog.aq_backend import render_active_queries
 from .backends.prolog.dump import dump_unit
-from .backends.prolog.render import render_program
+from .backends.prolog.render import render_added_rules, render_program
 from .frontend.definite import read_definite_program
 from .frontend.program import parse_program
-from .passes.pipeline import AQ_MODES, EVENT_PIPELINE, active_query_passes, run_pipeline
+from .passes.pipeline import ADDED_RULES_PIPELINE, AQ_MODES, EVENT_PIPELINE, active_query_passes, run_pipeline
 from .passes.unit import AqUnit, Unit
 
-__all__ = ["AQ_MODES", "AqOptions", "CompileResult", "compile_file", "compile_source", "module_name", "pass_names"]
+__all__ = ["AQ_MODES", "AqOptions", "CompileResult", "compile_added_rules", "compile_file", "compile_source",
+           "module_name", "pass_names"]
+
+RULE_PREFIX = re.compile(r"[a-z][A-Za-z0-9_]*")
+
 
 @dataclass(frozen=True)
 class AqOptions:
@@ -65,6 +70,17 @@ def compile_source(text: str, file: str, output_name: str = "PROGRAM.pl", dump_a
 
 def compile_file(path: str, **kwargs) -> CompileResult:
     return compile_source(Path(path).read_text(encoding="utf-8"), str(path), **kwargs)
+
+
+def compile_added_rules(text: str, module: str, prefix: str = "rt", file: str = "<rules>") -> CompileResult:
+    """Compile event rules to add to the running program `module` (ETALIS `ins_event_rule`);
+    unlabelled rules are named `<prefix>_<n>`. `prolog` is the text `retalisc/runtime_rules.py`
+    describes. Raises RetalisError for anything but event rules and `event_rule_property/3`."""
+    if not RULE_PREFIX.fullmatch(prefix):
+        raise ValueError(f"rule prefix {prefix!r} must match [a-z][A-Za-z0-9_]*")
+    unit = Unit(parse_program(text, file), module, rule_prefix=prefix)
+    unit = run_pipeline(unit, ADDED_RULES_PIPELINE)
+    return CompileResult(render_added_rules(unit), unit, list(unit.warnings))
 
 
 def pass_names(active_queries: Optional[AqOptions] = None) -> List[str]:

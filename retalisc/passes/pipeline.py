@@ -9,11 +9,15 @@ from __future__ import annotations
 
 from typing import Callable, List, Optional, TypeVar
 
-from . import (apply_rule_windows, aq_naive, aq_optimized, aq_program, aq_tabled, binarize, collect_settings,
-               edbc, push_conditions, validate)
+from . import (added_rules, apply_rule_windows, aq_naive, aq_optimized, aq_program, aq_tabled, binarize,
+               collect_settings, edbc, push_conditions, validate)
 
 #: Event programs (`.rtl`, read by `frontend/program.py`), rendered by `backends/prolog/render.py`.
 EVENT_PIPELINE = [validate, collect_settings, apply_rule_windows, push_conditions, binarize, edbc]
+
+#: Event rules added to a running program (`retalisc compile-rules`, `Engine.add_rules`): checked
+#: and named, then compiled like the rules of a program.
+ADDED_RULES_PIPELINE = [added_rules] + EVENT_PIPELINE
 
 #: Definite programs for active queries (read by `frontend/definite.py`), rendered by
 #: `backends/prolog/aq_backend.py`. A pass with a `mode` attribute is one transformation

@@ -93,6 +93,7 @@ class Unit:
     rules: Optional[List[BinaryRule]] = None          # set by binarize
     generated: Optional[List[GeneratedRule]] = None   # set by edbc
     warnings: List[str] = field(default_factory=list)
+    rule_prefix: str = "rt"  # added_rules: unlabelled rules added at run time are named <prefix>_<n>
 
 
 @dataclass

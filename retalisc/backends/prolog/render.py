@@ -1,8 +1,9 @@
-"""The Prolog backend: renders a compiled unit as one SWI-Prolog module.
+"""The Prolog backend: renders a compiled event unit as one SWI-Prolog module, or as the
+clauses of rules to add to a running program.
 
-Layout lives in `templates/program.pl.j2`; this module only turns terms into text: each
-clause is written with operators, one body goal per line, and the `forall/2` loops of
-EDBC rules on two lines, so a user debugging a rule recognises it.
+Layout lives in `templates/program.pl.j2` and `templates/added_rules.pl.j2`; this module only
+turns terms into text: each clause is written with operators, one body goal per line, and the
+`forall/2` loops of EDBC rules on two lines, so a user debugging a rule recognises it.
 """
 from __future__ import annotations
 
@@ -55,6 +56,17 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
                       if isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES],
         rules=[_RuleView(g) for g in unit.generated],
     )
+
+
+def render_added_rules(unit: Unit) -> str:
+    """The rules of `unit` for a running program (see `retalisc/runtime_rules.py`): each rule's
+    comment, its `'$rtl_rule'(Id, [store(Name, Arity, Window), ...]).` marker, its clauses."""
+    rules = []
+    for generated in unit.generated:
+        stores = ", ".join(f"store({quote_atom(name)}, {arity}, {_window_text(window)})"
+                           for name, arity, window in generated.stores)
+        rules.append({"view": _RuleView(generated), "id": quote_atom(generated.rule_id), "stores": stores})
+    return _ENV.get_template("added_rules.pl.j2").render(rules=rules)
 
 
 def render_rule(rule: GeneratedRule) -> str:
@@ -117,6 +129,10 @@ def _functor_pattern(name: str, arity: int) -> str:
     if arity == 0:
         return quote_atom(name)
     return f"{quote_atom(name)}({', '.join('_' for _ in range(arity))})"
+
+
+def _window_text(window) -> str:
+    return "none" if window is None else _number_text(window)
 
 
 def _number_text(value) -> str:
