@@ -15,6 +15,8 @@
 :- reexport(rtl_subscriptions).
 :- reexport(rtl_library).
 :- reexport(rtl_rules).
+:- reexport(rtl_slr).
+:- reexport(rtl_query).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 

@@ -6,6 +6,7 @@
             rtl_event/3,                % +Event, +Start, +End
             rtl_retract_event/3,        % +Event, +Start, +End
             rtl_derived/3,              % +Event, +Start, +End
+            rtl_internal_event/3,       % +Event, +Start, +End
             rtl_underived/3,            % +Event, +Start, +End
             rtl_clock/1,                % -Clock
             rtl_set_flag/2,             % +Flag, +Value
@@ -54,6 +55,7 @@ delay bound, and is removed by the periodic sweep.
 flag_default(max_delay, 1.0).               % seconds an event may arrive behind the clock
 flag_default(echo_input, false).            % write input events to the output too
 flag_default(event_consumption_policy, unrestricted).
+flag_default(query_time_limit, 10).          % seconds a query from outside may run
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -96,7 +98,7 @@ rtl_clear :-
 %!  rtl_flag(?Flag, ?Value) is nondet.
 %
 %   Flags: `max_delay` (seconds; `inf` keeps every partial match), `echo_input` (true or
-%   false) and `event_consumption_policy`.
+%   false), `event_consumption_policy` and `query_time_limit` (seconds).
 
 rtl_set_flag(Flag, Value) :-
     (   flag_default(Flag, _)
@@ -159,6 +161,16 @@ rtl_derived(Event, Start, End) :-
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
+    forall(M:ele_trigger(Event, Start, End), true).
+
+%!  rtl_internal_event(+Event, +Start, +End) is det.
+%
+%   An event of the runtime itself (memory events): matched by event rules and
+%   subscriptions, but not counted, not written as output and not moving the clock.
+
+rtl_internal_event(Event, Start, End) :-
+    run_output_hooks(Event, Start, End, add),
+    nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true).
 
 %!  rtl_underived(+Event, +Start, +End) is det.

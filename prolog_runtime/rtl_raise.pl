@@ -3,6 +3,7 @@
             new_event/2,                % +Event, +Time
             new_event/3,                % +Event, +Secs, +NSecs
             rtl_input/4,                % +Op, +Event, +Start, +End
+            rtl_raise_internal/3,       % +Event, +Start, +End
             rtl_flush_raised/0
           ]).
 
@@ -79,6 +80,22 @@ raise(Event, Start, End) :-
     ;   rtl_input(add, Event, Start, End)
     ).
 
+%!  rtl_raise_internal(+Event, +Start, +End) is det.
+%
+%   Raise an internal event of the runtime (a memory event): queued like new_event/2, then
+%   processed by rtl_internal_event/3 (event rules and subscriptions; it is not counted,
+%   not written to the output and does not move the clock).
+
+rtl_raise_internal(Event, Start, End) :-
+    (   nb_current(rtl_raise_busy, true)
+    ->  assertz(raised('$internal'(Event), Start, End))
+    ;   prolog_load_context(module, _)
+    ->  assertz(raised('$internal'(Event), Start, End))
+    ;   setup_call_cleanup(nb_setval(rtl_raise_busy, true),
+                           ( rtl_internal_event(Event, Start, End), drain ),
+                           nb_setval(rtl_raise_busy, false))
+    ).
+
 %!  rtl_input(+Op, +Event, +Start, +End) is det.
 %
 %   Process one input event (Op `add`) or deletion (Op `retract`), then every event raised
@@ -113,8 +130,11 @@ process(retract, Event, Start, End) :-
     rtl_retract_event(Event, Start, End).
 
 drain :-
-    (   retract(raised(Event, Start, End))
-    ->  rtl_event(Event, Start, End),
+    (   retract(raised(Raised, Start, End))
+    ->  (   Raised = '$internal'(Event)
+        ->  rtl_internal_event(Event, Start, End)
+        ;   rtl_event(Raised, Start, End)
+        ),
         drain
     ;   true
     ).

@@ -2,6 +2,7 @@
           [ rtl_subscribe/7,            % ?Id, +Consumer, +Pattern, +Conds, ?Template, +Ts, +Te
             rtl_unsubscribe/2,          % +Id, +Te
             rtl_subscription/7,         % ?Id, ?Consumer, ?Pattern, ?Conds, ?Template, ?Ts, ?Te
+            rtl_subscribed/1,           % +Event
             subscribe/5,                % +Pattern, +Conds, ?Template, +Consumer, +Id   (Retalis 2015)
             delete_subscription/2,      % +Consumer, +Id                             (Retalis 2015)
             sub/5,                      % +Id, +Consumer, +Query, ?Template, +Ts     (thesis 3.4)
@@ -152,6 +153,16 @@ rtl_unsubscribe(Id, Te0) :-
 rtl_subscription(Id, Consumer, Pattern, Conds, Template, Ts, Te) :-
     current_program(M),
     subscription(M, Id, Consumer, Pattern, Conds, Template, Ts, Te).
+
+%!  rtl_subscribed(+Event) is semidet.
+%
+%   Some subscription of the running program is on events of Event's type.
+
+rtl_subscribed(Event) :-
+    rtl_program(M),
+    functor(Event, Name, Arity),
+    by_functor(M, Name, Arity, _, _),
+    !.
 
 % ---- delivery -------------------------------------------------------------------------
 

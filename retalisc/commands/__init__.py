@@ -4,7 +4,8 @@ from __future__ import annotations
 import importlib
 
 # Modules that define click commands in a module-level list `COMMANDS`.
-_COMMAND_MODULES = ["retalisc.commands.compile", "retalisc.commands.aq", "retalisc.commands.rules"]
+_COMMAND_MODULES = ["retalisc.commands.compile", "retalisc.commands.aq", "retalisc.commands.rules",
+                    "retalisc.commands.query"]
 
 
 def registered_commands():

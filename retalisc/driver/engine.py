@@ -46,6 +46,23 @@ class OutputEvent:
         return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line)
 
 
+class QueryError(Exception):
+    """A query or memory request that was refused or failed. `kind` is "syntax" (the text does
+    not parse), "unsafe" (the sandbox refused it) or "failed" (it raised an error)."""
+
+    def __init__(self, kind: str, message: str):
+        super().__init__(f"{kind}: {message}")
+        self.kind = kind
+        self.message = message
+
+
+def _raise_if_refused(output: str) -> str:
+    if output.startswith("!"):
+        kind, _, message = output[1:].rstrip("\n").partition("\t")
+        raise QueryError(kind, message)
+    return output
+
+
 @dataclass(frozen=True)
 class Rejection:
     line: int
@@ -228,6 +245,34 @@ class Engine:
         """Forget every event seen so far (partial matches, clock, statistics)."""
         self.bridge.once("retalis:rtl_clear")
         self.bridge.once("retalis:rtl_output_to(buffer)")
+
+    # ---- SLR: queries and memory instances (thesis 4.2) -----------------------------------
+
+    def query(self, goal: str, at: Optional[Number] = None) -> Optional[Dict[str, str]]:
+        """The first answer to the SLR query <goal, at>: a dict mapping each variable of `goal`
+        (those not starting with `_`) to its value as writeq text, `{}` for a goal without
+        variables that succeeds, None when it fails. `at` limits what `mem/2` sees to records
+        ending at or before it (default: everything). The goal runs under SWI-Prolog's sandbox;
+        QueryError says why a goal was refused or failed."""
+        answers = self._query(goal, at, "first")
+        return answers[0] if answers else None
+
+    def query_all(self, goal: str, at: Optional[Number] = None) -> List[Dict[str, str]]:
+        """Every answer to <goal, at>, in Prolog's order (see `query`)."""
+        return self._query(goal, at, "all")
+
+    def _query(self, goal: str, at: Optional[Number], limit: str) -> List[Dict[str, str]]:
+        at_text = "inf" if at is None else _number_text(at)
+        output = self.bridge.call_text(f"retalis:rtl_query_lines({prolog_string(goal)}, {at_text}, {limit}, Out)")
+        return [json.loads(line) for line in _raise_if_refused(output).splitlines() if line]
+
+    def memory(self, request: str) -> None:
+        """Create or delete memory instances: `request` is the text of `c_mem(Id, Event-Conds, N, L)`,
+        `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)` or `delete_memory(IdPattern)`.
+        The conditions must pass the sandbox; QueryError says why a request was refused."""
+        goal = (f"retalis:rtl_memory_request({prolog_string(request)}, E), "
+                f"( var(E) -> Out = \"\" ; E =.. [K, M], format(string(Out), \"!~w\\t~w\", [K, M]) )")
+        _raise_if_refused(self.bridge.call_text(goal))
 
     # ---- inspection ----------------------------------------------------------------------
 

@@ -22,15 +22,15 @@ def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str]]
         yield first, batch
 
 
-def run_event_file(engine: Engine, events: str, out: str = "-", batch_size: int = 2000,
+def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
                    consumer_dir: Optional[str] = None) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
-    `out` ('-' for stdout). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`;
+    `out` ('-' for stdout, None to drop it). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`;
     a summary closes the run. With `consumer_dir`, subscription deliveries go to
     `consumer_dir/<consumer>.jsonl` instead of `out`. Returns the exit status."""
     name = "<stdin>" if events == "-" else events
     source = sys.stdin if events == "-" else open(events, encoding="utf-8")
-    sink = sys.stdout if out == "-" else open(out, "w", encoding="utf-8")
+    sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
     total = os.path.getsize(events) if events != "-" else 0
     consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
     show_progress = total > 5_000_000 and sys.stderr.isatty()

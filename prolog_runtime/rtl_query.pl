@@ -1,0 +1,235 @@
+:- module(rtl_query,
+          [ rtl_query/5,                % +GoalText, +At, +Limit, -Answers, -Error
+            rtl_query_lines/4,          % +GoalText, +At, +Limit, -Output
+            rtl_time_goal/2,            % +Goal0, -Goal
+            rtl_memory_request/2        % +Text, -Error
+          ]).
+
+/** <module> Queries from other components: SLR queries <Goal, Z> under the sandbox
+
+A query arrives as text (from Python, the command line or a service). It is read as a
+term with read_term (its variable names kept, trailing text refused), its time terms
+`E^T` / `E^[T1, T2]` are rewritten as the compiler rewrites them in the program (the
+time becomes the last two arguments), and it must pass SWI-Prolog's library(sandbox)
+(safe_goal/1) before it runs: no file, shell or database side effects, no halt. The
+program's own predicates are checked by the sandbox like any code; the SLR query
+predicates (prev, next, mem, ...) are declared safe here.
+
+An answer is the list of `Name=Value` pairs of the goal's variables (those whose name does
+not start with `_`), in the order they appear in the goal.
+*/
+
+:- use_module(library(sandbox)).
+:- use_module(library(time), [call_with_time_limit/2]).
+:- use_module(rtl_ele).
+:- use_module(rtl_slr).
+:- use_module(rtl_io).
+
+:- multifile sandbox:safe_primitive/1.
+
+sandbox:safe_primitive(rtl_slr:mem(_, _)).
+sandbox:safe_primitive(rtl_slr:access_mem(_, _, _)).
+sandbox:safe_primitive(rtl_slr:prev(_, _)).
+sandbox:safe_primitive(rtl_slr:prev(_, _, _)).
+sandbox:safe_primitive(rtl_slr:prev(_, _, _, _, _)).
+sandbox:safe_primitive(rtl_slr:next(_, _)).
+sandbox:safe_primitive(rtl_slr:next(_, _, _)).
+sandbox:safe_primitive(rtl_slr:next(_, _, _, _)).
+sandbox:safe_primitive(rtl_slr:next(_, _, _, _, _, _)).
+sandbox:safe_primitive(rtl_slr:next_inf(_, _, _, _, _)).
+sandbox:safe_primitive(rtl_slr:exist_mem(_)).
+sandbox:safe_primitive(rtl_slr:rtl_memory_size(_, _)).
+sandbox:safe_primitive(rtl_ele:rtl_clock(_)).
+
+%!  rtl_query(+GoalText, +At, +Limit, -Answers:list, -Error) is det.
+%
+%   Run the query GoalText (a string) on the running program as <Goal, At> (At a number
+%   of seconds or `inf`). Limit is `first` or `all`. Answers is a list of answers, each a
+%   list of `Name=Value`. Error is unbound on success, else `syntax(Message)`,
+%   `unsafe(Message)` or `failed(Message)` (the goal raised an error).
+
+rtl_query(Text, At, Limit, Answers, Error) :-
+    must_be(oneof([first, all]), Limit),
+    rtl_program(M),
+    read_goal(Text, M, Goal0, Bindings, Error),
+    (   nonvar(Error)
+    ->  Answers = []
+    ;   rtl_time_goal(Goal0, Goal),
+        in_temporary_module(Tmp,
+                            add_import_module(Tmp, M, start),
+                            checked_run(Limit, Tmp, Goal, At, Bindings, Answers, Error))
+    ).
+
+% The goal runs in a temporary module that inherits the program's predicates: what the
+% sandbox allows it to assert goes there, and is gone with it.
+checked_run(Limit, Tmp, Goal, At, Bindings, Answers, Error) :-
+    catch(safe_goal(Tmp:Goal), Unsafe, true),
+    (   var(Unsafe)
+    ->  run(Limit, Tmp, Goal, At, Bindings, Answers, Error)
+    ;   message_text(Unsafe, Message0),
+        format(atom(Prefix), "~q:", [Tmp]),
+        atomic_list_concat(Parts, Prefix, Message0),
+        atomic_list_concat(Parts, Message1),
+        atom_string(Message1, Message),
+        Error = unsafe(Message),
+        Answers = []
+    ).
+
+read_goal(Text, M, Goal, Bindings, Error) :-
+    catch(term_string(Goal, Text, [variable_names(Bindings), module(M), syntax_errors(error)]),
+          SyntaxError, true),
+    (   nonvar(SyntaxError)
+    ->  syntax_message(SyntaxError, Text, Message),
+        Error = syntax(Message)
+    ;   var(Goal)
+    ->  Error = syntax("the query must be a goal, not a variable")
+    ;   callable(Goal)
+    ->  true
+    ;   format(string(Message), "~q is not a goal", [Goal]),
+        Error = syntax(Message)
+    ).
+
+syntax_message(error(syntax_error(What), Context), Text, Message) :- !,
+    (   Context = string(_, CharNo), integer(CharNo)
+    ->  Column is CharNo + 1
+    ;   Context = file(_, _, _, CharNo), integer(CharNo)
+    ->  Column is CharNo + 1
+    ;   string_length(Text, Length),
+        Column is Length + 1
+    ),
+    format(string(Message), "1:~w: syntax error: ~w", [Column, What]).
+syntax_message(Error, _, Message) :-
+    message_text(Error, Message).
+
+run(Limit, M, Goal, At, Bindings, Answers, Error) :-
+    include(named, Bindings, Shown),
+    rtl_flag(query_time_limit, Seconds),
+    catch(call_with_time_limit(Seconds, all_or_first(Limit, M, Goal, At, Shown, Answers)),
+          Raised,
+          ( raised_message(Raised, Seconds, Message), Error = failed(Message), Answers = [] )).
+
+all_or_first(first, M, Goal, At, Shown, Answers) :-
+    (   rtl_with_view(At, M:Goal) -> Answers = [Shown] ; Answers = [] ).
+all_or_first(all, M, Goal, At, Shown, Answers) :-
+    findall(Shown, rtl_with_view(At, M:Goal), Answers).
+
+raised_message(time_limit_exceeded, Seconds, Message) :- !,
+    format(string(Message), "no answer within the query time limit (~w s)", [Seconds]).
+raised_message(Error, _, Message) :-
+    message_text(Error, Message).
+
+named(Name=_) :-
+    \+ sub_atom(Name, 0, _, _, '_').
+
+%!  rtl_query_lines(+GoalText, +At, +Limit, -Output:string) is det.
+%
+%   rtl_query/5 with the answers as JSON Lines, one object per answer mapping each
+%   variable name to its value written with writeq; or one line `!KIND<TAB>MESSAGE` when
+%   the query was refused or raised an error.
+
+rtl_query_lines(Text, At, Limit, Output) :-
+    rtl_query(Text, At, Limit, Answers, Error),
+    (   nonvar(Error)
+    ->  Error =.. [Kind, Message],
+        format(string(Output), "!~w\t~w~n", [Kind, Message])
+    ;   maplist(answer_json, Answers, Lines),
+        atomic_list_concat(Lines, Output0),
+        atom_string(Output0, Output)
+    ).
+
+answer_json(Pairs, Line) :-
+    maplist(pair_json, Pairs, Fields),
+    atomic_list_concat(Fields, ', ', Body),
+    format(string(Line), "{~w}~n", [Body]).
+
+pair_json(Name=Value, Field) :-
+    format(string(ValueText), "~q", [Value]),
+    rtl_json_string_escape(Name, N),
+    rtl_json_string_escape(ValueText, V),
+    format(string(Field), "\"~w\": \"~w\"", [N, V]).
+
+%!  rtl_memory_request(+Text:string, -Error) is det.
+%
+%   Create or delete memory instances on request from outside: Text is one of
+%   `c_mem(Id, Query, N, L)`, `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)`
+%   or `delete_memory(IdPattern)`. The conditions of a new instance must pass the
+%   sandbox. Error is unbound on success, else `syntax(Message)`, `unsafe(Message)` or
+%   `failed(Message)`; nothing is created then.
+
+rtl_memory_request(Text, Error) :-
+    rtl_program(M),
+    read_goal(Text, M, Request, _, Error),
+    (   nonvar(Error)
+    ->  true
+    ;   memory_request_conditions(Request, Conds)
+    ->  catch(( ( is_list(Conds) -> maplist(safe_condition(M), Conds) ; true ), Result = ok ), Unsafe,
+              ( message_text(Unsafe, Message), Result = unsafe(Message) )),
+        (   Result == ok
+        ->  catch(M:Request, Raised,
+                  ( message_text(Raised, Message), Error = failed(Message) ))
+        ;   Error = Result
+        )
+    ;   format(string(Message), "~q is not c_mem/4, memorize/5, d_mem/1 or delete_memory/1", [Request]),
+        Error = syntax(Message)
+    ).
+
+memory_request_conditions(c_mem(_, Query, _, _), Conds) :-
+    (   nonvar(Query), Query = _-Conds0 -> Conds = Conds0 ; Conds = [] ).
+memory_request_conditions(memorize(_, Conds, _, _, _), Conds).
+memory_request_conditions(d_mem(_), []).
+memory_request_conditions(delete_memory(_), []).
+
+safe_condition(M, Cond) :-
+    (   callable(Cond) -> safe_goal(M:Cond) ; type_error(callable, Cond) ).
+
+%!  rtl_time_goal(+Goal0, -Goal) is det.
+%
+%   Rewrite the time terms of a goal: `E^[T1, T2]` as E with T1 and T2 added as its last
+%   two arguments, `E^T` as E with T, T added; through `,`, `;`, `->`, `\+` and the goal
+%   arguments of findall/3, forall/2, aggregate_all/3, once/1 and ignore/1. The arguments
+%   of prev, next and mem stay as they are: there `^` is data.
+
+rtl_time_goal(G, G) :-
+    var(G), !.
+rtl_time_goal((A, B), (A1, B1)) :- !,
+    rtl_time_goal(A, A1), rtl_time_goal(B, B1).
+rtl_time_goal((A ; B), (A1 ; B1)) :- !,
+    rtl_time_goal(A, A1), rtl_time_goal(B, B1).
+rtl_time_goal((A -> B), (A1 -> B1)) :- !,
+    rtl_time_goal(A, A1), rtl_time_goal(B, B1).
+rtl_time_goal(\+ A, \+ A1) :- !,
+    rtl_time_goal(A, A1).
+rtl_time_goal(findall(T, G, L), findall(T, G1, L)) :- !,
+    rtl_time_goal(G, G1).
+rtl_time_goal(forall(C, A), forall(C1, A1)) :- !,
+    rtl_time_goal(C, C1), rtl_time_goal(A, A1).
+rtl_time_goal(aggregate_all(S, G, R), aggregate_all(S, G1, R)) :- !,
+    rtl_time_goal(G, G1).
+rtl_time_goal(once(G), once(G1)) :- !,
+    rtl_time_goal(G, G1).
+rtl_time_goal(ignore(G), ignore(G1)) :- !,
+    rtl_time_goal(G, G1).
+rtl_time_goal(E^Time, Goal) :-
+    callable(E), !,
+    (   nonvar(Time), Time = [T1, T2]
+    ->  true
+    ;   T1 = Time, T2 = Time
+    ),
+    E =.. List0,
+    append(List0, [T1, T2], List),
+    Goal =.. List.
+rtl_time_goal(G, G).
+
+message_text(Error, Text) :-
+    (   catch(message_to_codes(Error, Codes), _, fail)
+    ->  string_codes(Text0, Codes)
+    ;   format(string(Text0), "~q", [Error])
+    ),
+    split_string(Text0, "\n\t", " \t", Parts0),
+    exclude(==(""), Parts0, Parts),
+    atomic_list_concat(Parts, " ", Text1),
+    atom_string(Text1, Text).
+
+message_to_codes(Error, Codes) :-
+    '$messages':translate_message(Error, Lines, []),
+    with_output_to(codes(Codes), print_message_lines(current_output, '', Lines)).

@@ -1,0 +1,59 @@
+"""`retalisc query`: load events, then answer one SLR query (thesis 4.2.2, Def. 18)."""
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+from .compile import compile_or_exit
+
+
+@click.command("query")
+@click.argument("program", type=click.Path(exists=True, dir_okay=False))
+@click.argument("goal")
+@click.option("--events", "events", type=click.Path(allow_dash=True, dir_okay=False),
+              help="Event JSON Lines file to process first ('-' for standard input).")
+@click.option("--at", "at", type=float, default=None,
+              help="Answer the query as of time Z: mem/2 sees the records that end at or before Z.")
+@click.option("--first", is_flag=True, help="Print the first answer only.")
+@click.option("--max-delay", type=float, default=None, help="As for `retalisc run`.")
+@click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
+              help="Create (or delete, d_mem(Id)) a memory instance before the events. Repeatable.")
+def query_command(program: str, goal: str, events, at, first: bool, max_delay, memories) -> None:
+    """Process EVENTS with PROGRAM, then answer GOAL: one JSON object per answer mapping each
+    variable of GOAL to its value (writeq text); `{}` for a goal without variables that
+    succeeds; nothing when it fails (exit 0 either way). A goal that does not parse or that
+    the sandbox refuses exits 2; a goal that raises an error exits 1.
+
+    Example: retalisc query nao.rtl --events tf.jsonl 'prev(head_cam, tf(V, Q)^T, 12.5)'
+    """
+    from ..driver.engine import Engine, QueryError
+    from ..driver.run import run_event_file
+
+    if at is not None and at != at:
+        raise click.BadParameter("must be a number", param_hint="--at")
+    engine = Engine.from_compiled(compile_or_exit(program))
+    if max_delay is not None:
+        engine.set_flag("max_delay", repr(max_delay))
+    for request in memories:
+        try:
+            engine.memory(request)
+        except QueryError as error:
+            click.echo(f"--memory {request!r}: {error.kind} error: {error.message}", err=True)
+            sys.exit(2 if error.kind in ("syntax", "unsafe") else 1)
+    if events:
+        run_event_file(engine, events, out=None)
+    try:
+        answers = [engine.query(goal, at)] if first else engine.query_all(goal, at)
+    except QueryError as error:
+        where = "query:" if error.kind == "syntax" else "query: error:"
+        click.echo(f"{where}{error.message}" if error.kind == "syntax" else f"{where} {error.message}", err=True)
+        click.echo(f"  {goal}", err=True)
+        sys.exit(2 if error.kind in ("syntax", "unsafe") else 1)
+    for answer in answers:
+        if answer is not None:
+            click.echo(json.dumps(answer, ensure_ascii=False))
+
+
+COMMANDS = [query_command]
