@@ -17,6 +17,7 @@
 :- reexport(rtl_rules).
 :- reexport(rtl_slr).
 :- reexport(rtl_query).
+:- reexport(rtl_math).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 

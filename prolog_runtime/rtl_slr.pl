@@ -698,7 +698,10 @@ time_argument(T, Seconds, Culprit) :-
     ->  Seconds = inf
     ;   rtl_time_seconds(T, Seconds)
     ->  true
-    ;   throw(error(type_error(time, T), context(Culprit, 'a time is seconds, [Secs, NSecs], datime/7 or inf')))
+    ;   compound(T), \+ is_list(T), catch(Seconds is T, _, fail)
+    ->  true                                 % an expression such as T + 1 (thesis rule 4.8)
+    ;   throw(error(type_error(time, T),
+                    context(Culprit, 'a time is seconds, an arithmetic expression, [Secs, NSecs], datime/7 or inf')))
     ).
 
 %!  rtl_with_view(+Z, :Goal) is nondet.
