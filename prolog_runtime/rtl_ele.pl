@@ -86,13 +86,21 @@ rtl_reset :-
 
 %!  rtl_clear is det.
 %
-%   Forget everything the program has seen: partial matches, clock, statistics, output.
+%   Forget everything the program has seen: partial matches, memory records, clock,
+%   statistics, output.
 
 rtl_clear :-
     nb_getval(rtl_program, M),
     forall(M:ele_partial_store(Name, Arity),
            ( functor(Head, Name, Arity), retractall(M:Head) )),
+    forall(clear_hook, true),
     rtl_reset.
+
+%!  clear_hook is det.
+%
+%   Multifile: other runtime modules forget what they keep of the events seen (rtl_clear/0).
+
+:- multifile clear_hook/0.
 
 %!  rtl_set_flag(+Flag, +Value) is det.
 %!  rtl_flag(?Flag, ?Value) is nondet.

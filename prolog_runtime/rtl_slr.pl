@@ -260,6 +260,15 @@ rtl_memory_records(Id, Records) :-
     ;   existence_error(memory_instance, Id)
     ).
 
+%   rtl_clear/0 forgets the records of every instance (the instances stay).
+:- multifile rtl_ele:clear_hook/0.
+rtl_ele:clear_hook :-
+    current_program(M),
+    forall(id_handle(M, _, H),
+           ( bounds(H, First, Last),
+             forall(between(First, Last, Number), ( key(H, Number, Key), retractall(record(Key, _, _, _)) )),
+             reset_bounds(H) )).
+
 %!  rtl_slr_clear is det.
 %
 %   Delete every memory instance of the running program (stream histories included).

@@ -242,7 +242,7 @@ class Engine:
         self.bridge.once(f"atom_string(Id, {prolog_string(label)}), retalis:rtl_remove_rule({self.module}, Id)")
 
     def clear(self) -> None:
-        """Forget every event seen so far (partial matches, clock, statistics)."""
+        """Forget every event seen so far (partial matches, memory records, clock, statistics)."""
         self.bridge.once("retalis:rtl_clear")
         self.bridge.once("retalis:rtl_output_to(buffer)")
 
