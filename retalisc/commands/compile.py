@@ -89,8 +89,11 @@ def check_command(program: str) -> None:
 @click.option("--subscribe", "subscriptions", multiple=True, metavar="'CONSUMER=QUERY[=>TEMPLATE]'",
               help="Subscribe CONSUMER to the events matching QUERY (Event or Event-[Goals]), delivered "
                    "as TEMPLATE (default: the event). Repeatable.")
+@click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
+              help="Create a memory instance before the events (c_mem/4, memorize/5; d_mem/1 deletes one). "
+                   "Repeatable.")
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
-                consumer_dir, subscriptions) -> None:
+                consumer_dir, subscriptions, memories) -> None:
     """Run PROGRAM over an event file, printing derived events as JSON Lines."""
     from ..driver.engine import Engine
     from ..driver.run import run_event_file
@@ -103,8 +106,21 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         engine.set_flag("max_delay", repr(max_delay))
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
+    for request in memories:
+        add_cli_memory(engine, request)
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir)
     sys.exit(status)
+
+
+def add_cli_memory(engine, request: str) -> None:
+    """`--memory 'c_mem(...)'`: exit 2 when it does not parse or is refused, 1 when it fails."""
+    from ..driver.engine import QueryError
+
+    try:
+        engine.memory(request)
+    except QueryError as error:
+        click.echo(f"--memory {request!r}: {error.kind} error: {error.message}", err=True)
+        sys.exit(2 if error.kind in ("syntax", "unsafe") else 1)
 
 
 def add_cli_subscription(engine, spec: str) -> None:

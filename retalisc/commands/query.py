@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from .compile import compile_or_exit
+from .compile import add_cli_memory, compile_or_exit
 
 
 @click.command("query")
@@ -37,11 +37,7 @@ def query_command(program: str, goal: str, events, at, first: bool, max_delay, m
     if max_delay is not None:
         engine.set_flag("max_delay", repr(max_delay))
     for request in memories:
-        try:
-            engine.memory(request)
-        except QueryError as error:
-            click.echo(f"--memory {request!r}: {error.kind} error: {error.message}", err=True)
-            sys.exit(2 if error.kind in ("syntax", "unsafe") else 1)
+        add_cli_memory(engine, request)
     if events:
         run_event_file(engine, events, out=None)
     try:
