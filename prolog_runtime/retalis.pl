@@ -6,7 +6,8 @@
             rtl_feed_events/2,          % +Events, -Output
             rtl_action/1,               % :Goal
             rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
-            rtl_summary/1               % -Text
+            rtl_summary/1,              % -Text
+            rtl_end_of_input/2          % +Mode, -Output
           ]).
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
@@ -18,6 +19,7 @@
 :- reexport(rtl_slr).
 :- reexport(rtl_query).
 :- reexport(rtl_math).
+:- reexport(rtl_sync).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 
@@ -75,7 +77,8 @@ rtl_main :-
     ;   true
     ),
     catch(( rtl_flush_raised,
-            forall(member(File, Files), rtl_run_jsonl_file(File)) ),
+            forall(member(File, Files), rtl_run_jsonl_file(File)),
+            ( nb_current(rtl_drop_pending, true) -> rtl_sync_finish(drop) ; rtl_sync_finish(run) ) ),
           Error,
           ( print_message(error, Error), halt(1) )),
     rtl_close_consumer_files,
@@ -88,6 +91,8 @@ main_args([], []).
 main_args([Arg|Args], Files) :-
     (   Arg == '--echo-input'
     ->  rtl_set_flag(echo_input, true), Files = Rest
+    ;   Arg == '--drop-pending'
+    ->  nb_setval(rtl_drop_pending, true), Files = Rest
     ;   atom_concat('--consumer-dir=', Dir, Arg)
     ->  rtl_consumer_dir(Dir), Files = Rest
     ;   atom_concat('--max-delay=', D, Arg)
@@ -102,7 +107,7 @@ main_args([Arg|Args], Files) :-
 usage_error(Formal) :-
     (   Formal = domain_error(option, Opt)
     ->  format(user_error, "error: unknown option ~w~n", [Opt])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--consumer-dir=DIR] EVENTS.jsonl...~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--consumer-dir=DIR] [--drop-pending] EVENTS.jsonl...~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -243,6 +248,21 @@ rtl_aggregate(avg(X), Acc0, Sum-N, Avg) :-
     ;   Acc0 = Sum0-N0, Sum is Sum0 + X, N is N0 + 1
     ),
     Avg is Sum / N.
+
+%!  rtl_end_of_input(+Mode, -Output:string) is det.
+%
+%   The input has ended: run (Mode `run`) or discard (`drop`) the postponed synchronized
+%   matches (rtl_sync_finish/1); Output as for rtl_feed_lines/3.
+
+rtl_end_of_input(Mode, Output) :-
+    rtl_output_to(buffer),
+    rtl_sync_finish(Mode),
+    rtl_take_output(Lines),
+    (   Lines == []
+    ->  Output = ""
+    ;   atomic_list_concat(Lines, "\n", Joined),
+        string_concat(Joined, "\n", Output)
+    ).
 
 %!  rtl_summary(-Text:string) is det.
 

@@ -20,6 +20,7 @@
             rtl_memory/5,               % ?Id, ?Query, ?Template, ?N, ?L
             rtl_memory_size/2,          % ?Id, -Records
             rtl_memory_records/2,       % +Id, -Records
+            rtl_memory_last_end/2,      % +Id, -End
             rtl_with_view/2,            % +Z, :Goal
             rtl_slr_clear/0
           ]).
@@ -245,6 +246,18 @@ rtl_memory_size(Id, Size) :-
     expire(H),
     bounds(H, First, Last),
     Size is Last - First + 1.
+
+%!  rtl_memory_last_end(+Id, -End:number) is semidet.
+%
+%   End is the end time of the latest record of memory Id; fails when it has none.
+
+rtl_memory_last_end(Id, End) :-
+    current_program(M),
+    id_handle(M, Id, H),
+    bounds(H, First, Last),
+    Last >= First,
+    key(H, Last, Key),
+    record(Key, _, End, _).
 
 %!  rtl_memory_records(+Id, -Records:list) is det.
 %

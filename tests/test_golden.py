@@ -44,5 +44,6 @@ def test_standalone_swipl(program, folder, tmp_path, swipl, update_golden):
 def test_python_driver(program, folder):
     engine = Engine.load(program)
     produced, _ = engine.feed_lines((folder / "events.jsonl").read_text().rstrip("\n"))
+    produced += engine.end_of_input()
     expected = (folder / "expected.jsonl").read_text().splitlines()
     assert [e.line for e in produced] == expected

@@ -92,8 +92,11 @@ def check_command(program: str) -> None:
 @click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
               help="Create a memory instance before the events (c_mem/4, memorize/5; d_mem/1 deletes one). "
                    "Repeatable.")
+@click.option("--drop-pending", is_flag=True,
+              help="At the end of the input, discard the synchronized matches still waiting instead of "
+                   "running them.")
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
-                consumer_dir, subscriptions, memories) -> None:
+                consumer_dir, subscriptions, memories, drop_pending: bool) -> None:
     """Run PROGRAM over an event file, printing derived events as JSON Lines."""
     from ..driver.engine import Engine
     from ..driver.run import run_event_file
@@ -108,7 +111,8 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         add_cli_subscription(engine, spec)
     for request in memories:
         add_cli_memory(engine, request)
-    status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir)
+    status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
+                            drop_pending=drop_pending)
     sys.exit(status)
 
 

@@ -246,6 +246,13 @@ class Engine:
         self.bridge.once("retalis:rtl_clear")
         self.bridge.once("retalis:rtl_output_to(buffer)")
 
+    def end_of_input(self, drop_pending: bool = False) -> List[OutputEvent]:
+        """The input has ended: every history is complete, so the postponed synchronized
+        matches run now, in time order (or are discarded with `drop_pending`). Returns what
+        they produced."""
+        mode = "drop" if drop_pending else "run"
+        return self._deliver(self.bridge.call_text(f"retalis:rtl_end_of_input({mode}, Out)"))
+
     # ---- SLR: queries and memory instances (thesis 4.2) -----------------------------------
 
     def query(self, goal: str, at: Optional[Number] = None) -> Optional[Dict[str, str]]:

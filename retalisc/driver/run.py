@@ -23,10 +23,11 @@ def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str]]
 
 
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
-                   consumer_dir: Optional[str] = None) -> int:
+                   consumer_dir: Optional[str] = None, drop_pending: bool = False) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout, None to drop it). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`;
-    a summary closes the run. With `consumer_dir`, subscription deliveries go to
+    a summary closes the run. At the end of the input the postponed synchronized matches run
+    (or are dropped with `drop_pending`). With `consumer_dir`, subscription deliveries go to
     `consumer_dir/<consumer>.jsonl` instead of `out`. Returns the exit status."""
     name = "<stdin>" if events == "-" else events
     source = sys.stdin if events == "-" else open(events, encoding="utf-8")
@@ -36,17 +37,21 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     show_progress = total > 5_000_000 and sys.stderr.isatty()
     try:
         with click.progressbar(length=total, label="events", file=sys.stderr) if show_progress else _NoBar() as bar:
-            for first, lines in _batches(source, batch_size):
-                text = "\n".join(lines)
-                produced, rejected = engine.feed_lines(text, first)
-                for rejection in rejected:
-                    print(f"{name}:{rejection.line}: rejected: {rejection.reason}", file=sys.stderr)
+            def write(produced):
                 for event in produced:
                     if consumers is not None and event.consumer is not None:
                         consumers.write(event)
                     else:
                         sink.write(event.line + "\n")
+
+            for first, lines in _batches(source, batch_size):
+                text = "\n".join(lines)
+                produced, rejected = engine.feed_lines(text, first)
+                for rejection in rejected:
+                    print(f"{name}:{rejection.line}: rejected: {rejection.reason}", file=sys.stderr)
+                write(produced)
                 bar.update(len(text.encode("utf-8")) + len(lines))
+            write(engine.end_of_input(drop_pending))
         sink.flush()
     finally:
         if source is not sys.stdin:

@@ -379,7 +379,11 @@ class _RuleGenerator:
                 rule = self.rule.rule
                 derive = "rtl_underived" if retract else "rtl_derived"
                 action = C("rtl_action", rule.action) if rule.action is not None and not retract else None
-                result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
+                if rule.synchronized is not None:
+                    sync = "rtl_synchronized_retract" if retract else "rtl_synchronized"
+                    result = C(sync, *rule.synchronized.args, s, e)
+                else:
+                    result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
                 then = conj([action, result]) if (action or result) else Atom("true")
             else:
                 consumer = self.consumers[step.name] + ("_retract" if retract else "")

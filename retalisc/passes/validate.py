@@ -124,8 +124,10 @@ def _children(pattern: Pattern):
 
 
 def _check_head_variables(rule: EventRule) -> None:
+    if rule.synchronized is not None:
+        return                      # the query binds the event's variables (thesis A.2.5.2)
     bound = _pattern_variables(rule.pattern)
-    head = rule.head if rule.synchronized is None else rule.synchronized.args[0]
+    head = rule.head
     for var in variables(head):
         if var.name not in bound:
             raise RetalisSemanticError(

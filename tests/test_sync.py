@@ -1,0 +1,46 @@
+"""Synchronized rules (thesis A.2.5.2): postponed until the memories are up to date, delivered once."""
+from pathlib import Path
+
+from retalisc.driver.engine import Engine
+
+CASE = Path(__file__).parent / "golden" / "synchronized_rule"
+
+
+def _feed(engine, lines):
+    produced, rejected = engine.feed_lines("\n".join(lines))
+    assert rejected == []
+    return [e.event for e in produced]
+
+
+def test_a_match_waits_for_every_memory_and_is_released_by_the_update():
+    engine = Engine.load(CASE / "program.rtl")
+    assert _feed(engine, ['{"event": "tf(odom, base, 0)", "t": 0}', '{"event": "tf(base, cam, 100)", "t": 0}',
+                          '{"event": "marker(m1, 1000)", "t": 0.5}']) == []
+    assert _feed(engine, ['{"event": "tf(odom, base, 10)", "t": 1}']) == []          # base_cam still behind
+    assert _feed(engine, ['{"event": "tf(base, cam, 200)", "t": 1}']) == ["pose(m1,1155.0)"]
+    assert _feed(engine, ['{"event": "tf(base, cam, 300)", "t": 2}']) == []          # delivered once
+    assert engine.end_of_input() == []
+
+
+def test_end_of_input_runs_or_drops_what_still_waits():
+    lines = ['{"event": "tf(odom, base, 0)", "t": 0}', '{"event": "tf(base, cam, 100)", "t": 0}',
+             '{"event": "marker(m1, 1000)", "t": 0.5}']
+    engine = Engine.load(CASE / "program.rtl")
+    _feed(engine, lines)
+    assert engine.query("rtl_sync_pending(N)") == {"N": "1"}
+    assert [e.event for e in engine.end_of_input()] == ["pose(m1,1100)"]
+    dropping = Engine.load(CASE / "program.rtl")
+    _feed(dropping, lines)
+    assert dropping.end_of_input(drop_pending=True) == []
+
+
+def test_the_clock_passing_the_delay_bound_completes_a_history():
+    engine = Engine.load(CASE / "program.rtl")
+    engine.set_flag("max_delay", "0.5")      # runtime flags are shared by the engines of a process
+    try:
+        _feed(engine, ['{"event": "tf(odom, base, 0)", "t": 0}', '{"event": "tf(base, cam, 100)", "t": 0}',
+                       '{"event": "marker(m1, 1000)", "t": 0.5}'])
+        assert _feed(engine, ['{"event": "other", "t": 0.9}']) == []
+        assert _feed(engine, ['{"event": "other", "t": 1.0}']) == ["pose(m1,1100)"]
+    finally:
+        engine.set_flag("max_delay", "1.0")
