@@ -43,6 +43,7 @@ def test_standalone_swipl(program, folder, tmp_path, swipl, update_golden):
 @pytest.mark.parametrize("program, folder", _cases())
 def test_python_driver(program, folder):
     engine = Engine.load(program)
+    engine.set_flag("max_delay", "1.0")     # the default of a fresh process; flags are shared by its engines
     produced, _ = engine.feed_lines((folder / "events.jsonl").read_text().rstrip("\n"))
     produced += engine.end_of_input()
     expected = (folder / "expected.jsonl").read_text().splitlines()
