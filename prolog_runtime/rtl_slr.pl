@@ -367,7 +367,8 @@ add_record(H, M, Id, N, L, Options, Start, End, Template) :-
             End >= LastEnd
         ->  Number is Last + 1,
             nb_setarg(2, B, Number)
-        ;   insertion_point(H, First, Last, End, Point),
+        ;   last_not_after(H, First, Last, End, Before),    % a late record goes after
+            Point is Before + 1,                            % every record ending at or before it
             make_room(H, B, First, Last, Point, Number)
         ),
         key(H, Number, Key),
@@ -387,22 +388,6 @@ recorded(M, Id, Options, Start, End, Template) :-
     ;   true
     ),
     forall(memory_update_hook(M, Id, Start, End), true).
-
-% The first number whose record ends after End: a late record goes before it, after
-% every record with the same end time.
-insertion_point(H, Low, High, End, Point) :-
-    (   Low > High
-    ->  Point = Low
-    ;   Mid is (Low + High) >> 1,
-        key(H, Mid, Key),
-        record(Key, _, MidEnd, _),
-        (   MidEnd =< End
-        ->  Low1 is Mid + 1,
-            insertion_point(H, Low1, High, End, Point)
-        ;   High1 is Mid - 1,
-            insertion_point(H, Low, High1, End, Point)
-        )
-    ).
 
 % Free a number for a record that goes before Point: move the shorter side by one.
 make_room(H, B, First, Last, Point, Number) :-

@@ -306,6 +306,21 @@ def _is(term: Term, name: str, arity: int) -> bool:
     return isinstance(term, Compound) and term.name == name and term.arity == arity
 
 
+def pattern_conditions(pattern: Pattern):
+    """The conditions (`where`, `check`) of a pattern and its sub-patterns, outermost first."""
+    if isinstance(pattern, (Where, Check)):
+        yield pattern.condition
+        yield from pattern_conditions(pattern.pattern)
+    elif isinstance(pattern, Binary):
+        yield from pattern_conditions(pattern.left)
+        yield from pattern_conditions(pattern.right)
+    elif isinstance(pattern, (Window, Aggregate)):
+        yield from pattern_conditions(pattern.pattern)
+    elif isinstance(pattern, Negation):
+        for part in (pattern.negated, pattern.first, pattern.second):
+            yield from pattern_conditions(part)
+
+
 # ---- writing patterns back (for dumps and comments in generated code) -----------------
 
 

@@ -11,8 +11,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Dict, Optional, Tuple
 
-from ..frontend.program import Declaration, EventRule, StaticClause, Where, Check, Binary, Negation, Window, \
-    Aggregate, Directive
+from ..frontend.program import Declaration, Directive, EventRule, StaticClause, pattern_conditions
 from ..frontend.terms import Atom, Compound, Number, Term, list_items, span_of, walk
 from .unit import Unit
 
@@ -51,23 +50,7 @@ def _code_of(clause):
     elif isinstance(clause, EventRule):
         if clause.action is not None:
             yield clause.action
-        yield from _conditions(clause.pattern)
-
-
-def _conditions(pattern):
-    if isinstance(pattern, (Where, Check)):
-        yield pattern.condition
-        yield from _conditions(pattern.pattern)
-    elif isinstance(pattern, Binary):
-        yield from _conditions(pattern.left)
-        yield from _conditions(pattern.right)
-    elif isinstance(pattern, Window):
-        yield from _conditions(pattern.pattern)
-    elif isinstance(pattern, Negation):
-        for part in (pattern.negated, pattern.first, pattern.second):
-            yield from _conditions(part)
-    elif isinstance(pattern, Aggregate):
-        yield from _conditions(pattern.pattern)
+        yield from pattern_conditions(clause.pattern)
 
 
 def _stream_query_type(term: Term) -> Optional[Tuple[str, int]]:

@@ -11,8 +11,8 @@ from __future__ import annotations
 from typing import Dict, Iterable, Set, Tuple
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where,
-                                Window, DECLARATIONS)
+from ..frontend.program import (DECLARATIONS, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
+                                Where, Window, pattern_conditions)
 from ..frontend.terms import Atom, Compound, Term, indicator, span_of, variables
 from .unit import Unit
 
@@ -39,7 +39,7 @@ def run(unit: Unit) -> Unit:
     for rule in program.event_rules:
         _check_head_variables(rule)
         _check_pattern_arities(rule.pattern, derived)
-        for condition in _conditions(rule.pattern):
+        for condition in pattern_conditions(rule.pattern):
             _check_static_goals(condition, event_arities, static, "a where condition")
     for clause in program.static_clauses:
         key = indicator(clause.head)
@@ -78,20 +78,6 @@ def _atoms(pattern: Pattern):
         yield from _atoms(pattern.second)
 
 
-def _conditions(pattern: Pattern):
-    if isinstance(pattern, (Where, Check)):
-        yield pattern.condition
-        yield from _conditions(pattern.pattern)
-    elif isinstance(pattern, Binary):
-        yield from _conditions(pattern.left)
-        yield from _conditions(pattern.right)
-    elif isinstance(pattern, (Window, Aggregate)):
-        yield from _conditions(pattern.pattern)
-    elif isinstance(pattern, Negation):
-        for p in (pattern.negated, pattern.first, pattern.second):
-            yield from _conditions(p)
-
-
 def _pattern_variables(pattern: Pattern) -> Set[str]:
     names = set()
     for atom in _atoms(pattern):
@@ -99,7 +85,7 @@ def _pattern_variables(pattern: Pattern) -> Set[str]:
         for t in (atom.start, atom.end):
             if t is not None:
                 names.update(v.name for v in variables(t))
-    for condition in _conditions(pattern):
+    for condition in pattern_conditions(pattern):
         names.update(v.name for v in variables(condition))
     for node in _aggregates(pattern):
         names.update(v.name for v in variables(node.value))
