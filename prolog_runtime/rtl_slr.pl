@@ -21,6 +21,7 @@
             rtl_memory_size/2,          % ?Id, -Records
             rtl_memory_records/2,       % +Id, -Records
             rtl_memory_last_end/2,      % +Id, -End
+            rtl_memory_type/2,          % ?Id, -Name/Arity
             rtl_with_view/2,            % +Z, :Goal
             rtl_slr_clear/0
           ]).
@@ -97,6 +98,13 @@ retalis:rtl_declaration_handler(stream_history, 3, rtl_slr).
 :- multifile memory_update_hook/4.
 :- dynamic memory_update_hook/4.
 
+%!  rtl_slr:instance_created_hook(+Program, +Id) is det.
+%
+%   Multifile: called after memory instance Id was created.
+
+:- multifile instance_created_hook/2.
+:- dynamic instance_created_hook/2.
+
 key_base(1099511627776).                 % 2^40 numbers per instance
 number_origin(549755813888).             % 2^39: room to number late records downwards
 
@@ -171,6 +179,7 @@ create_instance(Id, Pattern, Conds, Template, N, L, Options, Culprit) :-
     reset_bounds(H),
     watch(M, Pattern, H),
     rtl_add_output_hook(rtl_slr:observe),
+    forall(instance_created_hook(M, Id), true),
     memory_event(M, memory_created(Pattern, Conds, Template, Id, N)).
 
 check_instance(Id, Pattern, Conds, N, L, Options, Culprit) :-
@@ -246,6 +255,15 @@ rtl_memory_size(Id, Size) :-
     expire(H),
     bounds(H, First, Last),
     Size is Last - First + 1.
+
+%!  rtl_memory_type(?Id, -Type) is nondet.
+%
+%   Type is `Name/Arity` of the events memory Id records.
+
+rtl_memory_type(Id, Name/Arity) :-
+    current_program(M),
+    instance(_, M, Id, Pattern, _, _, _, _, _),
+    functor(Pattern, Name, Arity).
 
 %!  rtl_memory_last_end(+Id, -End:number) is semidet.
 %

@@ -2,17 +2,29 @@
           [ rtl_synchronized/5,         % +Event, :Query, +SyncConds, +Start, +End
             rtl_synchronized_retract/5, % +Event, :Query, +SyncConds, +Start, +End
             rtl_sync_finish/1,          % +Mode (run or drop)
-            rtl_sync_pending/1          % -Count
+            rtl_sync_pending/1,         % -Count
+            max_delay/2,                % +Name/Arity, +Seconds or learn
+            rtl_history_complete/2,     % +Name/Arity, +Time
+            rtl_type_delay/2            % +Name/Arity, -Seconds
           ]).
 
 /** <module> Synchronized rules: wait for late data, then query (thesis 4.2.5, A.2.5.2)
 
+*History availability* (Def. 27): the history of events of type Name/Arity is complete up
+to time T when
+
+  - an input event `updated(Name/Arity)` with time at least T has been processed (a producer
+    says it has sent everything up to then), or
+  - the clock minus the type's delay bound is at least T. The delay bound of a type is
+    declared with `max_delay(Name/Arity, Seconds)`, or learned with
+    `max_delay(Name/Arity, learn)` as the largest delay seen so far (the clock when the
+    event arrived minus its end time, Def. 25-26); otherwise it is the flag `max_delay`.
+
 A rule `synchronized(Event, Query, SyncConds) <- Pattern` (the original release spells it
 `syncronized`) runs Query once for each match of Pattern, but only when the memories it
 reads are up to date: SyncConds is a list `[[MemoryId, Time], ...]`, and the query waits
-until each memory MemoryId either holds a record that ends after Time, or its history up to
-Time is complete (the clock has passed Time by the delay bound `max_delay`: nothing ending at
-or before Time can still arrive). Then Query runs (its first solution binds Event) and Event
+until each memory MemoryId either holds a record that ends after Time, or the history of the
+events it records is complete up to Time. Then Query runs (its first solution binds Event) and Event
 is derived over the match's interval, once. A match that must wait is *postponed*; other
 matches and the event flow go on.
 
@@ -33,6 +45,97 @@ order; rtl_sync_finish(drop) discards them.
 :- dynamic pending/7.
 % monitor(MemoryId, N, Time): match N waits for a record of MemoryId ending after Time
 :- dynamic monitor/3.
+% declared_delay(Program, Name, Arity, Seconds or learn)
+:- dynamic declared_delay/4.
+% learned_delay(Program, Name, Arity, Seconds)
+:- dynamic learned_delay/4.
+% updated_until(Program, Name, Arity, Time)
+:- dynamic updated_until/4.
+
+:- multifile retalis:rtl_declaration_handler/3.
+retalis:rtl_declaration_handler(max_delay, 2, rtl_sync).
+
+%!  max_delay(+Type, +Delay) is det.
+%
+%   Declare the delay bound of events of Type (Name/Arity): a number of seconds, or `learn`
+%   (the largest delay seen so far).
+
+max_delay(Type, Delay) :-
+    (   Type = Name/Arity, atom(Name), integer(Arity)
+    ->  true
+    ;   throw(error(type_error(event_type, Type), context(max_delay/2, 'write Name/Arity')))
+    ),
+    (   Delay == learn -> true
+    ;   number(Delay), Delay >= 0 -> true
+    ;   throw(error(domain_error(delay, Delay), context(max_delay/2, 'seconds >= 0 or learn')))
+    ),
+    (   prolog_load_context(module, M), current_predicate(M:ele_trigger/3)
+    ->  true                                 % a directive of the program being loaded
+    ;   rtl_program(M)
+    ),
+    retractall(declared_delay(M, Name, Arity, _)),
+    assertz(declared_delay(M, Name, Arity, Delay)),
+    rtl_add_output_hook(rtl_sync:availability).
+
+%!  rtl_type_delay(+Type, -Delay) is det.
+%
+%   The delay bound of Type (Name/Arity) now: declared, learned, or the flag max_delay.
+
+rtl_type_delay(Name/Arity, Delay) :-
+    rtl_program(M),
+    (   declared_delay(M, Name, Arity, D0)
+    ->  (   D0 == learn
+        ->  ( learned_delay(M, Name, Arity, D) -> Delay = D ; Delay = 0 )
+        ;   Delay = D0
+        )
+    ;   rtl_flag(max_delay, Delay)
+    ).
+
+%!  rtl_history_complete(+Type, +Time) is semidet.
+%
+%   Every event of Type (Name/Arity) ending at or before Time has arrived.
+
+rtl_history_complete(Name/Arity, T) :-
+    rtl_program(M),
+    (   updated_until(M, Name, Arity, U), U >= T
+    ->  true
+    ;   rtl_type_delay(Name/Arity, Delay),
+        Delay \== inf,
+        rtl_clock(Clock),
+        Clock - Delay >= T
+    ).
+
+%   The output hook of availability: `updated(Type)` events and learned delays.
+availability(updated(Type), _, End, add) :- !,
+    (   nonvar(Type), Type = Name/Arity
+    ->  rtl_program(M),
+        (   updated_until(M, Name, Arity, U), U >= End
+        ->  true
+        ;   retractall(updated_until(M, Name, Arity, _)),
+            assertz(updated_until(M, Name, Arity, End)),
+            recheck_all
+        )
+    ;   true
+    ).
+availability(Event, _, End, add) :- !,
+    functor(Event, Name, Arity),
+    (   rtl_program(M),
+        declared_delay(M, Name, Arity, learn)
+    ->  rtl_clock(Clock),
+        Delay is Clock - End,
+        (   learned_delay(M, Name, Arity, D0), D0 >= Delay
+        ->  true
+        ;   retractall(learned_delay(M, Name, Arity, _)),
+            assertz(learned_delay(M, Name, Arity, Delay))
+        )
+    ;   true
+    ).
+availability(_, _, _, _).
+
+%   Memories register the availability hook: `updated` events may come before any wait.
+:- multifile rtl_slr:instance_created_hook/2.
+rtl_slr:instance_created_hook(_, _) :-
+    rtl_add_output_hook(rtl_sync:availability).
 
 %!  rtl_synchronized(+Event, :Query, +SyncConds, +Start, +End) is det.
 %
@@ -45,9 +148,7 @@ rtl_synchronized(Event, Query, SyncConds, Start, End) :-
     ->  release(Event, Query, Start, End)
     ;   flag(rtl_sync_match, N0, N0 + 1),
         N is N0 + 1,
-        rtl_flag(max_delay, Delay),
-        aggregate_all(max(T), member(_-T, Open), Latest),
-        (   Delay == inf -> Deadline = inf ; Deadline is Latest + Delay ),   % history complete then
+        deadline(Open, Deadline),
         length(Open, Waiting),
         assertz(pending(N, Event, Query, Start, End, Waiting, Deadline)),
         forall(member(Id-T, Open), assertz(monitor(Id, N, T))),
@@ -87,14 +188,21 @@ sync_condition(Cond, Id-T) :-
 up_to_date(Id-T) :-
     (   rtl_memory_last_end(Id, Last), Last > T
     ->  true
-    ;   history_complete(T)
+    ;   rtl_memory_type(Id, Type)
+    ->  rtl_history_complete(Type, T)
+    ;   throw(error(existence_error(memory_instance, Id), context(synchronized/3, _)))
     ).
 
-history_complete(T) :-
-    rtl_flag(max_delay, Delay),
-    Delay \== inf,
-    rtl_clock(Clock),
-    Clock - Delay >= T.
+% When the histories of the open conditions will be complete by their delay bounds now.
+deadline(Open, Deadline) :-
+    foldl(condition_deadline, Open, -inf, Deadline).
+
+condition_deadline(Id-T, D0, D) :-
+    (   rtl_memory_type(Id, Type), rtl_type_delay(Type, Delay), Delay \== inf
+    ->  D1 is T + Delay
+    ;   D1 = inf
+    ),
+    (   D1 == inf -> D = inf ; D0 == inf -> D = inf ; D is max(D0, D1) ).
 
 release(Event, Query, Start, End) :-
     (   catch(once(Query), Error,
@@ -148,14 +256,41 @@ clock_moved(_, _, _, add) :- !,
     ->  rtl_program(M),
         findall(D-N, ( pending(N, _, M:_, _, _, _, D), D \== inf, D =< Clock ), Due0),
         keysort(Due0, Due),
-        forall(member(_-N, Due), release_pending(N)),
-        (   aggregate_all(min(D), ( pending(_, _, _, _, _, _, D), D \== inf ), Min)
-        ->  nb_setval(rtl_sync_next_deadline, Min)
-        ;   nb_setval(rtl_sync_next_deadline, inf)
-        )
+        forall(member(_-N, Due), recheck(N)),
+        next_deadline
     ;   true
     ).
 clock_moved(_, _, _, _).
+
+% A learned delay may have grown, or an `updated` event come: check the open conditions
+% of match N again; release it when all hold, else move its deadline.
+recheck(N) :-
+    findall(Id-T, monitor(Id, N, T), Open0),
+    exclude(up_to_date, Open0, Open),
+    (   Open == []
+    ->  release_pending(N)
+    ;   retract(pending(N, Event, Query, Start, End, _, _))
+    ->  forall(( member(Id-T, Open0), \+ memberchk(Id-T, Open) ), retract(monitor(Id, N, T))),
+        length(Open, Waiting),
+        deadline(Open, Deadline),
+        assertz(pending(N, Event, Query, Start, End, Waiting, Deadline))
+    ;   true
+    ).
+
+recheck_all :-
+    (   rtl_program(M), pending(_, _, M:_, _, _, _, _)
+    ->  findall(End-N, pending(N, _, M:_, _, End, _, _), Pairs),
+        keysort(Pairs, Sorted),
+        forall(member(_-N, Sorted), recheck(N)),
+        next_deadline
+    ;   true
+    ).
+
+next_deadline :-
+    (   aggregate_all(min(D), ( pending(_, _, _, _, _, _, D), D \== inf ), Min)
+    ->  nb_setval(rtl_sync_next_deadline, Min)
+    ;   nb_setval(rtl_sync_next_deadline, inf)
+    ).
 
 %!  rtl_sync_finish(+Mode) is det.
 %

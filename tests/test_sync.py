@@ -44,3 +44,41 @@ def test_the_clock_passing_the_delay_bound_completes_a_history():
         assert _feed(engine, ['{"event": "other", "t": 1.0}']) == ["pose(m1,1100)"]
     finally:
         engine.set_flag("max_delay", "1.0")
+
+
+AVAILABILITY = """
+c_mem(cam, tf(_, _)-[], inf, inf).
+c_mem(base, odom(_)-[], inf, inf).
+max_delay(tf/2, 0.2).
+max_delay(odom/1, learn).
+syncronized(seen(M, N), aggregate_all(count, mem(cam, _), N), [[cam, T]]) <- marker(M)^T.
+syncronized(moved(M, N), aggregate_all(count, mem(base, _), N), [[base, T]]) <- arm(M)^T.
+"""
+
+
+def _events(engine, *items):
+    produced = engine.feed_batch(items)
+    return [e.event for e in produced]
+
+
+def test_a_declared_delay_per_type_completes_the_history():
+    engine = Engine.from_source(AVAILABILITY)
+    assert _events(engine, ("tf(a, 1)", 0.0), ("marker(m1)", 1.0)) == []
+    assert _events(engine, ("noise", 1.1)) == []
+    assert _events(engine, ("noise", 1.2)) == ["seen(m1,1)"]      # 1.2 - 0.2 >= 1.0: no tf up to 1.0 can come
+
+
+def test_an_updated_event_completes_the_history():
+    engine = Engine.from_source(AVAILABILITY)
+    assert _events(engine, ("tf(a, 1)", 0.0), ("marker(m1)", 1.0)) == []
+    assert _events(engine, ("updated(tf/2)", 0.5)) == []            # only up to 0.5
+    assert _events(engine, ("updated(tf/2)", 1.0)) == ["seen(m1,1)"]
+
+
+def test_a_learned_delay_grows_with_the_largest_delay_seen():
+    engine = Engine.from_source(AVAILABILITY)
+    assert _events(engine, ("odom(1)", 5.0), ("odom(2)", 3.0)) == []       # odom(2) arrived 2 s late
+    assert engine.query("rtl_type_delay(odom/1, D)") == {"D": "2.0"}
+    assert _events(engine, ("arm(a)", 5.5)) == []
+    assert _events(engine, ("noise", 7.0)) == []                             # 7 - 2 < 5.5
+    assert _events(engine, ("noise", 7.5)) == ["moved(a,2)"]
