@@ -2,7 +2,9 @@
           [ rtl_query/5,                % +GoalText, +At, +Limit, -Answers, -Error
             rtl_query_lines/4,          % +GoalText, +At, +Limit, -Output
             rtl_time_goal/2,            % +Goal0, -Goal
-            rtl_memory_request/2        % +Text, -Error
+            rtl_memory_request/2,       % +Text, -Error
+            rtl_sync_query/5,           % +GoalText, +At, +Timeout, -QueryId, -Error
+            rtl_sync_results/1          % -Output
           ]).
 
 /** <module> Queries from other components: SLR queries <Goal, Z> under the sandbox
@@ -24,6 +26,10 @@ not start with `_`), in the order they appear in the goal.
 :- use_module(rtl_ele).
 :- use_module(rtl_slr).
 :- use_module(rtl_io).
+:- use_module(rtl_sync).
+
+% sync_result(QueryId, Status, Answers, Message): answers of synchronized queries not yet taken
+:- dynamic sync_result/4.
 
 :- multifile sandbox:safe_primitive/1.
 
@@ -181,6 +187,105 @@ memory_request_conditions(delete_memory(_), []).
 
 safe_condition(M, Cond) :-
     (   callable(Cond) -> safe_goal(M:Cond) ; type_error(callable, Cond) ).
+
+%!  rtl_sync_query(+GoalText, +At, +Timeout, -QueryId, -Error) is det.
+%
+%   Post the synchronized query <Goal, At> (thesis 4.2.5): it runs, like rtl_query/5 with
+%   all answers, as soon as it is achievable (Def. 29): every memory in its dynamic goal set
+%   (the memories and stream histories the goal can read, from the compiler's goal_set
+%   declarations and the memory terms of the goal itself) holds a record after At, or its
+%   history up to At is complete. Until then it waits, without delaying anything else. If
+%   the clock reaches At + Timeout first (Timeout `inf`: never), its result is `timeout`.
+%   Results are collected with rtl_sync_results/1. Error as for rtl_query/5 (the goal is
+%   read and checked by the sandbox at once).
+
+rtl_sync_query(Text, At, Timeout, QueryId, Error) :-
+    rtl_program(M),
+    read_goal(Text, M, Goal0, _, Error),
+    (   nonvar(Error)
+    ->  true
+    ;   \+ number(At)
+    ->  Error = syntax("a synchronized query needs a time (at)")
+    ;   rtl_time_goal(Goal0, Goal),
+        in_temporary_module(Tmp, add_import_module(Tmp, M, start),
+                            catch(safe_goal(Tmp:Goal), Unsafe, true)),
+        (   nonvar(Unsafe)
+        ->  message_text(Unsafe, Message),
+            Error = unsafe(Message)
+        ;   flag(rtl_sync_query, Q0, Q0 + 1),
+            QueryId is Q0 + 1,
+            goal_conditions(Goal, At, Conds),
+            (   Timeout == inf -> Until = inf ; Until is At + Timeout ),
+            rtl_postpone(Conds, Until, rtl_query:sync_answer(QueryId, Text, At))
+        )
+    ).
+
+goal_conditions(Goal, At, Conds) :-
+    findall(Id, ( sub_term(T, Goal), callable(T), goal_reads(T, Pattern),
+                  memory_of(Pattern, Id) ), Ids0),
+    sort(Ids0, Ids),
+    findall(Id-At, member(Id, Ids), Conds).
+
+goal_reads(T, Pattern) :-
+    functor(T, Name, Arity),
+    (   rtl_goal_set(Name/Arity, Ids, Types)
+    ->  (   member(Pattern, Ids)
+        ;   member(Type, Types), Pattern = '$stream'(Type)
+        )
+    ;   memory_query(Name, Arity)
+    ->  arg(1, T, Pattern)
+    ;   stream_query(Name, Arity)
+    ->  arg(1, T, Event0),
+        (   nonvar(Event0), Event0 = Event^_ -> true ; Event = Event0 ),
+        callable(Event),
+        functor(Event, EN, EA),
+        Pattern = '$stream'(EN/EA)
+    ).
+
+memory_query(mem, 2).
+memory_query(prev, 3).
+memory_query(next, 4).
+memory_query(prev, 5).
+memory_query(next, 6).
+memory_query(next_inf, 5).
+memory_query(access_mem, 3).
+
+stream_query(prev, 2).
+stream_query(next, 3).
+stream_query(next, 2).
+
+memory_of(Pattern, Id) :-
+    copy_term(Pattern, Id),
+    rtl_memory_type(Id, _).
+
+sync_answer(QueryId, Text, At, ready) :-
+    rtl_query(Text, At, all, Answers, Error),
+    (   var(Error)
+    ->  assertz(sync_result(QueryId, answered, Answers, ""))
+    ;   Error =.. [_, Message],
+        assertz(sync_result(QueryId, failed, [], Message))
+    ).
+sync_answer(QueryId, _, _, timeout) :-
+    assertz(sync_result(QueryId, timeout, [], "not achievable by the deadline")).
+sync_answer(QueryId, _, _, dropped) :-
+    assertz(sync_result(QueryId, dropped, [], "the input ended before it was achievable")).
+
+%!  rtl_sync_results(-Output:string) is det.
+%
+%   Take the results of synchronized queries that completed: for each, a line
+%   `=Id<TAB>Status<TAB>Message`, then one line `Id<TAB>{answer JSON}` per answer.
+
+rtl_sync_results(Output) :-
+    findall(Lines, ( retract(sync_result(Id, Status, Answers, Message)),
+                     result_lines(Id, Status, Answers, Message, Lines) ), Groups),
+    append(Groups, All),
+    atomic_list_concat(All, Output0),
+    atom_string(Output0, Output).
+
+result_lines(Id, Status, Answers, Message, [Header|Lines]) :-
+    format(string(Header), "=~w\t~w\t~w~n", [Id, Status, Message]),
+    findall(Line, ( member(A, Answers), answer_json(A, Json), format(string(Line), "~w\t~w", [Id, Json]) ),
+            Lines).
 
 %!  rtl_time_goal(+Goal0, -Goal) is det.
 %

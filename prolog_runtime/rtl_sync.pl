@@ -5,7 +5,10 @@
             rtl_sync_pending/1,         % -Count
             max_delay/2,                % +Name/Arity, +Seconds or learn
             rtl_history_complete/2,     % +Name/Arity, +Time
-            rtl_type_delay/2            % +Name/Arity, -Seconds
+            rtl_type_delay/2,           % +Name/Arity, -Seconds
+            rtl_postpone/3,             % +Conditions, +Until, :Action
+            rtl_goal_set/3,             % +Name/Arity, -MemoryIds, -StreamTypes
+            goal_set/3                  % +Name/Arity, +MemoryIds, +StreamTypes
           ]).
 
 /** <module> Synchronized rules: wait for late data, then query (thesis 4.2.5, A.2.5.2)
@@ -39,7 +42,8 @@ order; rtl_sync_finish(drop) discards them.
 :- use_module(rtl_slr).
 :- use_module(rtl_time).
 
-:- meta_predicate rtl_synchronized(+, 0, +, +, +), rtl_synchronized_retract(+, 0, +, +, +).
+:- meta_predicate rtl_synchronized(+, 0, +, +, +), rtl_synchronized_retract(+, 0, +, +, +),
+                  rtl_postpone(+, +, 1).
 
 % pending(N, Event, Query, Start, End, Waiting, Deadline)
 :- dynamic pending/7.
@@ -54,6 +58,47 @@ order; rtl_sync_finish(drop) discards them.
 
 :- multifile retalis:rtl_declaration_handler/3.
 retalis:rtl_declaration_handler(max_delay, 2, rtl_sync).
+retalis:rtl_declaration_handler(goal_set, 3, rtl_sync).
+
+% goal_set_of(Program, Name, Arity, MemoryIds, StreamTypes)
+:- dynamic goal_set_of/5.
+
+%!  goal_set(+Type, +MemoryIds, +StreamTypes) is det.
+%
+%   Declared by the compiler (pass slr_goal_sets): the dynamic goal set of the static
+%   predicate Type (Def. 28): the ids (or id patterns) of the memories and the event types
+%   of the stream histories a goal of Type may read.
+
+goal_set(Name/Arity, Ids, Types) :-
+    (   prolog_load_context(module, M), current_predicate(M:ele_trigger/3)
+    ->  true
+    ;   rtl_program(M)
+    ),
+    retractall(goal_set_of(M, Name, Arity, _, _)),
+    assertz(goal_set_of(M, Name, Arity, Ids, Types)).
+
+%!  rtl_goal_set(+Type, -MemoryIds, -StreamTypes) is semidet.
+
+rtl_goal_set(Name/Arity, Ids, Types) :-
+    rtl_program(M),
+    goal_set_of(M, Name, Arity, Ids, Types).
+
+%!  rtl_postpone(+Conditions, +Until, :Action) is det.
+%
+%   Conditions is a list `MemoryId-Time`. Call `call(Action, ready)` as soon as every
+%   memory is up to date for its time (at once if they are now); `call(Action, timeout)` if
+%   the clock reaches Until (a number or `inf`) first; `call(Action, dropped)` if the input
+%   ends with rtl_sync_finish(drop).
+
+rtl_postpone(Conds, Until, Action) :-
+    exclude(up_to_date, Conds, Open),
+    (   Open == []
+    ->  call(Action, ready)
+    ;   rtl_clock(Clock), Until \== inf, Clock >= Until
+    ->  call(Action, timeout)
+    ;   rtl_program(M),
+        park('$call'(Action, Until), M:true, Open, 0, 0)
+    ).
 
 %!  max_delay(+Type, +Delay) is det.
 %
@@ -146,9 +191,17 @@ rtl_synchronized(Event, Query, SyncConds, Start, End) :-
     exclude(up_to_date, Waits, Open),
     (   Open == []
     ->  release(Event, Query, Start, End)
-    ;   flag(rtl_sync_match, N0, N0 + 1),
+    ;   park(Event, Query, Open, Start, End)
+    ).
+
+park(Event, Query, Open, Start, End) :-
+    (   flag(rtl_sync_match, N0, N0 + 1),
         N is N0 + 1,
-        deadline(Open, Deadline),
+        deadline(Open, Deadline0),
+        (   Event = '$call'(_, Until), Until \== inf
+        ->  ( Deadline0 == inf -> Deadline = Until ; Deadline is min(Deadline0, Until) )
+        ;   Deadline = Deadline0
+        ),
         length(Open, Waiting),
         assertz(pending(N, Event, Query, Start, End, Waiting, Deadline)),
         forall(member(Id-T, Open), assertz(monitor(Id, N, T))),
@@ -204,6 +257,8 @@ condition_deadline(Id-T, D0, D) :-
     ),
     (   D1 == inf -> D = inf ; D0 == inf -> D = inf ; D is max(D0, D1) ).
 
+release('$call'(Action, _), _, _, _) :- !,
+    call(Action, ready).
 release(Event, Query, Start, End) :-
     (   catch(once(Query), Error,
               ( print_message(warning, format("synchronized query ~q raised ~q; no event", [Query, Error])),
@@ -269,10 +324,18 @@ recheck(N) :-
     exclude(up_to_date, Open0, Open),
     (   Open == []
     ->  release_pending(N)
+    ;   pending(N, '$call'(Action, Until), _, _, _, _, _),
+        Until \== inf, rtl_clock(Clock), Clock >= Until
+    ->  forget(N),
+        call(Action, timeout)
     ;   retract(pending(N, Event, Query, Start, End, _, _))
     ->  forall(( member(Id-T, Open0), \+ memberchk(Id-T, Open) ), retract(monitor(Id, N, T))),
         length(Open, Waiting),
-        deadline(Open, Deadline),
+        deadline(Open, Deadline0),
+        (   Event = '$call'(_, Until), Until \== inf
+        ->  ( Deadline0 == inf -> Deadline = Until ; Deadline is min(Deadline0, Until) )
+        ;   Deadline = Deadline0
+        ),
         assertz(pending(N, Event, Query, Start, End, Waiting, Deadline))
     ;   true
     ).
@@ -299,7 +362,9 @@ next_deadline :-
 
 rtl_sync_finish(drop) :- !,
     rtl_program(M),
-    forall(pending(N, _, M:_, _, _, _, _), forget(N)).
+    forall(pending(N, Event, M:_, _, _, _, _),
+           ( forget(N),
+             ( Event = '$call'(Action, _) -> call(Action, dropped) ; true ) )).
 rtl_sync_finish(run) :-
     rtl_program(M),
     findall(End-N, pending(N, _, M:_, _, End, _, _), Pairs),

@@ -82,3 +82,41 @@ def test_a_learned_delay_grows_with_the_largest_delay_seen():
     assert _events(engine, ("arm(a)", 5.5)) == []
     assert _events(engine, ("noise", 7.0)) == []                             # 7 - 2 < 5.5
     assert _events(engine, ("noise", 7.5)) == ["moved(a,2)"]
+
+
+QUERIES = """
+c_mem(odom, tf(odom, _)-[], inf, inf).
+c_mem(cam, tf(cam, _)-[], inf, inf).
+at(Id, T, V) :- prev(Id, tf(_, V1)^T1, T), next(Id, tf(_, V2)^T2, T, inf), time_fraction(T1, T2, T, F),
+    V is V1 + F * (V2 - V1).
+pos(T, X) :- at(odom, T, A), at(cam, T, B), X is A + B.
+"""
+
+
+def test_a_synchronized_query_waits_until_its_memories_are_up_to_date():
+    engine = Engine.from_source(QUERIES)
+    engine.feed_batch([("tf(odom, 0)", 0), ("tf(cam, 100)", 0), ("tf(odom, 10)", 1)])
+    future = engine.query_synchronized("pos(0.5, X)", at=0.5)
+    assert not future.done()                                  # cam has nothing after 0.5 yet
+    assert engine.query("pos(0.5, X)") is None                # unsynchronized: no `next` for cam yet
+    engine.feed_batch([("tf(cam, 200)", 1)])
+    assert future.result(timeout=0) == [{"X": "155.0"}]
+    ready = engine.query_synchronized("pos(0.25, X)", at=0.25)
+    assert ready.result(timeout=0) == [{"X": "127.5"}]        # achievable at once
+
+
+def test_a_synchronized_query_times_out_on_event_time_or_is_dropped():
+    engine = Engine.from_source(QUERIES)
+    engine.set_flag("max_delay", "inf")
+    try:
+        engine.feed_batch([("tf(odom, 0)", 0), ("tf(cam, 100)", 0)])
+        late = engine.query_synchronized("pos(0.5, X)", at=0.5, timeout=2)
+        waiting = engine.query_synchronized("pos(0.6, X)", at=0.6)
+        engine.feed_batch([("tf(odom, 10)", 2.4)])
+        assert not late.done()
+        engine.feed_batch([("tf(odom, 20)", 2.5)])
+        assert late.exception(timeout=0).kind == "timeout"
+        engine.end_of_input(drop_pending=True)
+        assert waiting.exception(timeout=0).kind == "dropped"
+    finally:
+        engine.set_flag("max_delay", "1.0")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import itertools
 import json
 import tempfile
+from concurrent.futures import Future
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
@@ -103,6 +104,7 @@ class Engine:
         self.module = module
         self._callbacks: List[Callable[[OutputEvent], None]] = []
         self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
+        self._synchronized: Dict[str, "Future"] = {}
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")
         self.bridge.consult(str(prolog_file))
         if module:
@@ -186,6 +188,7 @@ class Engine:
         return self._deliver_lines([line for line in output.splitlines() if line])
 
     def _deliver_lines(self, lines: List[str]) -> List[OutputEvent]:
+        self._collect_synchronized()
         events = [OutputEvent.from_line(line) for line in lines]
         for callback in self._callbacks:
             for event in events:
@@ -254,6 +257,45 @@ class Engine:
         return self._deliver(self.bridge.call_text(f"retalis:rtl_end_of_input({mode}, Out)"))
 
     # ---- SLR: queries and memory instances (thesis 4.2) -----------------------------------
+
+    def query_synchronized(self, goal: str, at: Number, timeout: Optional[Number] = None) -> "Future":
+        """Post the synchronized query <goal, at> (thesis 4.2.5): it runs as soon as every
+        memory it can read holds a record after `at` or has its history up to `at` complete,
+        without holding up anything else. Returns a `concurrent.futures.Future` whose result
+        is the list of answers (as `query_all`); it fails with QueryError kind "timeout" when
+        the clock (event time) reaches `at + timeout` first, kind "dropped" when the input
+        ends with `end_of_input(drop_pending=True)`. A goal that does not parse or that the
+        sandbox refuses raises QueryError at once."""
+        timeout_text = "inf" if timeout is None else _number_text(timeout)
+        goal_text = (f"retalis:rtl_sync_query({prolog_string(goal)}, {_number_text(at)}, {timeout_text}, Q, E), "
+                     f"( var(E) -> format(string(Out), \"~w\", [Q]) ; E =.. [K, M], "
+                     f"format(string(Out), \"!~w\\t~w\", [K, M]) )")
+        query_id = _raise_if_refused(self.bridge.call_text(goal_text))
+        future: Future = Future()
+        self._synchronized[query_id] = future
+        self._collect_synchronized()
+        return future
+
+    def _collect_synchronized(self) -> None:
+        if not self._synchronized:
+            return
+        output = self.bridge.call_text("retalis:rtl_sync_results(Out)")
+        results: Dict[str, tuple] = {}
+        for line in output.splitlines():
+            if line.startswith("="):
+                query_id, status, message = line[1:].split("\t", 2)
+                results[query_id] = (status, message, [])
+            elif line:
+                query_id, _, answer = line.partition("\t")
+                results[query_id][2].append(json.loads(answer))
+        for query_id, (status, message, answers) in results.items():
+            future = self._synchronized.pop(query_id, None)
+            if future is None:
+                continue
+            if status == "answered":
+                future.set_result(answers)
+            else:
+                future.set_exception(QueryError(status, message))
 
     def query(self, goal: str, at: Optional[Number] = None) -> Optional[Dict[str, str]]:
         """The first answer to the SLR query <goal, at>: a dict mapping each variable of `goal`

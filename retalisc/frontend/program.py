@@ -169,7 +169,7 @@ DECLARATIONS = {
     ("c_mem", 4), ("d_mem", 1), ("sub", 5), ("unsub", 2), ("subscribe_between", 5),
     ("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3),
     ("set_retalis_flag", 2), ("c_mem", 5), ("stream_history", 1), ("stream_history", 3),
-    ("max_delay", 2),
+    ("max_delay", 2), ("goal_set", 3),
 }
 
 DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
