@@ -14,6 +14,7 @@
             rtl_output_to/1,            % +Sink
             rtl_take_output/1,          % -Lines
             rtl_emit/5,                 % +Event, +Start, +End, +Consumer, +Op
+            rtl_emit_line/1,            % +Line
             rtl_stat/2,                 % ?Name, ?Value
             rtl_count/1,                % +Name
             rtl_store_size/1,           % -Clauses
@@ -227,6 +228,13 @@ rtl_output_to(Sink) :-
 
 rtl_emit(Event, Start, End, Consumer, Op) :-
     rtl_event_json(Event, Start, End, Consumer, Op, Line),
+    rtl_emit_line(Line).
+
+%!  rtl_emit_line(+Line:string) is det.
+%
+%   Deliver one output line given as JSON text (answers of synchronized queries).
+
+rtl_emit_line(Line) :-
     nb_getval(rtl_output_sink, Sink),
     (   Sink == print
     ->  write(Line), nl

@@ -3,8 +3,7 @@
             rtl_query_lines/4,          % +GoalText, +At, +Limit, -Output
             rtl_time_goal/2,            % +Goal0, -Goal
             rtl_memory_request/2,       % +Text, -Error
-            rtl_sync_query/5,           % +GoalText, +At, +Timeout, -QueryId, -Error
-            rtl_sync_results/1          % -Output
+            rtl_sync_query/5            % +GoalText, +At, +Timeout, ?QueryId, -Error
           ]).
 
 /** <module> Queries from other components: SLR queries <Goal, Z> under the sandbox
@@ -27,9 +26,6 @@ not start with `_`), in the order they appear in the goal.
 :- use_module(rtl_slr).
 :- use_module(rtl_io).
 :- use_module(rtl_sync).
-
-% sync_result(QueryId, Status, Answers, Message): answers of synchronized queries not yet taken
-:- dynamic sync_result/4.
 
 :- multifile sandbox:safe_primitive/1.
 
@@ -72,14 +68,18 @@ checked_run(Limit, Tmp, Goal, At, Bindings, Answers, Error) :-
     catch(safe_goal(Tmp:Goal), Unsafe, true),
     (   var(Unsafe)
     ->  run(Limit, Tmp, Goal, At, Bindings, Answers, Error)
-    ;   message_text(Unsafe, Message0),
-        format(atom(Prefix), "~q:", [Tmp]),
-        atomic_list_concat(Parts, Prefix, Message0),
-        atomic_list_concat(Parts, Message1),
-        atom_string(Message1, Message),
+    ;   unsafe_message(Unsafe, Tmp, Message),
         Error = unsafe(Message),
         Answers = []
     ).
+
+% The sandbox's refusal, without the name of the temporary module.
+unsafe_message(Unsafe, Tmp, Message) :-
+    message_text(Unsafe, Message0),
+    format(atom(Prefix), "~q:", [Tmp]),
+    atomic_list_concat(Parts, Prefix, Message0),
+    atomic_list_concat(Parts, Message1),
+    atom_string(Message1, Message).
 
 read_goal(Text, M, Goal, Bindings, Error) :-
     catch(term_string(Goal, Text, [variable_names(Bindings), module(M), syntax_errors(error)]),
@@ -188,7 +188,7 @@ memory_request_conditions(delete_memory(_), []).
 safe_condition(M, Cond) :-
     (   callable(Cond) -> safe_goal(M:Cond) ; type_error(callable, Cond) ).
 
-%!  rtl_sync_query(+GoalText, +At, +Timeout, -QueryId, -Error) is det.
+%!  rtl_sync_query(+GoalText, +At, +Timeout, ?QueryId, -Error) is det.
 %
 %   Post the synchronized query <Goal, At> (thesis 4.2.5): it runs, like rtl_query/5 with
 %   all answers, as soon as it is achievable (Def. 29): every memory in its dynamic goal set
@@ -196,8 +196,11 @@ safe_condition(M, Cond) :-
 %   declarations and the memory terms of the goal itself) holds a record after At, or its
 %   history up to At is complete. Until then it waits, without delaying anything else. If
 %   the clock reaches At + Timeout first (Timeout `inf`: never), its result is `timeout`.
-%   Results are collected with rtl_sync_results/1. Error as for rtl_query/5 (the goal is
-%   read and checked by the sandbox at once).
+%   The result is one output line, written when it is known:
+%   `{"query": Id, "at": Z, "status": S, "answers": [...], "message": M}` with S one of
+%   `answered`, `failed`, `timeout`, `dropped` (the input ended first, rtl_sync_finish(drop)).
+%   QueryId is given or numbered. Error as for rtl_query/5 (the goal is read and checked by
+%   the sandbox at once).
 
 rtl_sync_query(Text, At, Timeout, QueryId, Error) :-
     rtl_program(M),
@@ -208,12 +211,11 @@ rtl_sync_query(Text, At, Timeout, QueryId, Error) :-
     ->  Error = syntax("a synchronized query needs a time (at)")
     ;   rtl_time_goal(Goal0, Goal),
         in_temporary_module(Tmp, add_import_module(Tmp, M, start),
-                            catch(safe_goal(Tmp:Goal), Unsafe, true)),
+                            ( catch(safe_goal(Tmp:Goal), Unsafe, true),
+                              ( nonvar(Unsafe) -> unsafe_message(Unsafe, Tmp, Message) ; true ) )),
         (   nonvar(Unsafe)
-        ->  message_text(Unsafe, Message),
-            Error = unsafe(Message)
-        ;   flag(rtl_sync_query, Q0, Q0 + 1),
-            QueryId is Q0 + 1,
+        ->  Error = unsafe(Message)
+        ;   (   var(QueryId) -> flag(rtl_sync_query, Q0, Q0 + 1), QueryId is Q0 + 1 ; true ),
             goal_conditions(Goal, At, Conds),
             (   Timeout == inf -> Until = inf ; Until is At + Timeout ),
             rtl_postpone(Conds, Until, rtl_query:sync_answer(QueryId, Text, At))
@@ -261,31 +263,29 @@ memory_of(Pattern, Id) :-
 sync_answer(QueryId, Text, At, ready) :-
     rtl_query(Text, At, all, Answers, Error),
     (   var(Error)
-    ->  assertz(sync_result(QueryId, answered, Answers, ""))
+    ->  emit_result(QueryId, At, answered, Answers, "")
     ;   Error =.. [_, Message],
-        assertz(sync_result(QueryId, failed, [], Message))
+        emit_result(QueryId, At, failed, [], Message)
     ).
-sync_answer(QueryId, _, _, timeout) :-
-    assertz(sync_result(QueryId, timeout, [], "not achievable by the deadline")).
-sync_answer(QueryId, _, _, dropped) :-
-    assertz(sync_result(QueryId, dropped, [], "the input ended before it was achievable")).
+sync_answer(QueryId, _, At, timeout) :-
+    emit_result(QueryId, At, timeout, [], "not achievable by the deadline").
+sync_answer(QueryId, _, At, dropped) :-
+    emit_result(QueryId, At, dropped, [], "the input ended before it was achievable").
 
-%!  rtl_sync_results(-Output:string) is det.
-%
-%   Take the results of synchronized queries that completed: for each, a line
-%   `=Id<TAB>Status<TAB>Message`, then one line `Id<TAB>{answer JSON}` per answer.
+emit_result(QueryId, At, Status, Answers, Message) :-
+    maplist(answer_object, Answers, Objects),
+    atomic_list_concat(Objects, ', ', Body),
+    format(string(IdText), "~w", [QueryId]),
+    rtl_json_string_escape(IdText, Id),
+    rtl_json_string_escape(Message, M),
+    format(string(Line), "{\"query\": \"~w\", \"at\": ~w, \"status\": \"~w\", \"answers\": [~w], \"message\": \"~w\"}",
+           [Id, At, Status, Body, M]),
+    rtl_emit_line(Line).
 
-rtl_sync_results(Output) :-
-    findall(Lines, ( retract(sync_result(Id, Status, Answers, Message)),
-                     result_lines(Id, Status, Answers, Message, Lines) ), Groups),
-    append(Groups, All),
-    atomic_list_concat(All, Output0),
-    atom_string(Output0, Output).
-
-result_lines(Id, Status, Answers, Message, [Header|Lines]) :-
-    format(string(Header), "=~w\t~w\t~w~n", [Id, Status, Message]),
-    findall(Line, ( member(A, Answers), answer_json(A, Json), format(string(Line), "~w\t~w", [Id, Json]) ),
-            Lines).
+answer_object(Pairs, Object) :-
+    maplist(pair_json, Pairs, Fields),
+    atomic_list_concat(Fields, ', ', Body),
+    format(string(Object), "{~w}", [Body]).
 
 %!  rtl_time_goal(+Goal0, -Goal) is det.
 %

@@ -147,6 +147,7 @@ rtl_history_complete(Name/Arity, T) :-
     ;   rtl_type_delay(Name/Arity, Delay),
         Delay \== inf,
         rtl_clock(Clock),
+        Clock =\= -inf,                         % no event processed yet
         Clock - Delay >= T
     ).
 

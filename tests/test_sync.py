@@ -120,3 +120,70 @@ def test_a_synchronized_query_times_out_on_event_time_or_is_dropped():
         assert waiting.exception(timeout=0).kind == "dropped"
     finally:
         engine.set_flag("max_delay", "1.0")
+
+
+# ---- property: per-type delays do not change the answers --------------------------------
+
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+DELAYED = """
+c_mem(odom, odom(_)-[], inf, inf).
+c_mem(cam, cam(_)-[], inf, inf).
+at(Id, T, V) :-
+    prev(Id, E1^T1, T), arg(1, E1, V1),
+    (   next(Id, E2^T2, T, inf)
+    ->  arg(1, E2, V2), time_fraction(T1, T2, T, F), V is V1 + F * (V2 - V1)
+    ;   V = V1
+    ).
+place(T, X) :- at(odom, T, A), at(cam, T, B), X is A + B.
+synchronized(pose(M, X), place(T, X), [[odom, T], [cam, T]]) <- marker(M)^T.
+"""
+
+_stream = st.lists(st.tuples(st.sampled_from(["odom", "cam", "marker"]), st.integers(0, 40), st.integers(0, 9)),
+                   min_size=1, max_size=25)
+
+
+def _outcome(events):
+    engine = Engine.from_source(DELAYED)
+    engine.set_flag("max_delay", "inf")     # no deadline: waits end by a later record or the end of input
+    try:
+        produced = engine.feed_batch(events)
+        produced += engine.end_of_input()
+    finally:
+        engine.set_flag("max_delay", "1.0")
+    return sorted((e.event, e.start) for e in produced)
+
+
+@settings(max_examples=30, deadline=None)
+@given(_stream, st.fixed_dictionaries({t: st.integers(0, 15) for t in ("odom", "cam", "marker")}))
+def test_per_type_delays_give_the_answers_of_the_in_order_stream(stream, delays):
+    # odom/cam events carry their value; markers are named by their index; times are tenths of seconds
+    events = []
+    for index, (kind, time, value) in enumerate(stream):
+        term = f"marker(m{index})" if kind == "marker" else f"{kind}({value})"
+        events.append((kind, time / 10, term))
+    in_order = sorted(events, key=lambda e: e[1])
+    delayed = sorted(events, key=lambda e: (e[1] + delays[e[0]] / 10, e[1]))   # each type stays in order
+    assert _outcome([(term, t) for _, t, term in delayed]) == _outcome([(term, t) for _, t, term in in_order])
+
+
+def test_cli_run_prints_synchronized_answers_where_they_complete(tmp_path):
+    case = Path(__file__).parent / "golden" / "synchronized_rule"
+    run = subprocess.run([sys.executable, "-m", "retalisc", "run", str(case / "program.rtl"), "--events",
+                          str(case / "events.jsonl"), "--echo-input", "--query", "0.5", "place(0, 0.5, X)",
+                          "--query", "1.5", "place(0, 1.5, X)", "--query-timeout", "0.7"],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.splitlines()
+    answered = lines.index('{"query": "1", "at": 0.5, "status": "answered", "answers": [{"X": "155.0"}], '
+                           '"message": ""}')
+    assert lines[answered - 1] == '{"event": "tf(base,cam,200)", "start": 1, "end": 1}'   # released by it
+    assert '{"query": "2", "at": 1.5, "status": "timeout", "answers": [], ' \
+           '"message": "not achievable by the deadline"}' in lines
+    refused = subprocess.run([sys.executable, "-m", "retalisc", "run", str(case / "program.rtl"), "--events",
+                              str(case / "events.jsonl"), "--query", "1", "shell(ls)"],
+                             capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and "unsafe" in refused.stderr

@@ -92,11 +92,18 @@ def check_command(program: str) -> None:
 @click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
               help="Create a memory instance before the events (c_mem/4, memorize/5; d_mem/1 deletes one). "
                    "Repeatable.")
+@click.option("--query", "queries", multiple=True, nargs=2, type=(float, str), metavar="Z GOAL",
+              help="Post the synchronized query <GOAL, Z> before the events; its answers are written as "
+                   "a line {\"query\": N, \"status\": ..., \"answers\": [...]} when it becomes achievable "
+                   "(N counts the --query options from 1). Repeatable.")
+@click.option("--query-timeout", type=float, default=None,
+              help="A synchronized query still waiting when the clock reaches Z + SECONDS ends with status "
+                   "\"timeout\" (default: it waits until the end of the input).")
 @click.option("--drop-pending", is_flag=True,
               help="At the end of the input, discard the synchronized matches still waiting instead of "
                    "running them.")
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
-                consumer_dir, subscriptions, memories, drop_pending: bool) -> None:
+                consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool) -> None:
     """Run PROGRAM over an event file, printing derived events as JSON Lines."""
     from ..driver.engine import Engine
     from ..driver.run import run_event_file
@@ -111,9 +118,25 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         add_cli_subscription(engine, spec)
     for request in memories:
         add_cli_memory(engine, request)
+    posted = [post_cli_query(engine, number, at, goal, query_timeout)
+              for number, (at, goal) in enumerate(queries, start=1)]
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
-                            drop_pending=drop_pending)
+                            drop_pending=drop_pending, first_output=posted)
     sys.exit(status)
+
+
+def post_cli_query(engine, number: int, at: float, goal: str, timeout):
+    """`--query Z GOAL`: exit 2 when GOAL does not parse or is refused. Returns the output lines
+    of queries answered at once."""
+    from ..driver.engine import QueryError
+
+    if at != at or at in (float("inf"), float("-inf")):
+        raise click.BadParameter(f"{at}: the time of a query must be a finite number", param_hint="--query")
+    try:
+        return engine.post_synchronized(goal, at, timeout, query_id=str(number))
+    except QueryError as error:
+        click.echo(f"--query {goal!r}: {error.kind} error: {error.message}", err=True)
+        sys.exit(2)
 
 
 def add_cli_memory(engine, request: str) -> None:

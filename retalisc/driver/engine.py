@@ -22,6 +22,7 @@ from .bridge import Bridge
 Number = Union[int, float]
 
 _loaded_modules = itertools.count(1)
+_python_queries = itertools.count(1)
 
 
 def _unique_module(program_name: str) -> str:
@@ -32,7 +33,8 @@ def _unique_module(program_name: str) -> str:
 @dataclass(frozen=True)
 class OutputEvent:
     """One output line: `event` is the term text (writeq), `consumer` is set for subscription
-    deliveries, `op` is "add" or "retract"."""
+    deliveries, `op` is "add" or "retract"; or, with `op` "answer", the result of a synchronized
+    query (`query` holds its JSON object: query, at, status, answers, message)."""
 
     event: str
     start: Number
@@ -40,10 +42,13 @@ class OutputEvent:
     consumer: Optional[str] = None
     op: str = "add"
     line: str = ""
+    query: Optional[dict] = None     # op "answer": the result line of a synchronized query
 
     @classmethod
     def from_line(cls, line: str) -> "OutputEvent":
         data = json.loads(line)
+        if "query" in data:
+            return cls("", data["at"], data["at"], None, "answer", line, data)
         return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line)
 
 
@@ -188,8 +193,10 @@ class Engine:
         return self._deliver_lines([line for line in output.splitlines() if line])
 
     def _deliver_lines(self, lines: List[str]) -> List[OutputEvent]:
-        self._collect_synchronized()
-        events = [OutputEvent.from_line(line) for line in lines]
+        events = [OutputEvent.from_line(line) for line in lines if line]
+        for event in events:
+            if event.query is not None:
+                self._resolve(event.query)
         for callback in self._callbacks:
             for event in events:
                 callback(event)
@@ -266,36 +273,37 @@ class Engine:
         the clock (event time) reaches `at + timeout` first, kind "dropped" when the input
         ends with `end_of_input(drop_pending=True)`. A goal that does not parse or that the
         sandbox refuses raises QueryError at once."""
-        timeout_text = "inf" if timeout is None else _number_text(timeout)
-        goal_text = (f"retalis:rtl_sync_query({prolog_string(goal)}, {_number_text(at)}, {timeout_text}, Q, E), "
-                     f"( var(E) -> format(string(Out), \"~w\", [Q]) ; E =.. [K, M], "
-                     f"format(string(Out), \"!~w\\t~w\", [K, M]) )")
-        query_id = _raise_if_refused(self.bridge.call_text(goal_text))
         future: Future = Future()
+        query_id = f"py{next(_python_queries)}"
         self._synchronized[query_id] = future
-        self._collect_synchronized()
+        self.post_synchronized(goal, at, timeout, query_id)
         return future
 
-    def _collect_synchronized(self) -> None:
-        if not self._synchronized:
+    def post_synchronized(self, goal: str, at: Number, timeout: Optional[Number] = None,
+                          query_id: str = "") -> List["OutputEvent"]:
+        """Post the synchronized query <goal, at> under `query_id`; its result comes as an
+        output line `{"query": ID, "at": Z, "status": ..., "answers": [...], "message": ...}`
+        (an OutputEvent with op "answer") when it is known. Returns what was output at once."""
+        timeout_text = "inf" if timeout is None else _number_text(timeout)
+        goal_text = (f"retalis:rtl_output_to(buffer), atom_string(Q, {prolog_string(query_id)}), "
+                     f"retalis:rtl_sync_query({prolog_string(goal)}, {_number_text(at)}, {timeout_text}, Q, E), "
+                     f"( var(E) -> retalis:rtl_take_output(Ls), atomic_list_concat(Ls, '\\n', Out) ; "
+                     f"E =.. [K, M], format(string(Out), \"!~w\\t~w\", [K, M]) )")
+        try:
+            output = _raise_if_refused(self.bridge.call_text(goal_text))
+        except QueryError:
+            self._synchronized.pop(query_id, None)
+            raise
+        return self._deliver(output)
+
+    def _resolve(self, result: dict) -> None:
+        future = self._synchronized.pop(str(result["query"]), None)
+        if future is None:
             return
-        output = self.bridge.call_text("retalis:rtl_sync_results(Out)")
-        results: Dict[str, tuple] = {}
-        for line in output.splitlines():
-            if line.startswith("="):
-                query_id, status, message = line[1:].split("\t", 2)
-                results[query_id] = (status, message, [])
-            elif line:
-                query_id, _, answer = line.partition("\t")
-                results[query_id][2].append(json.loads(answer))
-        for query_id, (status, message, answers) in results.items():
-            future = self._synchronized.pop(query_id, None)
-            if future is None:
-                continue
-            if status == "answered":
-                future.set_result(answers)
-            else:
-                future.set_exception(QueryError(status, message))
+        if result["status"] == "answered":
+            future.set_result(result["answers"])
+        else:
+            future.set_exception(QueryError(result["status"], result["message"]))
 
     def query(self, goal: str, at: Optional[Number] = None) -> Optional[Dict[str, str]]:
         """The first answer to the SLR query <goal, at>: a dict mapping each variable of `goal`

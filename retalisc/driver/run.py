@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import IO, Dict, Iterator, List, Optional, Tuple
+from typing import IO, Dict, Iterator, List, Optional, Sequence, Tuple
 
 import click
 
@@ -23,11 +23,13 @@ def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str]]
 
 
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
-                   consumer_dir: Optional[str] = None, drop_pending: bool = False) -> int:
+                   consumer_dir: Optional[str] = None, drop_pending: bool = False,
+                   first_output: Sequence = ()) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout, None to drop it). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`;
     a summary closes the run. At the end of the input the postponed synchronized matches run
-    (or are dropped with `drop_pending`). With `consumer_dir`, subscription deliveries go to
+    (or are dropped with `drop_pending`). `first_output` holds outputs (lists of OutputEvents)
+    produced before the events, written first. With `consumer_dir`, subscription deliveries go to
     `consumer_dir/<consumer>.jsonl` instead of `out`. Returns the exit status."""
     name = "<stdin>" if events == "-" else events
     source = sys.stdin if events == "-" else open(events, encoding="utf-8")
@@ -44,6 +46,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                     else:
                         sink.write(event.line + "\n")
 
+            for produced in first_output:
+                write(produced)
             for first, lines in _batches(source, batch_size):
                 text = "\n".join(lines)
                 produced, rejected = engine.feed_lines(text, first)
