@@ -216,17 +216,27 @@ rtl_sync_query(Text, At, Timeout, QueryId, Error) :-
         (   nonvar(Unsafe)
         ->  Error = unsafe(Message)
         ;   (   var(QueryId) -> flag(rtl_sync_query, Q0, Q0 + 1), QueryId is Q0 + 1 ; true ),
-            goal_conditions(Goal, At, Conds),
             (   Timeout == inf -> Until = inf ; Until is At + Timeout ),
-            rtl_postpone(Conds, Until, rtl_query:sync_answer(QueryId, Text, At))
+            (   goal_reads_memory(Goal)
+            ->  attempt(QueryId, Text, At, Until)
+            ;   sync_answer(QueryId, Text, At, Until, ready)       % reads no history: nothing to wait for
+            )
         )
     ).
 
-goal_conditions(Goal, At, Conds) :-
-    findall(Id, ( sub_term(T, Goal), callable(T), goal_reads(T, Pattern),
-                  memory_of(Pattern, Id) ), Ids0),
-    sort(Ids0, Ids),
-    findall(Id-At, member(Id, Ids), Conds).
+% Evaluate the query, noting the histories it read; the answer is final when they are all
+% complete (Def. 29), else wait for them and try again.
+attempt(QueryId, Text, At, Until) :-
+    rtl_with_needs(rtl_query(Text, At, all, Answers, Error), Needs),
+    exclude(rtl_up_to_date, Needs, Open),
+    (   Open == []
+    ->  emit_answers(QueryId, At, Answers, Error)
+    ;   rtl_postpone(Open, Until, rtl_query:sync_answer(QueryId, Text, At, Until))
+    ).
+
+% The compiler's dynamic goal sets (Def. 28) tell which goals read no history at all.
+goal_reads_memory(Goal) :-
+    sub_term(T, Goal), callable(T), goal_reads(T, _), !.
 
 goal_reads(T, Pattern) :-
     functor(T, Name, Arity),
@@ -256,21 +266,23 @@ stream_query(prev, 2).
 stream_query(next, 3).
 stream_query(next, 2).
 
-memory_of(Pattern, Id) :-
-    copy_term(Pattern, Id),
-    rtl_memory_type(Id, _).
+sync_answer(QueryId, Text, At, Until, ready) :-
+    (   rtl_input_ended
+    ->  rtl_query(Text, At, all, Answers, Error),           % every history is complete now
+        emit_answers(QueryId, At, Answers, Error)
+    ;   attempt(QueryId, Text, At, Until)
+    ).
+sync_answer(QueryId, _, At, _, timeout) :-
+    emit_result(QueryId, At, timeout, [], "not achievable by the deadline").
+sync_answer(QueryId, _, At, _, dropped) :-
+    emit_result(QueryId, At, dropped, [], "the input ended before it was achievable").
 
-sync_answer(QueryId, Text, At, ready) :-
-    rtl_query(Text, At, all, Answers, Error),
+emit_answers(QueryId, At, Answers, Error) :-
     (   var(Error)
     ->  emit_result(QueryId, At, answered, Answers, "")
     ;   Error =.. [_, Message],
         emit_result(QueryId, At, failed, [], Message)
     ).
-sync_answer(QueryId, _, At, timeout) :-
-    emit_result(QueryId, At, timeout, [], "not achievable by the deadline").
-sync_answer(QueryId, _, At, dropped) :-
-    emit_result(QueryId, At, dropped, [], "the input ended before it was achievable").
 
 emit_result(QueryId, At, Status, Answers, Message) :-
     maplist(answer_object, Answers, Objects),

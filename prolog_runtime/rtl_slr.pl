@@ -23,6 +23,7 @@
             rtl_memory_last_end/2,      % +Id, -End
             rtl_memory_type/2,          % ?Id, -Name/Arity
             rtl_with_view/2,            % +Z, :Goal
+            rtl_with_needs/2,           % :Goal, -Needs
             rtl_slr_clear/0
           ]).
 
@@ -68,7 +69,7 @@ Def. 18). A time argument that is not bound raises an instantiation error.
 :- use_module(rtl_raise).
 :- use_module(rtl_subscriptions, [rtl_subscribed/1]).
 
-:- meta_predicate rtl_with_view(+, 0).
+:- meta_predicate rtl_with_view(+, 0), rtl_with_needs(0, -).
 
 % instance(H, Program, Id, Pattern, Conds, Template, N, L, Options)
 :- dynamic instance/9.
@@ -80,6 +81,8 @@ Def. 18). A time argument that is not bound raises an instantiation error.
 :- dynamic record/4.
 % stream_memory(Program, Name, Arity, H): the history behind prev/2 and next/3
 :- dynamic stream_memory/4.
+% need(Id, Time): while rtl_with_needs/2 runs, the histories its goal's answers depend on
+:- dynamic need/2.
 
 :- multifile retalis:rtl_declaration_handler/3.
 retalis:rtl_declaration_handler(c_mem, 4, rtl_slr).
@@ -549,6 +552,7 @@ mem(Id, Event) :-
     \+ Id = '$stream'(_),
     expire(H),
     bounds(H, First, Last),
+    needs(H, View),
     between(First, Last, Number),
     key(H, Number, Key),
     record(Key, S, E, T),
@@ -628,6 +632,7 @@ next_inf(Id, Event, T1, T2, Zs) :-
     next(Id, Event^[T1, T2], Zs, inf).
 
 latest(H, Event, Z) :-
+    needs(H, Z),
     expire(H),
     bounds(H, First, Last),
     last_not_after(H, First, Last, Z, From),
@@ -637,7 +642,32 @@ earliest(H, Event, Zs, Ze) :-
     expire(H),
     bounds(H, First, Last),
     first_not_before(H, First, Last, Zs, From),
-    scan_up(From, Last, H, Event, Ze).
+    (   scan_up(From, Last, H, Event, Ze)
+    ->  true                     % found: with per-type in-order arrival, nothing earlier can come
+    ;   needs(H, Ze),            % not found: final once the history up to Ze is complete
+        fail
+    ).
+
+%!  rtl_with_needs(:Goal, -Needs:list) is semidet.
+%
+%   Run Goal once, noting which histories its evaluation depended on: Needs is a list of
+%   `MemoryId-Time`, each meaning "the answer is final once this memory's history up to Time
+%   is complete" (prev and mem read up to their time; a next that found nothing needs its
+%   whole interval; a next that found a record needs nothing more). Synchronized queries
+%   (thesis Def. 29) use it.
+
+rtl_with_needs(Goal, Needs) :-
+    retractall(need(_, _)),
+    setup_call_cleanup(nb_setval(rtl_slr_log, true), once(Goal), nb_setval(rtl_slr_log, false)),
+    findall(Id-T, retract(need(Id, T)), Needs0),
+    sort(Needs0, Needs).
+
+needs(H, T) :-
+    (   nb_current(rtl_slr_log, true)
+    ->  instance(H, _, Id, _, _, _, _, _, _),
+        assertz(need(Id, T))
+    ;   true
+    ).
 
 scan_down(Number, First, H, Event) :-
     Number >= First,

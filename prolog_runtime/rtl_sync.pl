@@ -7,6 +7,8 @@
             rtl_history_complete/2,     % +Name/Arity, +Time
             rtl_type_delay/2,           % +Name/Arity, -Seconds
             rtl_postpone/3,             % +Conditions, +Until, :Action
+            rtl_up_to_date/1,           % +MemoryId-Time
+            rtl_input_ended/0,
             rtl_goal_set/3,             % +Name/Arity, -MemoryIds, -StreamTypes
             goal_set/3                  % +Name/Arity, +MemoryIds, +StreamTypes
           ]).
@@ -91,7 +93,7 @@ rtl_goal_set(Name/Arity, Ids, Types) :-
 %   ends with rtl_sync_finish(drop).
 
 rtl_postpone(Conds, Until, Action) :-
-    exclude(up_to_date, Conds, Open),
+    exclude(rtl_up_to_date, Conds, Open),
     (   Open == []
     ->  call(Action, ready)
     ;   rtl_clock(Clock), Until \== inf, Clock >= Until
@@ -189,7 +191,7 @@ rtl_slr:instance_created_hook(_, _) :-
 
 rtl_synchronized(Event, Query, SyncConds, Start, End) :-
     sync_conditions(SyncConds, Waits),
-    exclude(up_to_date, Waits, Open),
+    exclude(rtl_up_to_date, Waits, Open),
     (   Open == []
     ->  release(Event, Query, Start, End)
     ;   park(Event, Query, Open, Start, End)
@@ -239,8 +241,15 @@ sync_condition(Cond, Id-T) :-
 
 % A memory is up to date for time T when it has a record that ends after T, or when nothing
 % ending at or before T can arrive any more.
-up_to_date(Id-T) :-
-    (   rtl_memory_last_end(Id, Last), Last > T
+%!  rtl_up_to_date(+Condition) is semidet.
+%
+%   Condition `MemoryId-Time` holds: the memory has a record that ends after Time, or the
+%   history of the events it records is complete up to Time, or the input has ended.
+
+rtl_up_to_date(Id-T) :-
+    (   rtl_input_ended
+    ->  true
+    ;   rtl_memory_last_end(Id, Last), Last > T
     ->  true
     ;   rtl_memory_type(Id, Type)
     ->  rtl_history_complete(Type, T)
@@ -252,7 +261,7 @@ deadline(Open, Deadline) :-
     foldl(condition_deadline, Open, -inf, Deadline).
 
 condition_deadline(Id-T, D0, D) :-
-    (   rtl_memory_type(Id, Type), rtl_type_delay(Type, Delay), Delay \== inf
+    (   T \== inf, rtl_memory_type(Id, Type), rtl_type_delay(Type, Delay), Delay \== inf
     ->  D1 is T + Delay
     ;   D1 = inf
     ),
@@ -285,9 +294,17 @@ release_pending(N) :-
 :- multifile rtl_slr:memory_update_hook/4.
 rtl_slr:memory_update_hook(M, Id, _, End) :-
     monitor(Id, _, _),
-    findall(N, ( monitor(Id, N, T), End > T, pending(N, _, M:_, _, _, _, _) ), Woken),
+    findall(N, ( monitor(Id, N, T),
+                 pending(N, Event, M:_, _, _, _, _),
+                 ( End > T -> true ; Event = '$call'(_, _) )     % a query may need any new record
+               ), Woken0),
+    sort(Woken0, Woken),
     forall(member(N, Woken), woken(Id, N)).
 
+woken(_, N) :-
+    pending(N, '$call'(_, _), _, _, _, _, _),
+    !,
+    release_pending(N).          % a query: evaluate it again, it says what it still needs
 woken(Id, N) :-
     (   retract(monitor(Id, N, _)),
         retract(pending(N, Event, Query, Start, End, Waiting, Deadline))
@@ -322,7 +339,7 @@ clock_moved(_, _, _, _).
 % of match N again; release it when all hold, else move its deadline.
 recheck(N) :-
     findall(Id-T, monitor(Id, N, T), Open0),
-    exclude(up_to_date, Open0, Open),
+    exclude(rtl_up_to_date, Open0, Open),
     (   Open == []
     ->  release_pending(N)
     ;   pending(N, '$call'(Action, Until), _, _, _, _, _),
@@ -370,7 +387,16 @@ rtl_sync_finish(run) :-
     rtl_program(M),
     findall(End-N, pending(N, _, M:_, _, End, _, _), Pairs),
     keysort(Pairs, Sorted),
-    forall(member(_-N, Sorted), release_pending(N)).
+    setup_call_cleanup(nb_setval(rtl_input_ended, true),
+                       forall(member(_-N, Sorted), release_pending(N)),
+                       nb_setval(rtl_input_ended, false)).
+
+%!  rtl_input_ended is semidet.
+%
+%   True while rtl_sync_finish(run) runs what still waits at the end of the input.
+
+rtl_input_ended :-
+    nb_current(rtl_input_ended, true).
 
 %!  rtl_sync_pending(-Count:integer) is det.
 %

@@ -180,10 +180,57 @@ def test_cli_run_prints_synchronized_answers_where_they_complete(tmp_path):
     lines = run.stdout.splitlines()
     answered = lines.index('{"query": "1", "at": 0.5, "status": "answered", "answers": [{"X": "155.0"}], '
                            '"message": ""}')
-    assert lines[answered - 1] == '{"event": "tf(base,cam,200)", "start": 1, "end": 1}'   # released by it
+    released_by = lines.index('{"event": "tf(base,cam,200)", "start": 1, "end": 1}')
+    next_input = lines.index('{"event": "marker(m3,3000)", "start": 1.5, "end": 1.5}')
+    assert released_by < answered < next_input            # written while that event is processed
     assert '{"query": "2", "at": 1.5, "status": "timeout", "answers": [], ' \
            '"message": "not achievable by the deadline"}' in lines
     refused = subprocess.run([sys.executable, "-m", "retalisc", "run", str(case / "program.rtl"), "--events",
                               str(case / "events.jsonl"), "--query", "1", "shell(ls)"],
                              capture_output=True, text=True, timeout=120)
     assert refused.returncode == 2 and "unsafe" in refused.stderr
+
+
+# ---- the thesis's examples (4.2.5, rules 4.7 and 4.8) ----------------------------------
+
+STATE = Path(__file__).parent.parent / "examples" / "state_knowledge" / "state_knowledge.rtl"
+
+
+def test_interpolation_waits_for_the_first_later_observation():
+    engine = Engine.load(STATE)
+    engine.feed_batch([("tf(cam, base, [0, 0, 1])", 10)])
+    future = engine.query_synchronized("tf(cam, base, L)^11", at=11)
+    engine.feed_batch([("tf(base, rcf, [10, 0, 0])", 12)])        # a later tf, but not a cam-base one
+    assert not future.done()
+    engine.feed_batch([("tf(cam, base, [0, 2, 1])", 12)])
+    assert future.result(timeout=0) == [{"L": "[0.0,1.0,1.0]"}]
+
+
+def test_extrapolation_waits_until_t_plus_one_plus_the_delay_bound():
+    engine = Engine.load(STATE)
+    engine.feed_batch([("tf(base, rcf, [10, 0, 0])", 10)])
+    future = engine.query_synchronized("tf(base, rcf, L)^10.5", at=10.5)
+    engine.feed_batch([("noise", 12.4)])
+    assert not future.done()                                        # a base-rcf in [10.5, 11.5] may still come
+    engine.feed_batch([("noise", 12.5)])                            # 10.5 + 1 + max delay 1
+    assert future.result(timeout=0) == [{"L": "[10,0,0]"}]
+
+
+TABLE = """
+c_mem(segs, segR(_, _)-[], inf, inf).
+c_mem(objs, obj(_, _)-[], inf, inf).
+max_delay(segR/2, 100).
+max_delay(obj/2, 100).
+table_objects(T, Os) :-
+    findall(O, ( mem(segs, segR(O, table)^Z), Z =< T, \\+ mem(objs, obj(O, person)^_) ), Os).
+"""
+
+
+def test_updated_events_make_the_table_objects_query_achievable():
+    engine = Engine.from_source(TABLE)
+    engine.feed_batch([("segR(cup, table)", 1), ("segR(ann, table)", 2), ("obj(cup, mug)", 3)])
+    future = engine.query_synchronized("table_objects(5, Os)", at=5)
+    engine.feed_batch([("updated(segR/2)", 5), ("obj(ann, person)", 4)])
+    assert not future.done()                                        # obj/2 may still be incomplete up to 5
+    engine.feed_batch([("updated(obj/2)", 6)])
+    assert future.result(timeout=0) == [{"Os": "[cup]"}]
