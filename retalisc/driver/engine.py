@@ -305,7 +305,8 @@ class Engine:
         else:
             future.set_exception(QueryError(result["status"], result["message"]))
 
-    def query(self, goal: str, at: Optional[Number] = None) -> Optional[Dict[str, str]]:
+    def query(self, goal: str, at: Optional[Number] = None, synchronized: bool = False,
+              timeout: Optional[Number] = None):
         """The first answer to the SLR query <goal, at>: a dict mapping each variable of `goal`
         (those not starting with `_`) to its value as writeq text, `{}` for a goal without
         variables that succeeds, None when it fails. `at` limits what `mem/2` sees to records
