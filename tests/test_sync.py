@@ -234,3 +234,11 @@ def test_updated_events_make_the_table_objects_query_achievable():
     assert not future.done()                                        # obj/2 may still be incomplete up to 5
     engine.feed_batch([("updated(obj/2)", 6)])
     assert future.result(timeout=0) == [{"Os": "[cup]"}]
+
+
+def test_query_with_synchronized_true_returns_a_future():
+    engine = Engine.load(STATE)
+    engine.feed_batch([("tf(cam, base, [0, 0, 1])", 10)])
+    future = engine.query("tf(cam, base, L)^11", at=11, synchronized=True)
+    engine.feed_batch([("tf(cam, base, [0, 2, 1])", 12)])
+    assert future.result(timeout=0) == [{"L": "[0.0,1.0,1.0]"}]

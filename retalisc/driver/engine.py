@@ -311,7 +311,14 @@ class Engine:
         (those not starting with `_`) to its value as writeq text, `{}` for a goal without
         variables that succeeds, None when it fails. `at` limits what `mem/2` sees to records
         ending at or before it (default: everything). The goal runs under SWI-Prolog's sandbox;
-        QueryError says why a goal was refused or failed."""
+        QueryError says why a goal was refused or failed.
+
+        With `synchronized=True` (and `at`), the query waits until the data it needs has
+        arrived and a Future of all its answers is returned: see `query_synchronized`."""
+        if synchronized:
+            if at is None:
+                raise ValueError("a synchronized query needs a time: at=...")
+            return self.query_synchronized(goal, at, timeout)
         answers = self._query(goal, at, "first")
         return answers[0] if answers else None
 
