@@ -47,3 +47,21 @@ def test_a_declared_stream_history_is_kept_as_written():
     unit = slr_stream_histories.run(_unit("stream_history(obj/2, 10, 5).\na(T) :- prev(obj(_, _), T).\n"))
     declared = [write_term(c.goal, 999) for c in unit.program.clauses if isinstance(c, Declaration)]
     assert declared == ["stream_history(obj / 2, 10, 5)"]
+
+
+def test_goal_sets_follow_the_call_graph():
+    from retalisc.passes import slr_goal_sets
+
+    unit = slr_goal_sets.run(slr_time_terms.run(_unit(
+        "interp(Id, T, V) :- prev(Id, tf(V)^_, T).\n"
+        "place(T, P) :- interp(odom, T, A), head(T, B), P is A + B.\n"
+        "head(T, B) :- prev(neck_head, tf(B)^_, T), next(seen(_), T, inf).\n"
+        "plain(X) :- X > 1.\n"
+        "obj_color(O, C)^T :- prev(obj(O), color(C)^_, T).\n")))
+    declared = [write_term(c.goal, 999) for c in unit.program.clauses if isinstance(c, Declaration)]
+    assert declared == [
+        "goal_set(head / 2, [neck_head], [seen / 1])",
+        "goal_set(interp / 3, [Id], [])",
+        "goal_set(obj_color / 4, [obj(O)], [])",
+        "goal_set(place / 2, [Id, neck_head], [seen / 1])",
+    ]
