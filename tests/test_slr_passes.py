@@ -65,3 +65,9 @@ def test_goal_sets_follow_the_call_graph():
         "goal_set(obj_color / 4, [obj(O)], [])",
         "goal_set(place / 2, [Id, neck_head], [seen / 1])",
     ]
+
+
+def test_declarations_written_as_directives_run_at_start_like_facts():
+    program = parse_program(":- c_mem(m, a(_)-[], 3, inf).\n:- max_delay(a/1, 0.5).\n:- dynamic foo/1.\n", "t.rtl")
+    kinds = [type(c).__name__ for c in program.clauses]
+    assert kinds == ["Declaration", "Declaration", "Directive"]

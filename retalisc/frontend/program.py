@@ -190,7 +190,10 @@ def build_program(clauses: List[ReadClause], file: str, text: str = "") -> Progr
 def classify(clause: ReadClause) -> Clause:
     term = clause.term
     if _is(term, ":-", 1) or _is(term, "?-", 1):
-        return Directive(term.args[0], clause.span, clause.text)
+        goal = term.args[0]
+        if isinstance(goal, (Atom, Compound)) and (goal.name, getattr(goal, "arity", 0)) in DECLARATIONS:
+            return Declaration(goal, clause.span, clause.text)     # run at start, like the fact form
+        return Directive(goal, clause.span, clause.text)
     if _is(term, "rule:", 2):
         label_term, rule = term.args
         if not _is(rule, "<-", 2):
