@@ -30,9 +30,11 @@
     the binarized program: over-delete (and remove) what is reachable from
     the deleted facts (states, and answers whose creating derivation may be
     among the deleted ones: see Ranks), then re-derive the over-deleted
-    answers that had more than one derivation and still have a one-step
-    derivation, and propagate those forward again.  aq_configure([dred(basic)])
-    over-deletes every reachable answer instead.
+    answers and states that had more than one derivation and still have a
+    one-step derivation, and propagate those forward again.
+    aq_configure([dred(basic)]) over-deletes every reachable answer instead.
+    Facts are a set: a fact stored twice is one fact (see "A state can be
+    derived more than once").
 */
 
 :- module(rtl_aq,
@@ -192,7 +194,8 @@ warm_fact_indexes :-
 
 trie_lookup_state(S, T) :-
     nb_getval(aq_cstates, St),
-    trie_lookup(St, S, T).
+    trie_lookup(St, S, V),
+    table_of(V, T).
 
 goal_kind(Goal, Kind) :-
     (   callable(Goal), user:'$aq_kind'(Goal, Kind0)
@@ -344,6 +347,25 @@ trie_count(Tr, C) :-
 %   over-deleted only when a deleted derivation of smaller rank reaches it,
 %   which always includes the one that created it.
 
+%   A state can be derived more than once: from the same previous state
+%   resolved against a fact that the store holds twice (a program may list
+%   a fact twice), from two answers or facts that bind its literal alike
+%   (e(X, 1) and e(0, 1) for e(0, Y)), or from an answer that a new
+%   consumer finds in its table while the answer still waits on the agenda
+%   to be propagated to it.  It is still one state: DRed over-deletes it as
+%   a whole and re-derives it, like an answer, when it was derived more
+%   than once and still has a one-step derivation (rederive_state/3).
+%   Where the state is stored says how often it was derived, at no cost
+%   for the common single derivation: a state waiting on facts has one goal
+%   record per derivation (looking for an existing record at every
+%   creation would scan records that are not indexed on the state: 20
+%   times slower for Program 6 with a query per user), and over-deletion
+%   erases all of them; a consumer state is created once (a second table
+%   for one state could not be recorded), and a second derivation turns its
+%   table T in the cstates trie into m(T).  (Erasing one of two goal
+%   records, as the runtime once did, left the state behind, re-deriving
+%   answers whose facts were gone.)
+
 %!  aq_wait_fact(+Literal, +State) is det.
 %
 %   State waits for stored facts matching Literal: record it (so later
@@ -357,30 +379,42 @@ wait_fact(insert, Lit, S) :-
     user:'$aq_wadd'(Lit, S),
     forall(user:Lit, go(S, Lit, 0)).
 wait_fact(delete, Lit, S) :-
-    (   take_fact_record(Lit, S)
-    ->  forall(user:Lit, go(S, Lit, 0))
+    take_fact_records(Lit, S, N),
+    (   N > 0
+    ->  (   N > 1 -> ignore(mark(s(fact, Lit, S))) ; true ),
+        forall(user:Lit, go(S, Lit, 0))
     ;   true
     ).
+%   A state that is there already gets one more goal record: restoring an
+%   over-deleted derivation reached it a second time.
 wait_fact(restore, Lit, S) :-
     (   has_fact_record(Lit, S)
-    ->  true
+    ->  user:'$aq_wadd'(Lit, S)
     ;   wait_fact(insert, Lit, S)
     ).
 
-%   The goal record of State waiting on Literal (a variant, not an instance).
+%   The goal records of State waiting on Literal (variants, not instances).
 fact_record(Lit, S, Ref) :-
     user:'$aq_whead'(Lit, S, H),
     copy_term(H, H1),
     user:clause(H1, true, Ref),
     user:clause(H2, true, Ref),
-    H2 =@= H, !.
+    H2 =@= H.
 
-take_fact_record(Lit, S) :-
-    fact_record(Lit, S, Ref),
-    erase(Ref).
+%   Erase them; N is how many there were.
+take_fact_records(Lit, S, N) :-
+    Count = n(0),
+    (   fact_record(Lit, S, Ref),
+        erase(Ref),
+        arg(1, Count, N0),
+        N1 is N0 + 1,
+        nb_setarg(1, Count, N1),
+        fail
+    ;   arg(1, Count, N)
+    ).
 
 has_fact_record(Lit, S) :-
-    fact_record(Lit, S, _).
+    once(fact_record(Lit, S, _)).
 
 %!  aq_wait_call(+Literal, +State) is det.
 %
@@ -394,29 +428,35 @@ aq_wait_call(Lit, S) :-
     wait_call(P, Lit, S).
 
 wait_call(insert, Lit, S) :-
-    table_for(Lit, S, T, New),
-    consume(New, T, Lit, S).
+    nb_getval(aq_cstates, St),
+    (   trie_lookup(St, S, V)
+    ->  (   V = m(_) -> true ; trie_update(St, S, m(V)) )
+    ;   table_for(Lit, S, T, New),
+        consume(New, T, Lit, S)
+    ).
 wait_call(delete, Lit, S) :-
     nb_getval(aq_cstates, St),
-    (   trie_delete(St, S, T)
-    ->  forall(( clause(aq_c(T, L1, S1), true, Ref), L1-S1 =@= Lit-S ), erase(Ref)),
+    (   trie_delete(St, S, V)
+    ->  (   V = m(T) -> ignore(mark(s(call, Lit, S))) ; T = V ),
+        forall(( clause(aq_c(T, L1, S1), true, Ref), L1-S1 =@= Lit-S ), erase(Ref)),
         findall(Lit-RA, answer_rank(T, Lit, RA), Answers),
         forall(member(Lit-RA, Answers), go(S, Lit, RA))
     ;   true
     ).
 wait_call(restore, Lit, S) :-
-    nb_getval(aq_cstates, St),
-    (   trie_lookup(St, S, _)
-    ->  true
-    ;   wait_call(insert, Lit, S)
-    ).
+    wait_call(insert, Lit, S).
+
+%   The table of a consumer state, whose value in the cstates trie is T, or
+%   m(T) once the state was derived more than once.
+table_of(m(T), T) :- !.
+table_of(T, T).
 
 consume(New, T, Lit, S) :-
     aq_tab(T, _, Tr, _, _),
     (   New == true -> Snap = [] ; findall(Lit-RA, answer_rank(Tr, Lit, RA), Snap) ),
     assertz(aq_c(T, Lit, S)),
     nb_getval(aq_cstates, St),
-    (   trie_insert(St, S, T) -> true ; true ),
+    trie_insert(St, S, T),
     state_from(S, From),
     (   aq_dep(From, T) -> true ; assertz(aq_dep(From, T)) ),
     (   New == true -> activate(T) ; true ),
@@ -666,9 +706,12 @@ erase_fact(F) :-
     ;   forall(stored_copy(F, Ref), erase(Ref))
     ).
 
-%   Ref is a stored clause that is a variant of fact F.
+%   Ref is a stored clause that is a variant of fact F (looked up with a
+%   copy: F itself must not be bound by a more specific clause, or e(0, 1)
+%   would pass for a copy of e(_, 1)).
 stored_copy(F, Ref) :-
-    user:clause(F, true, Ref),
+    copy_term(F, F1),
+    user:clause(F1, true, Ref),
     user:clause(H, true, Ref),
     H =@= F.
 
@@ -715,8 +758,9 @@ dred_end(D) :-
 %   that created it and stays (answer/4); nothing behind it is visited.
 %   A derivation whose two premises are both over-deleted is followed from
 %   whichever of them goes first, while the other is still there.  D keeps
-%   the over-deleted answers that had more than one derivation (a(T, A)) and
-%   the answers lost by registered queries (n(Id, A)).
+%   the over-deleted answers that had more than one derivation (a(T, A)),
+%   the over-deleted states that had more than one derivation (s(Kind,
+%   Literal, State)) and the answers lost by registered queries (n(Id, A)).
 dred(Facts, D) :-
     % 1. over-delete
     nb_setval(aq_phase, delete),
@@ -724,11 +768,12 @@ dred(Facts, D) :-
            forall(user:'$aq_wrec'(F, S), go(S, F, 0))),
     drain,
     maplist(erase_fact, Facts),
-    % 2. re-derive the answers that may have another derivation, propagate
-    %    them forward: that also restores the states and single-derivation
-    %    answers that depend on them
+    % 2. re-derive the answers and states that may have another derivation,
+    %    propagate them forward: that also restores the states and
+    %    single-derivation answers that depend on them
     nb_setval(aq_phase, restore),
     forall(trie_gen(D, a(T, A)), ignore(rederive(T, A))),
+    forall(trie_gen(D, s(Kind, Lit, S)), ignore(rederive_state(Kind, Lit, S))),
     drain,
     nb_setval(aq_phase, insert),
     findall(ev(Id, A), trie_gen(D, n(Id, A)), Pending0),
@@ -736,10 +781,9 @@ dred(Facts, D) :-
     forall(member(ev(Id, A), Pending),
            ( query_has(Id, A) -> true ; emit(Id, delete, A) )).
 
-%   A state has exactly one derivation (its previous state and the answer
-%   of the literal it consumed, both recorded in the state), so an
-%   over-deleted state is never re-derived on its own: it comes back when
-%   the forward propagation of a restored item reaches it.
+%   Only answers and states derived more than once are re-derived: one
+%   with a single derivation that was over-deleted lost it, and comes back
+%   only when the forward propagation of a restored item reaches it.
 rederive(T, A) :-
     aq_tab(T, _, _, _, _),
     \+ trie_lookup(T, A, _),
@@ -755,6 +799,65 @@ answer_derivable(T, A, R) :-
     call(Check),
     A1 =@= A, !.
 
+%   An over-deleted state that was derived more than once is restored (and
+%   propagated forward) when it still has a one-step derivation.  One that
+%   is there again (restored by the forward propagation of another
+%   candidate) is marked as derived more than once again: the derivation
+%   that was not deleted is still there.
+rederive_state(Kind, Lit, S) :-
+    (   ( state_exists(Kind, Lit, S) ; state_derivable(S) )
+    ->  restore_state(Kind, Lit, S)
+    ;   true
+    ).
+
+state_exists(fact, Lit, S) :-
+    has_fact_record(Lit, S).
+state_exists(call, _, S) :-
+    nb_getval(aq_cstates, St),
+    trie_lookup(St, S, _).
+
+restore_state(fact, Lit, S) :- wait_fact(restore, Lit, S).
+restore_state(call, Lit, S) :- wait_call(restore, Lit, S).
+
+%   A one-step derivation of state S from what is there: the generated
+%   clause that creates S (the last goal of its body is aq_wait_*(_, S)),
+%   either '$aq_go'(Prev, Lit, _) resuming the state Prev with an answer or
+%   a fact Lit, or the activation '$aq_act'(Goal, T) of table T; the goals
+%   before are the builtins.  S binds Lit and Prev as far as S knows them
+%   (the variables of a state include those of its literal and of the state
+%   before it), and the premises are found by unification, as for answers
+%   (answer_derivable/3): the stored state Prev may be more general (a
+%   variable of the head is bound by a later literal).
+state_derivable(S) :-
+    copy_term(S, S1),
+    state_step(S1, P, Kind, Lit, Check),
+    premise(P, Kind, Lit, _),
+    call(Check),
+    S1 =@= S, !.
+
+state_step(S, P, Kind, Lit, Check) :-
+    user:clause('$aq_go'(P, Lit, _), Body),
+    body_last(Body, Check, Last),
+    creates(Last, S),
+    (   Kind = call
+    ;   user:'$aq_fact_pred'(Lit),
+        Kind = fact
+    ).
+state_step(S, act(T), none, G, Check) :-
+    user:clause('$aq_act'(G, T), Body),
+    body_last(Body, Check0, Last),
+    creates(Last, S),
+    Check = (aq_tab(T, G0, _, _, _), G = G0, Check0).
+
+body_last((A, B), Check, Last) :- !,
+    body_last(B, Check0, Last),
+    (   Check0 == true -> Check = A ; Check = (A, Check0) ).
+body_last(G, true, G).
+
+creates(_:G, S) :- !, creates(G, S).
+creates(aq_wait_fact(_, S), S).
+creates(aq_wait_call(_, S), S).
+
 premise(act(T), none, _, 0) :- !,
     aq_tab(T, _, _, _, _).
 premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on their
@@ -762,7 +865,8 @@ premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on 
     user:'$aq_wrec'(Lit, P).
 premise(P, call, Lit, R) :-
     nb_getval(aq_cstates, St),
-    trie_gen(St, P, T),
+    trie_gen(St, P, V),
+    table_of(V, T),
     answer_rank(T, Lit, R).
 
 query_has(Id, A) :-
@@ -784,7 +888,11 @@ query_has(Id, A) :-
 %   with `%` are skipped.  Prints one JSON object per notification:
 %   {"query": Id, "op": "answer"|"add"|"delete", "answer": Text}, Text being
 %   the goal instance written with writeq.  Throws aq_script_error(Line,
-%   Message) on a malformed line.
+%   Message) on a malformed line (one that does not parse, or a command the
+%   runtime refuses: an unknown or already registered query id, a goal
+%   that is not a query predicate, a fact of a predicate that is not
+%   dynamic), and aq_runtime_error(Line, Error) when a well-formed command
+%   fails while it runs.
 
 aq_run_script(File) :-
     read_file_to_string(File, Text, []),
@@ -801,7 +909,11 @@ run_line(Line0, N, N1) :-
         sub_string(Line, 1, _, 0, Rest0),
         normalize_space(string(Rest), Rest0),
         catch(parse_command(C, Rest, T), E, parse_error(N, E)),
-        catch(run_command(C, T, N), E2, line_error(N, E2)),
+        catch(check_command(C, T, N), E2, line_error(N, E2)),
+        (   catch(run_command(C, T), E3, throw(aq_runtime_error(N, E3)))
+        ->  true
+        ;   throw(aq_runtime_error(N, format("~s failed", [Line])))
+        ),
         aq_events(Evs0),
         msort(Evs0, Evs),
         forall(member(ev(Id, Op, A), Evs), print_event(Id, Op, A))
@@ -828,36 +940,46 @@ parse_error(N, E) :-
     atomic_list_concat(Parts, ' ', Msg),
     throw(aq_script_error(N, Msg)).
 
+%   Every error of check_command/3 is a bad script line.
+line_error(_, E) :-
+    E = aq_script_error(_, _), !,
+    throw(E).
 line_error(N, E) :-
-    (   E = aq_script_error(_, _) -> throw(E)
-    ;   E = error(Formal, _), script_usage_error(Formal)
-    ->  message_to_codes(E, Msg), throw(aq_script_error(N, Msg))
-    ;   throw(E)
-    ).
+    message_to_codes(E, Msg),
+    throw(aq_script_error(N, Msg)).
 
-script_usage_error(existence_error(active_query, _)).
-script_usage_error(existence_error(active_query_predicate, _)).
-script_usage_error(permission_error(_, _, _)).
-script_usage_error(type_error(_, _)).
-
+%   The message of an error on one line.
 message_to_codes(E, Msg) :-
     (   catch(message_to_chars(E, Msg0), _, fail)
-    ->  split_string(Msg0, "", " \n", [Msg])
-    ;   term_string(E, Msg)
-    ).
+    ->  true
+    ;   term_string(E, Msg0)
+    ),
+    split_string(Msg0, "\n", " \t", Parts0),
+    exclude(==(""), Parts0, Parts),
+    atomic_list_concat(Parts, ' ', Msg).
 
 message_to_chars(E, Msg) :-
     '$messages':translate_message(E, Lines, []),
     with_output_to(string(Msg), print_message_lines(current_output, '', Lines)).
 
-run_command("?", Id-Goal, _) :- !,
-    aq_register(Id, Goal).
-run_command("+", F, _) :- !, aq_assert(F).
-run_command("-", F, _) :- !, aq_retract(F).
-run_command("!", Id, _) :- !, aq_unregister(Id).
-run_command(C, _, N) :-
+%   What the runtime refuses before it changes anything: the errors that
+%   aq_register/3, aq_assert/1, aq_retract/1 and aq_unregister/1 raise for
+%   such a command.  Any error while the command runs is a runtime failure.
+check_command("?", Id-Goal, _) :- !,
+    (   aq_q(Id, _, _, _) -> permission_error(register, active_query, Id) ; true ),
+    goal_kind(Goal, _).
+check_command("+", F, _) :- !, check_fact(F).
+check_command("-", F, _) :- !, check_fact(F).
+check_command("!", Id, _) :- !,
+    (   aq_q(Id, _, _, _) -> true ; existence_error(active_query, Id) ).
+check_command(C, _, N) :-
     format(atom(Msg), 'unknown command ~w (expected ?, +, - or !)', [C]),
     throw(aq_script_error(N, Msg)).
+
+run_command("?", Id-Goal) :- aq_register(Id, Goal).
+run_command("+", F) :- aq_assert(F).
+run_command("-", F) :- aq_retract(F).
+run_command("!", Id) :- aq_unregister(Id).
 
 print_event(Id, Op, A) :-
     format(string(AT), '~q', [A]),
@@ -877,16 +999,24 @@ json_string(Text, J) :-
 %!  aq_script_main(+File) is det.
 %
 %   Run aq_run_script/1 as a program: halt(0) on success, halt(2) with
-%   `File:Line: message` on a malformed script line, halt(1) with the
-%   message on any other error.
+%   `File:Line: error: message` on a malformed script line, halt(1) with
+%   `File:Line: runtime error: message` (one line) when a command fails
+%   while it runs, and with `error: message` on any other error.
 
 aq_script_main(File) :-
-    catch(( aq_run_script(File), flush_output, Status = 0 ), E, script_error(File, E, Status)),
+    (   catch(( aq_run_script(File), flush_output, Status = 0 ), E, script_error(File, E, Status))
+    ->  true
+    ;   script_error(File, format("running ~w failed", [File]), Status)
+    ),
     halt(Status).
 
 script_error(File, aq_script_error(Line, Msg), 2) :- !,
     flush_output,
     format(user_error, '~w:~w: error: ~w~n', [File, Line, Msg]).
+script_error(File, aq_runtime_error(Line, E), 1) :- !,
+    flush_output,
+    message_to_codes(E, Msg),
+    format(user_error, '~w:~w: runtime error: ~w~n', [File, Line, Msg]).
 script_error(_, E, 1) :-
     flush_output,
     message_to_codes(E, Msg),

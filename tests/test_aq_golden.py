@@ -123,8 +123,9 @@ def test_golden(case, mode, subsumption, tmp_path, monkeypatch):
         if subsumption:
             args.append("--subsumption")
         result = CliRunner().invoke(main, args, catch_exceptions=False)
+        assert result.exit_code == 0, f"exit {result.exit_code} at {label}: {result.stderr}"
         answers = {n: set() for n in range(1, len(goals) + 1)}
-        for line in result.output.splitlines():
+        for line in result.stdout.splitlines():
             event = json.loads(line)
             n = int(event["query"][1:])
             if event["op"] in ("answer", "add"):
@@ -155,3 +156,39 @@ def _normalise(text: str):
         else:
             blocks[key].add(line)
     return blocks
+
+
+def _run_aq(tmp_path, program: str, script: str, mode: str):
+    (tmp_path / "program.pl").write_text(program)
+    (tmp_path / "updates.txt").write_text(script)
+    args = ["aq", str(tmp_path / "program.pl"), "--script", str(tmp_path / "updates.txt"), "--mode", mode]
+    return CliRunner().invoke(main, args, catch_exceptions=False)
+
+
+@pytest.mark.parametrize("mode", ["naive", "optimized", "tabled"])
+def test_runtime_failure_exits_1_with_one_line(tmp_path, mode):
+    """A well-formed script line that fails while it runs (here `is` on an atom) is a runtime
+    failure: exit status 1 and one line naming the script line, after the events printed so far."""
+    program = ":- dynamic e/1.\nt(Y) :- e(X), Y is X + 1.\ne(1).\n"
+    result = _run_aq(tmp_path, program, "?q t(A).\n+e(a).\n+e(2).\n", mode)
+    assert result.exit_code == 1, result.stderr
+    assert result.stdout == '{"query": "q", "op": "answer", "answer": "t(2)"}\n'
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith(f"{tmp_path / 'updates.txt'}:2: runtime error: ")
+    assert "evaluable" in lines[0] or "Arithmetic" in lines[0], lines[0]
+
+
+@pytest.mark.parametrize("script,message", [
+    ("?q nosuch(A).\n", "nosuch/1"),
+    ("?q t(A).\n?q t(B).\n", "register"),
+    ("+t(1).\n", "t/1"),
+    ("!r.\n", "r"),
+    ("*e(1).\n", "unknown command"),
+])
+def test_bad_script_line_exits_2(tmp_path, script, message):
+    program = ":- dynamic e/1.\nt(Y) :- e(Y).\ne(1).\n"
+    result = _run_aq(tmp_path, program, script, "tabled")
+    assert result.exit_code == 2, result.stderr
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and ": error: " in lines[0] and message in lines[0], result.stderr

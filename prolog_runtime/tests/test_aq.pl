@@ -58,4 +58,39 @@ test(non_ground_facts, [setup(aq_reset), cleanup(aq_reset)]) :-
 test(not_dynamic, [error(permission_error(modify, static_procedure, path/2))]) :-
     aq_assert(path(5, 6)).
 
+% Facts are a set.  A second copy of a stored fact (as consulting another file
+% of facts leaves it) is the same fact: one retraction removes it, and the
+% states derived from both copies go with it.
+test(fact_stored_twice, [setup(aq_reset), cleanup(restore_program4)]) :-
+    user:assertz(edge(1, 2)),
+    aq_register(q, path(0, _), A0), assertion(A0 == [path(0,1), path(0,2)]),
+    aq_retract(edge(1, 2)),
+    aq_events(E1), assertion(E1 == [ev(q, delete, path(0,2))]),
+    assertion(\+ user:edge(1, 2)),
+    aq_assert(edge(1, 2)),
+    aq_events(E2), assertion(E2 == [ev(q, add, path(0,2))]),
+    aq_retract(edge(1, 2)),
+    aq_events(E3), assertion(E3 == [ev(q, delete, path(0,2))]),
+    aq_answers(q, A3), assertion(A3 == [path(0,1)]),
+    aq_unregister(q),
+    aq_stats(S), forall(member(_=V, S), assertion(V == 0)).
+
+test(batch_names_a_fact_twice, [setup(aq_reset), cleanup(restore_program4)]) :-
+    aq_register(q, path(0, _), _),
+    aq_assert_all([edge(2, 3), edge(2, 3)]),
+    aq_events(E1), assertion(E1 == [ev(q, add, path(0,3))]),
+    aggregate_all(count, user:edge(2, 3), N), assertion(N == 1),
+    aq_retract_all([edge(2, 3), edge(2, 3)]),
+    aq_events(E2), assertion(E2 == [ev(q, delete, path(0,3))]),
+    aq_assert_all([edge(2, 3), edge(2, 3)]),
+    aq_retract(edge(2, 3)),
+    aq_events(E3), assertion(E3 == [ev(q, add, path(0,3)), ev(q, delete, path(0,3))]),
+    aq_answers(q, A), assertion(A == [path(0,1), path(0,2)]).
+
+restore_program4 :-
+    aq_reset,
+    retractall(user:edge(_, _)),
+    assertz(user:edge(0, 1)),
+    assertz(user:edge(1, 2)).
+
 :- end_tests(rtl_aq).
