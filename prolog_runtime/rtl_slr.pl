@@ -378,19 +378,18 @@ add_record(H, M, Id, N, L, Options, Start, End, Template) :-
         End < Clock - L
     ->  true                                     % outside the time limit already
     ;   bounds_term(H, B),
-        arg(1, B, First),
-        arg(2, B, Last),
+        B = bounds(First, Last, LastEnd),
         (   Last < First
         ->  Number = First,
-            nb_setarg(2, B, First)
-        ;   key(H, Last, LastKey),
-            record(LastKey, _, LastEnd, _),
-            End >= LastEnd
+            nb_setarg(2, B, First),
+            nb_setarg(3, B, End)
+        ;   End >= LastEnd
         ->  Number is Last + 1,
-            nb_setarg(2, B, Number)
+            nb_setarg(2, B, Number),
+            nb_setarg(3, B, End)
         ;   last_not_after(H, First, Last, End, Before),    % a late record goes after
             Point is Before + 1,                            % every record ending at or before it
-            make_room(H, B, First, Last, Point, Number)
+            make_room(H, B, First, Last, Point, Number)     % (never last: LastEnd stays)
         ),
         key(H, Number, Key),
         assertz(record(Key, Start, End, Template)),
@@ -506,7 +505,13 @@ close_gap(H, B, First, Last, Gap) :-
     ;   After is Gap + 1,
         forall(between(After, Last, N0), renumber(H, N0, -1)),
         Last1 is Last - 1,
-        nb_setarg(2, B, Last1)
+        nb_setarg(2, B, Last1),
+        (   Gap =:= Last, Last1 >= First          % the last record went: note the new last's end
+        ->  key(H, Last1, Key),
+            record(Key, _, LastEnd, _),
+            nb_setarg(3, B, LastEnd)
+        ;   true
+        )
     ).
 
 % Drop the records of a time-limited instance that have left its window.
@@ -780,6 +785,9 @@ key(H, Number, Key) :-
 bounds_key(H, Key) :-
     atom_concat('$rtl_slr_bounds_', H, Key).
 
+% The bounds of instance H: a global term bounds(First, Last, LastEnd), its records being
+% numbered First..Last (none when Last < First); LastEnd is the end time of record Last
+% (kept by add_record/9 and close_gap/5, so that an in-order append reads no record).
 bounds_term(H, B) :-
     bounds_key(H, Key),
     nb_getval(Key, B).
@@ -793,7 +801,7 @@ reset_bounds(H) :-
     number_origin(Origin),
     Last is Origin - 1,
     bounds_key(H, Key),
-    nb_setval(Key, bounds(Origin, Last)).
+    nb_setval(Key, bounds(Origin, Last, 0)).
 
 % ---- checks ------------------------------------------------------------------------------
 
