@@ -1,0 +1,36 @@
+"""Smoke tests of the benchmarks: they run (scaled down) and print every target line.
+They check that the figures are produced, not that the targets are met."""
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+SLR_TARGETS = [
+    r"\(a\) \d+ irrelevant instances within 10% of none",
+    r"\(a\) flat in the number of irrelevant instances",
+    r"\(b\) size [\d,]+ vs [\d,]+ equal within 10% once full",
+    r"\(c\) \d+ x tf\(head,cam,_,_\): .* per instance per event",
+    r"\(d\) next on 16,384 vs 128 records under 2x",
+    r"\(d\) prev on 16,384 vs 128 records under 2x",
+    r"\(e\) updates/s net of matching >= 2x thesis",
+    r"\(e\) updates/s net of baseline >= 2x thesis",
+    r"\(e\) aim: updates/s net of matching >= 10x thesis",
+    r"\(f\) 100 late: size [\d,]+ vs [\d,]+ within 10%",
+    r"\(f\) cost grows with lateness",
+]
+
+
+def test_slr_memory_quick(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "slr_memory.py"), "--quick",
+                           "--out-dir", str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("target ")]
+    for pattern in SLR_TARGETS:
+        assert any(re.match(r"target (met|MISSED|figure) +" + pattern, line) for line in lines), \
+            f"no target line for {pattern!r} in:\n" + "\n".join(lines)
+    assert (tmp_path / "slr_memory_quick.json").exists()
+    for name in ("instances", "sizes", "queries", "late"):
+        assert (tmp_path / f"slr_memory_quick_{name}.png").exists()
