@@ -20,7 +20,9 @@
             rtl_store_size/1,           % -Clauses
             rtl_collect_garbage/0,
             rtl_add_output_hook/1,      % :Hook
-            rtl_remove_output_hook/1    % :Hook
+            rtl_remove_output_hook/1,   % :Hook
+            rtl_add_type_output_hook/2, % +Pattern, :Hook
+            rtl_remove_type_output_hook/2 % +Pattern, :Hook
           ]).
 
 /** <module> ELE runtime: event ingestion, derivation, output and forgetting
@@ -50,7 +52,9 @@ delay bound, and is removed by the periodic sweep.
 
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
-:- meta_predicate rtl_add_output_hook(4), rtl_remove_output_hook(4).
+:- dynamic type_output_hook/2.              % type_output_hook(Skeleton, Hook)
+:- meta_predicate rtl_add_output_hook(4), rtl_remove_output_hook(4),
+                  rtl_add_type_output_hook(+, 4), rtl_remove_type_output_hook(+, 4).
 :- dynamic flag_value/2.
 
 flag_default(max_delay, 1.0).               % seconds an event may arrive behind the clock
@@ -207,7 +211,31 @@ rtl_remove_output_hook(Hook) :-
     retractall(output_hook(Hook)),
     (   output_hook(_) -> true ; nb_setval(rtl_output_hooks, false) ).
 
+%!  rtl_add_type_output_hook(+Pattern, :Hook) is det.
+%!  rtl_remove_type_output_hook(+Pattern, :Hook) is det.
+%
+%   As rtl_add_output_hook/1, for the events of Pattern's type (name and arity) only. The
+%   hooks of a type are found by first-argument indexing on the event itself, so events
+%   of other types do not pay for them (SLR memory instances use this). They run before
+%   the hooks of every type.
+
+rtl_add_type_output_hook(Pattern, Hook) :-
+    type_skeleton(Pattern, Skeleton),
+    (   type_output_hook(Skeleton, Hook) -> true ; assertz(type_output_hook(Skeleton, Hook)) ).
+
+rtl_remove_type_output_hook(Pattern, Hook) :-
+    type_skeleton(Pattern, Skeleton),
+    retractall(type_output_hook(Skeleton, Hook)).
+
+type_skeleton(Pattern, Skeleton) :-
+    (   compound(Pattern)
+    ->  compound_name_arity(Pattern, Name, Arity),
+        compound_name_arity(Skeleton, Name, Arity)
+    ;   Skeleton = Pattern
+    ).
+
 run_output_hooks(Event, Start, End, Op) :-
+    forall(type_output_hook(Event, Hook), call(Hook, Event, Start, End, Op)),
     (   nb_current(rtl_output_hooks, true)
     ->  forall(output_hook(Hook), call(Hook, Event, Start, End, Op))
     ;   true

@@ -83,6 +83,8 @@ Def. 18). A time argument that is not bound raises an instantiation error.
 :- dynamic stream_memory/4.
 % need(Id, Time): while rtl_with_needs/2 runs, the histories its goal's answers depend on
 :- dynamic need/2.
+% bounds_name(H, Name): the global variable holding the bounds of instance H
+:- dynamic bounds_name/2.
 
 :- multifile retalis:rtl_declaration_handler/3.
 retalis:rtl_declaration_handler(c_mem, 4, rtl_slr).
@@ -108,7 +110,7 @@ retalis:rtl_declaration_handler(stream_history, 3, rtl_slr).
 :- multifile instance_created_hook/2.
 :- dynamic instance_created_hook/2.
 
-key_base(1099511627776).                 % 2^40 numbers per instance
+key_base(1099511627776).                 % 2^40 numbers per instance (key/3 inlines it)
 number_origin(549755813888).             % 2^39: room to number late records downwards
 
 % ---- creating and deleting instances ----------------------------------------------------
@@ -181,7 +183,6 @@ create_instance(Id, Pattern, Conds, Template, N, L, Options, Culprit) :-
     assertz(id_handle(M, Id, H)),
     reset_bounds(H),
     watch(M, Pattern, H),
-    rtl_add_output_hook(rtl_slr:observe),
     forall(instance_created_hook(M, Id), true),
     memory_event(M, memory_created(Pattern, Conds, Template, Id, N)).
 
@@ -231,6 +232,7 @@ remove_instance(M, H, Id) :-
     unwatch(M, Pattern, H),
     bounds_key(H, BKey),
     nb_delete(BKey),
+    retractall(bounds_name(H, _)),
     memory_event(M, memory_deleted(Id)).
 
 %!  exist_mem(?Id) is nondet.
@@ -313,13 +315,22 @@ rtl_slr_clear :-
 
 % ---- the per-type index ------------------------------------------------------------------
 
+% The events of a watched type reach observe/6 through a per-type output hook of rtl_ele,
+% so that an event of a type no instance records costs one failed index lookup.
 watch(M, Pattern, H) :-
     watch_head(Pattern, M, H, Head),
-    assertz(Head).
+    assertz(Head),
+    functor(Head, P, _),
+    rtl_add_type_output_hook(Pattern, rtl_slr:observe(P)).
 
 unwatch(M, Pattern, H) :-
     watch_head(Pattern, M, H, Head),
-    retractall(Head).
+    retractall(Head),
+    functor(Head, P, _),
+    (   current_predicate(P/3), \+ call(P, _, _, _)
+    ->  rtl_remove_type_output_hook(Pattern, rtl_slr:observe(P))
+    ;   true
+    ).
 
 % watch_head(+Pattern, +Program, +H, -Head): Head is `P(FirstArgOfPattern, Program, H)`
 % for the type's index predicate P (created on first use).
@@ -336,16 +347,16 @@ watch_head(Pattern, M, H, Head) :-
 
 % ---- recording ---------------------------------------------------------------------------
 
-%   The output hook: every processed event, input, derived or internal.
-observe(Event, Start, End, Op) :-
-    functor(Event, Name, Arity),
-    (   watch_predicate(Name, Arity, P)
-    ->  rtl_program(M),
-        (   Arity > 0 -> arg(1, Event, First) ; First = [] ),
-        findall(H, call(P, First, M, H), Hs),
-        observe_in(Hs, Op, Event, Start, End)
-    ;   true
-    ).
+%   The type output hook: every processed event (input, derived or internal) of a type
+%   some instance records; P is the type's index predicate.
+observe(P, Event, Start, End, Op) :-
+    rtl_program(M),
+    (   compound(Event), compound_name_arity(Event, _, Arity), Arity > 0
+    ->  arg(1, Event, First)
+    ;   First = []
+    ),
+    findall(H, call(P, First, M, H), Hs),
+    observe_in(Hs, Op, Event, Start, End).
 
 observe_in([], _, _, _, _).
 observe_in([H|Hs], Op, Event, Start, End) :-
@@ -393,7 +404,10 @@ add_record(H, M, Id, N, L, Options, Start, End, Template) :-
         ),
         key(H, Number, Key),
         assertz(record(Key, Start, End, Template)),
-        forget_over_count(H, B, N, M, Id, Options),
+        (   N == inf
+        ->  true
+        ;   forget_over_count(H, B, N, M, Id, Options)
+        ),
         forget_expired(H, B, L, M, Id, Options),
         (   arg(1, B, F1), F1 =< Number
         ->  recorded(M, Id, Options, Start, End, Template)
@@ -429,7 +443,6 @@ renumber(H, N0, Delta) :-
     Key is Key0 + Delta,
     assertz(record(Key, S, E, T)).
 
-forget_over_count(_, _, inf, _, _, _) :- !.
 forget_over_count(H, B, N, M, Id, Options) :-
     arg(1, B, First),
     arg(2, B, Last),
@@ -779,11 +792,15 @@ view(View) :-
 % ---- numbers, keys and bounds ------------------------------------------------------------
 
 key(H, Number, Key) :-
-    key_base(Base),
-    Key is H * Base + Number.
+    Key is H * 1099511627776 + Number.          % key_base/1
 
+% The name of the global variable of instance H's bounds, made once per instance.
 bounds_key(H, Key) :-
-    atom_concat('$rtl_slr_bounds_', H, Key).
+    (   bounds_name(H, Key0)
+    ->  Key = Key0
+    ;   atom_concat('$rtl_slr_bounds_', H, Key),
+        assertz(bounds_name(H, Key))
+    ).
 
 % The bounds of instance H: a global term bounds(First, Last, LastEnd), its records being
 % numbered First..Last (none when Last < First); LastEnd is the end time of record Last

@@ -122,7 +122,12 @@ max_delay(Type, Delay) :-
     ),
     retractall(declared_delay(M, Name, Arity, _)),
     assertz(declared_delay(M, Name, Arity, Delay)),
-    rtl_add_output_hook(rtl_sync:availability).
+    rtl_add_type_output_hook(updated(_), rtl_sync:availability),
+    (   Delay == learn
+    ->  functor(Pattern, Name, Arity),
+        rtl_add_type_output_hook(Pattern, rtl_sync:availability)
+    ;   true
+    ).
 
 %!  rtl_type_delay(+Type, -Delay) is det.
 %
@@ -153,7 +158,8 @@ rtl_history_complete(Name/Arity, T) :-
         Clock - Delay >= T
     ).
 
-%   The output hook of availability: `updated(Type)` events and learned delays.
+%   The type output hook of availability: `updated(Type)` events, and the events of the
+%   types whose delay is learned.
 availability(updated(Type), _, End, add) :- !,
     (   nonvar(Type), Type = Name/Arity
     ->  rtl_program(M),
@@ -183,7 +189,7 @@ availability(_, _, _, _).
 %   Memories register the availability hook: `updated` events may come before any wait.
 :- multifile rtl_slr:instance_created_hook/2.
 rtl_slr:instance_created_hook(_, _) :-
-    rtl_add_output_hook(rtl_sync:availability).
+    rtl_add_type_output_hook(updated(_), rtl_sync:availability).
 
 %!  rtl_synchronized(+Event, :Query, +SyncConds, +Start, +End) is det.
 %
