@@ -35,7 +35,9 @@ matches and the event flow go on.
 
 Postponed matches wait on monitors: one per (memory, time) still missing, woken by the
 memory's record additions (rtl_slr's memory_update_hook/4), and one deadline per match (the
-largest Time plus the delay bound), checked as the clock moves. At the end of the input
+largest Time plus the delay bound), checked as the clock moves. Both are kept in time
+indexes (rtl_time_index.pl), so a record or a clock step costs what it wakes, not the
+number of matches waiting (thousands when producers are seconds late). At the end of the input
 every history is complete, so rtl_sync_finish(run) runs the matches still postponed, in time
 order; rtl_sync_finish(drop) discards them.
 */
@@ -43,14 +45,19 @@ order; rtl_sync_finish(drop) discards them.
 :- use_module(rtl_ele).
 :- use_module(rtl_slr).
 :- use_module(rtl_time).
+:- use_module(rtl_time_index).
 
 :- meta_predicate rtl_synchronized(+, 0, +, +, +), rtl_synchronized_retract(+, 0, +, +, +),
                   rtl_postpone(+, +, 1).
 
 % pending(N, Event, Query, Start, End, Waiting, Deadline)
 :- dynamic pending/7.
-% monitor(MemoryId, N, Time): match N waits for a record of MemoryId ending after Time
-:- dynamic monitor/3.
+% condition(N, MemoryId, Time): match N waits until memory MemoryId is up to date for Time;
+% its monitor is in the time index `monitor` under Program-MemoryId (item N-Time), or, for
+% a query ('$call'), which any new record may satisfy, call_monitor(Program-MemoryId, N)
+:- dynamic condition/3.
+:- dynamic call_monitor/2.
+% Deadlines are in the time index `deadline` under Program (item N).
 % declared_delay(Program, Name, Arity, Seconds or learn)
 :- dynamic declared_delay/4.
 % learned_delay(Program, Name, Arity, Seconds)
@@ -212,12 +219,40 @@ park(Event, Query, Open, Start, End) :-
         ;   Deadline = Deadline0
         ),
         length(Open, Waiting),
+        Query = M:_,
         assertz(pending(N, Event, Query, Start, End, Waiting, Deadline)),
-        forall(member(Id-T, Open), assertz(monitor(Id, N, T))),
-        (   nb_current(rtl_sync_next_deadline, Next0), Next0 \== [] -> true ; Next0 = inf ),
-        (   Deadline @< Next0, Deadline \== inf -> nb_setval(rtl_sync_next_deadline, Deadline) ; true ),
+        forall(member(Id-T, Open), add_condition(M, N, Event, Id, T)),
+        add_deadline(M, N, Deadline),
         rtl_add_output_hook(rtl_sync:clock_moved)
     ).
+
+add_condition(M, N, Event, Id, T) :-
+    assertz(condition(N, Id, T)),
+    (   Event = '$call'(_, _)
+    ->  assertz(call_monitor(M-Id, N))
+    ;   time_index_add(monitor, M-Id, T, N-T)
+    ).
+
+remove_condition(M, N, Id, T) :-
+    retract(condition(N, Id, T)),
+    (   retract(call_monitor(M-Id, N))
+    ->  true
+    ;   time_index_remove(monitor, M-Id, T, N-T)
+    ).
+
+add_deadline(M, N, Deadline) :-
+    (   Deadline == inf -> true ; time_index_add(deadline, M, Deadline, N) ).
+
+remove_deadline(M, N, Deadline) :-
+    (   Deadline == inf -> true ; time_index_remove(deadline, M, Deadline, N) ).
+
+% Remove match N with its conditions, monitors and deadline; the last one removes the hook.
+unpark(N, Event, Query, Start, End) :-
+    retract(pending(N, Event, Query, Start, End, _, Deadline)),
+    Query = M:_,
+    forall(condition(N, Id, T), remove_condition(M, N, Id, T)),
+    remove_deadline(M, N, Deadline),
+    (   pending(_, _, _, _, _, _, _) -> true ; rtl_remove_output_hook(rtl_sync:clock_moved) ).
 
 %!  rtl_synchronized_retract(+Event, :Query, +SyncConds, +Start, +End) is det.
 %
@@ -284,99 +319,90 @@ release(Event, Query, Start, End) :-
     ).
 
 forget(N) :-
-    retractall(pending(N, _, _, _, _, _, _)),
-    retractall(monitor(_, N, _)),
-    (   pending(_, _, _, _, _, _, _) -> true ; rtl_remove_output_hook(rtl_sync:clock_moved) ).
+    (   unpark(N, _, _, _, _) -> true ; true ).
 
 release_pending(N) :-
-    (   retract(pending(N, Event, Query, Start, End, _, _))
-    ->  retractall(monitor(_, N, _)),
-        (   pending(_, _, _, _, _, _, _) -> true ; rtl_remove_output_hook(rtl_sync:clock_moved) ),
-        release(Event, Query, Start, End)
+    (   unpark(N, Event, Query, Start, End)
+    ->  release(Event, Query, Start, End)
     ;   true
     ).
 
-%   A record was added to memory Id: wake the matches waiting for it.
+%   A record was added to memory Id: wake the matches waiting for it (each one's condition
+%   on Id for a time before End now holds), and the queries waiting on Id, in the order
+%   the matches were postponed.
 :- multifile rtl_slr:memory_update_hook/4.
 rtl_slr:memory_update_hook(M, Id, _, End) :-
-    monitor(Id, _, _),
-    findall(N, ( monitor(Id, N, T),
-                 pending(N, Event, M:_, _, _, _, _),
-                 ( End > T -> true ; Event = '$call'(_, _) )     % a query may need any new record
-               ), Woken0),
-    sort(Woken0, Woken),
-    forall(member(N, Woken), woken(Id, N)).
+    time_index_take(monitor, M-Id, <, End, Met),
+    findall(N-call, call_monitor(M-Id, N), Calls),
+    append(Met, Calls, Woken0),
+    (   Woken0 == []
+    ->  true
+    ;   msort(Woken0, Woken),
+        forall(member(N-What, Woken), woken(Id, N, What))
+    ).
 
-woken(_, N) :-
-    pending(N, '$call'(_, _), _, _, _, _, _),
-    !,
+woken(_, N, call) :- !,
     release_pending(N).          % a query: evaluate it again, it says what it still needs
-woken(Id, N) :-
-    (   retract(monitor(Id, N, _)),
+woken(Id, N, T) :-
+    (   retract(condition(N, Id, T)),
         retract(pending(N, Event, Query, Start, End, Waiting, Deadline))
     ->  Left is Waiting - 1,
         (   Left =:= 0
-        ->  release_pending_term(N, Event, Query, Start, End)
+        ->  assertz(pending(N, Event, Query, Start, End, Left, Deadline)),
+            release_pending(N)
         ;   assertz(pending(N, Event, Query, Start, End, Left, Deadline))
         )
     ;   true
     ).
 
-release_pending_term(N, Event, Query, Start, End) :-
-    retractall(monitor(_, N, _)),
-    (   pending(_, _, _, _, _, _, _) -> true ; rtl_remove_output_hook(rtl_sync:clock_moved) ),
-    release(Event, Query, Start, End).
-
 %   The output hook while matches are postponed: release those whose histories are
 %   complete now that the clock has moved.
 clock_moved(_, _, _, add) :- !,
     rtl_clock(Clock),
-    (   nb_current(rtl_sync_next_deadline, Next), number(Next), Clock >= Next
-    ->  rtl_program(M),
-        findall(D-N, ( pending(N, _, M:_, _, _, _, D), D \== inf, D =< Clock ), Due0),
-        keysort(Due0, Due),
-        forall(member(_-N, Due), recheck(N)),
-        next_deadline
-    ;   true
-    ).
+    rtl_program(M),
+    time_index_take(deadline, M, =<, Clock, Due),
+    forall(member(N, Due), recheck(N, taken)).
 clock_moved(_, _, _, _).
 
 % A learned delay may have grown, or an `updated` event come: check the open conditions
-% of match N again; release it when all hold, else move its deadline.
-recheck(N) :-
-    findall(Id-T, monitor(Id, N, T), Open0),
+% of match N again; release it when all hold, else move its deadline. Deadline is `taken`
+% when the deadline is already out of the index.
+recheck(N, Deadline) :-
+    findall(Id-T, condition(N, Id, T), Open0),
     exclude(rtl_up_to_date, Open0, Open),
     (   Open == []
-    ->  release_pending(N)
+    ->  ( Deadline == taken -> restore_deadline(N) ; true ),
+        release_pending(N)
     ;   pending(N, '$call'(Action, Until), _, _, _, _, _),
         Until \== inf, rtl_clock(Clock), Clock >= Until
-    ->  forget(N),
+    ->  ( Deadline == taken -> restore_deadline(N) ; true ),
+        forget(N),
         call(Action, timeout)
-    ;   retract(pending(N, Event, Query, Start, End, _, _))
-    ->  forall(( member(Id-T, Open0), \+ memberchk(Id-T, Open) ), retract(monitor(Id, N, T))),
+    ;   retract(pending(N, Event, Query, Start, End, _, Deadline0))
+    ->  Query = M:_,
+        forall(( member(Id-T, Open0), \+ memberchk(Id-T, Open) ), remove_condition(M, N, Id, T)),
+        ( Deadline == taken -> true ; remove_deadline(M, N, Deadline0) ),
         length(Open, Waiting),
-        deadline(Open, Deadline0),
+        deadline(Open, Deadline1),
         (   Event = '$call'(_, Until), Until \== inf
-        ->  ( Deadline0 == inf -> Deadline = Until ; Deadline is min(Deadline0, Until) )
-        ;   Deadline = Deadline0
+        ->  ( Deadline1 == inf -> NewDeadline = Until ; NewDeadline is min(Deadline1, Until) )
+        ;   NewDeadline = Deadline1
         ),
-        assertz(pending(N, Event, Query, Start, End, Waiting, Deadline))
+        assertz(pending(N, Event, Query, Start, End, Waiting, NewDeadline)),
+        add_deadline(M, N, NewDeadline)
     ;   true
     ).
+
+% The index no longer holds N's deadline: put it back, for unpark to remove.
+restore_deadline(N) :-
+    (   pending(N, _, M:_, _, _, _, Deadline) -> add_deadline(M, N, Deadline) ; true ).
 
 recheck_all :-
     (   rtl_program(M), pending(_, _, M:_, _, _, _, _)
     ->  findall(End-N, pending(N, _, M:_, _, End, _, _), Pairs),
         keysort(Pairs, Sorted),
-        forall(member(_-N, Sorted), recheck(N)),
-        next_deadline
+        forall(member(_-N, Sorted), recheck(N, indexed))
     ;   true
-    ).
-
-next_deadline :-
-    (   aggregate_all(min(D), ( pending(_, _, _, _, _, _, D), D \== inf ), Min)
-    ->  nb_setval(rtl_sync_next_deadline, Min)
-    ;   nb_setval(rtl_sync_next_deadline, inf)
     ).
 
 %!  rtl_sync_finish(+Mode) is det.
