@@ -44,11 +44,11 @@ time_index_add(Index, Key, T, Item) :-
     bucket(T, B),
     assertz(entry(B, Index, Key, T, Item)),
     (   retract(low_bucket(Index, Key, Low0, C0))
-    ->  Low = min(Low0, B), C is C0 + 1
+    ->  earliest_bucket(Low0, B, Low),
+        C is C0 + 1
     ;   Low = B, C = 1
     ),
-    Low1 is Low,
-    assertz(low_bucket(Index, Key, Low1, C)).
+    assertz(low_bucket(Index, Key, Low, C)).
 
 %!  time_index_remove(+Index, +Key, +Time, +Item) is det.
 %
@@ -72,7 +72,7 @@ time_index_take(Index, Key, Order, Limit, Items) :-
     (   low_bucket(Index, Key, Low, Count),
         bucket(Limit, LimitBucket),
         LimitBucket >= Low
-    ->  (   LimitBucket - Low >= Count
+    ->  (   \+ ( integer(Low), integer(LimitBucket), LimitBucket - Low < Count )
         ->  findall(T-Item, ( entry(_, Index, Key, T, Item), before(Order, T, Limit) ), Pairs0)
         ;   findall(T-Item, ( between(Low, LimitBucket, B),
                               entry(B, Index, Key, T, Item),
@@ -85,11 +85,27 @@ time_index_take(Index, Key, Order, Limit, Items) :-
         Left is Count - Taken,
         (   Left =:= 0
         ->  true
-        ;   NewLow is max(Low, LimitBucket),   % every item below Limit's bucket was taken
+        ;   latest_bucket(Low, LimitBucket, NewLow),   % every item below Limit's bucket was taken
             assertz(low_bucket(Index, Key, NewLow, Left))
         ),
         pairs_values(Pairs, Items)
     ;   Items = []
+    ).
+
+earliest_bucket(B1, B2, B) :-
+    (   B1 == -inf -> B = -inf
+    ;   B2 == -inf -> B = -inf
+    ;   B1 == inf -> B = B2
+    ;   B2 == inf -> B = B1
+    ;   B is min(B1, B2)
+    ).
+
+latest_bucket(B1, B2, B) :-
+    (   B1 == inf -> B = inf
+    ;   B2 == inf -> B = inf
+    ;   B1 == -inf -> B = B2
+    ;   B2 == -inf -> B = B1
+    ;   B is max(B1, B2)
     ).
 
 before(<, T, Limit) :- T < Limit.

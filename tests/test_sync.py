@@ -242,3 +242,13 @@ def test_query_with_synchronized_true_returns_a_future():
     future = engine.query("tf(cam, base, L)^11", at=11, synchronized=True)
     engine.feed_batch([("tf(cam, base, [0, 2, 1])", 12)])
     assert future.result(timeout=0) == [{"L": "[0.0,1.0,1.0]"}]
+
+
+def test_time_index_plunit(swipl):
+    """The time index that postponed matches wait in (prolog_runtime/rtl_time_index.pl)
+    against a list model on random add/remove/take sequences."""
+    proc = subprocess.run([swipl, "--no-tty", "-q", "-g", "run_tests", "-t", "halt",
+                           str(Path(__file__).resolve().parent.parent / "prolog_runtime" / "tests"
+                               / "test_time_index.pl")],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout
