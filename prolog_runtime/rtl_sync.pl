@@ -50,8 +50,8 @@ order; rtl_sync_finish(drop) discards them.
 :- meta_predicate rtl_synchronized(+, 0, +, +, +), rtl_synchronized_retract(+, 0, +, +, +),
                   rtl_postpone(+, +, 1).
 
-% pending(N, Event, Query, Start, End, Waiting, Deadline)
-:- dynamic pending/7.
+% pending(N, Event, Query, Start, End, Deadline): its open conditions are condition(N, _, _)
+:- dynamic pending/6.
 % condition(N, MemoryId, Time): match N waits until memory MemoryId is up to date for Time;
 % its monitor is in the time index `monitor` under Program-MemoryId (item N-Time), or, for
 % a query ('$call'), which any new record may satisfy, call_monitor(Program-MemoryId, N)
@@ -218,9 +218,8 @@ park(Event, Query, Open, Start, End) :-
         ->  ( Deadline0 == inf -> Deadline = Until ; Deadline is min(Deadline0, Until) )
         ;   Deadline = Deadline0
         ),
-        length(Open, Waiting),
         Query = M:_,
-        assertz(pending(N, Event, Query, Start, End, Waiting, Deadline)),
+        assertz(pending(N, Event, Query, Start, End, Deadline)),
         forall(member(Id-T, Open), add_condition(M, N, Event, Id, T)),
         add_deadline(M, N, Deadline),
         rtl_add_output_hook(rtl_sync:clock_moved)
@@ -248,11 +247,11 @@ remove_deadline(M, N, Deadline) :-
 
 % Remove match N with its conditions, monitors and deadline; the last one removes the hook.
 unpark(N, Event, Query, Start, End) :-
-    retract(pending(N, Event, Query, Start, End, _, Deadline)),
+    retract(pending(N, Event, Query, Start, End, Deadline)),
     Query = M:_,
     forall(condition(N, Id, T), remove_condition(M, N, Id, T)),
     remove_deadline(M, N, Deadline),
-    (   pending(_, _, _, _, _, _, _) -> true ; rtl_remove_output_hook(rtl_sync:clock_moved) ).
+    (   pending(_, _, _, _, _, _) -> true ; rtl_remove_output_hook(rtl_sync:clock_moved) ).
 
 %!  rtl_synchronized_retract(+Event, :Query, +SyncConds, +Start, +End) is det.
 %
@@ -260,7 +259,7 @@ unpark(N, Event, Query, Start, End) :-
 %   already released stays.)
 
 rtl_synchronized_retract(Event, Query, _, Start, End) :-
-    forall(( pending(N, E, Q, S, En, _, _), S =:= Start, En =:= End, E-Q =@= Event-Query ),
+    forall(( pending(N, E, Q, S, En, _), S =:= Start, En =:= End, E-Q =@= Event-Query ),
            forget(N)).
 
 sync_conditions(Conds, Waits) :-
@@ -345,13 +344,8 @@ woken(_, N, call) :- !,
     release_pending(N).          % a query: evaluate it again, it says what it still needs
 woken(Id, N, T) :-
     (   retract(condition(N, Id, T)),
-        retract(pending(N, Event, Query, Start, End, Waiting, Deadline))
-    ->  Left is Waiting - 1,
-        (   Left =:= 0
-        ->  assertz(pending(N, Event, Query, Start, End, Left, Deadline)),
-            release_pending(N)
-        ;   assertz(pending(N, Event, Query, Start, End, Left, Deadline))
-        )
+        \+ condition(N, _, _)
+    ->  release_pending(N)
     ;   true
     ).
 
@@ -361,47 +355,40 @@ clock_moved(_, _, _, add) :- !,
     rtl_clock(Clock),
     rtl_program(M),
     time_index_take(deadline, M, =<, Clock, Due),
-    forall(member(N, Due), recheck(N, taken)).
+    forall(member(N, Due), recheck(N)).
 clock_moved(_, _, _, _).
 
 % A learned delay may have grown, or an `updated` event come: check the open conditions
-% of match N again; release it when all hold, else move its deadline. Deadline is `taken`
-% when the deadline is already out of the index.
-recheck(N, Deadline) :-
+% of match N again; release it when all hold, else move its deadline (which clock_moved
+% may have taken out of the index already: removing it again does nothing).
+recheck(N) :-
     findall(Id-T, condition(N, Id, T), Open0),
     exclude(rtl_up_to_date, Open0, Open),
     (   Open == []
-    ->  ( Deadline == taken -> restore_deadline(N) ; true ),
-        release_pending(N)
-    ;   pending(N, '$call'(Action, Until), _, _, _, _, _),
+    ->  release_pending(N)
+    ;   pending(N, '$call'(Action, Until), _, _, _, _),
         Until \== inf, rtl_clock(Clock), Clock >= Until
-    ->  ( Deadline == taken -> restore_deadline(N) ; true ),
-        forget(N),
+    ->  forget(N),
         call(Action, timeout)
-    ;   retract(pending(N, Event, Query, Start, End, _, Deadline0))
+    ;   retract(pending(N, Event, Query, Start, End, Deadline0))
     ->  Query = M:_,
         forall(( member(Id-T, Open0), \+ memberchk(Id-T, Open) ), remove_condition(M, N, Id, T)),
-        ( Deadline == taken -> true ; remove_deadline(M, N, Deadline0) ),
-        length(Open, Waiting),
+        remove_deadline(M, N, Deadline0),
         deadline(Open, Deadline1),
         (   Event = '$call'(_, Until), Until \== inf
         ->  ( Deadline1 == inf -> NewDeadline = Until ; NewDeadline is min(Deadline1, Until) )
         ;   NewDeadline = Deadline1
         ),
-        assertz(pending(N, Event, Query, Start, End, Waiting, NewDeadline)),
+        assertz(pending(N, Event, Query, Start, End, NewDeadline)),
         add_deadline(M, N, NewDeadline)
     ;   true
     ).
 
-% The index no longer holds N's deadline: put it back, for unpark to remove.
-restore_deadline(N) :-
-    (   pending(N, _, M:_, _, _, _, Deadline) -> add_deadline(M, N, Deadline) ; true ).
-
 recheck_all :-
-    (   rtl_program(M), pending(_, _, M:_, _, _, _, _)
-    ->  findall(End-N, pending(N, _, M:_, _, End, _, _), Pairs),
+    (   rtl_program(M), pending(_, _, M:_, _, _, _)
+    ->  findall(End-N, pending(N, _, M:_, _, End, _), Pairs),
         keysort(Pairs, Sorted),
-        forall(member(_-N, Sorted), recheck(N, indexed))
+        forall(member(_-N, Sorted), recheck(N))
     ;   true
     ).
 
@@ -412,12 +399,12 @@ recheck_all :-
 
 rtl_sync_finish(drop) :- !,
     rtl_program(M),
-    forall(pending(N, Event, M:_, _, _, _, _),
+    forall(pending(N, Event, M:_, _, _, _),
            ( forget(N),
              ( Event = '$call'(Action, _) -> call(Action, dropped) ; true ) )).
 rtl_sync_finish(run) :-
     rtl_program(M),
-    findall(End-N, pending(N, _, M:_, _, End, _, _), Pairs),
+    findall(End-N, pending(N, _, M:_, _, End, _), Pairs),
     keysort(Pairs, Sorted),
     setup_call_cleanup(nb_setval(rtl_input_ended, true),
                        forall(member(_-N, Sorted), release_pending(N)),
@@ -436,4 +423,4 @@ rtl_input_ended :-
 
 rtl_sync_pending(Count) :-
     rtl_program(M),
-    aggregate_all(count, pending(_, _, M:_, _, _, _, _), Count).
+    aggregate_all(count, pending(_, _, M:_, _, _, _), Count).

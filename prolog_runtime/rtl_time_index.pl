@@ -73,14 +73,14 @@ time_index_take(Index, Key, Order, Limit, Items) :-
         bucket(Limit, LimitBucket),
         LimitBucket >= Low
     ->  (   \+ ( integer(Low), integer(LimitBucket), LimitBucket - Low < Count )
-        ->  findall(T-Item, ( entry(_, Index, Key, T, Item), before(Order, T, Limit) ), Pairs0)
-        ;   findall(T-Item, ( between(Low, LimitBucket, B),
-                              entry(B, Index, Key, T, Item),
-                              before(Order, T, Limit) ), Pairs0)
+        ->  findall(taken(T, Item, B), ( entry(B, Index, Key, T, Item), before(Order, T, Limit) ), Taken0)
+        ;   findall(taken(T, Item, B), ( between(Low, LimitBucket, B),
+                                         entry(B, Index, Key, T, Item),
+                                         before(Order, T, Limit) ), Taken0)
         ),
-        msort(Pairs0, Pairs),
-        forall(member(T-Item, Pairs), ( bucket(T, B), retract(entry(B, Index, Key, T, Item)) )),
-        length(Pairs, Taken),
+        msort(Taken0, TakenEntries),
+        forall(member(taken(T, Item, B), TakenEntries), retract(entry(B, Index, Key, T, Item))),
+        length(TakenEntries, Taken),
         retract(low_bucket(Index, Key, Low, Count)),
         Left is Count - Taken,
         (   Left =:= 0
@@ -88,7 +88,7 @@ time_index_take(Index, Key, Order, Limit, Items) :-
         ;   latest_bucket(Low, LimitBucket, NewLow),   % every item below Limit's bucket was taken
             assertz(low_bucket(Index, Key, NewLow, Left))
         ),
-        pairs_values(Pairs, Items)
+        findall(Item, member(taken(_, Item, _), TakenEntries), Items)
     ;   Items = []
     ).
 
