@@ -42,7 +42,9 @@ program file too, so del_event_rule/1 removes those as well.
 %
 %   The compiler is run as `PYTHON -m retalisc compile-rules`, PYTHON being the
 %   environment variable `RETALISC_PYTHON`, the Python that compiled the program, the
-%   `.venv` next to the runtime, or `python3`, whichever is found first.
+%   `.venv` next to the runtime, the Python of the installation the runtime was installed
+%   into (`PREFIX/bin/python3` for `PREFIX/lib/pythonX.Y/site-packages/retalisc/prolog_runtime`),
+%   or `python3`, whichever is found first.
 
 ins_event_rule(Caller:Rule) :-
     rtl_target_program(Caller, M),
@@ -234,12 +236,12 @@ rule_text(Rule, Text) :-
 
 run_compiler(M, Prefix, Text, Clauses) :-
     compiler_python(M, Python),
-    runtime_root(Root),
+    compiler_directory(Dir),
     setup_call_cleanup(
         process_create(Python, ['-m', retalisc, 'compile-rules', '--module', M,
                                 '--rule-prefix', Prefix, '--name', 'ins_event_rule'],
                        [ stdin(pipe(In)), stdout(pipe(Out)), stderr(pipe(Err)),
-                         cwd(Root), process(Pid) ]),
+                         cwd(Dir), process(Pid) ]),
         ( set_stream(In, encoding(utf8)),
           set_stream(Out, encoding(utf8)),
           set_stream(Err, encoding(utf8)),
@@ -268,6 +270,8 @@ compiler_python(M, Python) :-
         directory_file_path(Root, '.venv/bin/python', P),
         exists_file(P)
     ->  Python = P
+    ;   installation_python(P)
+    ->  Python = P
     ;   Python = path(python3)
     ).
 
@@ -275,3 +279,27 @@ runtime_root(Root) :-
     module_property(rtl_rules, file(File)),
     file_directory_name(File, Runtime),
     file_directory_name(Runtime, Root).
+
+%   The interpreter of the installation an installed runtime belongs to:
+%   PREFIX/lib/pythonX.Y/site-packages/retalisc/prolog_runtime gives PREFIX/bin/python3
+%   (a virtualenv, or the system's Python for dist-packages).
+installation_python(Python) :-
+    runtime_root(Package),
+    file_directory_name(Package, SitePackages),
+    file_base_name(SitePackages, Base),
+    memberchk(Base, ['site-packages', 'dist-packages']),
+    file_directory_name(SitePackages, PythonLib),
+    file_directory_name(PythonLib, Lib),
+    file_directory_name(Lib, Prefix),
+    directory_file_path(Prefix, 'bin/python3', Python),
+    exists_file(Python).
+
+%   The compiler runs in the root of a source checkout (so that `python -m retalisc` finds
+%   the package there without installing it), otherwise in the current directory.
+compiler_directory(Dir) :-
+    runtime_root(Root),
+    (   directory_file_path(Root, 'retalisc/__init__.py', Init),
+        exists_file(Init)
+    ->  Dir = Root
+    ;   working_directory(Dir, Dir)
+    ).

@@ -23,7 +23,7 @@ import jinja2
 from ...frontend.definite import Program, Rule, term_vars
 from ...frontend.terms import Compound, Term, quote_atom, to_prolog
 from ...passes.unit import AqUnit
-from .render import runtime_dir
+from ...runtime_location import runtime_dir
 
 _ENV = jinja2.Environment(
     loader=jinja2.FileSystemLoader(str(Path(__file__).with_name("templates"))),
@@ -156,4 +156,4 @@ def _render(program: Program) -> str:
     runtime = quote_atom(str(runtime_dir()))
     return _ENV.get_template("aq_program.j2").render(
         file=program.file, mode=program.mode, subsumption=program.subsumption, kinds=kinds,
-        dynamic=dynamic, facts=facts, rules=rules, runtime=runtime)
+        dynamic=dynamic, facts=facts, rules=rules, runtime_dir=runtime)

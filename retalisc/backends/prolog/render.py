@@ -7,7 +7,6 @@ turns terms into text: each clause is written with operators, one body goal per 
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import List
 
@@ -17,6 +16,7 @@ from ...frontend.program import Declaration, Directive, StaticClause
 from ...frontend.terms import Atom, Compound, Term, conjuncts, quote_atom
 from ...frontend.writer import write_term
 from ...passes.unit import GeneratedRule, Unit
+from ...runtime_location import runtime_dir
 
 _ENV = jinja2.Environment(
     loader=jinja2.FileSystemLoader(str(Path(__file__).with_name("templates"))),
@@ -26,13 +26,6 @@ _ENV = jinja2.Environment(
 
 # Directives that only configure the compiler: they are compiled, not copied.
 _COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3), ("op", 3)}
-
-
-def runtime_dir() -> Path:
-    override = os.environ.get("RETALIS_RUNTIME")
-    if override:
-        return Path(override).resolve()
-    return Path(__file__).resolve().parents[3] / "prolog_runtime"
 
 
 def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
