@@ -175,17 +175,32 @@ _SYMBOL_ATOM = re.compile(r"^[+\-*/\\^<>=~:.?@#&$]+$")
 def quote_atom(name: str) -> str:
     if _LETTER_ATOM.match(name) or name in ("[]", "!", ";", "{}"):
         return name
-    if _SYMBOL_ATOM.match(name) and name != ".":
+    if _SYMBOL_ATOM.match(name) and name != "." and "/*" not in name and not name.endswith("."):
         return name
-    escaped = (
-        name.replace("\\", "\\\\").replace("'", "\\'").replace("\n", "\\n").replace("\t", "\\t")
-    )
-    return f"'{escaped}'"
+    return "'" + _escape(name, "'") + "'"
+
+
+_CONTROL_ESCAPES = {"\\": "\\\\", "\n": "\\n", "\t": "\\t"}
+
+
+def _escape(text: str, quote: str) -> str:
+    """`text` between `quote`s as SWI-Prolog reads it back: backslash, the quote and control
+    characters escaped."""
+    out = []
+    for c in text:
+        if c == quote:
+            out.append("\\" + c)
+        elif c in _CONTROL_ESCAPES:
+            out.append(_CONTROL_ESCAPES[c])
+        elif ord(c) < 0x20 or ord(c) == 0x7F:
+            out.append(f"\\x{ord(c):x}\\")
+        else:
+            out.append(c)
+    return "".join(out)
 
 
 def _quote_string(text: str) -> str:
-    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n").replace("\t", "\\t")
-    return f'"{escaped}"'
+    return '"' + _escape(text, '"') + '"'
 
 
 def format_number(value) -> str:

@@ -36,6 +36,7 @@ def run(unit: Unit) -> Unit:
     derived = {indicator(r.head) for r in program.event_rules if r.synchronized is None}
     static = {indicator(c.head) for c in program.static_clauses}
 
+    _check_labels(program.event_rules)
     for rule in program.event_rules:
         _check_head_variables(rule)
         _check_pattern_arities(rule.pattern, derived)
@@ -52,6 +53,20 @@ def run(unit: Unit) -> Unit:
     for item in program.declarations + program.directives:
         _check_declaration_arity(item.goal, item.span)
     return unit
+
+
+def _check_labels(rules) -> None:
+    """Labels name the generated predicates and are the ids `del_event_rule/1` takes: two
+    rules cannot share one."""
+    labelled: Dict[str, EventRule] = {}
+    for rule in rules:
+        if rule.label is None:
+            continue
+        first = labelled.get(rule.label)
+        if first is not None:
+            raise RetalisSemanticError(f"two rules are labelled {rule.label} (the first one at line "
+                                       f"{first.span.line}); rule labels must be unique", rule.span)
+        labelled[rule.label] = rule
 
 
 def _event_arities(rules: Iterable[EventRule]) -> Set[Tuple[str, int]]:

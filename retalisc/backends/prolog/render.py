@@ -15,8 +15,14 @@ import jinja2
 
 from ...frontend.program import Declaration, Directive, StaticClause
 from ...frontend.terms import Atom, Compound, Term, conjuncts, quote_atom
-from ...frontend.writer import write_term
+from ...frontend.writer import write_term as _write_term
 from ...passes.unit import GeneratedRule, Unit
+
+def write_term(term: Term, max_priority: int = 1200) -> str:
+    """A term as generated code writes it: the event operators (`seq`, `where`, `<-`, ...) in
+    functional notation, since the runtime module does not declare them as operators."""
+    return _write_term(term, max_priority, event_operators=False)
+
 
 _ENV = jinja2.Environment(
     loader=jinja2.FileSystemLoader(str(Path(__file__).with_name("templates"))),

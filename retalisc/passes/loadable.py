@@ -1,0 +1,293 @@
+"""loadable: the Prolog that the program contributes to the generated module loads in SWI-Prolog.
+
+Static clauses, directives, `where`/`check` conditions and `do` actions are copied into the
+generated module as they are written, so what SWI-Prolog would refuse while loading it (or
+would accept only by silently changing the meaning of generated code) is an error here, at
+its place in the source:
+
+- a clause head that is not an atom or a compound term (`1.`, `X :- a.`), a control
+  construct (`(a, b, c).`), a module-qualified head, or a predicate the program may not
+  define: a builtin (ISO ones fail to load, others would replace what the generated code
+  calls), a runtime predicate (it would hide the runtime's), a predicate of the generated code
+  (`Unit.target` lists them; the backend fills it in);
+- a goal that is not callable (`foo :- 1.`, `where "s"`, `do 1`);
+- a directive that is not a goal (`:- :- G.`), `:- module(...)` (the program is compiled into
+  a module of its own), a malformed `op/3`, a declaration (`dynamic`, ...) of a predicate the
+  program may not define, and a directive that calls a predicate that does not exist when it
+  runs (directives run while the module loads: only builtins, library and runtime
+  predicates and the clauses above them exist then).
+
+Runs after `edbc`, which names the predicates of the generated code.
+"""
+from __future__ import annotations
+
+from typing import Iterable, Optional, Set, Tuple
+
+from ..frontend.errors import RetalisSemanticError
+from ..frontend.program import Declaration, Directive, EventRule, StaticClause, pattern_conditions
+from ..frontend.terms import Atom, Compound, Number, String, Term, Var, indicator, list_items, span_of
+from .unit import TargetPredicates, Unit
+
+name = "loadable"
+
+Indicator = Tuple[str, int]
+
+#: Terms that are not clause heads whatever SWI-Prolog makes of them.
+CONTROL_HEADS = {(":-", 1), (":-", 2), ("?-", 1), ("-->", 2), ("|", 2), ("<-", 2), ("rule:", 2)}
+
+# Goal arguments of control constructs and of the meta-predicates SWI-Prolog compiles in place
+# (or that take a goal written in the clause): the positions that hold goals.
+_GOAL_POSITIONS = {
+    (",", 2): (0, 1), (";", 2): (0, 1), ("->", 2): (0, 1), ("*->", 2): (0, 1), ("\\+", 1): (0,),
+    ("call", 1): (0,), ("once", 1): (0,), ("ignore", 1): (0,), ("forall", 2): (0, 1),
+    ("findall", 3): (1,), ("findall", 4): (1,), ("aggregate_all", 3): (1,), ("aggregate_all", 4): (2,),
+    ("catch", 3): (0, 2), ("call_cleanup", 2): (0, 1), ("setup_call_cleanup", 3): (0, 1, 2),
+}
+
+# Directives that declare properties of predicates given by indicators.
+_DECLARATIONS = {"dynamic", "discontiguous", "multifile", "public", "table", "thread_local",
+                 "module_transparent"}
+
+# Directives after which the directive check cannot know what is defined.
+_LOADERS = {"use_module", "ensure_loaded", "consult", "include", "load_files", "reexport", "autoload",
+            "use_foreign_library", "initialization"}
+
+OP_TYPES = ("xfx", "xfy", "yfx", "fy", "fx", "xf", "yf")
+
+
+#: SWI-Prolog's `max_procedure_arity` flag: a predicate cannot have more arguments.
+MAX_PROCEDURE_ARITY = 1024
+
+
+def run(unit: Unit) -> Unit:
+    _check_generated_arities(unit)
+    target = unit.target
+    generated = frozenset(_generated_predicates(unit)) | target.generated
+    reserved = _Reserved(target, generated)
+    defined: Set[Indicator] = set()
+    loaders_seen = False
+    for clause in unit.program.clauses:
+        if isinstance(clause, StaticClause):
+            key = _check_clause(clause, reserved)
+            if key is not None:
+                defined.add(key)
+        elif isinstance(clause, Directive):
+            _check_directive_goal(clause.goal, clause.span)
+            defined.update(_declared(clause.goal, clause.span, reserved))
+            if not loaders_seen and target.builtins:
+                _check_calls_exist(clause.goal, defined, target, clause.span)
+            loaders_seen = loaders_seen or _loads_code(clause.goal)
+        elif isinstance(clause, Declaration):
+            _check_directive_goal(clause.goal, clause.span)
+        elif isinstance(clause, EventRule):
+            for condition in pattern_conditions(clause.pattern):
+                _check_callable(condition, clause.span, "a condition")
+            if clause.action is not None:
+                _check_callable(clause.action, clause.span, "an action")
+    return unit
+
+
+def _check_generated_arities(unit: Unit) -> None:
+    for rule in unit.generated or []:
+        widest = max((arity for _, arity in _rule_predicates(rule)), default=0)
+        if widest > MAX_PROCEDURE_ARITY:
+            source = next(r.rule for r in unit.rules if r.rule_id == rule.rule_id)
+            raise RetalisSemanticError(
+                f"this rule needs a step predicate with {widest} arguments, and SWI-Prolog allows at most "
+                f"{MAX_PROCEDURE_ARITY}: split the pattern into several rules (each carries fewer variables)",
+                source.span)
+
+
+def _generated_predicates(unit: Unit) -> Iterable[Indicator]:
+    for rule in unit.generated or []:
+        yield from _rule_predicates(rule)
+
+
+def _rule_predicates(rule) -> Iterable[Indicator]:
+    for clause in rule.clauses + rule.triggers:
+        head = clause.args[0] if isinstance(clause, Compound) and clause.name == ":-" and clause.arity == 2 \
+            else clause
+        key = indicator(head)
+        if key is not None:
+            yield key
+    for store_name, arity, _ in rule.stores:
+        yield (store_name, arity)
+
+
+class _Reserved:
+    """Why the program may not define a predicate."""
+
+    def __init__(self, target: TargetPredicates, generated: frozenset):
+        self.target = target
+        self.generated = generated
+
+    def why(self, key: Indicator) -> Optional[str]:
+        if key in CONTROL_HEADS:
+            return "it is not a predicate a program can define"
+        if key in self.target.builtins or key[0].startswith("$"):
+            return "it is a builtin predicate of SWI-Prolog"
+        module = self.target.runtime.get(key)
+        if module is not None:
+            return f"it is a predicate of the Retalis runtime (module {module})"
+        if key in self.generated:
+            return "it is a predicate of the code generated for the event rules"
+        return None
+
+
+def _check_clause(clause: StaticClause, reserved: _Reserved) -> Optional[Indicator]:
+    term = clause.term
+    if isinstance(term, Compound) and term.name == "-->" and term.arity == 2:
+        head, body = term.args
+        if isinstance(head, Compound) and head.name == "," and head.arity == 2:
+            head = head.args[0]                       # Head, PushBack --> Body
+        key = _check_head(head, clause, reserved, extra=2)
+        _check_grammar_body(body, clause)
+        return key
+    key = _check_head(clause.head, clause, reserved)
+    if clause.body is not None:
+        _check_callable(clause.body, clause.span, "a clause body")
+    return key
+
+
+def _check_head(head: Term, clause: StaticClause, reserved: _Reserved, extra: int = 0) -> Indicator:
+    where = span_of(head) or clause.span
+    if isinstance(head, Var):
+        raise RetalisSemanticError(f"the head of a clause cannot be a variable ({head.name})", where)
+    if not isinstance(head, (Atom, Compound)):
+        raise RetalisSemanticError("the head of a clause must be an atom or a compound term", where)
+    if isinstance(head, Compound) and head.name == ":" and head.arity == 2:
+        raise RetalisSemanticError("a program cannot define clauses of another module (Module:Head)", where)
+    key = (head.name, (head.arity if isinstance(head, Compound) else 0) + extra)
+    reason = reserved.why(key)
+    if reason is not None:
+        raise RetalisSemanticError(f"cannot define {key[0]}/{key[1]}: {reason}", where)
+    return key
+
+
+def _goals(goal: Term):
+    """The goals of `goal` that are called, looking through control constructs."""
+    stack = [goal]
+    while stack:
+        g = stack.pop()
+        key = indicator(g)
+        positions = _GOAL_POSITIONS.get(key) if key is not None else None
+        if positions is None:
+            yield g
+        else:
+            stack.extend(g.args[i] for i in reversed(positions))
+
+
+def _check_callable(goal: Term, fallback, what: str) -> None:
+    for g in _goals(goal):
+        if isinstance(g, (Number, String)):
+            shown = g.text if isinstance(g, String) else g.value
+            raise RetalisSemanticError(f"{what} calls {shown!r}, which is not a goal (not callable)",
+                                       span_of(g) or fallback)
+        if isinstance(g, Compound) and g.name == ":" and g.arity == 2:
+            _check_callable(g.args[1], span_of(g) or fallback, what)
+
+
+def _check_grammar_body(body: Term, clause: StaticClause) -> None:
+    stack = [body]
+    while stack:
+        b = stack.pop()
+        if isinstance(b, Compound) and (b.name, b.arity) in ((",", 2), (";", 2), ("|", 2), ("->", 2)):
+            stack.extend(b.args)
+        elif isinstance(b, Compound) and (b.name, b.arity) == ("\\+", 1):
+            stack.append(b.args[0])
+        elif isinstance(b, Compound) and (b.name, b.arity) == ("{}", 1):
+            _check_callable(b.args[0], clause.span, "a grammar rule")
+        elif isinstance(b, Number):
+            raise RetalisSemanticError(f"a grammar rule body cannot contain the number {b.value}",
+                                       span_of(b) or clause.span)
+
+
+def _check_directive_goal(goal: Term, span) -> None:
+    where = span_of(goal) or span
+    if isinstance(goal, Var):
+        raise RetalisSemanticError(f"a directive must be a goal, not a variable ({goal.name})", where)
+    for g in _goals(goal):
+        key = indicator(g)
+        if key in ((":-", 1), (":-", 2), ("?-", 1), ("-->", 2), ("<-", 2), ("rule:", 2)):
+            raise RetalisSemanticError(f"'{key[0]}' inside a directive: a directive is written ':- Goal.'",
+                                       span_of(g) or where)
+        if key is not None and key[0] == "module" and key[1] in (1, 2):
+            raise RetalisSemanticError("a program cannot declare a module: retalisc compiles it into a module "
+                                       "of its own (remove the module/2 directive)", span_of(g) or where)
+        if key == ("op", 3):
+            _check_op(g, span)
+    _check_callable(goal, where, "a directive")
+
+
+def _check_op(goal: Compound, span) -> None:
+    priority, kind, names = goal.args
+    if not (isinstance(priority, Number) and isinstance(priority.value, int) and 0 <= priority.value <= 1200):
+        raise RetalisSemanticError("op/3: the priority must be an integer from 0 to 1200",
+                                   span_of(priority) or span)
+    if not (isinstance(kind, Atom) and kind.name in OP_TYPES):
+        raise RetalisSemanticError(f"op/3: the type must be one of {', '.join(OP_TYPES)}", span_of(kind) or span)
+    items = list_items(names)
+    for item in [names] if items is None else items:
+        if not isinstance(item, Atom):
+            raise RetalisSemanticError("op/3: the operator must be an atom or a list of atoms",
+                                       span_of(item) or span)
+        if item.name in (",", "[]", "{}", "|") or item.name in ("rule:", "<-"):
+            raise RetalisSemanticError(f"op/3: the operator '{item.name}' cannot be changed",
+                                       span_of(item) or span)
+
+
+def _declared(goal: Term, span, reserved: _Reserved) -> Set[Indicator]:
+    """Predicates a `dynamic`/`discontiguous`/... directive declares (checked: the program
+    must be allowed to define them)."""
+    found: Set[Indicator] = set()
+    for g in _goals(goal):
+        if isinstance(g, Compound) and g.name in _DECLARATIONS and g.arity == 1:
+            for spec in _indicators(g.args[0]):
+                if spec is None:
+                    continue
+                key, where = spec
+                reason = reserved.why(key)
+                if reason is not None:
+                    raise RetalisSemanticError(f"cannot declare {g.name} {key[0]}/{key[1]}: {reason}",
+                                               where or span)
+                found.add(key)
+    return found
+
+
+def _indicators(spec: Term):
+    """(indicator, span) of each `Name/Arity` (or `Name//Arity`) in a declaration argument."""
+    if isinstance(spec, Compound) and spec.name == "as" and spec.arity == 2:
+        spec = spec.args[0]
+    items = list_items(spec)
+    if items is not None:
+        for item in items:
+            yield from _indicators(item)
+        return
+    if isinstance(spec, Compound) and spec.name == "," and spec.arity == 2:
+        yield from _indicators(spec.args[0])
+        yield from _indicators(spec.args[1])
+        return
+    if (isinstance(spec, Compound) and spec.name in ("/", "//") and spec.arity == 2
+            and isinstance(spec.args[0], Atom) and isinstance(spec.args[1], Number)
+            and isinstance(spec.args[1].value, int)):
+        arity = spec.args[1].value + (2 if spec.name == "//" else 0)
+        yield (spec.args[0].name, arity), span_of(spec)
+        return
+    yield None
+
+
+def _check_calls_exist(goal: Term, defined: Set[Indicator], target: TargetPredicates, span) -> None:
+    for g in _goals(goal):
+        key = indicator(g)
+        if key is None or (key[0] == ":" and key[1] == 2):
+            continue
+        if key in defined or target.known(key):
+            continue
+        raise RetalisSemanticError(
+            f"this directive calls {key[0]}/{key[1]}, which does not exist when it runs (a directive runs "
+            "while the program loads: it can call builtins, library and runtime predicates and the "
+            "clauses above it)", span_of(g) or span)
+
+
+def _loads_code(goal: Term) -> bool:
+    return any(isinstance(g, (Atom, Compound)) and g.name in _LOADERS for g in _goals(goal))
