@@ -139,7 +139,7 @@ class _Resolver:
         if isinstance(item, _Operand):
             return item.term, 0
         name = item.name
-        if name in (",", "|"):
+        if name in (",", "|") and not item.quoted:          # ',' and '|' quoted are atoms
             raise self.error(f"unexpected '{name}'", self.pos - 1)
         nxt = self.peek()
         # A minus sign written directly before a number is part of the number.

@@ -354,19 +354,34 @@ def _is(term: Term, name: str, arity: int) -> bool:
     return isinstance(term, Compound) and term.name == name and term.arity == arity
 
 
+def pattern_children(pattern: Pattern) -> list:
+    """The direct sub-patterns of a pattern, left to right."""
+    if isinstance(pattern, Binary):
+        return [pattern.left, pattern.right]
+    if isinstance(pattern, (Where, Check, Window, Aggregate)):
+        return [pattern.pattern]
+    if isinstance(pattern, Negation):
+        return [pattern.negated, pattern.first, pattern.second]
+    return []
+
+
+def walk_pattern(pattern: Pattern, into=None):
+    """A pattern and its sub-patterns, each before its children, left to right, without
+    recursion (a chain of 1,500 `seq` steps nests 1,500 deep); `into(p)` false stops the walk
+    from entering p's children."""
+    stack = [pattern]
+    while stack:
+        p = stack.pop()
+        yield p
+        if into is None or into(p):
+            stack.extend(reversed(pattern_children(p)))
+
+
 def pattern_conditions(pattern: Pattern):
     """The conditions (`where`, `check`) of a pattern and its sub-patterns, outermost first."""
-    if isinstance(pattern, (Where, Check)):
-        yield pattern.condition
-        yield from pattern_conditions(pattern.pattern)
-    elif isinstance(pattern, Binary):
-        yield from pattern_conditions(pattern.left)
-        yield from pattern_conditions(pattern.right)
-    elif isinstance(pattern, (Window, Aggregate)):
-        yield from pattern_conditions(pattern.pattern)
-    elif isinstance(pattern, Negation):
-        for part in (pattern.negated, pattern.first, pattern.second):
-            yield from pattern_conditions(part)
+    for p in walk_pattern(pattern):
+        if isinstance(p, (Where, Check)):
+            yield p.condition
 
 
 # ---- writing patterns back (for dumps and comments in generated code) -----------------

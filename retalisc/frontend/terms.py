@@ -175,7 +175,7 @@ _SYMBOL_ATOM = re.compile(r"^[+\-*/\\^<>=~:.?@#&$]+$")
 def quote_atom(name: str) -> str:
     if _LETTER_ATOM.match(name) or name in ("[]", "!", ";", "{}"):
         return name
-    if _SYMBOL_ATOM.match(name) and name != "." and "/*" not in name and not name.endswith("."):
+    if _SYMBOL_ATOM.match(name) and name != "." and "/*" not in name:
         return name
     return "'" + _escape(name, "'") + "'"
 

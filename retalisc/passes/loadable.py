@@ -8,8 +8,10 @@ its place in the source:
 - a clause head that is not an atom or a compound term (`1.`, `X :- a.`), a control
   construct (`(a, b, c).`), a module-qualified head, or a predicate the program may not
   define: a builtin (ISO ones fail to load, others would replace what the generated code
-  calls), a runtime predicate (it would hide the runtime's), a predicate of the generated code
-  (`Unit.target` lists them; the backend fills it in);
+  calls), a `rtl_*` predicate of the runtime (generated code calls them), a predicate of the
+  generated code (`Unit.target` lists them; the backend fills it in). The runtime's library
+  predicates (`min/3`, `new_event/1`, ...) may be defined: they go to `Unit.runtime_overrides`
+  and the generated module does not import the runtime's;
 - a goal that is not callable (`foo :- 1.`, `where "s"`, `do 1`);
 - a directive that is not a goal (`:- :- G.`), `:- module(...)` (the program is compiled into
   a module of its own), a malformed `op/3`, a declaration (`dynamic`, ...) of a predicate the
@@ -24,8 +26,10 @@ from __future__ import annotations
 from typing import Iterable, Optional, Set, Tuple
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.program import Declaration, Directive, EventRule, StaticClause, pattern_conditions
-from ..frontend.terms import Atom, Compound, Number, String, Term, Var, indicator, list_items, span_of
+from ..frontend.program import (Aggregate, Check, Declaration, Directive, EventAtom, EventRule, StaticClause, Where,
+                                pattern_conditions, walk_pattern)
+from ..frontend.terms import (Atom, Compound, Number, String, Term, Var, indicator, list_items, span_of, to_prolog,
+                              walk)
 from .unit import TargetPredicates, Unit
 
 name = "loadable"
@@ -50,7 +54,7 @@ _DECLARATIONS = {"dynamic", "discontiguous", "multifile", "public", "table", "th
 
 # Directives after which the directive check cannot know what is defined.
 _LOADERS = {"use_module", "ensure_loaded", "consult", "include", "load_files", "reexport", "autoload",
-            "use_foreign_library", "initialization"}
+            "use_foreign_library"}
 
 OP_TYPES = ("xfx", "xfy", "yfx", "fy", "fx", "xf", "yf")
 
@@ -65,26 +69,89 @@ def run(unit: Unit) -> Unit:
     generated = frozenset(_generated_predicates(unit)) | target.generated
     reserved = _Reserved(target, generated)
     defined: Set[Indicator] = set()
+    everything = _program_predicates(unit.program.clauses)      # what initialization/1 goals can call
     loaders_seen = False
+    memories = _Memories()
     for clause in unit.program.clauses:
+        _check_no_dots(clause)
         if isinstance(clause, StaticClause):
             key = _check_clause(clause, reserved)
             if key is not None:
                 defined.add(key)
+                _note_override(unit, key)
         elif isinstance(clause, Directive):
             _check_directive_goal(clause.goal, clause.span)
-            defined.update(_declared(clause.goal, clause.span, reserved))
+            for key in _declared(clause.goal, clause.span, reserved):
+                defined.add(key)
+                _note_override(unit, key)
             if not loaders_seen and target.builtins:
-                _check_calls_exist(clause.goal, defined, target, clause.span)
+                _check_calls_exist(clause.goal, defined, everything, target, clause.span)
             loaders_seen = loaders_seen or _loads_code(clause.goal)
         elif isinstance(clause, Declaration):
             _check_directive_goal(clause.goal, clause.span)
+            _check_declaration_arguments(clause.goal, clause.span)
+            memories.declare(clause.goal, clause.span)
         elif isinstance(clause, EventRule):
             for condition in pattern_conditions(clause.pattern):
                 _check_callable(condition, clause.span, "a condition")
             if clause.action is not None:
                 _check_callable(clause.action, clause.span, "an action")
     return unit
+
+
+def _check_no_dots(clause) -> None:
+    """SWI-Prolog 7 reads a `'.'/2` term in a clause as a dict access (`Dict.Key`), which fails
+    or raises when the clause runs: outside the window `(P).Q` and negation `not(N).[P1, P2]`
+    of patterns, a `.` is an error."""
+    if isinstance(clause, EventRule):
+        terms = [clause.head] + ([clause.action] if clause.action is not None else [])
+        for p in walk_pattern(clause.pattern):
+            if isinstance(p, EventAtom):
+                terms += [t for t in (p.term, p.start, p.end) if t is not None]
+            elif isinstance(p, (Where, Check)):
+                terms.append(p.condition)
+            elif isinstance(p, Aggregate):
+                terms += [p.function, p.value]
+    else:
+        terms = [clause.term if isinstance(clause, StaticClause) else clause.goal]
+    for term in terms:
+        for t in walk(term):
+            if isinstance(t, Compound) and t.name == "." and t.arity == 2:
+                raise RetalisSemanticError(
+                    "'.' cannot stand here: SWI-Prolog would read Term.Key as a dict access (a window is "
+                    "written (Pattern).Seconds, a negation not(N).[P1, P2]; end a clause with '. ')",
+                    span_of(t) or clause.span)
+
+
+class _Memories:
+    """Memory instances the start-up declarations create, by id: creating one twice fails when
+    the program starts (d_mem/1 deletes them)."""
+
+    def __init__(self):
+        self.created: dict = {}
+
+    def declare(self, goal: Term, span) -> None:
+        key = indicator(goal) if isinstance(goal, (Atom, Compound)) else None
+        if key in (("c_mem", 4), ("c_mem", 5), ("memorize", 5)):
+            memory_id = goal.args[3] if key[0] == "memorize" else goal.args[0]
+            first = self.created.get(memory_id)
+            if first is not None:
+                raise RetalisSemanticError(f"a memory instance {to_prolog(memory_id)} is already created at line "
+                                           f"{first.line} (d_mem/1 deletes one)", span_of(memory_id) or span)
+            self.created[memory_id] = span
+        elif key in (("d_mem", 1), ("delete_memory", 1)):
+            pattern = goal.args[0]
+            if any(isinstance(t, Var) for t in walk(pattern)):
+                self.created.clear()
+            else:
+                self.created.pop(pattern, None)
+
+
+def _note_override(unit: Unit, key: Indicator) -> None:
+    """A program may define its own `min/3`, `new_event/1`, ... (not the `rtl_*` predicates the
+    generated code calls): the generated module then does not import the runtime's."""
+    if key in unit.target.runtime and key not in unit.runtime_overrides:
+        unit.runtime_overrides.append(key)
 
 
 def _check_generated_arities(unit: Unit) -> None:
@@ -127,7 +194,7 @@ class _Reserved:
         if key in self.target.builtins or key[0].startswith("$"):
             return "it is a builtin predicate of SWI-Prolog"
         module = self.target.runtime.get(key)
-        if module is not None:
+        if module is not None and key[0].startswith("rtl_"):
             return f"it is a predicate of the Retalis runtime (module {module})"
         if key in self.generated:
             return "it is a predicate of the code generated for the event rules"
@@ -177,8 +244,17 @@ def _goals(goal: Term):
             stack.extend(g.args[i] for i in reversed(positions))
 
 
+# Clause-level operators: as goals they are a misplaced rule, clause or directive.
+_CLAUSE_OPERATORS = {("<-", 2): "an event rule", (":-", 2): "a clause", (":-", 1): "a directive",
+                     ("?-", 1): "a directive", ("-->", 2): "a grammar rule", ("rule:", 2): "a labelled rule"}
+
+
 def _check_callable(goal: Term, fallback, what: str) -> None:
     for g in _goals(goal):
+        clause_kind = _CLAUSE_OPERATORS.get(indicator(g)) if isinstance(g, Compound) else None
+        if clause_kind is not None:
+            raise RetalisSemanticError(f"{what} contains '{g.name}': {clause_kind} cannot stand inside a goal",
+                                       span_of(g) or fallback)
         if isinstance(g, (Number, String)):
             shown = g.text if isinstance(g, String) else g.value
             raise RetalisSemanticError(f"{what} calls {shown!r}, which is not a goal (not callable)",
@@ -236,16 +312,94 @@ def _check_op(goal: Compound, span) -> None:
                                        span_of(item) or span)
 
 
+# The start-up declarations the runtime runs when the program is loaded, with what each
+# argument must be (the runtime's own checks, rtl_slr.pl, rtl_subscriptions.pl, rtl_sync.pl).
+_DECLARATION_ARGUMENTS = {
+    ("c_mem", 4): ("ground", "query", "size", "limit"),
+    ("c_mem", 5): ("ground", "query", "size", "limit", "list"),
+    ("memorize", 5): ("callable", "goals", "any", "ground", "size"),
+    ("stream_history", 1): ("type",),
+    ("stream_history", 3): ("type", "size", "limit"),
+    ("subscribe", 5): ("callable", "goals", "any", "consumer", "id"),
+    ("sub", 5): ("id", "consumer", "query", "any", "time"),
+    ("subscribe_between", 5): ("consumer", "query", "any", "time", "time"),
+    ("unsub", 2): ("ground", "time"),
+    ("max_delay", 2): ("type", "delay"),
+}
+
+_ARGUMENT_KINDS = {
+    "ground": "a ground term (no variables)",
+    "query": "an event atom, or Event-[Goal, ...]",
+    "size": "a positive integer or inf",
+    "limit": "a number of seconds >= 0 or inf",
+    "list": "a list",
+    "goals": "a list of goals",
+    "callable": "an event atom",
+    "consumer": "an atom (the consumer)",
+    "id": "a variable or a ground term",
+    "time": "now, inf, -inf, a number of seconds, [Secs, NSecs] or datime/7",
+    "type": "Name/Arity",
+    "delay": "a number of seconds >= 0 or learn",
+}
+
+
+def _check_declaration_arguments(goal: Term, span) -> None:
+    kinds = _DECLARATION_ARGUMENTS.get(indicator(goal)) if isinstance(goal, Compound) else None
+    for position, (kind, arg) in enumerate(zip(kinds or (), getattr(goal, "args", ())), start=1):
+        if not _argument_fits(kind, arg):
+            raise RetalisSemanticError(f"{goal.name}/{goal.arity}: argument {position} must be "
+                                       f"{_ARGUMENT_KINDS[kind]}", span_of(arg) or span)
+
+
+def _argument_fits(kind: str, arg: Term) -> bool:
+    if kind == "any":
+        return True
+    if kind in ("ground", "id"):
+        return (kind == "id" and isinstance(arg, Var)) or not any(isinstance(t, Var) for t in walk(arg))
+    if kind in ("callable", "consumer"):
+        return isinstance(arg, Atom) or (kind == "callable" and isinstance(arg, Compound)) or \
+            (kind == "consumer" and isinstance(arg, String))
+    if kind in ("list", "goals"):
+        items = list_items(arg)
+        return items is not None and (kind == "list" or all(isinstance(i, (Atom, Compound, Var)) for i in items))
+    if kind == "query":
+        if isinstance(arg, Compound) and arg.name == "-" and arg.arity == 2 and list_items(arg.args[1]) is not None:
+            return _argument_fits("callable", arg.args[0]) and _argument_fits("goals", arg.args[1])
+        return _argument_fits("callable", arg)
+    if kind == "size":
+        return arg == Atom("inf") or (isinstance(arg, Number) and isinstance(arg.value, int) and arg.value >= 1)
+    if kind in ("limit", "delay"):
+        if arg == Atom("inf" if kind == "limit" else "learn"):
+            return True
+        return isinstance(arg, Number) and arg.value == arg.value and arg.value >= 0 and \
+            (kind == "limit" or arg.value != float("inf"))
+    if kind == "type":
+        return _is_indicator(arg) and arg.name == "/"
+    if kind == "time":
+        if arg in (Atom("now"), Atom("inf")) or (isinstance(arg, Compound) and arg.name == "datime" and arg.arity == 7):
+            return True
+        if isinstance(arg, Compound) and arg.name == "-" and arg.arity == 1 and arg.args[0] == Atom("inf"):
+            return True
+        if isinstance(arg, Number):
+            return arg.value == arg.value
+        items = list_items(arg)
+        return items is not None and len(items) == 2 and all(isinstance(i, Number) and isinstance(i.value, int)
+                                                             for i in items)
+    raise AssertionError(kind)
+
+
 def _declared(goal: Term, span, reserved: _Reserved) -> Set[Indicator]:
-    """Predicates a `dynamic`/`discontiguous`/... directive declares (checked: the program
-    must be allowed to define them)."""
+    """Predicates a `dynamic`/`discontiguous`/... directive declares (checked: each is written
+    Name/Arity, and the program must be allowed to define it)."""
     found: Set[Indicator] = set()
     for g in _goals(goal):
         if isinstance(g, Compound) and g.name in _DECLARATIONS and g.arity == 1:
-            for spec in _indicators(g.args[0]):
-                if spec is None:
-                    continue
-                key, where = spec
+            for key, where in _indicators(g.args[0], g.name == "table"):
+                if key is None:
+                    raise RetalisSemanticError(f"{g.name} takes predicate indicators Name/Arity (or a list of them)",
+                                               where or span_of(g) or span)
+                if key[0] == ":":
+                    continue                            # Module:Name/Arity: another module's business
                 reason = reserved.why(key)
                 if reason is not None:
                     raise RetalisSemanticError(f"cannot declare {g.name} {key[0]}/{key[1]}: {reason}",
@@ -254,32 +408,70 @@ def _declared(goal: Term, span, reserved: _Reserved) -> Set[Indicator]:
     return found
 
 
-def _indicators(spec: Term):
-    """(indicator, span) of each `Name/Arity` (or `Name//Arity`) in a declaration argument."""
-    if isinstance(spec, Compound) and spec.name == "as" and spec.arity == 2:
-        spec = spec.args[0]
-    items = list_items(spec)
-    if items is not None:
-        for item in items:
-            yield from _indicators(item)
-        return
-    if isinstance(spec, Compound) and spec.name == "," and spec.arity == 2:
-        yield from _indicators(spec.args[0])
-        yield from _indicators(spec.args[1])
-        return
-    if (isinstance(spec, Compound) and spec.name in ("/", "//") and spec.arity == 2
+def _indicators(spec: Term, heads: bool = False):
+    """(indicator or None when malformed, span) for each `Name/Arity` (or `Name//Arity`) of a
+    declaration argument; with `heads` (table/1) a term such as `path(_, _, min)` counts too."""
+    stack = [spec]
+    while stack:
+        spec = stack.pop()
+        if isinstance(spec, Compound) and spec.name == "as" and spec.arity == 2:
+            stack.append(spec.args[0])
+            continue
+        items = list_items(spec)
+        if items is not None:
+            stack.extend(reversed(items))
+            continue
+        if isinstance(spec, Compound) and spec.name == "," and spec.arity == 2:
+            stack.extend(reversed(spec.args))
+            continue
+        if (isinstance(spec, Compound) and spec.name == ":" and spec.arity == 2 and isinstance(spec.args[0], Atom)
+                and _is_indicator(spec.args[1])):
+            yield (":", 2), span_of(spec)
+        elif _is_indicator(spec):
+            arity = spec.args[1].value + (2 if spec.name == "//" else 0)
+            yield (spec.args[0].name, arity), span_of(spec)
+        elif heads and isinstance(spec, (Atom, Compound)) and spec.name not in ("/", "//"):
+            yield indicator(spec), span_of(spec)
+        else:
+            yield None, span_of(spec)
+
+
+def _is_indicator(spec: Term) -> bool:
+    return (isinstance(spec, Compound) and spec.name in ("/", "//") and spec.arity == 2
             and isinstance(spec.args[0], Atom) and isinstance(spec.args[1], Number)
-            and isinstance(spec.args[1].value, int)):
-        arity = spec.args[1].value + (2 if spec.name == "//" else 0)
-        yield (spec.args[0].name, arity), span_of(spec)
-        return
-    yield None
+            and isinstance(spec.args[1].value, int) and 0 <= spec.args[1].value <= 1024)
 
 
-def _check_calls_exist(goal: Term, defined: Set[Indicator], target: TargetPredicates, span) -> None:
+def _program_predicates(clauses) -> Set[Indicator]:
+    """Every predicate the program's clauses define or its directives declare."""
+    found: Set[Indicator] = set()
+    for clause in clauses:
+        if isinstance(clause, StaticClause):
+            head = clause.head
+            extra = 0
+            if isinstance(clause.term, Compound) and clause.term.name == "-->" and clause.term.arity == 2:
+                head, extra = clause.term.args[0], 2
+                if isinstance(head, Compound) and head.name == "," and head.arity == 2:
+                    head = head.args[0]
+            key = indicator(head)
+            if key is not None:
+                found.add((key[0], key[1] + extra))
+        elif isinstance(clause, Directive):
+            for g in _goals(clause.goal):
+                if isinstance(g, Compound) and g.name in _DECLARATIONS and g.arity == 1:
+                    found.update(key for key, _ in _indicators(g.args[0], g.name == "table") if key is not None)
+    return found
+
+
+def _check_calls_exist(goal: Term, defined: Set[Indicator], everything: Set[Indicator], target: TargetPredicates,
+                       span) -> None:
     for g in _goals(goal):
         key = indicator(g)
         if key is None or (key[0] == ":" and key[1] == 2):
+            continue
+        if key in (("initialization", 1), ("initialization", 2)):
+            # runs when the whole file is loaded: any clause of the program exists by then
+            _check_calls_exist(g.args[0], everything, everything, target, span)
             continue
         if key in defined or target.known(key):
             continue

@@ -110,6 +110,9 @@ class Unit:
     warnings: List[str] = field(default_factory=list)
     rule_prefix: str = "rt"  # added_rules: unlabelled rules added at run time are named <prefix>_<n>
     target: TargetPredicates = field(default_factory=TargetPredicates)
+    # runtime library predicates (min/3, new_event/1, ...) the program defines itself: the
+    # generated module does not import them (set by `loadable`)
+    runtime_overrides: List[Tuple[str, int]] = field(default_factory=list)
 
 
 @dataclass

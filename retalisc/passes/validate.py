@@ -11,8 +11,8 @@ from __future__ import annotations
 from typing import Dict, Iterable, Set, Tuple
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.program import (DECLARATIONS, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
-                                Where, Window, pattern_conditions)
+from ..frontend.program import (DECLARATIONS, Aggregate, EventAtom, EventRule, Pattern, pattern_conditions,
+                                walk_pattern)
 from ..frontend.terms import Atom, Compound, Term, indicator, span_of, variables
 from .unit import Unit
 
@@ -80,17 +80,9 @@ def _event_arities(rules: Iterable[EventRule]) -> Set[Tuple[str, int]]:
 
 
 def _atoms(pattern: Pattern):
-    if isinstance(pattern, EventAtom):
-        yield pattern
-    elif isinstance(pattern, Binary):
-        yield from _atoms(pattern.left)
-        yield from _atoms(pattern.right)
-    elif isinstance(pattern, (Where, Check, Window, Aggregate)):
-        yield from _atoms(pattern.pattern)
-    elif isinstance(pattern, Negation):
-        yield from _atoms(pattern.negated)
-        yield from _atoms(pattern.first)
-        yield from _atoms(pattern.second)
+    for p in walk_pattern(pattern):
+        if isinstance(p, EventAtom):
+            yield p
 
 
 def _pattern_variables(pattern: Pattern) -> Set[str]:
@@ -108,20 +100,9 @@ def _pattern_variables(pattern: Pattern) -> Set[str]:
 
 
 def _aggregates(pattern: Pattern):
-    if isinstance(pattern, Aggregate):
-        yield pattern
-    for child in _children(pattern):
-        yield from _aggregates(child)
-
-
-def _children(pattern: Pattern):
-    if isinstance(pattern, Binary):
-        return [pattern.left, pattern.right]
-    if isinstance(pattern, (Where, Check, Window, Aggregate)):
-        return [pattern.pattern]
-    if isinstance(pattern, Negation):
-        return [pattern.negated, pattern.first, pattern.second]
-    return []
+    for p in walk_pattern(pattern):
+        if isinstance(p, Aggregate):
+            yield p
 
 
 def _check_head_variables(rule: EventRule) -> None:

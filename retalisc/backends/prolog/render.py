@@ -31,7 +31,8 @@ _ENV = jinja2.Environment(
 )
 
 # Directives that only configure the compiler: they are compiled, not copied.
-_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3), ("op", 3)}
+_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print_trigger", 1),
+                        ("event_rule_property", 3), ("op", 3)}
 
 
 def runtime_dir() -> Path:
@@ -61,6 +62,7 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
         declarations=[write_term(c.goal, 999) for c in unit.program.clauses
                       if isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES],
         rules=[_RuleView(g) for g in unit.generated],
+        runtime_overrides=[f"{quote_atom(name)}/{arity}" for name, arity in unit.runtime_overrides],
     )
 
 
