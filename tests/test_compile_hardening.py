@@ -53,6 +53,13 @@ REJECTED = [
     ("memory_size", "c_mem(m, a(_)-[], 0, 5).\n", 1, 19, "c_mem/4: argument 3 must be a positive integer"),
     ("memory_limit", "c_mem(m, a(_)-[], 1, -5).\n", 1, 22, "c_mem/4: argument 4 must be a number of seconds"),
     ("subscription_consumer", "sub(1, X, a(_)-[], t, 0).\n", 1, 8, "sub/5: argument 2 must be an atom"),
+    ("subscription_made_twice", "sub(1, cons, a(X)-[X > 1], got(X), 0).\nsub(1, cons, b(_), b, 0).\n", 2, 5,
+     "subscription 1 of cons is already made at line 1"),
+    ("unsub_without_subscription", "unsub(3, now).\n", 1, 7, "no declaration above makes a subscription 3"),
+    ("aggregate_variable_not_in_pattern", "m(M) <- s seq aggregate(min(P), price(1), M).\n", 1, 29,
+     "the variable P of min(P) does not occur"),
+    ("aggregate_of_a_constant", "m(M) <- s seq aggregate(max(3), price(_), M).\n", 1, 29,
+     "max(X) aggregates a variable"),
     ("dynamic_not_an_indicator", ":- dynamic foo/x.\n", 1, 12, "dynamic takes predicate indicators"),
     ("initialization_undefined", ":- initialization(nosuch).\n", 1, 19, "calls nosuch/0"),
     ("clause_for_generated_predicate", "x <- a seq b.\ne_r1_1(s, e).\n", 2, 1,
@@ -139,6 +146,8 @@ ACCEPTED = [
      [("x(" + "f(" * DEEP + "a" + ")" * DEEP + ")", 1, 1)]),
     ("seq_chain", "x <- " + " seq ".join(f"e{i}" for i in range(CHAIN)) + ".\n",
      _events(*[(f"e{i}", i + 1) for i in range(CHAIN)]), [("x", 1, CHAIN)]),
+    ("non_finite_numbers", "x(1.0Inf, -1.0Inf, 1.5NaN) <- a.\ny(Z) <- a where Z is -(1.0Inf).\n",
+     _events(("a", 1)), [("x(1.0Inf,-1.0Inf,1.5NaN)", 1, 1), ("y(-1.0Inf)", 1, 1)]),
     ("own_library_predicates", "min(A, _, A).\n:- dynamic max/3.\nnew_event(_).\n"
      "x(M) <- a(X) where min(X, 2, M).\n", _events(("a(1)", 1), ("a(5)", 2)), [("x(1)", 1, 1), ("x(5)", 2, 2)]),
     ("initialization_calls_clause_below", ":- initialization(setup).\nsetup :- assertz(seen(1)).\n"

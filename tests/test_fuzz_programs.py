@@ -65,7 +65,7 @@ NAMES = ["a", "b", "c", "x", "not", "aggregate", "median", "sum", "count", "seq"
          "set_etalis_flag", "event_rule_property", "null", "call", "findall", "t1", "t2", "min", "max", "inf",
          "write", "format", "member", "nb_getval", "succ", "rule", "property", "synchronized"]
 NUMBERS = ["0", "1", "-1", "2.5", "1.0Inf", "1.5NaN", "0x1F", "0'a", "123456789012345678901234567890", "1e10",
-           "0.0", "7"]
+           "0.0", "7", "-0.0", "1.0e-300", "0b101", "0o17", "1_000"]
 QUOTED = ["'a\\qb'", "'\\x41\\'", "'\\u00e9'", "\"str\"", "'it''s'", "'\\z'", "'\\u12'", "'seq'", "'<-'", "'.'",
           "'[]'", "'{}'", "`back`", "'a b'", "'\\x110000\\'", "'rauch'", "'\\n'"]
 CLAUSES = [":- new_event(foo(1)).", "foo :- 1.", "(a, b).", ":- op(700, xfx, ===>).", "x <- a ===> b.",
@@ -76,7 +76,11 @@ CLAUSES = [":- new_event(foo(1)).", "foo :- 1.", "(a, b).", ":- op(700, xfx, ===
            "w <- a where 1.", "v do true <- b.", ":- dynamic foo/x.", "g --> [a], g.", "g --> [].",
            "{a}.", "'$x'.", "ev(X) <- a(X)^[S, E] where S =< E.", "c_mem(mm, a(_)-[], 2, 5).",
            "z <- (a).1.0Inf.", "z <- (a).-1.", "x(\"a\\qb\") <- a.", ":- op(200, xfy, ^).", "z <- a(X) seq b(X) where X.",
-           "event_rule_property(l1, event_rule_window, 3).", "syncronized(a(X), [q], []) <- b(X)."]
+           "event_rule_property(l1, event_rule_window, 3).", "syncronized(a(X), [q], []) <- b(X).",
+           "x(1.0Inf, 1.5NaN) <- a.", "y(Z) <- a(X) where Z is X ** 0.5.", "p(X) :- X = \"str\", X \\= 0'a.",
+           "x('rauch_\u00fc', \"\u00e9\") <- a.", "r(X) <- a(X)^[S, E] check (t1(S), t2(E)).",
+           "sub(1, cons, a(X)-[X > 1], got(X), 0).", "subscribe(b(X), [], _, cons, s1).",
+           "stream_history(a/1).", "max_delay(a/1, 2).", "w <- a(X) fnot b(X).", "u <- (a seq b).0.5."]
 
 _TOKEN = re.compile(r"""%[^\n]*|/\*.*?\*/|'(?:[^'\\\n]|\\.|'')*'|"(?:[^"\\\n]|\\.)*"|`[^`\n]*`|0'.|"""
                     r"""\d+(?:\.\d+)?(?:[eE][+-]?\d+)?|[a-z][A-Za-z0-9_]*|[A-Z_][A-Za-z0-9_]*|"""

@@ -55,6 +55,22 @@ def deepest_tree(tree: Tree):
     return best
 
 
+def _start(target: Callable[[], None]):
+    """Start `target` in a thread with a large stack (smaller ones if the system refuses)."""
+    for size in (_STACK_BYTES, _STACK_BYTES // 8):
+        with _lock:                         # stack_size is process-wide: set it for this thread only
+            previous_size = threading.stack_size(size)
+            try:
+                thread = threading.Thread(target=target, name="retalisc-compile", daemon=True)
+                thread.start()
+                return thread
+            except (RuntimeError, MemoryError):
+                continue
+            finally:
+                threading.stack_size(previous_size)
+    return None
+
+
 def with_room_for_depth(function: Callable[[], T]) -> T:
     """Run `function()` in a thread with a stack and a recursion limit deep enough for terms
     nested `MAX_TERM_DEPTH` levels; return its result or raise its exception."""
@@ -73,14 +89,13 @@ def with_room_for_depth(function: Callable[[], T]) -> T:
             sys.setrecursionlimit(max(_saved_limit, _RECURSION_LIMIT))
         _active += 1
     try:
-        with _lock:                         # stack_size is process-wide: set it for this thread only
-            previous_size = threading.stack_size(_STACK_BYTES)
-            try:
-                thread = threading.Thread(target=target, name="retalisc-compile")
-                thread.start()
-            finally:
-                threading.stack_size(previous_size)
-        thread.join()
+        thread = _start(target)
+        if thread is None:                  # no thread could be made: run here, with the usual limit
+            with _lock:
+                sys.setrecursionlimit(_saved_limit)
+            target()
+        else:
+            thread.join()
     finally:
         with _lock:
             _active -= 1

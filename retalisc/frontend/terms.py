@@ -205,8 +205,10 @@ def _quote_string(text: str) -> str:
 
 def format_number(value) -> str:
     if isinstance(value, float):
-        if value != value or value in (float("inf"), float("-inf")):
-            return {"inf": "inf", "-inf": "-inf"}.get(str(value), "nan")
+        if value != value:
+            return "1.5NaN"                 # SWI-Prolog's syntax for floats that are not finite
+        if value in (float("inf"), float("-inf")):
+            return "1.0Inf" if value > 0 else "-1.0Inf"
         text = repr(value)
         if "e" in text and "." not in text.split("e")[0]:
             mantissa, exponent = text.split("e")

@@ -17,7 +17,14 @@ its place in the source:
   a module of its own), a malformed `op/3`, a declaration (`dynamic`, ...) of a predicate the
   program may not define, and a directive that calls a predicate that does not exist when it
   runs (directives run while the module loads: only builtins, library and runtime
-  predicates and the clauses above them exist then).
+  predicates and the clauses above them exist then; `initialization/1` goals run after the
+  whole file);
+- a `'.'/2` term outside the window and negation of patterns (SWI-Prolog 7 reads it as a dict
+  access);
+- a start-up declaration (`c_mem/4`, `sub/5`, ...) with an argument the runtime refuses when
+  the program starts, a memory instance or subscription created twice, or one ended that no
+  declaration made;
+- a step of a rule with more arguments than SWI-Prolog allows a predicate.
 
 Runs after `edbc`, which names the predicates of the generated code.
 """
@@ -71,7 +78,7 @@ def run(unit: Unit) -> Unit:
     defined: Set[Indicator] = set()
     everything = _program_predicates(unit.program.clauses)      # what initialization/1 goals can call
     loaders_seen = False
-    memories = _Memories()
+    start_up = _StartUp()
     for clause in unit.program.clauses:
         _check_no_dots(clause)
         if isinstance(clause, StaticClause):
@@ -90,7 +97,7 @@ def run(unit: Unit) -> Unit:
         elif isinstance(clause, Declaration):
             _check_directive_goal(clause.goal, clause.span)
             _check_declaration_arguments(clause.goal, clause.span)
-            memories.declare(clause.goal, clause.span)
+            start_up.declare(clause.goal, clause.span)
         elif isinstance(clause, EventRule):
             for condition in pattern_conditions(clause.pattern):
                 _check_callable(condition, clause.span, "a condition")
@@ -123,28 +130,63 @@ def _check_no_dots(clause) -> None:
                     span_of(t) or clause.span)
 
 
-class _Memories:
-    """Memory instances the start-up declarations create, by id: creating one twice fails when
-    the program starts (d_mem/1 deletes them)."""
+class _StartUp:
+    """What the start-up declarations create, in order: a memory instance (by id) or a
+    subscription (by consumer and id) created twice, or a subscription ended or deleted that no
+    declaration above made, fails when the program starts."""
 
     def __init__(self):
-        self.created: dict = {}
+        self.memories: dict = {}
+        self.subscriptions: dict = {}
 
     def declare(self, goal: Term, span) -> None:
         key = indicator(goal) if isinstance(goal, (Atom, Compound)) else None
         if key in (("c_mem", 4), ("c_mem", 5), ("memorize", 5)):
             memory_id = goal.args[3] if key[0] == "memorize" else goal.args[0]
-            first = self.created.get(memory_id)
+            first = self.memories.get(memory_id)
             if first is not None:
                 raise RetalisSemanticError(f"a memory instance {to_prolog(memory_id)} is already created at line "
                                            f"{first.line} (d_mem/1 deletes one)", span_of(memory_id) or span)
-            self.created[memory_id] = span
+            self.memories[memory_id] = span
         elif key in (("d_mem", 1), ("delete_memory", 1)):
-            pattern = goal.args[0]
-            if any(isinstance(t, Var) for t in walk(pattern)):
-                self.created.clear()
-            else:
-                self.created.pop(pattern, None)
+            self._forget(self.memories, goal.args[0])
+        elif key in (("sub", 5), ("subscribe", 5)):
+            sub_id, consumer = (goal.args[0], goal.args[1]) if key[0] == "sub" else (goal.args[4], goal.args[3])
+            if isinstance(sub_id, Var):
+                return                                  # a fresh id
+            ident = (_text(consumer), sub_id)
+            first = self.subscriptions.get(ident)
+            if first is not None:
+                raise RetalisSemanticError(f"subscription {to_prolog(sub_id)} of {ident[0]} is already made at line "
+                                           f"{first.line}", span_of(sub_id) or span)
+            self.subscriptions[ident] = span
+        elif key == ("unsub", 2):
+            sub_id = goal.args[0]
+            if not any(made_id == sub_id for _, made_id in self.subscriptions):
+                raise RetalisSemanticError(f"unsub: no declaration above makes a subscription {to_prolog(sub_id)}",
+                                           span_of(sub_id) or span)
+        elif key == ("delete_subscription", 2):
+            consumer, sub_id = goal.args
+            if isinstance(consumer, Var) or any(isinstance(t, Var) for t in walk(sub_id)):
+                return
+            if self.subscriptions.pop((_text(consumer), sub_id), None) is None:
+                raise RetalisSemanticError(f"delete_subscription: no declaration above makes a subscription "
+                                           f"{to_prolog(sub_id)} of {_text(consumer)}", span_of(sub_id) or span)
+
+    @staticmethod
+    def _forget(made: dict, pattern: Term) -> None:
+        if any(isinstance(t, Var) for t in walk(pattern)):
+            made.clear()
+        else:
+            made.pop(pattern, None)
+
+
+def _text(term: Term) -> str:
+    if isinstance(term, Atom):
+        return term.name
+    if isinstance(term, String):
+        return term.text
+    return to_prolog(term)
 
 
 def _note_override(unit: Unit, key: Indicator) -> None:

@@ -13,7 +13,7 @@ from typing import Dict, Iterable, Set, Tuple
 from ..frontend.errors import RetalisSemanticError
 from ..frontend.program import (DECLARATIONS, Aggregate, EventAtom, EventRule, Pattern, pattern_conditions,
                                 walk_pattern)
-from ..frontend.terms import Atom, Compound, Term, indicator, span_of, variables
+from ..frontend.terms import Atom, Compound, Term, Var, indicator, span_of, variables
 from .unit import Unit
 
 name = "validate"
@@ -39,6 +39,7 @@ def run(unit: Unit) -> Unit:
     _check_labels(program.event_rules)
     for rule in program.event_rules:
         _check_head_variables(rule)
+        _check_aggregate_variables(rule)
         _check_pattern_arities(rule.pattern, derived)
         for condition in pattern_conditions(rule.pattern):
             _check_static_goals(condition, event_arities, static, "a where condition")
@@ -115,6 +116,20 @@ def _check_head_variables(rule: EventRule) -> None:
             raise RetalisSemanticError(
                 f"variable {var.name} of the rule head does not occur in the pattern (it would stay unbound)",
                 span_of(var) or rule.span)
+
+
+def _check_aggregate_variables(rule: EventRule) -> None:
+    """`aggregate(sum(X), P, V)`: X is a variable of P (its value in each P is aggregated)."""
+    for node in _aggregates(rule.pattern):
+        if not isinstance(node.function, Compound):
+            continue
+        argument = node.function.args[0]
+        where = span_of(argument) or node.span or rule.span
+        if not isinstance(argument, Var) or argument.is_anonymous:
+            raise RetalisSemanticError(f"{node.function.name}(X) aggregates a variable X of the pattern", where)
+        if argument.name not in _pattern_variables(node.pattern):
+            raise RetalisSemanticError(f"the variable {argument.name} of {node.function.name}({argument.name}) does "
+                                       "not occur in the aggregated pattern", where)
 
 
 def _check_pattern_arities(pattern: Pattern, derived: Set[Tuple[str, int]]) -> None:
