@@ -357,8 +357,8 @@ def _check_op(goal: Compound, span) -> None:
 # The start-up declarations the runtime runs when the program is loaded, with what each
 # argument must be (the runtime's own checks, rtl_slr.pl, rtl_subscriptions.pl, rtl_sync.pl).
 _DECLARATION_ARGUMENTS = {
-    ("c_mem", 4): ("ground", "query", "size", "limit"),
-    ("c_mem", 5): ("ground", "query", "size", "limit", "list"),
+    ("c_mem", 4): ("ground", "memory_query", "size", "limit"),
+    ("c_mem", 5): ("ground", "memory_query", "size", "limit", "list"),
     ("memorize", 5): ("callable", "goals", "any", "ground", "size"),
     ("stream_history", 1): ("type",),
     ("stream_history", 3): ("type", "size", "limit"),
@@ -372,6 +372,7 @@ _DECLARATION_ARGUMENTS = {
 _ARGUMENT_KINDS = {
     "ground": "a ground term (no variables)",
     "query": "an event atom, or Event-[Goal, ...]",
+    "memory_query": "an event atom, or Event-[Goal, ...]",
     "size": "a positive integer or inf",
     "limit": "a number of seconds >= 0 or inf",
     "list": "a list",
@@ -404,8 +405,10 @@ def _argument_fits(kind: str, arg: Term) -> bool:
     if kind in ("list", "goals"):
         items = list_items(arg)
         return items is not None and (kind == "list" or all(isinstance(i, (Atom, Compound, Var)) for i in items))
-    if kind == "query":
-        if isinstance(arg, Compound) and arg.name == "-" and arg.arity == 2 and list_items(arg.args[1]) is not None:
+    if kind in ("query", "memory_query"):
+        # a memory query splits every Event-Conds; a subscription only when Conds is a list
+        if isinstance(arg, Compound) and arg.name == "-" and arg.arity == 2 and \
+                (kind == "memory_query" or list_items(arg.args[1]) is not None):
             return _argument_fits("callable", arg.args[0]) and _argument_fits("goals", arg.args[1])
         return _argument_fits("callable", arg)
     if kind == "size":
