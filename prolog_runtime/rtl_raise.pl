@@ -38,8 +38,10 @@ rtl_flush_raised/0).
 %   new_event/3. Event must be ground.
 
 new_event(Event) :-
-    rtl_clock(Clock),
-    (   Clock =:= -inf -> T = 0 ; T = Clock ),
+    (   nb_current(rtl_clock, Clock), Clock =\= -inf       % unset while a program loads
+    ->  T = Clock
+    ;   T = 0
+    ),
     raise(Event, T, T).
 
 new_event(Event, Time) :-

@@ -17,7 +17,9 @@ from typing import Callable, List, Optional, Union
 from .backends.prolog.aq_backend import render_active_queries
 from .backends.prolog.dump import dump_unit
 from .backends.prolog.render import render_added_rules, render_program
+from .backends.prolog.reserved import target_predicates
 from .frontend.definite import read_definite_program
+from .frontend.depth import with_room_for_depth
 from .frontend.program import parse_program
 from .passes.pipeline import ADDED_RULES_PIPELINE, AQ_MODES, EVENT_PIPELINE, active_query_passes, run_pipeline
 from .passes.unit import AqUnit, Unit
@@ -56,14 +58,22 @@ def compile_source(text: str, file: str, output_name: str = "PROGRAM.pl", dump_a
     """Compile program text: an event program, or with `active_queries` a definite program for
     active queries. With `dump_after`, hand the text of the unit after that pass to `dump`.
     Raises RetalisError (with a source location) on bad programs, ValueError for an unknown
-    mode or a `dump_after` pass this compilation does not run."""
+    mode or a `dump_after` pass this compilation does not run. `retalisc check` and
+    `retalisc compile` both come here: what one accepts, the other compiles."""
     _check_dump_after(dump_after, active_queries)
+    return with_room_for_depth(lambda: _compile(text, file, output_name, dump_after, dump, module, active_queries))
+
+
+def _compile(text: str, file: str, output_name: str, dump_after: Optional[str], dump: Callable[[str], None],
+             module: Optional[str], active_queries: Optional[AqOptions]) -> CompileResult:
+    if text.startswith("\ufeff"):
+        text = text[1:]                     # a UTF-8 byte-order mark
     if active_queries is not None:
         passes = active_query_passes(active_queries.mode)
         unit = AqUnit(read_definite_program(text, file), active_queries.mode, active_queries.subsumption)
         unit = run_pipeline(unit, passes, _dumper(dump_after, dump))
         return CompileResult(render_active_queries(unit), unit, list(unit.warnings))
-    unit = Unit(parse_program(text, file), module or module_name(file))
+    unit = Unit(parse_program(text, file), module or module_name(file), target=target_predicates())
     unit = run_pipeline(unit, EVENT_PIPELINE, _dumper(dump_after, dump))
     return CompileResult(render_program(unit, output_name), unit, list(unit.warnings))
 
@@ -78,9 +88,12 @@ def compile_added_rules(text: str, module: str, prefix: str = "rt", file: str = 
     describes. Raises RetalisError for anything but event rules and `event_rule_property/3`."""
     if not RULE_PREFIX.fullmatch(prefix):
         raise ValueError(f"rule prefix {prefix!r} must match [a-z][A-Za-z0-9_]*")
-    unit = Unit(parse_program(text, file), module, rule_prefix=prefix)
-    unit = run_pipeline(unit, ADDED_RULES_PIPELINE)
-    return CompileResult(render_added_rules(unit), unit, list(unit.warnings))
+
+    def compile_rules() -> CompileResult:
+        unit = Unit(parse_program(text, file), module, rule_prefix=prefix, target=target_predicates())
+        unit = run_pipeline(unit, ADDED_RULES_PIPELINE)
+        return CompileResult(render_added_rules(unit), unit, list(unit.warnings))
+    return with_room_for_depth(compile_rules)
 
 
 def pass_names(active_queries: Optional[AqOptions] = None) -> List[str]:

@@ -44,7 +44,14 @@ def _prolog_atom(text: str) -> str:
     return "'" + text.replace("\\", "\\\\").replace("'", "\\'") + "'"
 
 
-@click.command("aq")
+@click.command("aq", epilog="""\b
+Example:
+  retalisc aq tests/golden_aq/program1/program.pl --script UPDATES.txt --mode tabled
+with UPDATES.txt:
+  ?q1 a(X, Z).
+  +d(4).
+  -d(3).
+  !q1.""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 @click.option("--script", "script", required=True, type=click.Path(exists=True, dir_okay=False),
               help="Update script: `?Id Goal.` register, `+Fact.` assert, `-Fact.` retract, `!Id.` unregister.")

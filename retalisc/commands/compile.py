@@ -9,6 +9,7 @@ import click
 from ..compiler import AQ_MODES, AqOptions, compile_file, pass_names
 from ..frontend.errors import RetalisError
 from ..passes.pipeline import PASS_NAMES
+from .options import Seconds, output_directory, output_file
 
 
 def report_program_error(error: RetalisError) -> None:
@@ -30,7 +31,13 @@ def compile_or_exit(program: str, **kwargs):
     return result
 
 
-@click.command("compile")
+@click.command("compile", epilog="""\b
+Examples:
+  retalisc compile examples/fire_alarm/fire_alarm.rtl -o fire_alarm.pl
+  swipl fire_alarm.pl examples/fire_alarm/events.jsonl
+  swipl fire_alarm.pl - < examples/fire_alarm/events.jsonl      # '-': standard input
+  retalisc compile examples/fire_alarm/fire_alarm.rtl --dump-after binarize
+  retalisc compile tests/golden_aq/program1/program.pl --active-queries tabled -o aq.pl""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the Prolog program here "
               "(default: standard output).")
@@ -57,30 +64,43 @@ def compile_command(program: str, output: str, dump_after: str, active_queries: 
     result = compile_or_exit(program, output_name=Path(output).name if output else "PROGRAM.pl",
                              active_queries=options)
     if output:
-        Path(output).write_text(result.prolog, encoding="utf-8")
+        try:
+            Path(output).write_text(result.prolog, encoding="utf-8")
+        except OSError as error:
+            raise click.BadParameter(f"cannot write {output}: {error.strerror}", param_hint="-o") from None
     else:
         click.echo(result.prolog, nl=False)
 
 
-@click.command("check")
+@click.command("check", epilog="""\b
+Example:
+  retalisc check examples/fire_alarm/fire_alarm.rtl    # examples/fire_alarm/fire_alarm.rtl: ok (1 event rule)""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 def check_command(program: str) -> None:
-    """Check PROGRAM for errors without writing anything (exit status 2 on errors)."""
+    """Check PROGRAM for errors without writing anything (exit status 2 on errors).
+
+    It runs the whole compilation, as `retalisc compile` does, and discards the result: a
+    program `check` accepts compiles, and its Prolog loads."""
     result = compile_or_exit(program)
     rules = len(result.unit.rules)
     click.echo(f"{program}: ok ({rules} event rule{'s' if rules != 1 else ''})", err=True)
 
 
-@click.command("run")
+@click.command("run", epilog="""\b
+Examples:
+  retalisc run examples/fire_alarm/fire_alarm.rtl --events examples/fire_alarm/events.jsonl
+  cat examples/fire_alarm/events.jsonl | retalisc run examples/fire_alarm/fire_alarm.rtl --events - --echo-input
+  retalisc run examples/state_knowledge/state_knowledge.rtl --events examples/state_knowledge/events.jsonl \\
+      --max-delay 0.5 --query 14 'location(box, L)^14'""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
-@click.option("--events", "events", required=True, type=click.Path(allow_dash=True, dir_okay=False),
+@click.option("--events", "events", required=True, type=click.Path(exists=True, allow_dash=True, dir_okay=False),
               help="Event JSON Lines file ('-' for standard input).")
 @click.option("--out", type=click.Path(dir_okay=False, allow_dash=True), default="-",
               help="Write the output JSON Lines here (default: standard output).")
 @click.option("--echo-input", is_flag=True, help="Also write the input events to the output.")
-@click.option("--max-delay", type=float, default=None,
+@click.option("--max-delay", type=Seconds(), default=None,
               help="Seconds an event may arrive behind the latest one and still be matched in full "
-                   "(default 1.0).")
+                   "(default 1.0; a number >= 0, or inf).")
 @click.option("--batch-size", type=click.IntRange(1), default=2000, show_default=True,
               help="Events handed to Prolog per call.")
 @click.option("--consumer-dir", type=click.Path(file_okay=False), default=None,
@@ -96,7 +116,7 @@ def check_command(program: str) -> None:
               help="Post the synchronized query <GOAL, Z> before the events; its answers are written as "
                    "a line {\"query\": N, \"status\": ..., \"answers\": [...]} when it becomes achievable "
                    "(N counts the --query options from 1). Repeatable.")
-@click.option("--query-timeout", type=float, default=None,
+@click.option("--query-timeout", type=Seconds(), default=None,
               help="A synchronized query still waiting when the clock reaches Z + SECONDS ends with status "
                    "\"timeout\" (default: it waits until the end of the input).")
 @click.option("--drop-pending", is_flag=True,
@@ -109,6 +129,8 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     from ..driver.run import run_event_file
 
     result = compile_or_exit(program)
+    output_file(out, "--out")
+    output_directory(consumer_dir, "--consumer-dir")
     engine = Engine.from_compiled(result)
     if echo_input:
         engine.set_flag("echo_input", "true")

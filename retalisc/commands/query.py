@@ -7,17 +7,22 @@ import sys
 import click
 
 from .compile import add_cli_memory, compile_or_exit
+from .options import Seconds
 
 
-@click.command("query")
+@click.command("query", epilog="""\b
+Examples:
+  retalisc query examples/state_knowledge/state_knowledge.rtl --events examples/state_knowledge/events.jsonl \\
+      'location(box, L)^14'
+  retalisc query nao.rtl --events tf.jsonl --first 'prev(head_cam, tf(V, Q)^T, 12.5)'""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 @click.argument("goal")
-@click.option("--events", "events", type=click.Path(allow_dash=True, dir_okay=False),
+@click.option("--events", "events", type=click.Path(exists=True, allow_dash=True, dir_okay=False),
               help="Event JSON Lines file to process first ('-' for standard input).")
 @click.option("--at", "at", type=float, default=None,
               help="Answer the query as of time Z: mem/2 sees the records that end at or before Z.")
 @click.option("--first", is_flag=True, help="Print the first answer only.")
-@click.option("--max-delay", type=float, default=None, help="As for `retalisc run`.")
+@click.option("--max-delay", type=Seconds(), default=None, help="As for `retalisc run`.")
 @click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
               help="Create (or delete, d_mem(Id)) a memory instance before the events. Repeatable.")
 def query_command(program: str, goal: str, events, at, first: bool, max_delay, memories) -> None:
@@ -25,8 +30,6 @@ def query_command(program: str, goal: str, events, at, first: bool, max_delay, m
     variable of GOAL to its value (writeq text); `{}` for a goal without variables that
     succeeds; nothing when it fails (exit 0 either way). A goal that does not parse or that
     the sandbox refuses exits 2; a goal that raises an error exits 1.
-
-    Example: retalisc query nao.rtl --events tf.jsonl 'prev(head_cam, tf(V, Q)^T, 12.5)'
     """
     from ..driver.engine import Engine, QueryError
     from ..driver.run import run_event_file

@@ -9,7 +9,9 @@ from ..frontend.errors import RetalisError
 from ..runtime_rules import compile_rules
 
 
-@click.command("compile-rules")
+@click.command("compile-rules", epilog="""\b
+Example:
+  echo 'late : ab(X) <- a(X) seq b(X).' | retalisc compile-rules --module rtl_prog_fire_alarm""")
 @click.option("--module", "module", required=True, help="Module of the running program.")
 @click.option("--rule-prefix", default="rt", show_default=True,
               help="Unlabelled rules get the ids PREFIX_1, PREFIX_2, ...")

@@ -25,9 +25,11 @@ class RetalisError(Exception):
         text = source_text
         if text is None:
             try:
-                text = Path(self.span.file).read_text()
+                text = Path(self.span.file).read_text(encoding="utf-8", errors="replace")
             except OSError:
                 text = None
+        if text is not None and text.startswith("\ufeff"):
+            text = text[1:]                 # a byte-order mark: columns count from after it
         if text is None:
             return head
         lines = text.splitlines()

@@ -16,6 +16,7 @@ from typing import List, Optional, Tuple
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
+from .depth import MAX_TERM_DEPTH, deepest_tree, term_depth
 from .errors import RetalisSyntaxError
 from .operators import ARGUMENT_PRIORITY, CLAUSE_PRIORITY, EVENT_OPERATORS, STANDARD_OPERATORS, OperatorTable
 from .terms import NIL, Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
@@ -138,7 +139,7 @@ class _Resolver:
         if isinstance(item, _Operand):
             return item.term, 0
         name = item.name
-        if name in (",", "|"):
+        if name in (",", "|") and not item.quoted:          # ',' and '|' quoted are atoms
             raise self.error(f"unexpected '{name}'", self.pos - 1)
         nxt = self.peek()
         # A minus sign written directly before a number is part of the number.
@@ -197,11 +198,28 @@ class _Source:
         return Span(self.file, line, column)
 
 
-_ESCAPES = {"a": "\a", "b": "\b", "f": "\f", "n": "\n", "r": "\r", "t": "\t", "v": "\v", "0": "\0",
+_ESCAPES = {"a": "\a", "b": "\b", "f": "\f", "n": "\n", "r": "\r", "t": "\t", "v": "\v",
             "\\": "\\", "'": "'", '"': '"', "`": "`", "e": "\x1b", "s": " ", "\n": ""}
 
 
+class _EscapeError(Exception):
+    """A bad escape sequence at `offset` in the text between the quotes."""
+
+    def __init__(self, message: str, offset: int):
+        super().__init__(message)
+        self.message = message
+        self.offset = offset
+
+
+def _code_point(value: int, offset: int) -> str:
+    if value > 0x10FFFF or 0xD800 <= value <= 0xDFFF:
+        raise _EscapeError(f"illegal character code {value:#x} in an escape sequence", offset)
+    return chr(value)
+
+
 def _unescape(body: str, quote: str) -> str:
+    """The text of a quoted item with its escape sequences replaced, as SWI-Prolog reads it.
+    Raises _EscapeError for an escape SWI-Prolog rejects (`\\q`, `\\u12`, ...)."""
     out = []
     i = 0
     while i < len(body):
@@ -210,32 +228,41 @@ def _unescape(body: str, quote: str) -> str:
             out.append(quote)
             i += 2
             continue
-        if c == "\\" and i + 1 < len(body):
+        if c == "\\":
+            if i + 1 >= len(body):
+                raise _EscapeError("a quoted item cannot end with a single backslash", i)
             d = body[i + 1]
             if d in _ESCAPES:
                 out.append(_ESCAPES[d])
                 i += 2
                 continue
+            if d == "c":              # \c skips the layout that follows it
+                i += 2
+                while i < len(body) and body[i] in " \t\n\r":
+                    i += 1
+                continue
             if d == "x":
                 m = re.match(r"x([0-9a-fA-F]+)\\?", body[i + 1:])
-                if m:
-                    out.append(chr(int(m.group(1), 16)))
-                    i += 1 + m.end()
-                    continue
+                if not m:
+                    raise _EscapeError("\\x must be followed by hexadecimal digits (\\xHH\\)", i)
+                out.append(_code_point(int(m.group(1), 16), i))
+                i += 1 + m.end()
+                continue
             if d in "uU":
                 width = 4 if d == "u" else 8
                 digits = body[i + 2:i + 2 + width]
-                out.append(chr(int(digits, 16)))
+                if not re.fullmatch(f"[0-9a-fA-F]{{{width}}}", digits):
+                    raise _EscapeError(f"\\{d} must be followed by {width} hexadecimal digits", i)
+                out.append(_code_point(int(digits, 16), i))
                 i += 2 + width
                 continue
-            if d.isdigit():
+            if d in "01234567":
                 m = re.match(r"([0-7]+)\\?", body[i + 1:])
-                out.append(chr(int(m.group(1), 8)))
+                out.append(_code_point(int(m.group(1), 8), i))
                 i += 1 + m.end()
                 continue
-            out.append(d)
-            i += 2
-            continue
+            raise _EscapeError(f"unknown escape sequence '\\{d}' in a quoted item (write '\\\\' for a backslash)",
+                               i)
         out.append(c)
         i += 1
     return "".join(out)
@@ -267,6 +294,13 @@ class _Builder:
         return Span(self.file, meta.line, meta.column, getattr(meta, "end_line", 0) or 0,
                     getattr(meta, "end_column", 0) or 0)
 
+    def unescape(self, body: str, quote: str, offset: int) -> str:
+        """`_unescape`, with a bad escape reported where it is (`offset`: where `body` starts)."""
+        try:
+            return _unescape(body, quote)
+        except _EscapeError as error:
+            raise RetalisSyntaxError(error.message, self.source.span_at(offset + error.offset)) from None
+
     def sequence(self, tree: Tree, max_priority: int) -> Term:
         items = [self.item(child) for child in tree.children]
         resolver = _Resolver(items, self.ops, self.file, self.source)
@@ -281,7 +315,7 @@ class _Builder:
             token = node.children[0]
             text = str(token)
             quoted = token.type == "QUOTED_NAME"
-            name = _unescape(text[1:-1], "'") if quoted else text
+            name = self.unescape(text[1:-1], "'", token.start_pos + 1) if quoted else text
             return _Name(name, self.span(token), token.start_pos, token.end_pos, quoted)
         term = self.operand(node)
         return _Operand(term, node.meta.start_pos, node.meta.end_pos, node.data == "compound")
@@ -295,17 +329,18 @@ class _Builder:
             return Number(_number(str(node.children[0])), span)
         if kind == "char_code":
             body = str(node.children[0])[2:]
-            char = "'" if body == "''" else _unescape(body, "'") if body.startswith("\\") else body
+            start = node.meta.start_pos + 2
+            char = "'" if body == "''" else self.unescape(body, "'", start) if body.startswith("\\") else body
             return Number(ord(char[0]), span)
         if kind == "string":
-            return String(_unescape(str(node.children[0])[1:-1], '"'), span)
+            return String(self.unescape(str(node.children[0])[1:-1], '"', node.meta.start_pos + 1), span)
         if kind == "backquoted":
-            text = _unescape(str(node.children[0])[1:-1], "`")
+            text = self.unescape(str(node.children[0])[1:-1], "`", node.meta.start_pos + 1)
             return make_list([Number(ord(c)) for c in text])
         if kind == "compound":
             functor = str(node.children[0])[:-1]
             if functor.startswith("'"):
-                functor = _unescape(functor[1:-1], "'")
+                functor = self.unescape(functor[1:-1], "'", node.meta.start_pos + 1)
             args = tuple(self.sequence(child, ARGUMENT_PRIORITY) for child in node.children[1:])
             return Compound(functor, args, span)
         if kind == "empty_list":
@@ -369,11 +404,29 @@ def read_program(text: str, file: str = "<program>", ops: Optional[OperatorTable
     builder = _Builder(source, ops)
     clauses = []
     for clause_tree in tree.children:
-        term = builder.sequence(clause_tree.children[0], CLAUSE_PRIORITY)
         span = builder.span(clause_tree)
+        term = _build_clause(builder, clause_tree, span)
         clauses.append(ReadClause(term, span, text[clause_tree.meta.start_pos:clause_tree.meta.end_pos]))
         _apply_op_directive(term, ops)
     return clauses
+
+
+def _build_clause(builder: "_Builder", clause_tree: Tree, span: Span) -> Term:
+    """The term of one clause; a located error when it nests deeper than MAX_TERM_DEPTH."""
+    depth, node = deepest_tree(clause_tree)
+    if depth > 2 * MAX_TERM_DEPTH + 2:         # two tree levels per level of brackets
+        raise RetalisSyntaxError(_too_deep(), builder.span(node) if node.meta and not node.meta.empty else span)
+    try:
+        term = builder.sequence(clause_tree.children[0], CLAUSE_PRIORITY)
+    except RecursionError:
+        raise RetalisSyntaxError(_too_deep(), span) from None
+    if term_depth(term) > MAX_TERM_DEPTH:
+        raise RetalisSyntaxError(_too_deep(), span)
+    return term
+
+
+def _too_deep() -> str:
+    return f"clause too deep: terms may nest at most {MAX_TERM_DEPTH} levels (brackets, arguments, operators)"
 
 
 def read_term(text: str, file: str = "<term>", ops: Optional[OperatorTable] = None) -> Term:

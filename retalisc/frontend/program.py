@@ -7,6 +7,7 @@ the parser into these dataclasses; patterns become `Pattern` trees.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import List, Optional, Union
 
@@ -82,6 +83,8 @@ class Aggregate:
 
 
 Pattern = Union[EventAtom, Binary, Where, Check, Window, Negation, Aggregate]
+
+LABEL = re.compile(r"[a-z][A-Za-z0-9_]*")
 
 AGGREGATE_FUNCTIONS = {("count", 0), ("sum", 1), ("min", 1), ("max", 1), ("avg", 1)}
 
@@ -219,6 +222,9 @@ def _event_rule(term: Compound, clause: ReadClause, label_term: Optional[Term]) 
     if _is(head, "do", 2):
         head, action = head.args
     head = _strip_time(head)
+    if _is(head, ":", 2):
+        raise RetalisSyntaxError("the head of an event rule cannot be Module:Event; a label is written "
+                                 "'label : Head <- Pattern' with a name as label", span_of(head) or clause.span)
     synchronized = None
     if isinstance(head, Compound) and head.name in ("synchronized", "syncronized") and head.arity == 3:
         synchronized = head
@@ -232,7 +238,7 @@ def _label(term: Optional[Term], span: Span):
     if term is None:
         return None, {}
     if isinstance(term, Atom):
-        return term.name, {}
+        return _label_name(term), {}
     if isinstance(term, Compound) and term.arity == 1:
         items = list_items(term.args[0])
         properties = {}
@@ -244,11 +250,18 @@ def _label(term: Optional[Term], span: Span):
                                          span_of(item) or span)
         if items is None:
             raise RetalisSyntaxError("rule properties are written [property(Name, Value), ...]", span)
-        return term.name, properties
-    if isinstance(term, Number):
-        return str(term.value), {}
-    raise RetalisSyntaxError("a rule label must be an atom or Label([property(Name, Value), ...])",
-                             span_of(term) or span)
+        return _label_name(term), properties
+    raise RetalisSyntaxError("a rule label must be a name ([a-z][A-Za-z0-9_]*) or Label([property(Name, Value), "
+                             "...])", span_of(term) or span)
+
+
+def _label_name(term: Union[Atom, Compound]) -> str:
+    """A label names the rule's generated predicates (`e_<label>_<n>`) and is the id that
+    `del_event_rule/1` takes, so it must be a plain name."""
+    if not LABEL.fullmatch(term.name):
+        raise RetalisSyntaxError(f"the rule label {term.name!r} must be a name matching [a-z][A-Za-z0-9_]* "
+                                 "(it names the rule's generated predicates)", span_of(term))
+    return term.name
 
 
 def _strip_time(head: Term) -> Term:
@@ -261,6 +274,11 @@ def to_pattern(term: Term, span: Span) -> Pattern:
     """Turn an event pattern term into a Pattern tree."""
     where = span_of(term) or span
     if isinstance(term, Compound):
+        if (term.name, term.arity) in _NOT_PATTERNS:
+            raise RetalisSyntaxError(f"'{term.name}' cannot stand inside a pattern ({_NOT_PATTERNS[term.name, term.arity]})",
+                                     where)
+        if term.name == "not":
+            raise RetalisSyntaxError("negation is written not(N).[P1, P2]: no N between P1 and P2", where)
         if term.arity == 2 and term.name in BINARY_OPERATORS:
             return Binary(term.name, to_pattern(term.args[0], span), to_pattern(term.args[1], span), where)
         if term.arity == 2 and term.name == "where":
@@ -281,8 +299,8 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                 return Negation(to_pattern(left.args[0], span), to_pattern(items[0], span),
                                 to_pattern(items[1], span), where)
             if isinstance(right, Number):
-                if right.value < 0:
-                    raise RetalisSyntaxError("a window length must not be negative", where)
+                if right.value != right.value or right.value < 0:
+                    raise RetalisSyntaxError("a window length must be a number of seconds, not negative", where)
                 return Window(to_pattern(left, span), right.value, where)
             raise RetalisSyntaxError("'(Pattern).Q' needs a number Q (the window length in seconds)", where)
         if term.arity == 3 and term.name == "aggregate":
@@ -290,6 +308,11 @@ def to_pattern(term: Term, span: Span) -> Pattern:
             key = (function.name, getattr(function, "arity", 0)) if isinstance(function, (Atom, Compound)) else None
             if key in AGGREGATE_FUNCTIONS:
                 return Aggregate(function, to_pattern(term.args[1], span), term.args[2], where)
+            known = ", ".join(f"{n}(X)" if a else n for n, a in sorted(AGGREGATE_FUNCTIONS))
+            raise RetalisSyntaxError(f"unknown aggregate function {_function_text(function)} (expected {known})",
+                                     span_of(function) or where)
+        if term.name == "aggregate":
+            raise RetalisSyntaxError("an aggregate is written aggregate(Function, Pattern, Value)", where)
         if term.arity == 2 and term.name == "^":
             atom = to_pattern(term.args[0], span)
             if not isinstance(atom, EventAtom):
@@ -300,29 +323,65 @@ def to_pattern(term: Term, span: Span) -> Pattern:
             return EventAtom(atom.term, where, term.args[1], term.args[1])
         return EventAtom(term, where)
     if isinstance(term, Atom):
+        if term.name == "not":
+            raise RetalisSyntaxError("negation is written not(N).[P1, P2]: no N between P1 and P2", where)
         return EventAtom(term, where)
     if isinstance(term, Var):
         raise RetalisSyntaxError(f"a variable ({term.name}) cannot stand for an event pattern", where)
     raise RetalisSyntaxError(f"{to_prolog(term)} is not an event pattern", where)
 
 
+# Clause-level operators that cannot be part of a pattern.
+_NOT_PATTERNS = {
+    ("<-", 2): "an event rule cannot be nested in a pattern; write the inner rule as a rule of its own "
+               "and use its head here",
+    (":-", 2): "a pattern is not a Prolog clause",
+    (":-", 1): "a pattern is not a directive",
+    ("?-", 1): "a pattern is not a directive",
+    ("-->", 2): "a pattern is not a grammar rule",
+    ("do", 2): "an action is written on the head: Head do Action <- Pattern",
+    ("rule:", 2): "a rule label is written before the head: label 'rule:' Head <- Pattern",
+}
+
+
+def _function_text(function: Term) -> str:
+    from .writer import write_term
+
+    return write_term(function, 999)
+
+
 def _is(term: Term, name: str, arity: int) -> bool:
     return isinstance(term, Compound) and term.name == name and term.arity == arity
 
 
+def pattern_children(pattern: Pattern) -> list:
+    """The direct sub-patterns of a pattern, left to right."""
+    if isinstance(pattern, Binary):
+        return [pattern.left, pattern.right]
+    if isinstance(pattern, (Where, Check, Window, Aggregate)):
+        return [pattern.pattern]
+    if isinstance(pattern, Negation):
+        return [pattern.negated, pattern.first, pattern.second]
+    return []
+
+
+def walk_pattern(pattern: Pattern, into=None):
+    """A pattern and its sub-patterns, each before its children, left to right, without
+    recursion (a chain of 1,500 `seq` steps nests 1,500 deep); `into(p)` false stops the walk
+    from entering p's children."""
+    stack = [pattern]
+    while stack:
+        p = stack.pop()
+        yield p
+        if into is None or into(p):
+            stack.extend(reversed(pattern_children(p)))
+
+
 def pattern_conditions(pattern: Pattern):
     """The conditions (`where`, `check`) of a pattern and its sub-patterns, outermost first."""
-    if isinstance(pattern, (Where, Check)):
-        yield pattern.condition
-        yield from pattern_conditions(pattern.pattern)
-    elif isinstance(pattern, Binary):
-        yield from pattern_conditions(pattern.left)
-        yield from pattern_conditions(pattern.right)
-    elif isinstance(pattern, (Window, Aggregate)):
-        yield from pattern_conditions(pattern.pattern)
-    elif isinstance(pattern, Negation):
-        for part in (pattern.negated, pattern.first, pattern.second):
-            yield from pattern_conditions(part)
+    for p in walk_pattern(pattern):
+        if isinstance(p, (Where, Check)):
+            yield p.condition
 
 
 # ---- writing patterns back (for dumps and comments in generated code) -----------------

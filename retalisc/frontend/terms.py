@@ -175,23 +175,40 @@ _SYMBOL_ATOM = re.compile(r"^[+\-*/\\^<>=~:.?@#&$]+$")
 def quote_atom(name: str) -> str:
     if _LETTER_ATOM.match(name) or name in ("[]", "!", ";", "{}"):
         return name
-    if _SYMBOL_ATOM.match(name) and name != ".":
+    if _SYMBOL_ATOM.match(name) and name != "." and "/*" not in name:
         return name
-    escaped = (
-        name.replace("\\", "\\\\").replace("'", "\\'").replace("\n", "\\n").replace("\t", "\\t")
-    )
-    return f"'{escaped}'"
+    return "'" + _escape(name, "'") + "'"
+
+
+_CONTROL_ESCAPES = {"\\": "\\\\", "\n": "\\n", "\t": "\\t"}
+
+
+def _escape(text: str, quote: str) -> str:
+    """`text` between `quote`s as SWI-Prolog reads it back: backslash, the quote and control
+    characters escaped."""
+    out = []
+    for c in text:
+        if c == quote:
+            out.append("\\" + c)
+        elif c in _CONTROL_ESCAPES:
+            out.append(_CONTROL_ESCAPES[c])
+        elif ord(c) < 0x20 or ord(c) == 0x7F:
+            out.append(f"\\x{ord(c):x}\\")
+        else:
+            out.append(c)
+    return "".join(out)
 
 
 def _quote_string(text: str) -> str:
-    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n").replace("\t", "\\t")
-    return f'"{escaped}"'
+    return '"' + _escape(text, '"') + '"'
 
 
 def format_number(value) -> str:
     if isinstance(value, float):
-        if value != value or value in (float("inf"), float("-inf")):
-            return {"inf": "inf", "-inf": "-inf"}.get(str(value), "nan")
+        if value != value:
+            return "1.5NaN"                 # SWI-Prolog's syntax for floats that are not finite
+        if value in (float("inf"), float("-inf")):
+            return "1.0Inf" if value > 0 else "-1.0Inf"
         text = repr(value)
         if "e" in text and "." not in text.split("e")[0]:
             mantissa, exponent = text.split("e")

@@ -9,7 +9,6 @@ were pushed to by push_conditions).
 """
 from __future__ import annotations
 
-import re
 from typing import List, Optional, Set
 
 from ..frontend.errors import RetalisSemanticError
@@ -28,20 +27,22 @@ END_MARK = Atom("$end")
 
 
 def run(unit: Unit) -> Unit:
-    used: Set[str] = set()
-    unit.rules = []
-    for index, rule in enumerate(unit.program.event_rules, start=1):
-        rule_id = _rule_id(rule, index, used)
-        unit.rules.append(_Binarizer(rule, rule_id).binarize())
+    rules = unit.program.event_rules
+    labels = {rule.label for rule in rules if rule.label}
+    unit.rules = [_Binarizer(rule, _rule_id(rule, index, labels)).binarize()
+                  for index, rule in enumerate(rules, start=1)]
     return unit
 
 
-def _rule_id(rule: EventRule, index: int, used: Set[str]) -> str:
-    base = rule.label if rule.label and re.fullmatch(r"[a-z][A-Za-z0-9_]*", rule.label) else f"r{index}"
-    rule_id, n = base, 2
-    while rule_id in used:
-        rule_id, n = f"{base}_{n}", n + 1
-    used.add(rule_id)
+def _rule_id(rule: EventRule, index: int, labels: Set[str]) -> str:
+    """The rule's label (`validate` has checked that labels are unique names), or `r<index>`
+    (its position) for an unlabelled rule; when a label already is `r<index>`, the unlabelled
+    rule is `r<index>_2` (or `_3`, ...): labels keep their names."""
+    if rule.label:
+        return rule.label
+    rule_id, n = f"r{index}", 2
+    while rule_id in labels:
+        rule_id, n = f"r{index}_{n}", n + 1
     return rule_id
 
 

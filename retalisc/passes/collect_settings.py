@@ -32,6 +32,9 @@ def run(unit: Unit) -> Unit:
                 else:
                     unit.warnings.append(f"{item.span}: warning: ETALIS flag {write_term(flag)} has no "
                                          "meaning in retalisc and is ignored")
+            elif _is(goal, "set_retalis_flag", 2):
+                unit.warnings.append(f"{item.span}: warning: set_retalis_flag/2 has no meaning in retalisc and is "
+                                     "ignored")
             elif _is(goal, "print_trigger", 1):
                 spec = goal.args[0]
                 if _is(spec, "/", 2) and isinstance(spec.args[0], Atom) and isinstance(spec.args[1], Number):

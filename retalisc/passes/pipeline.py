@@ -10,11 +10,12 @@ from __future__ import annotations
 from typing import Callable, List, Optional, TypeVar
 
 from . import (added_rules, apply_rule_windows, aq_naive, aq_optimized, aq_program, aq_tabled, binarize,
-               collect_settings, edbc, push_conditions, slr_goal_sets, slr_stream_histories, slr_time_terms,
-               validate)
+               collect_settings, edbc, loadable, push_conditions, slr_goal_sets, slr_stream_histories,
+               slr_time_terms, validate)
 
 #: Event programs (`.rtl`, read by `frontend/program.py`), rendered by `backends/prolog/render.py`.
-EVENT_PIPELINE = [slr_time_terms, slr_stream_histories, slr_goal_sets, validate, collect_settings, apply_rule_windows, push_conditions, binarize, edbc]
+EVENT_PIPELINE = [slr_time_terms, slr_stream_histories, slr_goal_sets, validate, collect_settings, apply_rule_windows, push_conditions, binarize, edbc,
+                  loadable]
 
 #: Event rules added to a running program (`retalisc compile-rules`, `Engine.add_rules`): checked
 #: and named, then compiled like the rules of a program.

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import List, Optional, Set
 
-from ..frontend.program import Binary, EventAtom, Pattern, Where, Window
+from ..frontend.program import Binary, EventAtom, Pattern, Where, Window, walk_pattern
 from ..frontend.terms import Compound, Term, conjunction, conjuncts, indicator, variables
 from .unit import Unit
 
@@ -74,15 +74,12 @@ def _single_atom_for(conjunct: Term, pattern: Pattern, static: Set) -> Optional[
 
 def _reachable_atoms(pattern: Pattern):
     """Event atoms every match of `pattern` contains (not inside or / negation)."""
-    if isinstance(pattern, EventAtom):
-        yield pattern
-    elif isinstance(pattern, Binary) and pattern.op not in ("or", "fnot"):
-        yield from _reachable_atoms(pattern.left)
-        yield from _reachable_atoms(pattern.right)
-    elif isinstance(pattern, Where):
-        yield from _reachable_atoms(pattern.pattern)
-    elif isinstance(pattern, Window):
-        yield from _reachable_atoms(pattern.pattern)
+    def into(p: Pattern) -> bool:
+        return (isinstance(p, Binary) and p.op not in ("or", "fnot")) or isinstance(p, (Where, Window))
+
+    for p in walk_pattern(pattern, into):
+        if isinstance(p, EventAtom):
+            yield p
 
 
 def _atom_variables(atom: EventAtom) -> Set[str]:

@@ -14,7 +14,7 @@ Passes only build dataclasses and terms; the text of a unit, for the output or f
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import Dict, FrozenSet, List, Optional, Tuple
 
 from ..frontend import definite
 from ..frontend.program import EventRule, Program
@@ -85,6 +85,21 @@ class GeneratedRule:
     stores: List[tuple]             # (name, arity, window or None)
 
 
+@dataclass(frozen=True)
+class TargetPredicates:
+    """What the generated module sees without defining it, by (name, arity): SWI-Prolog's
+    builtins, its autoloaded library and the Retalis runtime's predicates (with their module).
+    The backend knows them (`backends/prolog/reserved.py`); the compiler hands them to the unit."""
+
+    builtins: FrozenSet[Tuple[str, int]] = frozenset()
+    library: FrozenSet[Tuple[str, int]] = frozenset()
+    runtime: Dict[Tuple[str, int], str] = field(default_factory=dict)
+    generated: FrozenSet[Tuple[str, int]] = frozenset()   # defined by every generated module
+
+    def known(self, key: Tuple[str, int]) -> bool:
+        return key in self.builtins or key in self.library or key in self.runtime
+
+
 @dataclass
 class Unit:
     program: Program
@@ -94,6 +109,10 @@ class Unit:
     generated: Optional[List[GeneratedRule]] = None   # set by edbc
     warnings: List[str] = field(default_factory=list)
     rule_prefix: str = "rt"  # added_rules: unlabelled rules added at run time are named <prefix>_<n>
+    target: TargetPredicates = field(default_factory=TargetPredicates)
+    # runtime library predicates (min/3, new_event/1, ...) the program defines itself: the
+    # generated module does not import them (set by `loadable`)
+    runtime_overrides: List[Tuple[str, int]] = field(default_factory=list)
 
 
 @dataclass

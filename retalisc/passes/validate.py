@@ -11,9 +11,9 @@ from __future__ import annotations
 from typing import Dict, Iterable, Set, Tuple
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.program import (DECLARATIONS, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
-                                Where, Window, pattern_conditions)
-from ..frontend.terms import Atom, Compound, Term, indicator, span_of, variables
+from ..frontend.program import (DECLARATIONS, Aggregate, EventAtom, EventRule, Pattern, pattern_conditions,
+                                walk_pattern)
+from ..frontend.terms import Atom, Compound, Term, Var, indicator, span_of, variables
 from .unit import Unit
 
 name = "validate"
@@ -36,8 +36,10 @@ def run(unit: Unit) -> Unit:
     derived = {indicator(r.head) for r in program.event_rules if r.synchronized is None}
     static = {indicator(c.head) for c in program.static_clauses}
 
+    _check_labels(program.event_rules)
     for rule in program.event_rules:
         _check_head_variables(rule)
+        _check_aggregate_variables(rule)
         _check_pattern_arities(rule.pattern, derived)
         for condition in pattern_conditions(rule.pattern):
             _check_static_goals(condition, event_arities, static, "a where condition")
@@ -54,6 +56,20 @@ def run(unit: Unit) -> Unit:
     return unit
 
 
+def _check_labels(rules) -> None:
+    """Labels name the generated predicates and are the ids `del_event_rule/1` takes: two
+    rules cannot share one."""
+    labelled: Dict[str, EventRule] = {}
+    for rule in rules:
+        if rule.label is None:
+            continue
+        first = labelled.get(rule.label)
+        if first is not None:
+            raise RetalisSemanticError(f"two rules are labelled {rule.label} (the first one at line "
+                                       f"{first.span.line}); rule labels must be unique", rule.span)
+        labelled[rule.label] = rule
+
+
 def _event_arities(rules: Iterable[EventRule]) -> Set[Tuple[str, int]]:
     found = set()
     for rule in rules:
@@ -65,17 +81,9 @@ def _event_arities(rules: Iterable[EventRule]) -> Set[Tuple[str, int]]:
 
 
 def _atoms(pattern: Pattern):
-    if isinstance(pattern, EventAtom):
-        yield pattern
-    elif isinstance(pattern, Binary):
-        yield from _atoms(pattern.left)
-        yield from _atoms(pattern.right)
-    elif isinstance(pattern, (Where, Check, Window, Aggregate)):
-        yield from _atoms(pattern.pattern)
-    elif isinstance(pattern, Negation):
-        yield from _atoms(pattern.negated)
-        yield from _atoms(pattern.first)
-        yield from _atoms(pattern.second)
+    for p in walk_pattern(pattern):
+        if isinstance(p, EventAtom):
+            yield p
 
 
 def _pattern_variables(pattern: Pattern) -> Set[str]:
@@ -93,20 +101,9 @@ def _pattern_variables(pattern: Pattern) -> Set[str]:
 
 
 def _aggregates(pattern: Pattern):
-    if isinstance(pattern, Aggregate):
-        yield pattern
-    for child in _children(pattern):
-        yield from _aggregates(child)
-
-
-def _children(pattern: Pattern):
-    if isinstance(pattern, Binary):
-        return [pattern.left, pattern.right]
-    if isinstance(pattern, (Where, Check, Window, Aggregate)):
-        return [pattern.pattern]
-    if isinstance(pattern, Negation):
-        return [pattern.negated, pattern.first, pattern.second]
-    return []
+    for p in walk_pattern(pattern):
+        if isinstance(p, Aggregate):
+            yield p
 
 
 def _check_head_variables(rule: EventRule) -> None:
@@ -119,6 +116,20 @@ def _check_head_variables(rule: EventRule) -> None:
             raise RetalisSemanticError(
                 f"variable {var.name} of the rule head does not occur in the pattern (it would stay unbound)",
                 span_of(var) or rule.span)
+
+
+def _check_aggregate_variables(rule: EventRule) -> None:
+    """`aggregate(sum(X), P, V)`: X is a variable of P (its value in each P is aggregated)."""
+    for node in _aggregates(rule.pattern):
+        if not isinstance(node.function, Compound):
+            continue
+        argument = node.function.args[0]
+        where = span_of(argument) or node.span or rule.span
+        if not isinstance(argument, Var) or argument.is_anonymous:
+            raise RetalisSemanticError(f"{node.function.name}(X) aggregates a variable X of the pattern", where)
+        if argument.name not in _pattern_variables(node.pattern):
+            raise RetalisSemanticError(f"the variable {argument.name} of {node.function.name}({argument.name}) does "
+                                       "not occur in the aggregated pattern", where)
 
 
 def _check_pattern_arities(pattern: Pattern, derived: Set[Tuple[str, int]]) -> None:

@@ -14,9 +14,15 @@ import jinja2
 
 from ...frontend.program import Declaration, Directive, StaticClause
 from ...frontend.terms import Atom, Compound, Term, conjuncts, quote_atom
-from ...frontend.writer import write_term
+from ...frontend.writer import write_term as _write_term
 from ...passes.unit import GeneratedRule, Unit
 from ...runtime_location import runtime_dir
+
+def write_term(term: Term, max_priority: int = 1200) -> str:
+    """A term as generated code writes it: the event operators (`seq`, `where`, `<-`, ...) in
+    functional notation, since the runtime module does not declare them as operators."""
+    return _write_term(term, max_priority, event_operators=False)
+
 
 _ENV = jinja2.Environment(
     loader=jinja2.FileSystemLoader(str(Path(__file__).with_name("templates"))),
@@ -25,7 +31,8 @@ _ENV = jinja2.Environment(
 )
 
 # Directives that only configure the compiler: they are compiled, not copied.
-_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3), ("op", 3)}
+_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print_trigger", 1),
+                        ("event_rule_property", 3), ("op", 3)}
 
 
 def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
@@ -48,6 +55,7 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
         declarations=[write_term(c.goal, 999) for c in unit.program.clauses
                       if isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES],
         rules=[_RuleView(g) for g in unit.generated],
+        runtime_overrides=[f"{quote_atom(name)}/{arity}" for name, arity in unit.runtime_overrides],
     )
 
 

@@ -1,0 +1,74 @@
+"""Option types and checks shared by the commands: a bad value is a one-line usage error
+(exit status 2), never a traceback."""
+from __future__ import annotations
+
+import math
+import os
+
+import click
+
+
+class Seconds(click.ParamType):
+    """A duration in seconds: a number >= 0, `inf` when `allow_inf` (no bound); never NaN or
+    negative."""
+
+    name = "seconds"
+
+    def __init__(self, allow_inf: bool = True):
+        self.allow_inf = allow_inf
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            number = float(value)
+        else:
+            try:
+                number = float(str(value).strip())
+            except ValueError:
+                self.fail(f"{value!r} is not a number of seconds", param, ctx)
+        if math.isnan(number):
+            self.fail("NaN is not a number of seconds", param, ctx)
+        if number < 0:
+            self.fail(f"{value} is negative; give a number of seconds >= 0", param, ctx)
+        if math.isinf(number) and not self.allow_inf:
+            self.fail("must be a finite number of seconds", param, ctx)
+        return number
+
+
+class FiniteTime(click.ParamType):
+    """A time stamp in seconds: any finite number."""
+
+    name = "time"
+
+    def convert(self, value, param, ctx):
+        try:
+            number = float(str(value).strip()) if not isinstance(value, (int, float)) else float(value)
+        except ValueError:
+            self.fail(f"{value!r} is not a number", param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value} is not a finite number", param, ctx)
+        return number
+
+
+def output_file(path: str, option: str) -> None:
+    """Fail with a usage error unless `path` can be written (it is created, empty, if missing)."""
+    if path in (None, "-"):
+        return
+    if os.path.isdir(path):
+        raise click.BadParameter(f"{path} is a directory", param_hint=option)
+    try:
+        with open(path, "a", encoding="utf-8"):
+            pass
+    except OSError as error:
+        raise click.BadParameter(f"cannot write {path}: {error.strerror}", param_hint=option) from None
+
+
+def output_directory(path: str, option: str) -> None:
+    """Fail with a usage error unless directory `path` exists or can be made, and is writable."""
+    if path is None:
+        return
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as error:
+        raise click.BadParameter(f"cannot make the directory {path}: {error.strerror}", param_hint=option) from None
+    if not os.access(path, os.W_OK):
+        raise click.BadParameter(f"cannot write in the directory {path}", param_hint=option)
