@@ -1,0 +1,212 @@
+"""`retalisc run PROGRAM --bag FILE`: a recording replayed into a running program.
+
+Each message of the selected topics becomes an event (messages.py), in record order, and
+goes to the Engine in batches (`feed_batch`, one Prolog call per batch). With a rate, the
+replay follows the recording's clock (times the rate), feeding each message when it is due.
+The output is written as by `retalisc run --events`; rejected messages (that cannot be
+decoded or converted) are reported on standard error as `BAG:TOPIC#N: rejected: REASON` (N
+counts the replayed messages from 1) and skipped; a summary closes the run.
+"""
+from __future__ import annotations
+
+import os
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import IO, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
+
+import click
+
+from .bags import DEFAULT_ROS2_STORE, BagError, Recording, topic_list
+from .messages import ConversionError, Convention, MessageConverter
+
+
+@dataclass
+class BagOptions:
+    """What to replay and how messages become events (the --bag options of `retalisc run`)."""
+
+    topics: Optional[List[str]] = None
+    rate: Optional[float] = None          # None: as fast as possible
+    start: float = 0.0                    # seconds skipped from the start of the recording
+    duration: Optional[float] = None      # seconds replayed from `start`
+    convention: Convention = field(default_factory=Convention)
+    stamp: str = "header"                 # or "record": every event at its record time
+    typestore: str = DEFAULT_ROS2_STORE   # for ROS 2 bags without definitions
+
+    @classmethod
+    def from_cli(cls, values: dict) -> "BagOptions":
+        return cls(topics=topic_list(values.get("topics")), rate=values.get("rate"),
+                   start=values.get("bag_start") or 0.0, duration=values.get("bag_duration"),
+                   convention=Convention(plain_strings=bool(values.get("plain_strings")),
+                                         wrap_topic=bool(values.get("wrap_topic"))),
+                   stamp=values.get("stamp") or "header",
+                   typestore=values.get("bag_typestore") or DEFAULT_ROS2_STORE)
+
+
+@dataclass
+class ReplayStats:
+    """What a replay read: messages per topic, and the messages rejected."""
+
+    per_topic: Counter = field(default_factory=Counter)
+    rejected: int = 0
+    seconds: float = 0.0
+
+    @property
+    def messages(self) -> int:
+        return sum(self.per_topic.values())
+
+    def summary(self, name: str) -> str:
+        topics = ", ".join(f"{topic} {count:,}" for topic, count in sorted(self.per_topic.items()))
+        rejected = f", {self.rejected:,} rejected" if self.rejected else ""
+        return (f"bag: {name}: {self.messages:,} messages in {self.seconds:.2f} s"
+                f"{rejected}{': ' + topics if topics else ''}")
+
+
+Event = Tuple[str, float]
+
+
+def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
+               report: Callable[[str, int, str], None],
+               converter: Optional[MessageConverter] = None) -> Iterator[Tuple[str, float, int]]:
+    """(event text, time in seconds, record time in ns) for each message replayed, in record
+    order. Messages that cannot be decoded or converted go to `report(topic, number, reason)`
+    and are counted in `stats.rejected`."""
+    converter = converter or MessageConverter(bag.typestore, options.convention)
+    start_ns, stop_ns = window(bag, options)
+    record_stamp = options.stamp == "record"
+    number = 0
+    for record in bag.records(options.topics, start_ns, stop_ns):
+        number += 1
+        stats.per_topic[record.topic] += 1
+        if record.msg is None:
+            stats.rejected += 1
+            report(record.topic, number, record.error or "cannot decode")
+            continue
+        try:
+            text, seconds = converter.event(record.msg, record.msgtype, record.topic, record.time_ns)
+        except (ConversionError, AttributeError, TypeError, ValueError) as error:
+            stats.rejected += 1
+            report(record.topic, number, f"cannot convert {record.msgtype}: {error}")
+            continue
+        if record_stamp:
+            seconds = record.time_ns / 1e9
+        yield text, seconds, record.time_ns
+
+
+def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
+    """The record-time window [start, stop) in ns of --start and --duration."""
+    start_ns = bag.start_ns + int(options.start * 1e9) if options.start else None
+    stop_ns = None
+    if options.duration is not None:
+        stop_ns = (start_ns if start_ns is not None else bag.start_ns) + int(options.duration * 1e9)
+    return start_ns, stop_ns
+
+
+def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[BagOptions] = None,
+               batch_size: int = 2000, consumer_dir: Optional[str] = None, drop_pending: bool = False,
+               first_output: Sequence = (), progress: Optional[bool] = None) -> int:
+    """Replay the recording at `path` into `engine`; write the output JSON Lines to `out`
+    ('-' for stdout, None to drop it), as `run_event_file` does. A progress bar shows on a
+    terminal (`progress` forces it on or off). Returns the exit status: 0, 1 when the program
+    raised an error, 2 when the recording cannot be read."""
+    from ..driver.bridge import PrologError
+    from ..driver.run import ConsumerFiles
+
+    options = options or BagOptions()
+    name = str(path)
+    try:
+        bag = Recording(path, options.typestore).__enter__()
+    except BagError as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+    sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
+    consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
+    stats = ReplayStats()
+    status = 0
+    if options.topics:
+        unknown = [t for t in options.topics if t not in bag.topics()]
+        if unknown:
+            click.echo(f"{name}: warning: no topic {', '.join(unknown)} in this recording "
+                       f"(it has {', '.join(bag.topics())})", err=True)
+
+    def write(produced) -> None:
+        for event in produced:
+            if consumers is not None and event.consumer is not None:
+                consumers.write(event)
+            else:
+                sink.write(event.line + "\n")
+
+    def report(topic: str, number: int, reason: str) -> None:
+        click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
+
+    start_ns, stop_ns = window(bag, options)
+    first_ns = start_ns if start_ns is not None else bag.start_ns
+    last_ns = min(stop_ns, bag.end_ns) if stop_ns is not None else bag.end_ns
+    show = progress if progress is not None else sys.stderr.isatty()
+    began = time.perf_counter()
+    try:
+        with (click.progressbar(length=max(1, (last_ns - first_ns) // 1_000_000), label=f"replaying {name}",
+                                file=sys.stderr) if show else _NoBar()) as bar:
+            for produced in first_output:
+                write(produced)
+            batch: List[Tuple[str, float]] = []
+            shown_ms = 0
+            for text, seconds, record_ns in bag_events(bag, options, stats, report):
+                if options.rate is not None:
+                    due = began + (record_ns - first_ns) / 1e9 / options.rate
+                    wait = due - time.perf_counter()
+                    if wait > 0:
+                        if batch:
+                            write(engine.feed_batch(batch))
+                            batch = []
+                            sink.flush()
+                        time.sleep(wait)
+                batch.append((text, seconds))
+                if len(batch) >= batch_size:
+                    write(engine.feed_batch(batch))
+                    batch = []
+                done_ms = (record_ns - first_ns) // 1_000_000
+                if done_ms > shown_ms:
+                    bar.update(done_ms - shown_ms)
+                    shown_ms = done_ms
+            if batch:
+                write(engine.feed_batch(batch))
+            write(engine.end_of_input(drop_pending))
+        sink.flush()
+    except PrologError as error:
+        sink.flush()
+        click.echo(f"{name}: error: {error}", err=True)
+        status = 1
+    finally:
+        bag.__exit__(None, None, None)
+        if sink is not sys.stdout:
+            sink.close()
+        if consumers is not None:
+            consumers.close()
+    stats.seconds = time.perf_counter() - began
+    click.echo(stats.summary(name), err=True)
+    click.echo(engine.summary(), err=True)
+    return status
+
+
+def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
+    """`retalisc run PROGRAM --bag FILE ...`: `values` are the --bag options (options.py)."""
+    from . import MissingDependency
+
+    try:
+        return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values), **run_options)
+    except MissingDependency as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+
+
+class _NoBar:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def update(self, n: int) -> None:
+        pass
