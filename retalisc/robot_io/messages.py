@@ -153,7 +153,7 @@ class MessageConverter:
         if self.convention.wrap_topic:
             text = f"{atom_text(topic_functor(topic))}({text})"
         stamp = self.stamp_ns(msg, msgtype)
-        return text, (stamp or record_ns) / 1e9
+        return text, (stamp or record_ns) / 1_000_000_000     # int / int: correctly rounded
 
     def stamp_ns(self, msg, msgtype: str) -> int:
         """`header.stamp` of `msg` in nanoseconds, 0 when it has no header."""

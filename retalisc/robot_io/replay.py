@@ -90,16 +90,16 @@ def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
             report(record.topic, number, f"cannot convert {record.msgtype}: {error}")
             continue
         if record_stamp:
-            seconds = record.time_ns / 1e9
+            seconds = record.time_ns / 1_000_000_000
         yield text, seconds, record.time_ns
 
 
 def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
     """The record-time window [start, stop) in ns of --start and --duration."""
-    start_ns = bag.start_ns + int(options.start * 1e9) if options.start else None
+    start_ns = bag.start_ns + round(options.start * 1e9) if options.start else None
     stop_ns = None
     if options.duration is not None:
-        stop_ns = (start_ns if start_ns is not None else bag.start_ns) + int(options.duration * 1e9)
+        stop_ns = (start_ns if start_ns is not None else bag.start_ns) + round(options.duration * 1e9)
     return start_ns, stop_ns
 
 
