@@ -3,7 +3,8 @@
 Each message of the selected topics becomes an event (messages.py), in record order, and
 goes to the Engine in batches (`feed_batch`, one Prolog call per batch). With a rate, the
 replay follows the recording's clock (times the rate), feeding each message when it is due.
-The output is written as by `retalisc run --events`; rejected messages (that cannot be
+The output is written as by `retalisc run --events`; with a rate, messages are fed in slices
+of at most 10 ms of the recording's time (RATE_TICK), so a message is at most that late. rejected messages (that cannot be
 decoded or converted) are reported on standard error as `BAG:TOPIC#N: rejected: REASON` (N
 counts the replayed messages from 1) and skipped; a summary closes the run.
 """
@@ -64,6 +65,10 @@ class ReplayStats:
 
 
 Event = Tuple[str, float]
+
+RATE_TICK = 0.01
+"""With --rate, the replay sleeps at least this many seconds at a time: a message is fed at
+most this late, together with the others that fell due meanwhile (one Prolog call)."""
 
 
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
@@ -161,7 +166,8 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                             write(engine.feed_batch(batch))
                             batch = []
                             sink.flush()
-                        time.sleep(wait)
+                        # sleep at least one tick: what fell due meanwhile goes in one batch
+                        time.sleep(max(wait, RATE_TICK))
                 batch.append((text, seconds))
                 if len(batch) >= batch_size:
                     write(engine.feed_batch(batch))
