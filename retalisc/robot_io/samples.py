@@ -185,3 +185,28 @@ def shared_bags_dir(root) -> "Path | None":
         if candidate.is_dir():
             return candidate
     return None
+
+
+def main(argv=None) -> int:
+    """`python -m retalisc.robot_io.samples OUT [--format ros1|ros2|mcap] [--seconds S]
+    [--tf-rate HZ]`: write the sample recording."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m retalisc.robot_io.samples",
+                                     description="Write the sample recording of the NAO application (thesis A.2).")
+    parser.add_argument("out", help="a .bag file (ros1) or a folder to create (ros2, mcap)")
+    parser.add_argument("--format", choices=("ros1", "ros2", "mcap"), default=None,
+                        help="default: ros1 for a .bag name, else ros2")
+    parser.add_argument("--seconds", type=float, default=4.0)
+    parser.add_argument("--tf-rate", type=float, default=50.0, help="TFMessages per second")
+    args = parser.parse_args(argv)
+    fmt = args.format or ("ros1" if args.out.endswith(".bag") else "ros2")
+    if Path(args.out).exists():
+        parser.error(f"{args.out} exists already")
+    path = write_nao_bag(args.out, fmt, seconds=args.seconds, tf_rate=args.tf_rate)
+    print(f"{path}: {fmt}, {args.seconds:g} s", file=__import__("sys").stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
