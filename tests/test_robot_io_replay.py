@@ -210,10 +210,11 @@ def _cli(*args):
 def test_cli_replays_a_bag_and_reports_bad_input(nao_bags, tmp_path):
     consumers = tmp_path / "consumers"
     run = _cli("run", NAO_PROGRAM, "--bag", nao_bags["ros1"], "--consumer-dir", consumers, "--topics",
-               "/tf,/ar_pose_marker")
+               "/tf,/ar_pose_marker", "--out-bag", tmp_path / "out.mcap")
     assert run.returncode == 0, run.stderr
+    assert f"out-bag: {tmp_path / 'out.mcap'}: " in run.stderr and (tmp_path / "out.mcap").stat().st_size > 1000
     lines = [json.loads(line) for line in run.stdout.splitlines()]
-    assert lines and all(line["event"].startswith("geometry_msgs__0__PoseStamped(") for line in lines)
+    assert lines and all(line["event"].startswith(("geometry_msgs__0__PoseStamped(", "seen_again(")) for line in lines)
     assert {p.name for p in consumers.iterdir()} == {"marker1.jsonl", "marker2.jsonl"}
     assert "messages in" in run.stderr and "/ar_pose_marker" in run.stderr and "/robot_pose" not in run.stderr
     bad = _cli("run", NAO_PROGRAM, "--bag", NAO_PROGRAM)

@@ -115,7 +115,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
     if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
         raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
-                               "--stamp and --typestore go with --bag")
+                               "--stamp, --typestore, --out-bag and --foxglove go with --bag")
     result = compile_or_exit(program)
     engine = Engine.from_compiled(result)
     if echo_input:

@@ -30,11 +30,19 @@ _OPTIONS = [
     click.option("--typestore", "bag_typestore", default="ros2_humble", show_default=True,
                  help="With --bag: the rosbags type store for ROS 2 bags that do not embed their "
                       "message definitions."),
+    click.option("--out-bag", type=click.Path(dir_okay=False), default=None, metavar="FILE.mcap",
+                 help="With --bag: write the input messages and what the program derived to this MCAP file "
+                      "(message events as ROS messages, others as JSON on /retalis/events)."),
+    click.option("--foxglove", type=click.IntRange(0, 65535), is_flag=False, flag_value=8765, default=None,
+                 metavar="[PORT]",
+                 help="With --bag: serve the same live over Foxglove's WebSocket protocol (port 8765 by "
+                      "default); waits for a client, then replays in real time unless --rate says otherwise."),
 ]
 
 # The options that only mean something with --bag, and their defaults.
 BAG_DEFAULTS = {"topics": None, "rate": None, "bag_start": 0.0, "bag_duration": None, "wrap_topic": False,
-                "plain_strings": False, "stamp": "header", "bag_typestore": "ros2_humble"}
+                "plain_strings": False, "stamp": "header", "bag_typestore": "ros2_humble", "out_bag": None,
+                "foxglove": None}
 
 
 def bag_options(command):

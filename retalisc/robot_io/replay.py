@@ -14,12 +14,12 @@ import os
 import sys
 import time
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import IO, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
 import click
 
-from .bags import DEFAULT_ROS2_STORE, BagError, Recording, topic_list
+from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
 from .messages import ConversionError, Convention, MessageConverter
 
 
@@ -73,9 +73,8 @@ most this late, together with the others that fell due meanwhile (one Prolog cal
 
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
                report: Callable[[str, int, str], None],
-               converter: Optional[MessageConverter] = None) -> Iterator[Tuple[str, float, int]]:
-    """(event text, time in seconds, record time in ns) for each message replayed, in record
-    order. Messages that cannot be decoded or converted go to `report(topic, number, reason)`
+               converter: Optional[MessageConverter] = None) -> Iterator[Tuple[str, float, Record]]:
+    """(event text, time in seconds, record) for each message replayed, in record order. Messages that cannot be decoded or converted go to `report(topic, number, reason)`
     and are counted in `stats.rejected`."""
     converter = converter or MessageConverter(bag.typestore, options.convention)
     start_ns, stop_ns = window(bag, options)
@@ -96,7 +95,7 @@ def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
             continue
         if record_stamp:
             seconds = record.time_ns / 1_000_000_000
-        yield text, seconds, record.time_ns
+        yield text, seconds, record
 
 
 def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
@@ -110,11 +109,15 @@ def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional
 
 def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[BagOptions] = None,
                batch_size: int = 2000, consumer_dir: Optional[str] = None, drop_pending: bool = False,
-               first_output: Sequence = (), progress: Optional[bool] = None) -> int:
+               first_output: Sequence = (), progress: Optional[bool] = None, out_bag: Optional[str] = None,
+               foxglove: Optional[int] = None, foxglove_wait: Optional[float] = None) -> int:
     """Replay the recording at `path` into `engine`; write the output JSON Lines to `out`
     ('-' for stdout, None to drop it), as `run_event_file` does. A progress bar shows on a
-    terminal (`progress` forces it on or off). Returns the exit status: 0, 1 when the program
-    raised an error, 2 when the recording cannot be read."""
+    terminal (`progress` forces it on or off). `out_bag` writes the input messages and what
+    the program derived to an MCAP file; `foxglove` serves them live on that port (0: any
+    free port) after waiting up to `foxglove_wait` seconds (None: as long as it takes) for a
+    client, replaying in real time unless the options give a rate (publish.py). Returns the
+    exit status: 0, 1 when the program raised an error, 2 when the recording cannot be read."""
     from ..driver.bridge import PrologError
     from ..driver.run import ConsumerFiles
 
@@ -125,6 +128,13 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     except BagError as error:
         click.echo(f"error: {error}", err=True)
         return 2
+    try:
+        publisher, sinks = _open_sinks(bag, options, out_bag, foxglove, foxglove_wait)
+    except BaseException:
+        bag.__exit__(None, None, None)
+        raise
+    if foxglove is not None and options.rate is None:
+        options = replace(options, rate=1.0)
     sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
     consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
     stats = ReplayStats()
@@ -141,6 +151,11 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                 consumers.write(event)
             else:
                 sink.write(event.line + "\n")
+            if publisher is not None:
+                message = publisher.output(event)
+                if message is not None:
+                    for target in sinks:
+                        target.write(message)
 
     def report(topic: str, number: int, reason: str) -> None:
         click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
@@ -157,27 +172,40 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                 write(produced)
             batch: List[Tuple[str, float]] = []
             shown_ms = 0
-            for text, seconds, record_ns in bag_events(bag, options, stats, report):
+
+            def feed(batch) -> None:
+                if publisher is not None:
+                    publisher.fed(batch)
+                write(engine.feed_batch(batch))
+
+            for text, seconds, record in bag_events(bag, options, stats, report):
+                record_ns = record.time_ns
                 if options.rate is not None:
                     due = began + (record_ns - first_ns) / 1e9 / options.rate
                     wait = due - time.perf_counter()
                     if wait > 0:
                         if batch:
-                            write(engine.feed_batch(batch))
+                            feed(batch)
                             batch = []
                             sink.flush()
                         # sleep at least one tick: what fell due meanwhile goes in one batch
                         time.sleep(max(wait, RATE_TICK))
+                if publisher is not None:
+                    message = publisher.input(record.topic, record.msgtype, record_ns, record.msg)
+                    for target in sinks:
+                        target.write(message)
                 batch.append((text, seconds))
                 if len(batch) >= batch_size:
-                    write(engine.feed_batch(batch))
+                    feed(batch)
                     batch = []
                 done_ms = (record_ns - first_ns) // 1_000_000
                 if done_ms > shown_ms:
                     bar.update(done_ms - shown_ms)
                     shown_ms = done_ms
             if batch:
-                write(engine.feed_batch(batch))
+                feed(batch)
+            if publisher is not None:
+                publisher.fed([])
             write(engine.end_of_input(drop_pending))
         sink.flush()
     except PrologError as error:
@@ -190,8 +218,12 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
             sink.close()
         if consumers is not None:
             consumers.close()
+        for target in sinks:
+            target.close()
     stats.seconds = time.perf_counter() - began
     click.echo(stats.summary(name), err=True)
+    for target in sinks:
+        click.echo(f"{target.describe()}: {target.count:,} messages", err=True)
     click.echo(engine.summary(), err=True)
     return status
 
@@ -201,10 +233,46 @@ def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
     from . import MissingDependency
 
     try:
-        return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values), **run_options)
+        return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values), out_bag=values.get("out_bag"),
+                          foxglove=values.get("foxglove"), **run_options)
     except MissingDependency as error:
         click.echo(f"error: {error}", err=True)
         return 2
+    except OSError as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+
+
+def _open_sinks(bag: Recording, options: BagOptions, out_bag: Optional[str], foxglove: Optional[int],
+                foxglove_wait: Optional[float]):
+    """The Publisher and the sinks of --out-bag and --foxglove (none: (None, []))."""
+    if out_bag is None and foxglove is None:
+        return None, []
+    from .bags import typestore
+    from .publish import EVENTS_TOPIC, FoxgloveSink, McapSink, Publisher
+
+    fallback = typestore("ros1_noetic" if bag.format == "ros1" else DEFAULT_ROS2_STORE)
+    publisher = Publisher(bag.typestore, fallback, options.convention)
+    sinks: list = []
+    try:
+        if out_bag is not None:
+            sinks.append(McapSink(out_bag))
+        if foxglove is not None:
+            server = FoxgloveSink(foxglove)
+            sinks.append(server)
+            for topic, info in bag.topics().items():
+                if options.topics is None or topic in options.topics:
+                    server.advertise(publisher.advertisement(topic, info.msgtype))
+            server.advertise(publisher.advertisement(EVENTS_TOPIC, None))
+            click.echo(f"foxglove: waiting for a client on ws://{server.host}:{server.port} "
+                       f"(Foxglove: Open connection, Foxglove WebSocket)", err=True)
+            if not server.wait_for_client(foxglove_wait):
+                click.echo("foxglove: no client came; replaying anyway", err=True)
+    except BaseException:
+        for target in sinks:
+            target.close()
+        raise
+    return publisher, sinks
 
 
 class _NoBar:
