@@ -186,6 +186,18 @@ def test_terms_that_are_not_messages_say_why(text, message):
     assert message in str(error.value)
 
 
+def test_field_names_that_are_not_identifiers_use_the_generic_walk():
+    from rosbags.typesys import get_types_from_msg
+    store = typestore("ros2_humble")
+    store.register(get_types_from_msg("int32 ok\n", "test_msgs/msg/Odd"))
+    fields = store.fielddefs["test_msgs/msg/Odd"]
+    store.fielddefs["test_msgs/msg/Odd"] = (fields[0], [("import", fields[1][0][1])])   # as a crafted bag could
+    msg = type("Odd", (), {"import": 3})()
+    converter = MessageConverter(store)
+    assert converter.term(msg, "test_msgs/msg/Odd") == "test_msgs__0__Odd(3)"
+    assert "test_msgs/msg/Odd" not in converter._sources          # no code was generated for it
+
+
 def test_generated_source_is_cached_and_readable():
     converter = MessageConverter(ROS2)
     source = converter.source("tf2_msgs/msg/TFMessage")

@@ -150,11 +150,13 @@ def test_wrap_topic_plain_strings_and_record_stamps(nao_bags, tmp_path):
 def test_rate_replays_in_real_time(nao_bags, tmp_path, capsys):
     engine = Engine.from_source("", "rate.rtl")
     engine.set_flag("echo_input", "false")
-    status = replay_bag(engine, str(nao_bags["ros2"]), None, BagOptions(topics=["/tf"], rate=4.0, duration=1.0))
+    status = replay_bag(engine, str(nao_bags["ros2"]), None, BagOptions(topics=["/tf"], rate=4.0, duration=1.0),
+                        progress=True)
     assert status == 0
     summary = capsys.readouterr().err
+    assert f"replaying {nao_bags['ros2']}" in summary           # the progress bar's label
     seconds = float(summary.split(" messages in ")[1].split(" s")[0])
-    assert 0.2 <= seconds < 1.5, summary          # 1 s of recording at 4x: about 0.25 s
+    assert 0.2 <= seconds < 3.0, summary          # 1 s of recording at 4x: about 0.25 s (not as fast as possible)
 
 
 def test_messages_that_cannot_be_decoded_are_rejected_and_the_replay_goes_on(tmp_path, capsys):

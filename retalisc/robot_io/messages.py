@@ -34,7 +34,9 @@ release's double quotes) or a Prolog string.
 """
 from __future__ import annotations
 
+import keyword
 import math
+import re
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
@@ -166,7 +168,7 @@ class MessageConverter:
         return function(msg)
 
     def _term_function(self, msgtype: str) -> Callable[[Any], str]:
-        if self.generated:
+        if self.generated and _identifiers_only(self.typestore, msgtype):
             source = self.source(msgtype)
             namespace = {"q": self._string, "fl": float_text, "fls": _float_list, "ints": _int_list,
                          "bools": _bool_list}
@@ -362,6 +364,27 @@ class MessageConverter:
         if not 0 <= nanosec < 1_000_000_000:
             raise ConversionError(f"{path}: nanoseconds {nanosec} outside [0, 1e9)")
         return cls(sec=sec, nanosec=nanosec)
+
+
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+
+def _identifiers_only(typestore, msgtype: str, seen: Optional[set] = None) -> bool:
+    """Whether every field name of `msgtype` (and of the types it holds) is a plain Python
+    identifier, as ROS allows: the generated code names fields as attributes, and the
+    definitions may come from a bag; otherwise the generic walk (getattr) converts it."""
+    seen = set() if seen is None else seen
+    if msgtype in seen or msgtype in TIME_TYPES:
+        return True
+    seen.add(msgtype)
+    for name, desc in _fields(typestore, msgtype):
+        if not _IDENTIFIER.match(name) or keyword.iskeyword(name):
+            return False
+        kind, detail = desc
+        element = detail if kind == NAME else (detail[0][1] if kind in (ARRAY, SEQUENCE) and detail[0][0] == NAME else None)
+        if element is not None and not _identifiers_only(typestore, element, seen):
+            return False
+    return True
 
 
 def _header_stamp(msg) -> int:

@@ -7,17 +7,17 @@ import click
 STAMPS = ("header", "record")
 
 _OPTIONS = [
-    click.option("--bag", type=click.Path(exists=True), default=None,
+    click.option("--bag", type=click.Path(exists=True), default=None, metavar="RECORDING",
                  help="Replay this recording instead of --events: a ROS 1 .bag file, a ROS 2 bag folder "
                       "(sqlite3 or MCAP storage) or an .mcap file; messages become events "
                       "(docs/robot_io.md)."),
     click.option("--topics", default=None, metavar="T1,T2",
                  help="With --bag: replay only these topics (default: all)."),
-    click.option("--rate", type=click.FloatRange(min=0, min_open=True), default=None,
+    click.option("--rate", type=click.FloatRange(min=0, min_open=True), default=None, metavar="RATE",
                  help="With --bag: replay in real time times RATE (1 = as recorded; default: as fast as possible)."),
-    click.option("--start", "bag_start", type=click.FloatRange(min=0), default=0.0,
+    click.option("--start", "bag_start", type=click.FloatRange(min=0), default=0.0, metavar="SECONDS",
                  help="With --bag: skip the first SECONDS of the recording (record time)."),
-    click.option("--duration", "bag_duration", type=click.FloatRange(min=0), default=None,
+    click.option("--duration", "bag_duration", type=click.FloatRange(min=0), default=None, metavar="SECONDS",
                  help="With --bag: replay SECONDS of the recording from --start."),
     click.option("--wrap-topic", is_flag=True,
                  help="With --bag: wrap each message in its topic name, topic(Msg) (/tf -> tf(...))."),
@@ -27,7 +27,7 @@ _OPTIONS = [
     click.option("--stamp", type=click.Choice(STAMPS), default="header", show_default=True,
                  help="With --bag: the time of an event: its message's header.stamp (the record time "
                       "when it has none), or always the record time."),
-    click.option("--typestore", "bag_typestore", default="ros2_humble", show_default=True,
+    click.option("--typestore", "bag_typestore", default="ros2_humble", show_default=True, metavar="NAME",
                  help="With --bag: the rosbags type store for ROS 2 bags that do not embed their "
                       "message definitions."),
     click.option("--out-bag", type=click.Path(dir_okay=False), default=None, metavar="FILE.mcap",
