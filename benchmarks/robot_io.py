@@ -139,7 +139,7 @@ def conversion(quick: bool) -> Dict[str, dict]:
     store = typestore("ros2_humble")
     maker = Maker(store)
     start = 1_700_000_000_000_000_000
-    n = 20 if quick else 200
+    n = 10 if quick else 200
     cases = {
         "TFMessage (3 transforms)": ("tf2_msgs/msg/TFMessage", [maker.tf(start + k, FRAMES[:3]) for k in range(n)]),
         "PoseStamped": ("geometry_msgs/msg/PoseStamped", [maker.pose_stamped(start + k) for k in range(n)]),
@@ -147,7 +147,7 @@ def conversion(quick: bool) -> Dict[str, dict]:
                                      [maker.marker_array(start + k) for k in range(n)]),
     }
     rounds = 1 if quick else 25
-    runs = 3 if quick else 7
+    runs = 2 if quick else 7
     results = {}
     for label, (msgtype, messages) in cases.items():
         row = {"msgtype": msgtype, "chars": len(MessageConverter(store).term(messages[0], msgtype)),
@@ -239,7 +239,7 @@ def run(quick: bool, out_dir: Path) -> int:
         print("(a) conversion ...", file=saved_err)
         results["conversion"] = conversion(quick)
         print("(b) 1,900 transforms/s in real time ...", file=saved_err)
-        seconds = 0.3 if quick else 10.0
+        seconds = 0.2 if quick else 10.0
         bag = tf_recording(folder / "tf_load", seconds)
         sys.stderr = devnull
         try:
@@ -247,7 +247,7 @@ def run(quick: bool, out_dir: Path) -> int:
         finally:
             sys.stderr = saved_err
         print("(c) replay ...", file=saved_err)
-        nao_seconds = 0.5 if quick else 20.0
+        nao_seconds = 0.3 if quick else 20.0
         results["replay"] = {}
         for fmt in ("ros1", "ros2", "mcap"):
             path = write_nao_bag(folder / ("nao.bag" if fmt == "ros1" else f"nao_{fmt}"), fmt, seconds=nao_seconds,

@@ -343,7 +343,7 @@ SHARED_TYPES = {  # bag: (number of message types, a type that must be among the
 
 @pytest.mark.parametrize("name", SHARED_NAMES)
 def test_round_trip_every_message_type_of_the_shared_bags(name):
-    counts = _round_trip_recording(shared_bag(name), per_topic=5)
+    counts = _round_trip_recording(shared_bag(name), per_topic=2)
     types, example = SHARED_TYPES[name]
     assert len(counts) == types and example in counts
 

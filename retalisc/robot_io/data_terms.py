@@ -10,8 +10,9 @@ numbers, written by the runtime with writeq. `read_data_term` reads such text in
     list                         proper lists
 
 with a small tokenizer that handles exactly this syntax, several times faster than the
-program parser; text it does not handle (operators such as `a-b`, variables, partial lists)
-goes to the full reader of retalisc.frontend and is converted to the same values, so every
+program parser. Text it does not handle (operators such as `a-b` or `0:'|'`, which writeq
+prints for compounds whose functor is an operator) is read by SWI-Prolog itself (read_term
+from a string) and written back with write_canonical/1, which the tokenizer reads: every
 term writeq can print is read.
 """
 from __future__ import annotations
@@ -20,8 +21,8 @@ import math
 import re
 from typing import List, Union
 
-from ..frontend.parser import _number, _unescape, read_term
-from ..frontend.terms import NIL, Atom, Compound, Number, String, Var
+from ..frontend.parser import _number, _unescape
+from ..frontend.terms import Atom, Compound, String
 
 DataTerm = Union[int, float, Atom, String, Compound, list]
 
@@ -46,18 +47,41 @@ def read_data_term(text: str) -> DataTerm:
     """Read one ground term from `text` (no final period needed). Raises ValueError when
     `text` is not one ground term."""
     try:
-        tokens = _tokens(text)
-        value, position = _parse(tokens, 0)
-        if position != len(tokens):
-            raise _Unsupported
-        return value
+        return _read_fast(text)
     except _Unsupported:
         pass
+    canonical = _canonical(text)
     try:
-        term = read_term(text.rstrip().rstrip(".") + " .")
-    except Exception as error:  # RetalisSyntaxError, with its own message
-        raise ValueError(f"not a term: {error}") from None
-    return from_term(term)
+        return _read_fast(canonical)
+    except _Unsupported as error:
+        raise ValueError(str(error) or f"not a data term: {text[:60]}") from None
+
+
+def _read_fast(text: str) -> DataTerm:
+    tokens = _tokens(text)
+    value, position = _parse(tokens, 0)
+    if position != len(tokens):
+        raise _Unsupported
+    return value
+
+
+def _canonical(text: str) -> str:
+    """`text` read by SWI-Prolog (read_term from a string, never pasted into a goal) and
+    written back with write_canonical/1: no operators left, which the fast reader reads."""
+    from ..driver.bridge import Bridge, PrologError
+    from ..driver.engine import prolog_string
+
+    goal = (f"term_string(T, {prolog_string(text)}, [variable_names(Vs)]), "
+            "(   Vs = [N=_|_] -> format(string(Out), '!not ground: variable ~w', [N])"
+            " ;  \\+ ground(T) -> Out = \"!not ground\""
+            " ;  format(string(Out), '~k', [T]) )")
+    try:
+        out = Bridge().call_text(goal)
+    except PrologError as error:
+        raise ValueError(f"not a term: {str(error).splitlines()[0]}") from None
+    if out.startswith("!"):
+        raise ValueError(out[1:])
+    return out
 
 
 def _tokens(text: str) -> list:
@@ -127,6 +151,9 @@ def _parse(tokens: list, i: int):
     if kind == "[]":
         return [], i + 1
     if kind == "{}":
+        if i + 1 < len(tokens) and tokens[i + 1][0] == "(":   # {}(Args): a curly term, written canonically
+            tokens[i] = ("atom", "{}")
+            return _parse(tokens, i)
         return Atom("{}"), i + 1
     if kind == "[":
         items = []
@@ -140,34 +167,11 @@ def _parse(tokens: list, i: int):
                 i += 1
             elif tokens[i][0] == "]":
                 return items, i + 1
+            elif tokens[i][0] == "|":
+                raise _Unsupported("not a proper list")
             else:
-                raise _Unsupported        # a partial list [H|T]: the full reader decides
+                raise _Unsupported
     raise _Unsupported
-
-
-def from_term(term) -> DataTerm:
-    """A frontend term as a data term; ValueError for a term with variables or a partial list."""
-    if isinstance(term, Number):
-        return term.value
-    if isinstance(term, String):
-        return term
-    if isinstance(term, Var):
-        raise ValueError(f"not ground: variable {term.name}")
-    if term == NIL:
-        return []
-    if isinstance(term, Atom):
-        return Atom(term.name)
-    if isinstance(term, Compound):
-        if term.name == "[|]" and term.arity == 2:
-            items: List[DataTerm] = []
-            while isinstance(term, Compound) and term.name == "[|]" and term.arity == 2:
-                items.append(from_term(term.args[0]))
-                term = term.args[1]
-            if term != NIL:
-                raise ValueError("not a proper list")
-            return items
-        return Compound(term.name, tuple(from_term(arg) for arg in term.args))
-    raise ValueError(f"not a data term: {term!r}")
 
 
 # ---- writing ---------------------------------------------------------------------------
