@@ -216,7 +216,7 @@ _data = st.recursive(_leaves, lambda inner: st.one_of(
     max_leaves=12)
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_data)
 def test_data_terms_read_back_what_swi_prolog_writes(value):
     text = write_data_term(value)
@@ -290,7 +290,7 @@ def _all_types(draw, store):
         nothing=T["std_msgs/msg/Empty"](structure_needs_at_least_one_member=0))
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                     HealthCheck.too_slow])
 @given(data=st.data(), plain=st.booleans())
 def test_random_messages_round_trip_and_generated_equals_generic(custom, data, plain):

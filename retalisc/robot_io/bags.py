@@ -9,6 +9,8 @@ read with a rosbags type store (`ros2_humble` unless told otherwise).
 """
 from __future__ import annotations
 
+import struct
+from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, Iterable, Iterator, List, NamedTuple, Optional, Sequence, Tuple
@@ -94,16 +96,28 @@ class Recording:
             self.path = self.path.parent
         self.default_store = default_store
         self._reader = None
+        self._store = None
 
     def __enter__(self) -> "Recording":
-        highlevel = require("rosbags.highlevel", "reading bags")
-        default = typestore(self.default_store) if self.format != "ros1" else None
+        if self.format == "ros1":
+            module = require("rosbags.rosbag1", "reading bags")
+        else:
+            module = require("rosbags.rosbag2", "reading bags")
+        typesys = require("rosbags.typesys", "reading bags")
         try:
-            self._reader = highlevel.AnyReader([self.path], default_typestore=default)
-            self._reader.open()
-        except (highlevel.AnyReaderError, OSError, ValueError, KeyError) as error:
-            self._reader = None
+            reader = module.Reader(self.path)
+            reader.open()
+        except (module.ReaderError, OSError, ValueError, KeyError) as error:
             raise BagError(f"{self.path}: cannot read this {self.format} recording: {error}") from None
+        try:
+            self._store = _typestore_of(reader.connections, self.format == "ros1", self.default_store)
+        except (typesys.TypesysError, ValueError, KeyError) as error:
+            reader.close()
+            raise BagError(f"{self.path}: cannot read the message definitions of this recording: {error}") from None
+        except BaseException:
+            reader.close()
+            raise
+        self._reader = reader
         return self
 
     def __exit__(self, *exc) -> bool:
@@ -114,8 +128,9 @@ class Recording:
 
     @property
     def typestore(self):
-        """The type store the messages are decoded with (the bag's own definitions)."""
-        return self._reader.typestore
+        """The type store the messages are decoded with (the bag's own definitions, when it
+        has them)."""
+        return self._store
 
     @property
     def start_ns(self) -> int:
@@ -144,12 +159,11 @@ class Recording:
         order, decoded."""
         reader = self._reader
         connections = [c for c in reader.connections if topics is None or c.topic in topics]
-        if topics is not None and not connections:
+        if not connections:
             return
-        deserialize = reader.deserialize
+        deserialize = self._store.deserialize_ros1 if self.format == "ros1" else self._store.deserialize_cdr
         errors = _read_errors()
-        for connection, time_ns, raw in reader.messages(connections=connections, start=start_ns,
-                                                        stop=stop_ns):
+        for connection, time_ns, raw in reader.messages(connections=connections, start=start_ns, stop=stop_ns):
             try:
                 msg = deserialize(raw, connection.msgtype)
             except errors as error:
@@ -158,10 +172,55 @@ class Recording:
             yield Record(connection.topic, connection.msgtype, time_ns, msg)
 
 
+_STORES: "OrderedDict[tuple, object]" = OrderedDict()
+_STORES_KEPT = 8
+
+
+def _typestore_of(connections, ros1: bool, default_store: str):
+    """The type store of a recording: the definitions its connections embed (each parsed
+    once: many connections share one), else the named default store (a ROS 2 bag without
+    definitions). The digests recorded with the definitions are checked. Stores are kept
+    for the last few sets of definitions, so opening the same recording again costs
+    neither the parsing nor rosbags' generation of decoders."""
+    interfaces = require("rosbags.interfaces", "reading bags")
+    typesys = require("rosbags.typesys", "reading bags")
+    none = interfaces.MessageDefinitionFormat.NONE
+    definitions = sorted({(c.msgtype, c.msgdef.format.value, c.msgdef.data, c.digest or "")
+                          for c in connections if c.msgdef.format != none})
+    key = (ros1, tuple(definitions) if definitions else default_store)
+    store = _STORES.get(key)
+    if store is not None:
+        _STORES.move_to_end(key)
+        return store
+    if not definitions:
+        store = typestore(default_store)
+    else:
+        types: dict = {}
+        msg_format = interfaces.MessageDefinitionFormat.MSG.value
+        for msgtype, kind, data, _ in definitions:
+            if kind == msg_format:
+                types.update(typesys.get_types_from_msg(data, msgtype))
+            else:
+                separator = "=" * 80 + "\n"
+                parts = data.split(separator)[1:] if data.startswith(separator + "IDL: ") else [data]
+                for part in parts:
+                    types.update(typesys.get_types_from_idl(part.split("\n", 1)[1] if part.startswith("IDL: ")
+                                                            else part))
+        store = typesys.get_typestore(typesys.Stores.EMPTY)
+        store.register(types)
+        digest_of = (lambda name: store.generate_msgdef(name)[1]) if ros1 else store.hash_rihs01
+        for msgtype, _, _, digest in definitions:
+            if digest and digest_of(msgtype) != digest:
+                raise ValueError(f"message type {msgtype}: the definition does not match its digest {digest}")
+    _STORES[key] = store
+    if len(_STORES) > _STORES_KEPT:
+        _STORES.popitem(last=False)
+    return store
+
+
 def _read_errors() -> Tuple[type, ...]:
-    highlevel = require("rosbags.highlevel", "reading bags")
     serde = require("rosbags.serde", "reading bags")
-    return (highlevel.AnyReaderError, serde.SerdeError, ValueError, IndexError, KeyError, UnicodeDecodeError)
+    return (serde.SerdeError, ValueError, IndexError, KeyError, UnicodeDecodeError, struct.error)
 
 
 def write_bag(path, fmt: str, store, records: Iterable[Tuple[str, str, int, object]]) -> Path:
