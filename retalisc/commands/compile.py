@@ -10,6 +10,7 @@ from ..compiler import AQ_MODES, AqOptions, compile_file, pass_names
 from ..frontend.errors import RetalisError
 from ..passes.pipeline import PASS_NAMES
 from .options import Seconds, output_directory, output_file
+from ..robot_io.options import BAG_DEFAULTS, bag_options
 
 
 def report_program_error(error: RetalisError) -> None:
@@ -93,8 +94,8 @@ Examples:
   retalisc run examples/state_knowledge/state_knowledge.rtl --events examples/state_knowledge/events.jsonl \\
       --max-delay 0.5 --query 14 'location(box, L)^14'""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
-@click.option("--events", "events", required=True, type=click.Path(exists=True, allow_dash=True, dir_okay=False),
-              help="Event JSON Lines file ('-' for standard input).")
+@click.option("--events", "events", type=click.Path(exists=True, allow_dash=True, dir_okay=False),
+              help="Event JSON Lines file ('-' for standard input). Or --bag.")
 @click.option("--out", type=click.Path(dir_okay=False, allow_dash=True), default="-",
               help="Write the output JSON Lines here (default: standard output).")
 @click.option("--echo-input", is_flag=True, help="Also write the input events to the output.")
@@ -122,12 +123,19 @@ Examples:
 @click.option("--drop-pending", is_flag=True,
               help="At the end of the input, discard the synchronized matches still waiting instead of "
                    "running them.")
+@bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
-                consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool) -> None:
-    """Run PROGRAM over an event file, printing derived events as JSON Lines."""
+                consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
+                **bag) -> None:
+    """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines."""
     from ..driver.engine import Engine
     from ..driver.run import run_event_file
 
+    if (events is None) == (bag["bag"] is None):
+        raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
+    if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
+        raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
+                               "--stamp, --typestore, --out-bag and --foxglove go with --bag")
     result = compile_or_exit(program)
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
@@ -142,6 +150,10 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         add_cli_memory(engine, request)
     posted = [post_cli_query(engine, number, at, goal, query_timeout)
               for number, (at, goal) in enumerate(queries, start=1)]
+    if bag["bag"] is not None:
+        from ..robot_io.replay import replay_from_cli
+        sys.exit(replay_from_cli(engine, out, bag, batch_size=batch_size, consumer_dir=consumer_dir,
+                                 drop_pending=drop_pending, first_output=posted))
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
                             drop_pending=drop_pending, first_output=posted)
     sys.exit(status)

@@ -1,0 +1,397 @@
+"""Robot data in: ROS message conversion and bag replay (issue 15; thesis 5.1).
+
+(a) conversion: messages per second of CPU from a decoded ROS 2 message to event text, with
+    the converter generated per type and with the generic walk over the type definitions,
+    for tf2_msgs/TFMessage with 3 transforms, geometry_msgs/PoseStamped and a
+    visualization_msgs/MarkerArray of 10 markers (200 different messages of each, cycled;
+    best of 7 runs, the two converters interleaved). Target: the generated converter is several (>= 3) times faster.
+(b) CPU share at the thesis's load: the thesis's converter took about 40% of a core at
+    1,900 transforms/s (5.1). A recording of TFMessages of 3 transforms at 633.3 Hz (1,900
+    transforms/s) is replayed in real time (--rate 1) into an empty program (the input
+    pipeline: read the bag, decode, convert, hand the events to Prolog) and into the
+    tf-splitting program of Listing A.1 with the five memories of A.2.4; process CPU time
+    over wall time is the CPU share (the Prolog engine runs in this process).
+    Targets: the conversion alone (a's generated cost x 633.3/s) and the whole pipeline below
+    the thesis's 40%; the input pipeline below 10%.
+(c) replay: events per second end to end (`replay_bag`: read, decode, convert, feed, write
+    the output) as fast as possible, for the sample recording of the NAO application
+    (retalisc.robot_io.samples) in each format (ROS 1 .bag, ROS 2 sqlite3,
+    ROS 2 MCAP) at the thesis's load (380 TFMessages of the 5 links of the chain per second
+    = 1,900 transforms/s, plus markers, poses and marker arrays), with an empty program
+    (input only) and with examples/nao_markers; and for the shared sample bags when
+    ../shared/data/bags is there. Throughput per CPU second (the machine may be shared; wall
+    times are printed too). Targets: the input alone replays at least 10x faster than real
+    time, and the NAO program keeps up with real time, in every format.
+
+Usage: python benchmarks/robot_io.py [--quick] [--out-dir DIR]
+Writes DIR/robot_io.json and DIR/robot_io.png (robot_io_quick.* with --quick); DIR defaults
+to benchmarks/results (not in git).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import random
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Dict, List
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from retalisc.driver.engine import Engine  # noqa: E402
+from retalisc.robot_io.bags import Recording, typestore, write_bag  # noqa: E402
+from retalisc.robot_io.messages import MessageConverter  # noqa: E402
+from retalisc.robot_io.replay import BagOptions, replay_bag  # noqa: E402
+from retalisc.robot_io.samples import shared_bags_dir, write_nao_bag  # noqa: E402
+
+THESIS_SHARE = 0.40           # the thesis's converter at 1,900 transforms/s (5.1)
+THESIS_RATE = 1900            # transforms per second
+TRANSFORMS = 3
+AIM_SHARE = 0.10
+SPEEDUP_TARGET = 3.0
+REALTIME_TARGET = 10.0        # bag input alone, x real time at the thesis's load
+NAO_TF_RATE = THESIS_RATE / 5  # TFMessages of the 5 links of the NAO chain per second
+NAO = ROOT / "examples" / "nao_markers" / "nao_markers.rtl"
+
+TF_PROGRAM = """
+header(std_msgs__0__Header(_Seq, Stamp, Frame), Stamp, Frame).
+header(std_msgs__0__Header(Stamp, Frame), Stamp, Frame).
+null do split_tf(Ts) <- tf2_msgs__0__TFMessage(Ts).
+split_tf([]).
+split_tf([geometry_msgs__0__TransformStamped(H, Child, geometry_msgs__0__Transform(
+              geometry_msgs__0__Vector3(X, Y, Z), geometry_msgs__0__Quaternion(QX, QY, QZ, QW)))|Ts]) :-
+    header(H, [S, NS], Parent),
+    new_event(tf(Parent, Child, [X, Y, Z], [QX, QY, QZ, QW]), S, NS),
+    split_tf(Ts).
+memorize(tf('"odom"', '"base_link"', V, Q), [], tf(V, Q), odom_base, 2500).
+memorize(tf('"base_link"', '"torso"', V, Q), [], tf(V, Q), base_torso, 2500).
+memorize(tf('"torso"', '"Neck"', V, Q), [], tf(V, Q), torso_neck, 2500).
+memorize(tf('"Neck"', '"Head"', V, Q), [], tf(V, Q), neck_head, 2500).
+memorize(tf('"Head"', '"CameraTop_frame"', V, Q), [], tf(V, Q), head_cam, 2500).
+"""
+FRAMES = [("odom", "base_link"), ("base_link", "torso"), ("torso", "Neck"), ("Neck", "Head"),
+          ("Head", "CameraTop_frame")]
+
+
+# ---- messages -----------------------------------------------------------------------------
+
+class Maker:
+    def __init__(self, store, seed: int = 7):
+        self.t = store.types
+        self.rng = random.Random(seed)
+
+    def time(self, ns):
+        return self.t["builtin_interfaces/msg/Time"](sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+    def header(self, ns, frame):
+        return self.t["std_msgs/msg/Header"](stamp=self.time(ns), frame_id=frame)
+
+    def number(self):
+        return self.rng.uniform(-2, 2)
+
+    def vector(self, kind="geometry_msgs/msg/Vector3"):
+        return self.t[kind](x=self.number(), y=self.number(), z=self.number())
+
+    def quaternion(self):
+        q = [self.rng.gauss(0, 1) for _ in range(4)]
+        n = math.sqrt(sum(v * v for v in q))
+        return self.t["geometry_msgs/msg/Quaternion"](x=q[0] / n, y=q[1] / n, z=q[2] / n, w=q[3] / n)
+
+    def pose(self):
+        return self.t["geometry_msgs/msg/Pose"](position=self.vector("geometry_msgs/msg/Point"),
+                                                orientation=self.quaternion())
+
+    def tf(self, ns, links):
+        return self.t["tf2_msgs/msg/TFMessage"](transforms=[
+            self.t["geometry_msgs/msg/TransformStamped"](
+                header=self.header(ns, parent), child_frame_id=child,
+                transform=self.t["geometry_msgs/msg/Transform"](translation=self.vector(), rotation=self.quaternion()))
+            for parent, child in links])
+
+    def pose_stamped(self, ns):
+        return self.t["geometry_msgs/msg/PoseStamped"](header=self.header(ns, "map"), pose=self.pose())
+
+    def marker_array(self, ns, count=10):
+        import numpy
+        t = self.t
+        markers = []
+        for i in range(count):
+            markers.append(t["visualization_msgs/msg/Marker"](
+                header=self.header(ns, "map"), ns="objects", id=i, type=2, action=0, pose=self.pose(),
+                scale=self.vector(), color=t["std_msgs/msg/ColorRGBA"](r=1.0, g=0.5, b=0.0, a=1.0),
+                lifetime=t["builtin_interfaces/msg/Duration"](sec=1, nanosec=0), frame_locked=False,
+                points=[], colors=[], texture_resource="",
+                texture=t["sensor_msgs/msg/CompressedImage"](header=self.header(ns, ""), format="",
+                                                              data=numpy.zeros(0, dtype=numpy.uint8)),
+                uv_coordinates=[], text=f"object {i}", mesh_resource="",
+                mesh_file=t["visualization_msgs/msg/MeshFile"](filename="", data=numpy.zeros(0, dtype=numpy.uint8)),
+                mesh_use_embedded_materials=False))
+        return t["visualization_msgs/msg/MarkerArray"](markers=markers)
+
+
+def conversion(quick: bool) -> Dict[str, dict]:
+    store = typestore("ros2_humble")
+    maker = Maker(store)
+    start = 1_700_000_000_000_000_000
+    n = 10 if quick else 200
+    cases = {
+        "TFMessage (3 transforms)": ("tf2_msgs/msg/TFMessage", [maker.tf(start + k, FRAMES[:3]) for k in range(n)]),
+        "PoseStamped": ("geometry_msgs/msg/PoseStamped", [maker.pose_stamped(start + k) for k in range(n)]),
+        "MarkerArray (10 markers)": ("visualization_msgs/msg/MarkerArray",
+                                     [maker.marker_array(start + k) for k in range(n)]),
+    }
+    rounds = 1 if quick else 25
+    runs = 2 if quick else 7
+    results = {}
+    for label, (msgtype, messages) in cases.items():
+        row = {"msgtype": msgtype, "chars": len(MessageConverter(store).term(messages[0], msgtype)),
+               "generated": math.inf, "generic": math.inf}
+        converters = {"generated": MessageConverter(store), "generic": MessageConverter(store, generated=False)}
+        for converter in converters.values():
+            converter.term(messages[0], msgtype)              # generate and cache first
+        for _ in range(runs):                                  # interleaved, best of 7: fair under load
+            for kind, converter in converters.items():
+                began = time.process_time()
+                for _ in range(rounds):
+                    for msg in messages:
+                        converter.event(msg, msgtype, "/topic", 1)
+                row[kind] = min(row[kind], (time.process_time() - began) / (rounds * len(messages)))
+        serialized = [store.serialize_cdr(m, msgtype) for m in messages]
+        best = math.inf
+        for _ in range(runs):
+            began = time.process_time()
+            for _ in range(max(1, rounds // 5)):
+                for raw in serialized:
+                    store.deserialize_cdr(raw, msgtype)
+            best = min(best, (time.process_time() - began) / (max(1, rounds // 5) * len(messages)))
+        row["decode"] = best
+        results[label] = row
+    return results
+
+
+# ---- (b) the thesis's load in real time -------------------------------------------------------------
+
+def tf_recording(path: Path, seconds: float, fmt: str = "mcap") -> Path:
+    store = typestore("ros2_humble")
+    maker = Maker(store, seed=3)
+    rate = THESIS_RATE / TRANSFORMS
+    start = 1_700_000_000_000_000_000
+    records = []
+    for k in range(int(seconds * rate)):
+        ns = start + round(k * 1e9 / rate)
+        records.append(("/tf", "tf2_msgs/msg/TFMessage", ns + 500_000, maker.tf(ns, FRAMES[:TRANSFORMS])))
+    return write_bag(path, fmt, store, records)
+
+
+def cpu_share(bag: Path, seconds: float) -> dict:
+    """Process CPU over wall time while the recording replays in real time, into the tf program
+    and into an empty program (the input pipeline alone); and the CPU of the tf program
+    replayed as fast as possible."""
+    result = {"recording_seconds": seconds}
+    for key, source, rate in (("tf", TF_PROGRAM, 1.0), ("input", "", 1.0), ("fast", TF_PROGRAM, None)):
+        engine = Engine.from_source(source, f"load_{key}.rtl")
+        engine.set_flag("echo_input", "false")
+        wall0, cpu0 = time.perf_counter(), time.process_time()
+        status = replay_bag(engine, str(bag), None, BagOptions(rate=rate), progress=False)
+        wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+        result[key] = {"status": status, "wall": wall, "cpu": cpu, "share": cpu / (wall if rate else seconds),
+                       "events": engine.stats().get("events", 0)}
+    return result
+
+
+# ---- (c) replay throughput ----------------------------------------------------------------------------
+
+def replay_throughput(bag: Path, program: str, repeat: int) -> dict:
+    """Replay as fast as possible (best of `repeat`): wall time and process CPU time (the
+    Prolog engine runs in this process), and how many times faster than the recording."""
+    best = None
+    for _ in range(repeat):
+        engine = Engine.load(NAO) if program == "nao" else Engine.from_source("", "empty.rtl")
+        engine.set_flag("echo_input", "false")
+        with Recording(bag) as recording:
+            messages, span = recording.message_count, (recording.end_ns - recording.start_ns) / 1e9
+        began, cpu0 = time.perf_counter(), time.process_time()
+        replay_bag(engine, str(bag), None, BagOptions(), progress=False)
+        wall, cpu = time.perf_counter() - began, time.process_time() - cpu0
+        events = engine.stats().get("events", 0)
+        result = {"messages": messages, "events": events, "derived": engine.stats().get("derived", 0),
+                  "wall": wall, "cpu": cpu, "messages_per_s": messages / wall, "events_per_s": events / wall,
+                  "messages_per_cpu_s": messages / cpu, "events_per_cpu_s": events / cpu,
+                  "realtime": span / wall if span else None, "realtime_cpu": span / cpu if span else None}
+        if best is None or cpu < best["cpu"]:
+            best = result
+    return best
+
+
+def run(quick: bool, out_dir: Path) -> int:
+    prefix = "robot_io_quick" if quick else "robot_io"
+    results: dict = {"quick": quick}
+    devnull = open(os.devnull, "w")
+    saved_err = sys.stderr
+    with tempfile.TemporaryDirectory(prefix="retalisc-bench-") as folder:
+        folder = Path(folder)
+        print("(a) conversion ...", file=saved_err)
+        results["conversion"] = conversion(quick)
+        print("(b) 1,900 transforms/s in real time ...", file=saved_err)
+        seconds = 0.2 if quick else 10.0
+        bag = tf_recording(folder / "tf_load", seconds)
+        sys.stderr = devnull
+        try:
+            results["load"] = cpu_share(bag, seconds)
+        finally:
+            sys.stderr = saved_err
+        print("(c) replay ...", file=saved_err)
+        nao_seconds = 0.3 if quick else 20.0
+        results["replay"] = {}
+        for fmt in ("ros1", "ros2", "mcap"):
+            path = write_nao_bag(folder / ("nao.bag" if fmt == "ros1" else f"nao_{fmt}"), fmt, seconds=nao_seconds,
+                                 tf_rate=NAO_TF_RATE)
+            sys.stderr = devnull
+            try:
+                results["replay"][fmt] = {program: replay_throughput(path, program, 1 if quick else 3)
+                                          for program in ("empty", "nao")}
+            finally:
+                sys.stderr = saved_err
+        shared = shared_bags_dir(ROOT)
+        results["shared"] = {}
+        if shared is not None and not quick:
+            for path in sorted(shared.iterdir()):
+                if path.name.endswith(".md"):
+                    continue
+                sys.stderr = devnull
+                try:
+                    results["shared"][path.name] = replay_throughput(path, "empty", 2)
+                finally:
+                    sys.stderr = saved_err
+    devnull.close()
+    targets = report(results)
+    results["targets"] = [{"text": text, "met": met} for text, met in targets]
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / f"{prefix}.json").write_text(json.dumps(results, indent=1, default=str))
+    plot(results, out_dir / f"{prefix}.png")
+    print(f"\nwrote {out_dir / (prefix + '.json')} and {out_dir / (prefix + '.png')}")
+    return 0
+
+
+def report(res: dict) -> List[tuple]:
+    targets = []
+    print(f"\n(a) conversion of decoded ROS 2 messages to event text, CPU per message (best of 7, interleaved)\n")
+    print(f"{'message':28} {'chars':>6} {'generated':>12} {'generic':>12} {'speedup':>8} {'msgs/s gen.':>12} "
+          f"{'decode (rosbags)':>17}")
+    for label, row in res["conversion"].items():
+        speedup = row["generic"] / row["generated"]
+        print(f"{label:28} {row['chars']:>6} {row['generated'] * 1e6:9.2f} us {row['generic'] * 1e6:9.2f} us "
+              f"{speedup:7.1f}x {1 / row['generated']:>12,.0f} {row['decode'] * 1e6:14.2f} us")
+        targets.append((f"(a) {label}: generated converter >= {SPEEDUP_TARGET:.0f}x the generic walk: "
+                        f"{speedup:.1f}x ({1 / row['generated']:,.0f} vs {1 / row['generic']:,.0f} msgs/s)",
+                        speedup >= SPEEDUP_TARGET))
+
+    load = res["load"]
+    tf = res["conversion"]["TFMessage (3 transforms)"]
+    per_second = THESIS_RATE / TRANSFORMS
+    conversion_share = tf["generated"] * per_second
+    decode_share = tf["decode"] * per_second
+    print(f"\n(b) {THESIS_RATE:,} transforms/s ({per_second:.1f} TFMessages of {TRANSFORMS}/s), "
+          f"{load['recording_seconds']:.0f} s of recording; CPU share of one core (process CPU / wall)")
+    print(f"    conversion alone, from (a)                         {conversion_share:7.2%}")
+    print(f"    decode (rosbags) + conversion, from (a)            {decode_share + conversion_share:7.2%}")
+    for key, label in (("input", "input pipeline, real time (read, decode, convert,\n"
+                                 "      feed to an empty program)                  "),
+                       ("tf", "whole pipeline, real time (+ Listing A.1 split,\n"
+                              "      5 memories)                                "),
+                       ("fast", "whole pipeline as fast as possible, CPU over the\n"
+                                "      recording's seconds                        ")):
+        r = load[key]
+        print(f"    {label}    {r['share']:7.2%}  (CPU {r['cpu']:.2f} s, wall {r['wall']:.2f} s, "
+              f"{r['events']:,} events)")
+    print(f"    thesis (2012 laptop, the converter)                {THESIS_SHARE:7.0%}")
+    targets.append((f"(b) conversion CPU share at {THESIS_RATE:,} transforms/s below the thesis's "
+                    f"{THESIS_SHARE:.0%}: {conversion_share:.2%}", conversion_share < THESIS_SHARE))
+    targets.append((f"(b) input pipeline (read, decode, convert, hand to Prolog) in real time below "
+                    f"{AIM_SHARE:.0%} (thesis converter {THESIS_SHARE:.0%}): {load['input']['share']:.2%}",
+                    load["input"]["share"] < AIM_SHARE and load["input"]["status"] == 0))
+    targets.append((f"(b) whole pipeline with the tf program (split, 5 memories) in real time below "
+                    f"{THESIS_SHARE:.0%}: {load['tf']['share']:.2%}",
+                    load["tf"]["share"] < THESIS_SHARE and load["tf"]["status"] == 0))
+
+    print(f"\n(c) replay end to end, as fast as possible (the NAO sample recording at the thesis's load: "
+          f"{NAO_TF_RATE:.0f} TFMessages of 5 transforms/s)\n")
+    print(f"{'format':8} {'program':8} {'messages':>9} {'events':>9} {'derived':>8} {'wall':>8} {'CPU':>8} "
+          f"{'msgs/CPU s':>10} {'events/CPU s':>12} {'x real time (CPU)':>17}")
+    for fmt, programs in res["replay"].items():
+        for program, r in programs.items():
+            print(f"{fmt:8} {program:8} {r['messages']:>9,} {r['events']:>9,} {r['derived']:>8,} {r['wall']:7.2f}s "
+                  f"{r['cpu']:7.2f}s {r['messages_per_cpu_s']:>10,.0f} {r['events_per_cpu_s']:>12,.0f} "
+                  f"{r['realtime_cpu']:>16.1f}x")
+        empty, nao = programs["empty"], programs["nao"]
+        targets.append((f"(c) {fmt}: bag input alone (empty program) >= {REALTIME_TARGET:.0f}x real time at "
+                        f"{THESIS_RATE:,} transforms/s: {empty['realtime_cpu']:.1f}x per CPU second "
+                        f"({empty['messages_per_cpu_s']:,.0f} msgs/s; wall {empty['realtime']:.1f}x)",
+                        empty["realtime_cpu"] >= REALTIME_TARGET))
+        targets.append((f"(c) {fmt}: the NAO program keeps up with {THESIS_RATE:,} transforms/s (>= 1x real time): "
+                        f"{nao['realtime_cpu']:.1f}x per CPU second ({nao['events_per_cpu_s']:,.0f} events/s; "
+                        f"wall {nao['realtime']:.1f}x)", nao["realtime_cpu"] >= 1.0))
+    if res["shared"]:
+        print(f"\n    shared sample bags, empty program:")
+        for name, r in res["shared"].items():
+            print(f"    {name:32} {r['messages']:>6,} msgs {r['cpu']:6.2f}s CPU {r['messages_per_cpu_s']:>9,.0f} msgs "
+                  f"per CPU s (bag opening included)")
+    print()
+    for text, met in targets:
+        verdict = "figure" if met is None else ("met" if met else "MISSED")
+        print(f"target {verdict:6} {text}")
+    return targets
+
+
+def plot(res: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.5))
+    labels = list(res["conversion"])
+    xs = range(len(labels))
+    gen = [res["conversion"][k]["generated"] * 1e6 for k in labels]
+    generic = [res["conversion"][k]["generic"] * 1e6 for k in labels]
+    decode = [res["conversion"][k]["decode"] * 1e6 for k in labels]
+    left.bar([x - 0.27 for x in xs], generic, 0.27, label="generic walk")
+    left.bar(list(xs), gen, 0.27, label="generated converter")
+    left.bar([x + 0.27 for x in xs], decode, 0.27, label="decode (rosbags)")
+    left.set_xticks(list(xs))
+    left.set_xticklabels(labels, fontsize=8)
+    left.set_ylabel("CPU per message (us)")
+    left.set_title("(a) message -> event text")
+    left.legend(fontsize=8)
+    fmts = list(res["replay"])
+    xs = range(len(fmts))
+    for offset, program in ((-0.2, "empty"), (0.2, "nao")):
+        right.bar([x + offset for x in xs], [res["replay"][f][program]["messages_per_cpu_s"] for f in fmts], 0.4,
+                  label=f"{program} program")
+    right.set_xticks(list(xs))
+    right.set_xticklabels(fmts)
+    right.set_ylabel("messages per CPU second")
+    right.set_title(f"(c) replay end to end; (b) CPU at 1,900 tf/s: input {res['load']['input']['share']:.1%}, "
+                    f"with tf program {res['load']['tf']['share']:.1%}", fontsize=9)
+    right.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes (the smoke test)")
+    parser.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
+    args = parser.parse_args()
+    return run(args.quick, args.out_dir)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

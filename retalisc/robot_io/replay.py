@@ -1,0 +1,286 @@
+"""`retalisc run PROGRAM --bag FILE`: a recording replayed into a running program.
+
+Each message of the selected topics becomes an event (messages.py), in record order, and
+goes to the Engine in batches (`feed_batch`, one Prolog call per batch). With a rate, the
+replay follows the recording's clock (times the rate), feeding each message when it is due.
+The output is written as by `retalisc run --events`; with a rate, messages are fed in slices
+of at most 10 ms of the recording's time (RATE_TICK), so a message is at most that late. rejected messages (that cannot be
+decoded or converted) are reported on standard error as `BAG:TOPIC#N: rejected: REASON` (N
+counts the replayed messages from 1) and skipped; a summary closes the run.
+"""
+from __future__ import annotations
+
+import os
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass, field, replace
+from typing import IO, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
+
+import click
+
+from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
+from .messages import ConversionError, Convention, MessageConverter
+
+
+@dataclass
+class BagOptions:
+    """What to replay and how messages become events (the --bag options of `retalisc run`)."""
+
+    topics: Optional[List[str]] = None
+    rate: Optional[float] = None          # None: as fast as possible
+    start: float = 0.0                    # seconds skipped from the start of the recording
+    duration: Optional[float] = None      # seconds replayed from `start`
+    convention: Convention = field(default_factory=Convention)
+    stamp: str = "header"                 # or "record": every event at its record time
+    typestore: str = DEFAULT_ROS2_STORE   # for ROS 2 bags without definitions
+
+    @classmethod
+    def from_cli(cls, values: dict) -> "BagOptions":
+        return cls(topics=topic_list(values.get("topics")), rate=values.get("rate"),
+                   start=values.get("bag_start") or 0.0, duration=values.get("bag_duration"),
+                   convention=Convention(plain_strings=bool(values.get("plain_strings")),
+                                         wrap_topic=bool(values.get("wrap_topic"))),
+                   stamp=values.get("stamp") or "header",
+                   typestore=values.get("bag_typestore") or DEFAULT_ROS2_STORE)
+
+
+@dataclass
+class ReplayStats:
+    """What a replay read: messages per topic, and the messages rejected."""
+
+    per_topic: Counter = field(default_factory=Counter)
+    rejected: int = 0
+    seconds: float = 0.0
+
+    @property
+    def messages(self) -> int:
+        return sum(self.per_topic.values())
+
+    def summary(self, name: str) -> str:
+        topics = ", ".join(f"{topic} {count:,}" for topic, count in sorted(self.per_topic.items()))
+        rejected = f", {self.rejected:,} rejected" if self.rejected else ""
+        return (f"bag: {name}: {self.messages:,} messages in {self.seconds:.2f} s"
+                f"{rejected}{': ' + topics if topics else ''}")
+
+
+Event = Tuple[str, float]
+
+RATE_TICK = 0.01
+"""With --rate, the replay sleeps at least this many seconds at a time: a message is fed at
+most this late, together with the others that fell due meanwhile (one Prolog call)."""
+
+
+def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
+               report: Callable[[str, int, str], None],
+               converter: Optional[MessageConverter] = None) -> Iterator[Tuple[str, float, Record]]:
+    """(event text, time in seconds, record) for each message replayed, in record order. Messages that cannot be decoded or converted go to `report(topic, number, reason)`
+    and are counted in `stats.rejected`."""
+    converter = converter or MessageConverter(bag.typestore, options.convention)
+    start_ns, stop_ns = window(bag, options)
+    record_stamp = options.stamp == "record"
+    number = 0
+    for record in bag.records(options.topics, start_ns, stop_ns):
+        number += 1
+        stats.per_topic[record.topic] += 1
+        if record.msg is None:
+            stats.rejected += 1
+            report(record.topic, number, record.error or "cannot decode")
+            continue
+        try:
+            text, seconds = converter.event(record.msg, record.msgtype, record.topic, record.time_ns)
+        except (ConversionError, AttributeError, TypeError, ValueError) as error:
+            stats.rejected += 1
+            report(record.topic, number, f"cannot convert {record.msgtype}: {error}")
+            continue
+        if record_stamp:
+            seconds = record.time_ns / 1_000_000_000
+        yield text, seconds, record
+
+
+def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
+    """The record-time window [start, stop) in ns of --start and --duration."""
+    start_ns = bag.start_ns + round(options.start * 1e9) if options.start else None
+    stop_ns = None
+    if options.duration is not None:
+        stop_ns = (start_ns if start_ns is not None else bag.start_ns) + round(options.duration * 1e9)
+    return start_ns, stop_ns
+
+
+def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[BagOptions] = None,
+               batch_size: int = 2000, consumer_dir: Optional[str] = None, drop_pending: bool = False,
+               first_output: Sequence = (), progress: Optional[bool] = None, out_bag: Optional[str] = None,
+               foxglove: Optional[int] = None, foxglove_wait: Optional[float] = None) -> int:
+    """Replay the recording at `path` into `engine`; write the output JSON Lines to `out`
+    ('-' for stdout, None to drop it), as `run_event_file` does. A progress bar shows on a
+    terminal (`progress` forces it on or off). `out_bag` writes the input messages and what
+    the program derived to an MCAP file; `foxglove` serves them live on that port (0: any
+    free port) after waiting up to `foxglove_wait` seconds (None: as long as it takes) for a
+    client, replaying in real time unless the options give a rate (publish.py). Returns the
+    exit status: 0, 1 when the program raised an error, 2 when the recording cannot be read."""
+    from ..driver.bridge import PrologError
+    from ..driver.run import ConsumerFiles
+
+    options = options or BagOptions()
+    name = str(path)
+    try:
+        bag = Recording(path, options.typestore).__enter__()
+    except BagError as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+    try:
+        publisher, sinks = _open_sinks(bag, options, out_bag, foxglove, foxglove_wait)
+    except BaseException:
+        bag.__exit__(None, None, None)
+        raise
+    if foxglove is not None and options.rate is None:
+        options = replace(options, rate=1.0)
+    sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
+    consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
+    stats = ReplayStats()
+    status = 0
+    if options.topics:
+        unknown = [t for t in options.topics if t not in bag.topics()]
+        if unknown:
+            click.echo(f"{name}: warning: no topic {', '.join(unknown)} in this recording "
+                       f"(it has {', '.join(bag.topics())})", err=True)
+
+    def write(produced) -> None:
+        for event in produced:
+            if consumers is not None and event.consumer is not None:
+                consumers.write(event)
+            else:
+                sink.write(event.line + "\n")
+            if publisher is not None:
+                message = publisher.output(event)
+                if message is not None:
+                    for target in sinks:
+                        target.write(message)
+
+    def report(topic: str, number: int, reason: str) -> None:
+        click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
+
+    start_ns, stop_ns = window(bag, options)
+    first_ns = start_ns if start_ns is not None else bag.start_ns
+    last_ns = min(stop_ns, bag.end_ns) if stop_ns is not None else bag.end_ns
+    show = progress if progress is not None else sys.stderr.isatty()
+    began = time.perf_counter()
+    try:
+        with (click.progressbar(length=max(1, (last_ns - first_ns) // 1_000_000), label=f"replaying {name}",
+                                file=sys.stderr) if show else _NoBar()) as bar:
+            for produced in first_output:
+                write(produced)
+            batch: List[Tuple[str, float]] = []
+            shown_ms = 0
+
+            def feed(batch) -> None:
+                if publisher is not None:
+                    publisher.fed(batch)
+                write(engine.feed_batch(batch))
+
+            for text, seconds, record in bag_events(bag, options, stats, report):
+                record_ns = record.time_ns
+                if options.rate is not None:
+                    due = began + (record_ns - first_ns) / 1e9 / options.rate
+                    wait = due - time.perf_counter()
+                    if wait > 0:
+                        if batch:
+                            feed(batch)
+                            batch = []
+                            sink.flush()
+                        # sleep at least one tick: what fell due meanwhile goes in one batch
+                        time.sleep(max(wait, RATE_TICK))
+                if publisher is not None:
+                    message = publisher.input(record.topic, record.msgtype, record_ns, record.msg)
+                    for target in sinks:
+                        target.write(message)
+                batch.append((text, seconds))
+                if len(batch) >= batch_size:
+                    feed(batch)
+                    batch = []
+                done_ms = (record_ns - first_ns) // 1_000_000
+                if done_ms > shown_ms:
+                    bar.update(done_ms - shown_ms)
+                    shown_ms = done_ms
+            if batch:
+                feed(batch)
+            if publisher is not None:
+                publisher.fed([])
+            write(engine.end_of_input(drop_pending))
+        sink.flush()
+    except PrologError as error:
+        sink.flush()
+        click.echo(f"{name}: error: {error}", err=True)
+        status = 1
+    finally:
+        bag.__exit__(None, None, None)
+        if sink is not sys.stdout:
+            sink.close()
+        if consumers is not None:
+            consumers.close()
+        for target in sinks:
+            target.close()
+    stats.seconds = time.perf_counter() - began
+    click.echo(stats.summary(name), err=True)
+    for target in sinks:
+        click.echo(f"{target.describe()}: {target.count:,} messages", err=True)
+    click.echo(engine.summary(), err=True)
+    return status
+
+
+def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
+    """`retalisc run PROGRAM --bag FILE ...`: `values` are the --bag options (options.py)."""
+    from . import MissingDependency
+
+    try:
+        return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values), out_bag=values.get("out_bag"),
+                          foxglove=values.get("foxglove"), **run_options)
+    except MissingDependency as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+    except OSError as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+
+
+def _open_sinks(bag: Recording, options: BagOptions, out_bag: Optional[str], foxglove: Optional[int],
+                foxglove_wait: Optional[float]):
+    """The Publisher and the sinks of --out-bag and --foxglove (none: (None, []))."""
+    if out_bag is None and foxglove is None:
+        return None, []
+    from .bags import typestore
+    from .publish import EVENTS_TOPIC, FoxgloveSink, McapSink, Publisher
+
+    fallback = typestore("ros1_noetic" if bag.format == "ros1" else DEFAULT_ROS2_STORE)
+    publisher = Publisher(bag.typestore, fallback, options.convention)
+    sinks: list = []
+    try:
+        if out_bag is not None:
+            sinks.append(McapSink(out_bag))
+        if foxglove is not None:
+            server = FoxgloveSink(foxglove)
+            sinks.append(server)
+            for topic, info in bag.topics().items():
+                if options.topics is None or topic in options.topics:
+                    server.advertise(publisher.advertisement(topic, info.msgtype))
+            server.advertise(publisher.advertisement(EVENTS_TOPIC, None))
+            click.echo(f"foxglove: waiting for a client on ws://{server.host}:{server.port} "
+                       f"(Foxglove: Open connection, Foxglove WebSocket)", err=True)
+            if not server.wait_for_client(foxglove_wait):
+                click.echo("foxglove: no client came; replaying anyway", err=True)
+    except BaseException:
+        for target in sinks:
+            target.close()
+        raise
+    return publisher, sinks
+
+
+class _NoBar:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+    def update(self, n: int) -> None:
+        pass

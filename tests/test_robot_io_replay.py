@@ -1,0 +1,232 @@
+"""Bag replay (`retalisc run PROGRAM --bag FILE`, retalisc/robot_io/replay.py): the
+repository's own sample recording in the three formats, every shared sample bag, the ROS 1 /
+ROS 2 pairs, the options, and the thesis's NAO program placing markers in the world."""
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from robot_io_support import ROOT, ROS1_ROS2_PAIRS, SHARED_NAMES, shared_bag, without_seq
+
+from retalisc.driver.engine import Engine  # noqa: E402
+from retalisc.robot_io.bags import Recording  # noqa: E402
+from retalisc.robot_io.messages import Convention, MessageConverter  # noqa: E402
+from retalisc.robot_io.replay import BagOptions, replay_bag  # noqa: E402
+from retalisc.robot_io.samples import TF_CHAIN, nao_records, sample_store, write_nao_bag  # noqa: E402
+
+NAO_PROGRAM = ROOT / "examples" / "nao_markers" / "nao_markers.rtl"
+FORMATS = ["ros1", "ros2", "mcap"]
+
+
+@pytest.fixture(scope="module")
+def nao_bags(tmp_path_factory):
+    """The sample recording (3 s, tf at 50 Hz) in each format."""
+    folder = tmp_path_factory.mktemp("bags")
+    return {fmt: write_nao_bag(folder / ("nao.bag" if fmt == "ros1" else f"nao_{fmt}"), fmt, seconds=3.0)
+            for fmt in FORMATS}
+
+
+def replay(engine_or_source, bag, tmp_path, echo=False, batch_size=64, **options):
+    if isinstance(engine_or_source, Engine):
+        engine = engine_or_source
+    else:
+        engine = Engine.from_source(engine_or_source, "replayed.rtl")
+    engine.set_flag("echo_input", "true" if echo else "false")
+    out = tmp_path / "out.jsonl"
+    status = replay_bag(engine, str(bag), str(out), BagOptions(**options), batch_size=batch_size)
+    return status, [json.loads(line) for line in out.read_text().splitlines()]
+
+
+# ---- the thesis's application on the sample recording --------------------------------------
+
+def _yaw(q):
+    return 2 * math.atan2(q[2], q[3])
+
+
+def _world_pose(records, stamp_ns, relative):
+    """Oracle: the chain of the five transforms at `stamp_ns` (linear interpolation of the
+    translations and yaws between the samples around it; every rotation of the sample
+    recording is about z), applied to the marker's pose relative to the camera."""
+    samples = [(ns, msg) for _, msgtype, ns, msg in records if msgtype == "tf2_msgs/msg/TFMessage"]
+    x, y, z, yaw = 0.0, 0.0, 0.0, 0.0
+    for link in range(len(TF_CHAIN)):
+        around = []
+        for _, msg in samples:
+            tr = msg.transforms[link]
+            ns = tr.header.stamp.sec * 1_000_000_000 + tr.header.stamp.nanosec
+            around.append((ns, tr.transform))
+        before = max((s for s in around if s[0] <= stamp_ns), key=lambda s: s[0])
+        after = min((s for s in around if s[0] > stamp_ns), key=lambda s: s[0])
+        f = (stamp_ns - before[0]) / (after[0] - before[0])
+        t1, t2 = before[1], after[1]
+        v = [a + f * (b - a) for a, b in zip((t1.translation.x, t1.translation.y, t1.translation.z),
+                                              (t2.translation.x, t2.translation.y, t2.translation.z))]
+        r = _yaw((t1.rotation.x, t1.rotation.y, t1.rotation.z, t1.rotation.w))
+        r += f * (_yaw((t2.rotation.x, t2.rotation.y, t2.rotation.z, t2.rotation.w)) - r)
+        x, y, z = x + math.cos(yaw) * v[0] - math.sin(yaw) * v[1], y + math.sin(yaw) * v[0] + math.cos(yaw) * v[1], z + v[2]
+        yaw += r
+    rx, ry, rz = relative
+    return x + math.cos(yaw) * rx - math.sin(yaw) * ry, y + math.sin(yaw) * rx + math.cos(yaw) * ry, z + rz
+
+
+def test_nao_markers_are_placed_in_the_world_the_same_from_every_format(nao_bags, tmp_path):
+    outputs = {}
+    for fmt in FORMATS:
+        status, lines = replay(Engine.load(NAO_PROGRAM), nao_bags[fmt], tmp_path)
+        assert status == 0
+        outputs[fmt] = lines
+    assert outputs["ros1"] == outputs["ros2"] == outputs["mcap"]
+    store = sample_store(2)
+    records = nao_records(store, seconds=3.0)
+    detections = [m for _, msgtype, _, m in records if msgtype == "ar_pose/msg/ARMarkers"]
+    poses = [line for line in outputs["ros2"] if line["event"].startswith("geometry_msgs__0__PoseStamped(")]
+    derived = [line for line in poses if "consumer" not in line]
+    delivered = [line for line in poses if "consumer" in line]
+    again = [line for line in outputs["ros2"] if line["event"].startswith("seen_again(")]
+    assert again and all(0 < line["end"] - line["start"] <= 0.5 for line in again)
+    assert len(outputs["ros2"]) == len(poses) + len(again)
+    assert len(derived) == len(detections) == len(delivered) > 10
+    converter = MessageConverter(store)
+    by_stamp = {}
+    for message in detections:
+        marker = message.markers[0]
+        stamp = marker.header.stamp.sec * 1_000_000_000 + marker.header.stamp.nanosec
+        position = marker.pose.pose.position
+        by_stamp[stamp] = (marker.header.frame_id, (position.x, position.y, position.z))
+    for line in derived:
+        msgtype, pose = converter.message(line["event"])
+        assert msgtype == "geometry_msgs/msg/PoseStamped"
+        stamp = pose.header.stamp.sec * 1_000_000_000 + pose.header.stamp.nanosec
+        name, relative = by_stamp[stamp]
+        assert pose.header.frame_id == name and abs(line["start"] - stamp / 1e9) < 1e-6
+        expected = _world_pose(records, stamp, relative)
+        got = (pose.pose.position.x, pose.pose.position.y, pose.pose.position.z)
+        assert all(abs(a - b) < 1e-4 for a, b in zip(got, expected)), (got, expected)
+    for line in delivered:
+        assert line["consumer"] == "marker" + line["event"].split("4x4_")[1][0]
+
+
+# ---- input events: record order, options ------------------------------------------------------
+
+def test_echo_input_gives_every_message_in_record_order(nao_bags, tmp_path):
+    status, lines = replay("", nao_bags["mcap"], tmp_path, echo=True)
+    assert status == 0
+    with Recording(nao_bags["mcap"]) as bag:
+        converter = MessageConverter(bag.typestore)
+        expected = [converter.event(r.msg, r.msgtype, r.topic, r.time_ns) for r in bag.records()]
+    assert [(line["event"], line["start"]) for line in lines] == expected
+    markers = [line["start"] for line in lines if line["event"].startswith("ar_pose__0__ARMarkers")]
+    assert markers != sorted(markers) or len(markers) < 2  # late detections stay late
+    tf = [line["start"] for line in lines if line["event"].startswith("tf2_msgs")]
+    assert len(tf) == 150 and lines[0]["start"] <= tf[0]
+
+
+def test_topics_start_and_duration_select_by_record_time(nao_bags, tmp_path):
+    status, lines = replay("", nao_bags["ros1"], tmp_path, echo=True, topics=["/tf", "/robot_pose"],
+                           start=1.0, duration=0.5)
+    assert status == 0
+    records = nao_records(sample_store(1), seconds=3.0)
+    first = records[0][2]
+    chosen = [r for r in records if r[0] in ("/tf", "/robot_pose")
+              and first + 1_000_000_000 <= r[2] < first + 1_500_000_000]
+    assert len(lines) == len(chosen) == 25 + 5
+
+
+def test_wrap_topic_plain_strings_and_record_stamps(nao_bags, tmp_path):
+    status, lines = replay("", nao_bags["ros2"], tmp_path, echo=True, topics=["/robot_pose"], duration=0.15,
+                           convention=Convention(plain_strings=True, wrap_topic=True), stamp="record")
+    assert status == 0 and len(lines) == 2
+    assert lines[0]["event"] == ("robot_pose(geometry_msgs__0__PoseStamped(std_msgs__0__Header([1413748205,0],'/odom'),"
+                                 "geometry_msgs__0__Pose(geometry_msgs__0__Point(0.0,0.0,0.0),"
+                                 "geometry_msgs__0__Quaternion(0.0,0.0,0.0,1.0))))")
+    assert lines[0]["start"] == 1413748205.002          # recorded 2 ms after its stamp
+
+
+def test_rate_replays_in_real_time(nao_bags, tmp_path, capsys):
+    engine = Engine.from_source("", "rate.rtl")
+    engine.set_flag("echo_input", "false")
+    status = replay_bag(engine, str(nao_bags["ros2"]), None, BagOptions(topics=["/tf"], rate=4.0, duration=1.0),
+                        progress=True)
+    assert status == 0
+    summary = capsys.readouterr().err
+    assert f"replaying {nao_bags['ros2']}" in summary           # the progress bar's label
+    seconds = float(summary.split(" messages in ")[1].split(" s")[0])
+    assert 0.2 <= seconds < 3.0, summary          # 1 s of recording at 4x: about 0.25 s (not as fast as possible)
+
+
+def test_messages_that_cannot_be_decoded_are_rejected_and_the_replay_goes_on(tmp_path, capsys):
+    from rosbags.rosbag1 import Writer
+    store = sample_store(1)
+    records = nao_records(store, seconds=0.2, tf_rate=20)
+    path = tmp_path / "broken.bag"
+    with Writer(path) as writer:
+        connections = {}
+        for number, (topic, msgtype, ns, msg) in enumerate(records):
+            if topic not in connections:
+                connections[topic] = writer.add_connection(topic, msgtype, typestore=store)
+            data = store.serialize_ros1(msg, msgtype)
+            writer.write(connections[topic], ns, data[:7] if number == 1 else data)
+    status, lines = replay("", path, tmp_path, echo=True)
+    err = capsys.readouterr().err
+    assert status == 0 and len(lines) == len(records) - 1
+    assert f"{path}:{records[1][0]}#2: rejected: cannot decode" in err
+    assert "1 rejected" in err
+
+
+# ---- the shared sample bags -----------------------------------------------------------------
+
+@pytest.mark.parametrize("name", SHARED_NAMES)
+def test_every_shared_bag_replays_every_message(name, tmp_path, capsys):
+    path = shared_bag(name)
+    with Recording(path) as bag:
+        count = bag.message_count
+    status, lines = replay("", path, tmp_path, echo=count < 600, batch_size=2000)
+    err = capsys.readouterr().err
+    assert status == 0 and len(lines) == (count if count < 600 else 0)
+    assert "rejected" not in err.split("retalis:")[0]
+    assert f"{count:,} messages" in err and f"{count:,} events" in err
+
+
+@pytest.mark.parametrize("ros1, ros2", ROS1_ROS2_PAIRS)
+def test_ros1_and_ros2_forms_of_a_recording_give_the_same_events(ros1, ros2, tmp_path):
+    topics = ["/tf", "/tf_static"]
+    _, one = replay("", shared_bag(ros1), tmp_path, echo=True, topics=topics)
+    _, two = replay("", shared_bag(ros2), tmp_path, echo=True, topics=topics)
+    assert len(one) == len(two) > 100
+    assert "std_msgs__0__Header(0,[" in one[0]["event"] and "std_msgs__0__Header([" in two[0]["event"]
+    assert [(without_seq(x["event"]), x["start"]) for x in one] == [(without_seq(x["event"]), x["start"]) for x in two]
+
+
+# ---- the command line -------------------------------------------------------------------------
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "retalisc", *map(str, args)], capture_output=True, text=True,
+                          timeout=120, cwd=ROOT)
+
+
+def test_cli_replays_a_bag_and_reports_bad_input(nao_bags, tmp_path):
+    from click.testing import CliRunner
+
+    from retalisc.commands.compile import run_command
+
+    consumers = tmp_path / "consumers"
+    run = _cli("run", NAO_PROGRAM, "--bag", nao_bags["ros1"], "--consumer-dir", consumers, "--topics",
+               "/tf,/ar_pose_marker", "--out-bag", tmp_path / "out.mcap")
+    assert run.returncode == 0, run.stderr
+    assert f"out-bag: {tmp_path / 'out.mcap'}: " in run.stderr and (tmp_path / "out.mcap").stat().st_size > 1000
+    lines = [json.loads(line) for line in run.stdout.splitlines()]
+    assert lines and all(line["event"].startswith(("geometry_msgs__0__PoseStamped(", "seen_again(")) for line in lines)
+    assert {p.name for p in consumers.iterdir()} == {"marker1.jsonl", "marker2.jsonl"}
+    assert "messages in" in run.stderr and "/ar_pose_marker" in run.stderr and "/robot_pose" not in run.stderr
+    program = tmp_path / "cli_bad_bag.rtl"            # in this process: a module name of its own
+    program.write_text("alarm <- smoke.\n")
+    bad = CliRunner().invoke(run_command, [str(program), "--bag", str(program)])
+    assert bad.exit_code == 2 and "not a recording" in bad.output and bad.exception is None or \
+        isinstance(bad.exception, SystemExit)
+    usage = CliRunner().invoke(run_command, [str(program), "--events", "-", "--rate", "2"])
+    assert usage.exit_code == 2 and "go with --bag" in usage.output
