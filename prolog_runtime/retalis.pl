@@ -20,6 +20,7 @@
 :- reexport(rtl_query).
 :- reexport(rtl_math).
 :- reexport(rtl_sync).
+:- reexport(rtl_api).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 

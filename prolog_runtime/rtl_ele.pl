@@ -110,18 +110,35 @@ rtl_clear :-
 %!  rtl_set_flag(+Flag, +Value) is det.
 %!  rtl_flag(?Flag, ?Value) is nondet.
 %
-%   Flags: `max_delay` (seconds; `inf` keeps every partial match), `echo_input` (true or
-%   false), `event_consumption_policy` and `query_time_limit` (seconds).
+%   Flags: `max_delay` (seconds, a non-negative number; `inf` keeps every partial match),
+%   `echo_input` (true or false), `event_consumption_policy` (unrestricted, recent,
+%   chronological) and `query_time_limit` (seconds, a positive number). A bad value raises
+%   a type or domain error and changes nothing.
 
 rtl_set_flag(Flag, Value) :-
     (   flag_default(Flag, _)
     ->  true
     ;   domain_error(retalis_flag, Flag)
     ),
+    (   valid_flag_value(Flag, Value)
+    ->  true
+    ;   var(Value)
+    ->  instantiation_error(Value)
+    ;   domain_error(Flag, Value)
+    ),
     retractall(flag_value(Flag, _)),
     assertz(flag_value(Flag, Value)),
     (   Flag == echo_input -> nb_setval(rtl_echo_input, Value) ; true ),   % read on every event
     (   Flag == max_delay -> schedule_sweep ; true ).
+
+valid_flag_value(max_delay, V) :-
+    (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
+valid_flag_value(echo_input, V) :-
+    ( V == true ; V == false ), !.
+valid_flag_value(event_consumption_policy, V) :-
+    atom(V), memberchk(V, [unrestricted, recent, chronological]).
+valid_flag_value(query_time_limit, V) :-
+    number(V), V > 0, V =\= inf.
 
 rtl_flag(Flag, Value) :-
     flag_default(Flag, Default),

@@ -9,39 +9,24 @@
 /** <module> Queries from other components: SLR queries <Goal, Z> under the sandbox
 
 A query arrives as text (from Python, the command line or a service). It is read as a
-term with read_term (its variable names kept, trailing text refused), its time terms
+term with rtl_read_text/4 (its variable names kept, trailing text refused), its time terms
 `E^T` / `E^[T1, T2]` are rewritten as the compiler rewrites them in the program (the
-time becomes the last two arguments), and it must pass SWI-Prolog's library(sandbox)
-(safe_goal/1) before it runs: no file, shell or database side effects, no halt. The
-program's own predicates are checked by the sandbox like any code; the SLR query
-predicates (prev, next, mem, ...) are declared safe here.
+time becomes the last two arguments), and it must pass rtl_check_goal/3 (rtl_sandbox.pl,
+built on SWI-Prolog's library(sandbox)) before it runs: no file, shell or database side
+effects, no halt. The program's own predicates are checked like any code; the SLR query
+predicates (prev, next, mem, ...) are declared safe there.
 
 An answer is the list of `Name=Value` pairs of the goal's variables (those whose name does
 not start with `_`), in the order they appear in the goal.
 */
 
-:- use_module(library(sandbox)).
 :- use_module(library(time), [call_with_time_limit/2]).
+:- use_module(rtl_sandbox).
+:- use_module(rtl_text).
 :- use_module(rtl_ele).
 :- use_module(rtl_slr).
 :- use_module(rtl_io).
 :- use_module(rtl_sync).
-
-:- multifile sandbox:safe_primitive/1.
-
-sandbox:safe_primitive(rtl_slr:mem(_, _)).
-sandbox:safe_primitive(rtl_slr:access_mem(_, _, _)).
-sandbox:safe_primitive(rtl_slr:prev(_, _)).
-sandbox:safe_primitive(rtl_slr:prev(_, _, _)).
-sandbox:safe_primitive(rtl_slr:prev(_, _, _, _, _)).
-sandbox:safe_primitive(rtl_slr:next(_, _)).
-sandbox:safe_primitive(rtl_slr:next(_, _, _)).
-sandbox:safe_primitive(rtl_slr:next(_, _, _, _)).
-sandbox:safe_primitive(rtl_slr:next(_, _, _, _, _, _)).
-sandbox:safe_primitive(rtl_slr:next_inf(_, _, _, _, _)).
-sandbox:safe_primitive(rtl_slr:exist_mem(_)).
-sandbox:safe_primitive(rtl_slr:rtl_memory_size(_, _)).
-sandbox:safe_primitive(rtl_ele:rtl_clock(_)).
 
 %!  rtl_query(+GoalText, +At, +Limit, -Answers:list, -Error) is det.
 %
@@ -65,7 +50,7 @@ rtl_query(Text, At, Limit, Answers, Error) :-
 % The goal runs in a temporary module that inherits the program's predicates: what the
 % sandbox allows it to assert goes there, and is gone with it.
 checked_run(Limit, Tmp, Goal, At, Bindings, Answers, Error) :-
-    catch(safe_goal(Tmp:Goal), Unsafe, true),
+    catch(rtl_check_goal(query([Tmp]), Tmp, Goal), Unsafe, true),
     (   var(Unsafe)
     ->  run(Limit, Tmp, Goal, At, Bindings, Answers, Error)
     ;   unsafe_message(Unsafe, Tmp, Message),
@@ -82,8 +67,7 @@ unsafe_message(Unsafe, Tmp, Message) :-
     atom_string(Message1, Message).
 
 read_goal(Text, M, Goal, Bindings, Error) :-
-    catch(term_string(Goal, Text, [variable_names(Bindings), module(M), syntax_errors(error)]),
-          SyntaxError, true),
+    catch(rtl_read_text(Text, Goal, Bindings, [module(M)]), SyntaxError, true),
     (   nonvar(SyntaxError)
     ->  syntax_message(SyntaxError, Text, Message),
         Error = syntax(Message)
@@ -168,7 +152,8 @@ rtl_memory_request(Text, Error) :-
     (   nonvar(Error)
     ->  true
     ;   memory_request_conditions(Request, Conds)
-    ->  catch(( ( is_list(Conds) -> maplist(safe_condition(M), Conds) ; true ), Result = ok ), Unsafe,
+    ->  (   is_list(Conds) -> CondList = Conds ; CondList = [Conds] ),
+        catch(( maplist(safe_condition(M), CondList), Result = ok ), Unsafe,
               ( message_text(Unsafe, Message), Result = unsafe(Message) )),
         (   Result == ok
         ->  catch(M:Request, Raised,
@@ -186,7 +171,7 @@ memory_request_conditions(d_mem(_), []).
 memory_request_conditions(delete_memory(_), []).
 
 safe_condition(M, Cond) :-
-    (   callable(Cond) -> safe_goal(M:Cond) ; type_error(callable, Cond) ).
+    (   callable(Cond) -> rtl_check_goal(query([]), M, Cond) ; type_error(callable, Cond) ).
 
 %!  rtl_sync_query(+GoalText, +At, +Timeout, ?QueryId, -Error) is det.
 %
@@ -211,7 +196,7 @@ rtl_sync_query(Text, At, Timeout, QueryId, Error) :-
     ->  Error = syntax("a synchronized query needs a time (at)")
     ;   rtl_time_goal(Goal0, Goal),
         in_temporary_module(Tmp, add_import_module(Tmp, M, start),
-                            ( catch(safe_goal(Tmp:Goal), Unsafe, true),
+                            ( catch(rtl_sandbox:rtl_check_goal(query([Tmp]), Tmp, Goal), Unsafe, true),
                               ( nonvar(Unsafe) -> unsafe_message(Unsafe, Tmp, Message) ; true ) )),
         (   nonvar(Unsafe)
         ->  Error = unsafe(Message)

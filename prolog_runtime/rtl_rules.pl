@@ -26,6 +26,7 @@ program file too, so del_event_rule/1 removes those as well.
 :- use_module(library(readutil)).
 :- use_module(rtl_ele).
 :- use_module(rtl_library, [rtl_target_program/2]).
+:- use_module(rtl_sandbox, [rtl_check_rule/4]).
 
 :- meta_predicate ins_event_rule(:), del_event_rule(:).
 
@@ -67,7 +68,9 @@ del_event_rule(Caller:Label) :-
 %!  rtl_install_rules(+Module, +Text:string, -Ids:list(atom)) is det.
 %
 %   Add the rules in Text, the output of `retalisc compile-rules`, to Module. Nothing is
-%   added when one of their ids is in use.
+%   added when one of their ids is in use, or when one of them is refused by
+%   rtl_check_rule/4 (rtl_sandbox.pl): a rule added at run time comes from outside the
+%   program file, so every goal it could run must be safe.
 
 rtl_install_rules(M, Text, Ids) :-
     read_rules(M, Text, Rules),
@@ -78,6 +81,8 @@ rtl_install_rules(M, Text, Ids) :-
                            context(ins_event_rule/1, 'a rule with this id exists; delete it first')))
            ;   true
            )),
+    forall(member(rule(Id, Stores, Clauses), Rules),
+           rtl_check_rule(M, Id, Stores, Clauses)),
     forall(member(rule(Id, Stores, Clauses), Rules),
            install_rule(M, Id, Stores, Clauses)),
     reschedule_sweep.

@@ -187,16 +187,13 @@ def add_cli_memory(engine, request: str) -> None:
 def add_cli_subscription(engine, spec: str) -> None:
     """`--subscribe 'CONSUMER=QUERY[=>TEMPLATE]'`: a usage error (exit 2) when it is malformed."""
     from ..driver.bridge import PrologError
-    from ..driver.engine import prolog_string
 
     consumer, sep, rest = spec.partition("=")
     query, _, template = rest.partition("=>")
     if not sep or not consumer.strip() or not query.strip():
         raise click.UsageError(f"--subscribe {spec!r}: expected 'CONSUMER=QUERY' or 'CONSUMER=QUERY=>TEMPLATE'")
-    text = f"q(({query}), ({template or '_'}))"
     try:
-        engine.bridge.once(f"term_string(T, {prolog_string(text)}), T = q(Q, Tmpl), "
-                           f"retalis:sub(_, {prolog_string(consumer.strip())}, Q, Tmpl, (-inf))")
+        engine.subscribe_query(consumer.strip(), query, template or None)
     except PrologError as error:
         raise click.UsageError(f"--subscribe {spec!r}: {error}")
 

@@ -8,9 +8,11 @@
     aq.retract_facts(["offers(s1, o7, 3)", "seller(s1, t1)"])   # one DRed pass
     aq.unregister("q1")                                # frees its tables, goals and records
 
-Answers and facts cross the boundary as Prolog text; answers are goal instances written with
-writeq.  One program is loaded per process (the bridge has one Prolog engine): loading another
-program unloads the previous one and drops every query.
+Goals, facts and query ids cross the boundary as values (`Bridge.apply` into
+`prolog_runtime/rtl_aq_api.pl`), never pasted into goal text: a goal or fact is read there
+as exactly one term (a registered goal can only be one atom of a program predicate). Answers
+come back as writeq text. One program is loaded per process (the bridge has one Prolog
+engine): loading another program unloads the previous one and drops every query.
 """
 from __future__ import annotations
 
@@ -22,21 +24,24 @@ from ..compiler import AqOptions, compile_source
 from ..frontend.terms import quote_atom
 from .bridge import Bridge
 
+_API = "rtl_aq_api"
+
 QueryId = Union[str, int]
 Callback = Callable[[QueryId, str], None]
 
 _loaded: Dict[str, Optional[str]] = {"path": None}
 
 
-def _id_text(qid: QueryId) -> str:
+def _id_value(qid: QueryId) -> QueryId:
     if isinstance(qid, bool) or not isinstance(qid, (str, int)):
         raise TypeError(f"query ids are str or int, not {type(qid).__name__}")
-    return str(qid) if isinstance(qid, int) else quote_atom(qid)
+    return qid
 
 
-def _strip(text: str) -> str:
-    text = text.strip()
-    return text[:-1] if text.endswith(".") else text
+def _text(value: str, what: str) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"{what} must be a str, not {type(value).__name__}")
+    return value
 
 
 class ActiveQueries:
@@ -77,6 +82,9 @@ class ActiveQueries:
             self.bridge.once("forall(catch(user:'$aq_fact_pred'(F), _, fail), retractall(user:F))")
             self.bridge.once(f"unload_file({quote_atom(previous)})")
         self.bridge.consult(out)
+        # the API module next to the runtime the program loaded (a constant goal, no values)
+        self.bridge.once("module_property(rtl_aq, file(F)), file_directory_name(F, D), "
+                         "directory_file_path(D, 'rtl_aq_api.pl', P), use_module(user:P)")
         _loaded["path"] = str(out)
         self._ids.clear()
 
@@ -88,9 +96,7 @@ class ActiveQueries:
         self._on_delete.append(callback)
 
     def _events(self) -> List[tuple]:
-        text = self.bridge.call_text(
-            "rtl_aq:aq_events(Es), with_output_to(string(Out), "
-            "forall(member(ev(I, O, A), Es), format('~q\\t~w\\t~q~n', [I, O, A])))")
+        text = self.bridge.apply(_API, "aq_api_events")
         events = []
         for line in text.splitlines():
             qtext, op, answer = line.split("\t", 2)
@@ -109,41 +115,34 @@ class ActiveQueries:
     # -- queries ---------------------------------------------------------------------------
     def register(self, query_id: QueryId, goal: str) -> List[str]:
         """Register `goal` as active query `query_id`; returns its current answers."""
-        idt = _id_text(query_id)
-        text = self.bridge.call_text(
-            f"rtl_aq:aq_register({idt}, ({_strip(goal)}), As), "
-            "with_output_to(string(Out), forall(member(A, As), format('~q~n', [A])))")
-        self._ids[self.bridge.call_text(f"format(string(Out), '~q', [{idt}])")] = query_id
+        qid = _id_value(query_id)
+        text = self.bridge.apply(_API, "aq_api_register", qid, _text(goal, "a goal"))
+        self._ids[self.bridge.apply(_API, "aq_api_id_text", qid)] = query_id
         return text.splitlines()
 
     def unregister(self, query_id: QueryId) -> None:
-        self.bridge.once(f"rtl_aq:aq_unregister({_id_text(query_id)})")
+        self.bridge.apply(_API, "aq_api_unregister", _id_value(query_id))
         self._dispatch()
 
     def answers(self, query_id: QueryId) -> List[str]:
-        return self.bridge.all(f"rtl_aq:aq_answers({_id_text(query_id)}, As), member(A, As)", "A")
+        return self.bridge.apply(_API, "aq_api_answers", _id_value(query_id)).splitlines()
 
     # -- updates ---------------------------------------------------------------------------
     def assert_fact(self, fact: str) -> None:
-        self.bridge.once(f"rtl_aq:aq_assert(({_strip(fact)}))")
-        self._dispatch()
+        self.assert_facts([fact])
 
     def retract_fact(self, fact: str) -> None:
-        self.bridge.once(f"rtl_aq:aq_retract(({_strip(fact)}))")
-        self._dispatch()
+        self.retract_facts([fact])
 
     def assert_facts(self, facts: Iterable[str]) -> None:
-        items = ", ".join(f"({_strip(f)})" for f in facts)
-        self.bridge.once(f"rtl_aq:aq_assert_all([{items}])")
+        self.bridge.apply(_API, "aq_api_assert", [_text(f, "a fact") for f in facts])
         self._dispatch()
 
     def retract_facts(self, facts: Iterable[str]) -> None:
         """Retract several facts in one DRed pass."""
-        items = ", ".join(f"({_strip(f)})" for f in facts)
-        self.bridge.once(f"rtl_aq:aq_retract_all([{items}])")
+        self.bridge.apply(_API, "aq_api_retract", [_text(f, "a fact") for f in facts])
         self._dispatch()
 
     def stats(self) -> Dict[str, int]:
-        text = self.bridge.call_text(
-            "rtl_aq:aq_stats(S), with_output_to(string(Out), forall(member(K=V, S), format('~w ~w~n', [K, V])))")
+        text = self.bridge.apply(_API, "aq_api_stats")
         return {k: int(v) for k, v in (line.split() for line in text.splitlines())}

@@ -1,10 +1,18 @@
-"""Text-level bridge between Python and an in-process SWI-Prolog.
+"""Bridge between Python and an in-process SWI-Prolog.
 
 Every piece of Python code that talks to Prolog goes through :class:`Bridge`.
-Terms cross the boundary as *text* in both directions: goals are Prolog
-source text, answers come back as ``writeq`` text (or as plain text from
-:meth:`Bridge.call_text`).  Keeping the interface textual makes it identical
-for both backends and keeps the per-call cost predictable.
+There are two kinds of call:
+
+:meth:`Bridge.apply` (values as data)
+    ``apply("rtl_api", "rtl_api_feed_events", items)`` runs the fixed goal
+    ``rtl_api:rtl_api_feed_events(Items, Out)`` with every Python argument
+    passed as a Prolog *value* (str -> string, int -> integer, float -> float,
+    list/tuple -> list), never as source text, and returns ``Out`` as text.
+    This is the only form for anything that comes from outside (event text,
+    goals, labels): the Prolog side reads such strings with read_term.
+``once``/``all``/``call_text``/``consult`` (trusted text)
+    Goal *text* written by the programmer (tests, tools); answers come back as
+    ``writeq`` text.  Never build such text from values you did not write.
 
 Backends
 --------
@@ -14,6 +22,25 @@ Backends
 ``pyswip``
     Fallback.  We use only pyswip's ctypes layer (``pyswip/core.py``) to find
     and load ``libswipl``, and call the C foreign-language interface directly.
+
+Both backends call the same two helper predicates (``retalisc_bridge:bridge/6``
+for text, ``retalisc_bridge:bridge_apply/6`` for values; source in
+``_HELPER_SRC``), so one small interface fits both.
+
+Threads
+-------
+SWI-Prolog global variables (``nb_setval``) and ``thread_local`` predicates
+belong to a Prolog thread, and the runtime keeps its state (clock, output
+buffer, current program) in them.  So that an engine works from any Python
+thread (ROS and zenoh callbacks come from other threads), every request runs
+in one Prolog thread, the *owner*, created by the helper (``thread_create/3``)
+at the first call: the calling thread sends the request to the owner's message
+queue and waits for the answer on its own (``thread_send_message/2``,
+``thread_get_message/1``), all inside one C call, with the GIL released and no
+polling.  The handoff costs two thread switches (about 20 microseconds); the
+bridge's lock serialises callers.  (A Prolog *engine* shared by the threads
+would be cheaper, but SWI-Prolog 9.0 ties an engine to the C stack of the
+thread that created it and aborts when another thread runs it.)
 
 Why not ``pyswip.Prolog``
 -------------------------
@@ -28,11 +55,10 @@ engine it started.
 
 Protocol
 --------
-All calls run the Prolog helper ``retalisc_bridge:bridge/6`` (source in
-``_HELPER_SRC``) which parses the goal text, runs it inside ``catch/3`` and
-reports ``Status`` (1 success, 0 failure, 2 error) plus a result string, so
-Prolog exceptions never escape into the C interface, never reach the debugger
-and are turned into :class:`PrologError` carrying Prolog's own message text.
+The helpers run the request inside ``catch/3`` in the owner thread and report
+``Status`` (1 success, 0 failure, 2 error) plus a result string, so Prolog
+exceptions never escape into the C interface, never reach the debugger and are
+turned into :class:`PrologError` carrying Prolog's own message text.
 """
 
 from __future__ import annotations
@@ -68,7 +94,7 @@ class GoalFailed(PrologError):
     """Raised by :meth:`Bridge.call_text` when its goal fails."""
 
 
-# Call modes understood by retalisc_bridge:bridge/6.
+# Call modes understood by retalisc_bridge:bridge/6 (bridge_apply/6 has none).
 _MODE_BOOL, _MODE_ONCE, _MODE_ALL, _MODE_TEXT, _MODE_CONSULT = range(5)
 _OK, _FAILED, _ERROR = 1, 0, 2
 
@@ -81,11 +107,91 @@ _HELPER_SRC = r"""
 %   Never raises: errors are reported as Status 2 with the printed
 %   message in Out and the writeq text of the error term in ErrTerm.
 %   Out and ErrTerm are always bound (janus cannot return unbound vars).
+%   The request runs in the owner engine (see serve/0).
 bridge(Mode, GoalText, Aux, Status, Out, ErrTerm) :-
+    post(text(Mode, GoalText, Aux), Status, Out, ErrTerm).
+
+%   bridge_apply(+Module, +Name, +Args, -Status, -Out, -ErrTerm)
+%   Run Module:Name(Args..., Result) once: Args are values (strings,
+%   numbers, lists), never parsed; Out is the text of Result.
+bridge_apply(Module, Name, Args, Status, Out, ErrTerm) :-
+    post(apply(Module, Name, Args), Status, Out, ErrTerm).
+
+%   post(+Request, -Status, -Out, -ErrTerm)
+%   Hand the request to the owner thread and wait for its answer.
+post(Request, Status, Out, ErrTerm) :-
+    owner(Owner),
+    thread_self(Me),
+    (   Me == Owner
+    ->  handle(Request, reply(Status, Out, ErrTerm))
+    ;   flag(retalisc_bridge_request, Id, Id + 1),
+        thread_send_message(Owner, request(Me, Id, Request)),
+        thread_get_message(answer(Id, Reply)),
+        (   Reply = reply(Status, Out, ErrTerm)
+        ->  true
+        ;   Status = 2,
+            Out = "the bridge's Prolog thread ended (its state is lost); a new one runs the next calls",
+            ErrTerm = ""
+        )
+    ).
+
+%   The owner thread runs every request, whichever thread posts it, so
+%   global variables and thread_local predicates are the same for all
+%   callers. (A Prolog engine cannot serve several OS threads: SWI-Prolog
+%   9.0 checks the C stack of the thread that created it.)
+:- dynamic owner_thread/1.
+
+owner(Owner) :-
+    (   owner_thread(Owner)
+    ->  true
+    ;   with_mutex(retalisc_bridge, start_owner(Owner))
+    ).
+
+start_owner(Owner) :-
+    (   owner_thread(Owner)
+    ->  true
+    ;   thread_create(serve, Owner, [detached(true), at_exit(owner_exit)]),
+        assertz(owner_thread(Owner))
+    ).
+
+owner_exit :-
+    retractall(owner_thread(_)),
+    (   nb_current(retalisc_bridge_pending, From-Id)
+    ->  catch(thread_send_message(From, answer(Id, ended)), _, true)
+    ;   true
+    ).
+
+serve :-
+    set_flags,
+    repeat,
+    thread_get_message(request(From, Id, Request)),
+    nb_setval(retalisc_bridge_pending, From-Id),
+    handle(Request, Reply),
+    nb_setval(retalisc_bridge_pending, none),
+    thread_send_message(From, answer(Id, Reply)),
+    fail.
+
+handle(text(Mode, GoalText, Aux), reply(Status, Out, ErrTerm)) :-
     catch(run(Mode, GoalText, Aux, Status, Out), E,
           caught(E, Status, Out, ErrTerm)),
     !,
     ( var(ErrTerm) -> ErrTerm = "" ; true ).
+handle(apply(Module, Name, Args), reply(Status, Out, ErrTerm)) :-
+    catch(apply_goal(Module, Name, Args, Status, Out), E,
+          caught(E, Status, Out, ErrTerm)),
+    !,
+    ( var(ErrTerm) -> ErrTerm = "" ; true ).
+handle(_, reply(2, "bridge helper failed", "")).
+
+apply_goal(ModuleText, NameText, Args, Status, Out) :-
+    atom_string(Module, ModuleText),
+    atom_string(Name, NameText),
+    append(Args, [Result], AllArgs),
+    Goal =.. [Name|AllArgs],
+    (   call(Module:Goal)
+    ->  Status = 1, text_of(Result, Out)
+    ;   Status = 0, Out = ""
+    ).
 
 run(0, GT, _, Status, "") :-
     parse(GT, G, _),
@@ -316,6 +422,10 @@ class _PyswipEngine:
                                  ctypes.POINTER(ctypes.c_size_t))
         self._release_strings = _fn(lib, "PL_release_string_buffers_from_mark", None,
                                     ctypes.c_size_t)
+        self._put_int64 = _fn(lib, "PL_put_int64", ctypes.c_int, _term_t, ctypes.c_int64)
+        self._put_float = _fn(lib, "PL_put_float", ctypes.c_int, _term_t, ctypes.c_double)
+        self._put_nil = _fn(lib, "PL_put_nil", ctypes.c_int, _term_t)
+        self._cons_list = _fn(lib, "PL_cons_list", ctypes.c_int, _term_t, _term_t, _term_t)
         self._mark = ctypes.c_size_t()
         predicate = _fn(lib, "PL_predicate", ctypes.c_void_p, ctypes.c_char_p,
                         ctypes.c_int, ctypes.c_char_p)
@@ -328,6 +438,7 @@ class _PyswipEngine:
         self._ensure_thread()
         self._boot(lib)
         self._pred = predicate(b"bridge", 6, b"retalisc_bridge")
+        self._apply_pred = predicate(b"bridge_apply", 6, b"retalisc_bridge")
 
     @staticmethod
     def _init_prolog(lib: ctypes.CDLL, core: ModuleType) -> None:
@@ -400,6 +511,53 @@ class _PyswipEngine:
         self._clear_exception()
         return PrologError(text, text)
 
+    def _put_value(self, t: int, value: Any) -> None:
+        """Put a Python value into term ref `t` as a Prolog value (never parsed)."""
+        if isinstance(value, str):
+            data = value.encode("utf-8")
+            ok = self._put_chars(t, self._string_type | _REP_UTF8, len(data), data)
+        elif isinstance(value, bool) or value is None:
+            raise TypeError(f"cannot pass {value!r} to Prolog")
+        elif isinstance(value, int):
+            if not -2**63 <= value < 2**63:
+                raise ValueError(f"integer out of range for Prolog: {value}")
+            ok = self._put_int64(t, value)
+        elif isinstance(value, float):
+            ok = self._put_float(t, value)
+        elif isinstance(value, (list, tuple)):
+            ok = self._put_nil(t)
+            head = self._new_ref()
+            for item in reversed(value):
+                self._put_value(head, item)
+                ok = ok and self._cons_list(t, head, t)
+        else:
+            raise TypeError(f"cannot pass a {type(value).__name__} to Prolog")
+        if not ok:
+            raise self._pending_error("cannot build the arguments of a bridge call")
+
+    def apply(self, module: str, name: str, args: tuple) -> tuple[int, Any, str]:
+        self._ensure_thread()
+        self._mark_strings(ctypes.byref(self._mark))
+        mark = self._mark.value
+        fid = self._open_frame()
+        try:
+            t = self._new_refs(6)
+            self._put_value(t, module)
+            self._put_value(t + 1, name)
+            self._put_value(t + 2, list(args))
+            if not self._call_pred(None, self._flags, self._apply_pred, t):
+                raise self._pending_error("bridge helper failed")
+            self._get_integer(t + 3, ctypes.byref(self._status))
+            status = self._status.value
+            if status == _ERROR:
+                return status, self._text(t + 4), self._text(t + 5)
+            if status == _FAILED:
+                return status, None, ""
+            return status, self._text(t + 4), ""
+        finally:
+            self._discard_frame(fid)
+            self._release_strings(mark)
+
     def run(self, mode: int, goal: str, aux: str) -> tuple[int, Any, str]:
         self._ensure_thread()
         # Even with BUF_DISCARDABLE, PL_get_nchars(REP_UTF8) pushes a buffer
@@ -465,6 +623,34 @@ class _JanusEngine:
         return status, r["Out"], ""
 
 
+    _APPLY = "retalisc_bridge:bridge_apply(Module, Name, Args, Status, Out, Err)"
+
+    def apply(self, module: str, name: str, args: tuple) -> tuple[int, Any, str]:
+        for arg in args:
+            _check_value(arg)
+        try:
+            r = self._janus.query_once(self._APPLY, {"Module": module, "Name": name, "Args": list(args)})
+        except self._error as e:
+            raise PrologError(str(e)) from None
+        if not r.get("truth"):
+            raise PrologError("bridge helper failed")
+        status = r["Status"]
+        if status == _ERROR:
+            return status, r["Out"], r["Err"]
+        if status == _FAILED:
+            return status, None, ""
+        return status, r["Out"], ""
+
+
+def _check_value(value: Any) -> None:
+    """The values bridge calls pass: str, int, float and lists of them."""
+    if isinstance(value, (list, tuple)):
+        for item in value:
+            _check_value(item)
+    elif isinstance(value, bool) or not isinstance(value, (str, int, float)):
+        raise TypeError(f"cannot pass {value!r} to Prolog")
+
+
 def _make_engine() -> Union[_JanusEngine, _PyswipEngine]:
     choice = os.environ.get("RETALISC_BRIDGE_BACKEND", "").strip().lower()
     if choice != "pyswip":
@@ -509,9 +695,9 @@ class Bridge:
     Goal text is parsed in module ``user`` and run there; a trailing full stop
     is allowed, anything after the first term is ignored by the reader.
 
-    Each Python thread talks to its own Prolog engine (SWI binds engines to
-    OS threads): the clause database is shared, but global variables
-    (``nb_setval``) and ``thread_local`` predicates are per thread.
+    Every call, from any Python thread, runs in the same Prolog thread, so
+    global variables (``nb_setval``) and ``thread_local`` predicates are the
+    same for all callers (see the module documentation).
     """
 
     _instance: ClassVar[Optional["Bridge"]] = None
@@ -546,6 +732,23 @@ class Bridge:
         if status == _ERROR:
             raise PrologError(out or term, term or None)
         return status, out
+
+    def apply(self, module: str, name: str, *args: Any) -> str:
+        """Run ``module:name(Arg1, ..., ArgN, Out)`` once and return the text of ``Out``.
+
+        The arguments are passed as Prolog values: str as a string, int and
+        float as numbers, lists and tuples as lists (nested freely); nothing
+        is parsed as Prolog source. Atoms, strings and numbers come back as
+        their text, other terms as ``write`` text. Raises :class:`GoalFailed`
+        when the goal fails, :class:`PrologError` when it raises.
+        """
+        with self._lock:
+            status, out, term = self._engine.apply(module, name, args)
+        if status == _ERROR:
+            raise PrologError(out or term, term or None)
+        if status != _OK:
+            raise GoalFailed(f"goal failed: {module}:{name}/{len(args) + 1}")
+        return out
 
     def consult(self, path: Union[str, "os.PathLike[str]"]) -> None:
         """Load a Prolog file into ``user``; errors printed while loading are raised."""

@@ -5,24 +5,36 @@ and feeds it events, one at a time or in batches. Every output line the program 
 (derived events, subscription deliveries, deletions) comes back as an `OutputEvent`, in
 processing order, and is also handed to the callbacks registered with `on_output`.
 Batches are the fast path: one Prolog call per batch, not per event.
+
+Values are data: every call goes to a fixed predicate of `prolog_runtime/rtl_api.pl` with
+the Python values as Prolog strings and numbers (`Bridge.apply`), never as goal text. Text
+that stands for a term (an event, a goal, a label) is read on the Prolog side as exactly
+one term; rules, queries and conditions from here must pass the sandbox (rtl_sandbox.pl).
+
+An Engine may be used from any thread: calls are serialised and all run in the bridge's one
+Prolog engine. Callbacks run in the thread whose call produced the output.
 """
 from __future__ import annotations
 
 import itertools
 import json
+import math
 import tempfile
+import threading
 from concurrent.futures import Future
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, module_name
-from .bridge import Bridge
+from .bridge import Bridge, PrologError
 
 Number = Union[int, float]
 
 _loaded_modules = itertools.count(1)
 _python_queries = itertools.count(1)
+
+_API = "rtl_api"        # prolog_runtime/rtl_api.pl: the predicates an Engine calls
 
 
 def _unique_module(program_name: str) -> str:
@@ -75,30 +87,32 @@ class Rejection:
     reason: str
 
 
-def prolog_string(text: str) -> str:
-    """`text` as a Prolog string literal."""
-    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n").replace("\r", "\\r")
-    return f'"{escaped}"'
+def _time(value: Number, what: str = "a time") -> Number:
+    """A finite number of seconds, or ValueError/TypeError (checked before Prolog sees it)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"{what} must be a number of seconds, not {value!r}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"{what} must be a finite number, not {value!r}")
+    return value
 
 
-def _bound_text(value, default: str) -> str:
-    """A subscription time bound as Prolog text: a number, "now", or the default."""
+def _bound(value, default: str) -> Union[Number, str]:
+    """A subscription time bound: a finite number, "now", "inf", "-inf", or the default."""
     if value is None:
         return default
-    if value in ("now", "inf"):
-        return value
-    if value == "-inf":
-        return "(-inf)"
-    return _number_text(value)
+    if isinstance(value, str):
+        if value in ("now", "inf", "-inf"):
+            return value
+        raise ValueError(f"a time bound is a number, 'now', 'inf' or '-inf', not {value!r}")
+    if isinstance(value, float) and math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return _time(value, "a time bound")
 
 
-def _number_text(value: Number) -> str:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"a time must be a number of seconds, not {value!r}")
-    if isinstance(value, float) and value != value:
-        raise ValueError("a time must not be NaN")
-    text = repr(value)
-    return f"({text})" if text.startswith("-") else text
+def _text(value, what: str) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"{what} must be a str, not {type(value).__name__}")
+    return value
 
 
 class Engine:
@@ -110,11 +124,12 @@ class Engine:
         self._callbacks: List[Callable[[OutputEvent], None]] = []
         self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
         self._synchronized: Dict[str, "Future"] = {}
-        self.bridge.once("set_prolog_flag(retalis_embedded, true)")
+        self._lock = threading.RLock()    # one call (and its output delivery) at a time
+        self.bridge.once("set_prolog_flag(retalis_embedded, true)")     # constant text, no values
         self.bridge.consult(str(prolog_file))
         if module:
-            self.bridge.once(f"retalis:rtl_use_program({module})")
-        self.bridge.once("retalis:rtl_output_to(buffer)")
+            self._call("rtl_api_use_program", module)
+        self._call("rtl_api_output_to_buffer")
 
     # ---- loading -------------------------------------------------------------------------
 
@@ -144,15 +159,23 @@ class Engine:
         path.write_text(prolog, encoding="utf-8")
         return cls(path, bridge, module)
 
+    def _call(self, name: str, *args) -> str:
+        """rtl_api:Name(Args..., Out): the values go to Prolog as data (Bridge.apply)."""
+        return self.bridge.apply(_API, name, *args)
+
     # ---- configuration -------------------------------------------------------------------
 
     def set_flag(self, name: str, value_text: str) -> None:
-        """Set a runtime flag (`max_delay`, `echo_input`); value_text is Prolog text."""
-        self.bridge.once(f"retalis:rtl_set_flag({name}, {value_text})")
+        """Set a runtime flag (`max_delay`, `echo_input`, `query_time_limit`); value_text is
+        the value as Prolog text ("2.5", "inf", "true"), read as one ground term. A bad name or
+        value raises PrologError and changes nothing."""
+        with self._lock:
+            self._call("rtl_api_set_flag", _text(name, "a flag name"), _text(value_text, "a flag value"))
 
     def on_output(self, callback: Callable[[OutputEvent], None]) -> None:
         """Call `callback(output_event)` for every output line, in processing order."""
-        self._callbacks.append(callback)
+        with self._lock:
+            self._callbacks.append(callback)
 
     # ---- feeding -------------------------------------------------------------------------
 
@@ -161,7 +184,13 @@ class Engine:
         return self.feed_batch([(event, start, end, op)])
 
     def feed_batch(self, events: Iterable[Sequence]) -> List[OutputEvent]:
-        """Process `(event_text, start[, end[, op]])` tuples in order, in one Prolog call."""
+        """Process `(event_text, start[, end[, op]])` tuples in order, in one Prolog call.
+
+        Each event text must be one ground term; times finite numbers, start <= end. A bad
+        item raises (TypeError/ValueError for Python values, PrologError for the text) before
+        anything of the batch is processed. An event whose processing raises an error stops
+        the batch: what the events before it produced is delivered (callbacks included),
+        then PrologError says which event failed; the engine stays usable."""
         items = []
         for item in events:
             event, start = item[0], item[1]
@@ -169,25 +198,38 @@ class Engine:
             op = item[3] if len(item) > 3 else "add"
             if op not in ("add", "retract"):
                 raise ValueError(f"op must be 'add' or 'retract', not {op!r}")
-            items.append(f"event({op}, {event}, {_number_text(start)}, {_number_text(end)})")
+            start, end = _time(start, "a start time"), _time(end, "an end time")
+            if start > end:
+                raise ValueError(f"the start time {start} is after the end time {end}")
+            items.append([op, _text(event, "an event"), start, end])
         if not items:
             return []
-        output = self.bridge.call_text(f"retalis:rtl_feed_events([{', '.join(items)}], Out)")
-        return self._deliver(output)
+        with self._lock:
+            output = self._call("rtl_api_feed_events", items)
+            lines = output.splitlines()
+            failure = lines.pop() if lines and lines[-1].startswith("!error\t") else None
+            delivered = self._deliver_lines(lines)
+        if failure is not None:
+            _, index, message = failure.split("\t", 2)
+            raise PrologError(f"event {index} of the batch ({items[int(index)][1]!r}): {message}")
+        return delivered
 
     def feed_lines(self, text: str, first_line: int = 1) -> Tuple[List[OutputEvent], List[Rejection]]:
         """Process event JSON Lines (SPEC section 11) exactly as `swipl PROGRAM.pl FILE` does;
         return the output and the rejected lines with their reasons."""
-        output = self.bridge.call_text(f"retalis:rtl_feed_lines({prolog_string(text)}, {first_line}, Out)")
-        rejections = []
-        lines = []
-        for line in output.splitlines():
-            if line.startswith("!"):
-                number, _, reason = line[1:].partition("\t")
-                rejections.append(Rejection(int(number), reason))
-            elif line:
-                lines.append(line)
-        return self._deliver_lines(lines), rejections
+        if isinstance(first_line, bool) or not isinstance(first_line, int):
+            raise TypeError(f"first_line must be an int, not {first_line!r}")
+        with self._lock:
+            output = self._call("rtl_api_feed_lines", _text(text, "event lines"), first_line)
+            rejections = []
+            lines = []
+            for line in output.splitlines():
+                if line.startswith("!"):
+                    number, _, reason = line[1:].partition("\t")
+                    rejections.append(Rejection(int(number), reason))
+                elif line:
+                    lines.append(line)
+            return self._deliver_lines(lines), rejections
 
     def _deliver(self, output: str) -> List[OutputEvent]:
         return self._deliver_lines([line for line in output.splitlines() if line])
@@ -197,7 +239,7 @@ class Engine:
         for event in events:
             if event.query is not None:
                 self._resolve(event.query)
-        for callback in self._callbacks:
+        for callback in list(self._callbacks):
             for event in events:
                 callback(event)
         if self._consumers:
@@ -214,54 +256,66 @@ class Engine:
                   callback: Optional[Callable[[OutputEvent], None]] = None) -> str:
         """Deliver every event matching `pattern_text` (term text) and `conditions_text` (a
         Prolog list of goals) that occurs within [start, end] to `consumer`, as
-        `template_text` (default: the event itself). `start`/`end` are seconds or "now";
-        None means unbounded. Deliveries come back as OutputEvents with `consumer` set,
-        and go to `callback` if given. Returns the subscription id (text). A bad
-        subscription raises PrologError saying why; nothing is registered then."""
-        text = f"s(({pattern_text}), ({template_text or '_'}), ({conditions_text}))"
-        goal = (f"term_string(T, {prolog_string(text)}), T = s(P, Tmpl, Conds), "
-                f"retalis:rtl_subscribe(Id, {prolog_string(consumer)}, P, Conds, Tmpl, "
-                f"{_bound_text(start, '(-inf)')}, {_bound_text(end, 'inf')}), "
-                f"term_string(Id, IdText)")
-        subscription_id = self.bridge.call_text(goal, "IdText")
-        if callback is not None:
-            self._consumers.setdefault(consumer, []).append(callback)
+        `template_text` (default: the event itself). The three texts share variables by name.
+        `start`/`end` are seconds or "now"; None means unbounded. Deliveries come back as
+        OutputEvents with `consumer` set, and go to `callback` if given. Returns the
+        subscription id (text). The conditions must pass the sandbox. A bad subscription
+        raises PrologError saying why; nothing is registered then."""
+        args = (_text(consumer, "a consumer"), _text(pattern_text, "a pattern"),
+                "" if template_text is None else _text(template_text, "a template"),
+                _text(conditions_text, "the conditions"), _bound(start, "-inf"), _bound(end, "inf"))
+        with self._lock:
+            subscription_id = self._call("rtl_api_subscribe", *args)
+            if callback is not None:
+                self._consumers.setdefault(consumer, []).append(callback)
         return subscription_id
+
+    def subscribe_query(self, consumer: str, query_text: str, template_text: Optional[str] = None) -> str:
+        """Subscribe `consumer` to `query_text`, an event pattern or `Pattern-[Goals]` (the
+        form of `retalisc run --subscribe`), from the start of the input. Returns the id."""
+        args = (_text(consumer, "a consumer"), _text(query_text, "a query"),
+                "" if template_text is None else _text(template_text, "a template"))
+        with self._lock:
+            return self._call("rtl_api_subscribe_query", *args)
 
     def unsubscribe(self, subscription_id: str, end: Union[Number, str, None] = None) -> None:
         """Stop delivering the events of subscription `subscription_id` that end after `end`
         (seconds; default "now", the clock)."""
-        self.bridge.once(f"term_string(Id, {prolog_string(str(subscription_id))}), "
-                         f"retalis:rtl_unsubscribe(Id, {_bound_text(end, 'now')})")
+        with self._lock:
+            self._call("rtl_api_unsubscribe", str(subscription_id), _bound(end, "now"))
 
     def add_rules(self, text: str) -> List[str]:
         """Add the event rules in `text` (.rtl syntax) to the running program; they see only
         the events processed from now on. Unlabelled rules get fresh ids. Returns the rule
         ids. Raises RetalisError for a rule that does not compile, PrologError when a label
-        is already in use."""
+        is already in use or when a goal of a rule is unsafe (`unsafe goal: shell/1`): the
+        rules come from outside the program file, so they must pass the sandbox
+        (prolog_runtime/rtl_sandbox.pl). Nothing of `text` is added then."""
         from ..runtime_rules import compile_rules
 
-        prefix = self.bridge.call_text(f"retalis:rtl_fresh_rule_prefix({self.module}, P)", "P")
-        compiled = compile_rules(text, self.module, prefix)
-        self.bridge.once(f"retalis:rtl_install_rules({self.module}, {prolog_string(compiled.text)}, _)")
+        with self._lock:
+            prefix = self._call("rtl_api_fresh_rule_prefix", self.module)
+            compiled = compile_rules(_text(text, "rule text"), self.module, prefix)
+            self._call("rtl_api_install_rules", self.module, compiled.text)
         return compiled.rule_ids
 
     def remove_rule(self, label: str) -> None:
         """Remove the event rule `label` (added at runtime or compiled with the program), its
         triggers and its stored partial matches."""
-        self.bridge.once(f"atom_string(Id, {prolog_string(label)}), retalis:rtl_remove_rule({self.module}, Id)")
+        with self._lock:
+            self._call("rtl_api_remove_rule", self.module, _text(label, "a rule label"))
 
     def clear(self) -> None:
         """Forget every event seen so far (partial matches, memory records, clock, statistics)."""
-        self.bridge.once("retalis:rtl_clear")
-        self.bridge.once("retalis:rtl_output_to(buffer)")
+        with self._lock:
+            self._call("rtl_api_clear")
 
     def end_of_input(self, drop_pending: bool = False) -> List[OutputEvent]:
         """The input has ended: every history is complete, so the postponed synchronized
         matches run now, in time order (or are discarded with `drop_pending`). Returns what
         they produced."""
-        mode = "drop" if drop_pending else "run"
-        return self._deliver(self.bridge.call_text(f"retalis:rtl_end_of_input({mode}, Out)"))
+        with self._lock:
+            return self._deliver(self._call("rtl_api_end_of_input", "drop" if drop_pending else "run"))
 
     # ---- SLR: queries and memory instances (thesis 4.2) -----------------------------------
 
@@ -275,8 +329,9 @@ class Engine:
         sandbox refuses raises QueryError at once."""
         future: Future = Future()
         query_id = f"py{next(_python_queries)}"
-        self._synchronized[query_id] = future
-        self.post_synchronized(goal, at, timeout, query_id)
+        with self._lock:
+            self._synchronized[query_id] = future
+            self.post_synchronized(goal, at, timeout, query_id)
         return future
 
     def post_synchronized(self, goal: str, at: Number, timeout: Optional[Number] = None,
@@ -284,17 +339,15 @@ class Engine:
         """Post the synchronized query <goal, at> under `query_id`; its result comes as an
         output line `{"query": ID, "at": Z, "status": ..., "answers": [...], "message": ...}`
         (an OutputEvent with op "answer") when it is known. Returns what was output at once."""
-        timeout_text = "inf" if timeout is None else _number_text(timeout)
-        goal_text = (f"retalis:rtl_output_to(buffer), atom_string(Q, {prolog_string(query_id)}), "
-                     f"retalis:rtl_sync_query({prolog_string(goal)}, {_number_text(at)}, {timeout_text}, Q, E), "
-                     f"( var(E) -> retalis:rtl_take_output(Ls), atomic_list_concat(Ls, '\\n', Out) ; "
-                     f"E =.. [K, M], format(string(Out), \"!~w\\t~w\", [K, M]) )")
-        try:
-            output = _raise_if_refused(self.bridge.call_text(goal_text))
-        except QueryError:
-            self._synchronized.pop(query_id, None)
-            raise
-        return self._deliver(output)
+        args = (_text(query_id, "a query id"), _text(goal, "a goal"), _time(at, "the query time"),
+                "inf" if timeout is None else _time(timeout, "a timeout"))
+        with self._lock:
+            try:
+                output = _raise_if_refused(self._call("rtl_api_post_query", *args))
+            except QueryError:
+                self._synchronized.pop(query_id, None)
+                raise
+            return self._deliver(output)
 
     def _resolve(self, result: dict) -> None:
         future = self._synchronized.pop(str(result["query"]), None)
@@ -327,33 +380,37 @@ class Engine:
         return self._query(goal, at, "all")
 
     def _query(self, goal: str, at: Optional[Number], limit: str) -> List[Dict[str, str]]:
-        at_text = "inf" if at is None else _number_text(at)
-        output = self.bridge.call_text(f"retalis:rtl_query_lines({prolog_string(goal)}, {at_text}, {limit}, Out)")
+        at_value = "inf" if at is None else _time(at, "the query time")
+        with self._lock:
+            output = self._call("rtl_api_query", _text(goal, "a goal"), at_value, limit)
         return [json.loads(line) for line in _raise_if_refused(output).splitlines() if line]
 
     def memory(self, request: str) -> None:
         """Create or delete memory instances: `request` is the text of `c_mem(Id, Event-Conds, N, L)`,
         `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)` or `delete_memory(IdPattern)`.
         The conditions must pass the sandbox; QueryError says why a request was refused."""
-        goal = (f"retalis:rtl_memory_request({prolog_string(request)}, E), "
-                f"( var(E) -> Out = \"\" ; E =.. [K, M], format(string(Out), \"!~w\\t~w\", [K, M]) )")
-        _raise_if_refused(self.bridge.call_text(goal))
+        with self._lock:
+            _raise_if_refused(self._call("rtl_api_memory", _text(request, "a memory request")))
 
     # ---- inspection ----------------------------------------------------------------------
 
     def stats(self) -> dict:
-        pairs = self.bridge.all("retalis:rtl_stat(Name, Value)", "Name-Value")
+        with self._lock:
+            text = self._call("rtl_api_stats")
         result = {}
-        for pair in pairs:
-            name, _, value = pair.partition("-")
+        for line in text.splitlines():
+            name, _, value = line.partition("\t")
             result[name] = int(value)
         return result
 
     def summary(self) -> str:
-        return self.bridge.call_text("retalis:rtl_summary(Out)")
+        with self._lock:
+            return self._call("rtl_api_summary")
 
     def store_size(self) -> int:
-        return int(self.bridge.once("retalis:rtl_store_size(N)", "N"))
+        with self._lock:
+            return int(self._call("rtl_api_store_size"))
 
     def clock(self) -> float:
-        return float(self.bridge.once("retalis:rtl_clock(C)", "C"))
+        with self._lock:
+            return float(self._call("rtl_api_clock"))

@@ -1,0 +1,352 @@
+:- module(rtl_api,
+          [ rtl_api_use_program/2,      % +Module, -Out
+            rtl_api_output_to_buffer/1, % -Out
+            rtl_api_set_flag/3,         % +Name, +ValueText, -Out
+            rtl_api_feed_events/2,      % +Items, -Output
+            rtl_api_feed_lines/3,       % +Text, +FirstLineNo, -Output
+            rtl_api_fresh_rule_prefix/2,% +Module, -Prefix
+            rtl_api_install_rules/3,    % +Module, +ClausesText, -Ids
+            rtl_api_remove_rule/3,      % +Module, +Label, -Out
+            rtl_api_subscribe/7,        % +Consumer, +PatternText, +TemplateText, +ConditionsText, +Ts, +Te, -Id
+            rtl_api_subscribe_query/4,  % +Consumer, +QueryText, +TemplateText, -Id
+            rtl_api_unsubscribe/3,      % +IdText, +Te, -Out
+            rtl_api_clear/1,            % -Out
+            rtl_api_end_of_input/2,     % +Mode, -Output
+            rtl_api_post_query/5,       % +QueryId, +GoalText, +At, +Timeout, -Output
+            rtl_api_query/4,            % +GoalText, +At, +Limit, -Output
+            rtl_api_memory/2,           % +RequestText, -Output
+            rtl_api_stats/1,            % -Text
+            rtl_api_summary/1,          % -Text
+            rtl_api_store_size/1,       % -Size
+            rtl_api_clock/1             % -Clock
+          ]).
+
+/** <module> The entry points of the Python Engine: values as data, never as program text
+
+The Python driver (retalisc/driver/engine.py) calls only these predicates, through the
+bridge's fixed-goal call: `rtl_api:Name(Arg1, ..., ArgN, Out)` with every argument a
+Prolog string, number or list of them, never goal text built from Python values. Out is
+always a string (`""` for predicates that only act). Text that
+stands for a term (an event, a goal, a pattern, a label, a flag value) is read here with
+rtl_read_text/4 (rtl_text.pl): one term, trailing text refused, variables by name. Events
+must be ground; times finite numbers. Goals from outside (subscription conditions) pass
+rtl_check_goal/3 (rtl_sandbox.pl); rules pass it in rtl_install_rules/3 and queries in
+rtl_query.pl.
+
+Output is a string of lines. Feeding stops at the first event whose processing raises an
+error: the output produced before it is returned, followed by a last line
+`!error<TAB>Index<TAB>Message` (Index counts the batch's events from 0).
+*/
+
+:- use_module(library(apply)).
+:- use_module(library(lists)).
+:- use_module(rtl_ele).
+:- use_module(rtl_raise, [rtl_input/4]).
+:- use_module(rtl_rules).
+:- use_module(rtl_query).
+:- use_module(rtl_subscriptions).
+:- use_module(rtl_sandbox).
+:- use_module(rtl_text).
+:- use_module(retalis, [rtl_feed_lines/3, rtl_end_of_input/2, rtl_summary/1]).
+
+%!  rtl_api_use_program(+Module:text, -Out) is det.
+
+rtl_api_use_program(Text, "") :-
+    module_atom(Text, M),
+    rtl_use_program(M).
+
+%!  rtl_api_output_to_buffer(-Out) is det.
+%
+%   Output lines are collected for the caller (rtl_output_to/1).
+
+rtl_api_output_to_buffer("") :-
+    rtl_output_to(buffer).
+
+module_atom(Text, M) :-
+    must_be(text, Text),
+    atom_string(M, Text),
+    (   current_module(M)
+    ->  true
+    ;   existence_error(module, M)
+    ).
+
+%!  rtl_api_set_flag(+Name:text, +ValueText:text, -Out) is det.
+%
+%   Set a runtime flag; the value is read as a ground term (`2.5`, `inf`, `true`).
+
+rtl_api_set_flag(NameText, ValueText, "") :-
+    must_be(text, NameText),
+    atom_string(Name, NameText),
+    rtl_read_ground(ValueText, Value),
+    rtl_set_flag(Name, Value).
+
+%!  rtl_api_feed_events(+Items:list, -Output:string) is det.
+%
+%   Items are `[Op, EventText, Start, End]` lists: Op `"add"` or `"retract"`, Start and End
+%   finite numbers with Start =< End. The whole batch is read first: a bad item raises an
+%   error naming it and nothing is processed.
+
+rtl_api_feed_events(Items, Output) :-
+    must_be(list, Items),
+    foldl(read_item, Items, Events, 0, _),
+    rtl_output_to(buffer),
+    process_events(Events, 0, Failure),
+    rtl_take_output(Lines0),
+    (   var(Failure)
+    ->  Lines = Lines0
+    ;   append(Lines0, [Failure], Lines)
+    ),
+    lines_output(Lines, Output).
+
+read_item(Item, event(Op, Event, Start, End), I, I1) :-
+    I1 is I + 1,
+    catch(item_event(Item, Op, Event, Start, End), Error,
+          throw(error(bad_item(I, Error), _))).
+
+item_event([OpText, Text, Start, End], Op, Event, Start, End) :- !,
+    must_be(text, OpText),
+    atom_string(Op, OpText),
+    must_be(oneof([add, retract]), Op),
+    rtl_read_event(Text, Event),
+    finite_time(Start),
+    finite_time(End),
+    (   Start =< End
+    ->  true
+    ;   domain_error(interval_with_start_before_end, [Start, End])
+    ).
+item_event(Item, _, _, _, _) :-
+    type_error(event_item, Item).
+
+finite_time(T) :-
+    must_be(number, T),
+    (   float(T), \+ ( T =:= T, abs(T) =\= inf )
+    ->  domain_error(finite_time, T)
+    ;   true
+    ).
+
+process_events([], _, _).
+process_events([event(Op, Event, Start, End)|Events], I, Failure) :-
+    catch(( rtl_input(Op, Event, Start, End) -> true ; true ), Error, true),
+    (   var(Error)
+    ->  I1 is I + 1,
+        process_events(Events, I1, Failure)
+    ;   message_line(Error, Message),
+        format(string(Failure), "!error\t~w\t~w", [I, Message])
+    ).
+
+lines_output(Lines, Output) :-
+    (   Lines == []
+    ->  Output = ""
+    ;   atomic_list_concat(Lines, "\n", Joined),
+        string_concat(Joined, "\n", Output)
+    ).
+
+%!  rtl_api_feed_lines(+Text:string, +FirstLineNo:integer, -Output:string) is det.
+%
+%   rtl_feed_lines/3: a batch of event JSON Lines.
+
+rtl_api_feed_lines(Text, First, Output) :-
+    must_be(text, Text),
+    must_be(integer, First),
+    rtl_feed_lines(Text, First, Output).
+
+%!  rtl_api_fresh_rule_prefix(+Module:text, -Prefix:atom) is det.
+
+rtl_api_fresh_rule_prefix(ModuleText, Prefix) :-
+    module_atom(ModuleText, M),
+    rtl_fresh_rule_prefix(M, Prefix).
+
+%!  rtl_api_install_rules(+Module:text, +ClausesText:string, -Ids:string) is det.
+%
+%   rtl_install_rules/3 (which refuses unsafe rules); Ids one per line.
+
+rtl_api_install_rules(ModuleText, Clauses, IdsText) :-
+    module_atom(ModuleText, M),
+    must_be(string, Clauses),
+    rtl_install_rules(M, Clauses, Ids),
+    atomic_list_concat(Ids, '\n', IdsText).
+
+%!  rtl_api_remove_rule(+Module:text, +Label:text, -Out) is det.
+
+rtl_api_remove_rule(ModuleText, LabelText, "") :-
+    module_atom(ModuleText, M),
+    must_be(text, LabelText),
+    atom_string(Label, LabelText),
+    rtl_remove_rule(M, Label).
+
+%!  rtl_api_subscribe(+Consumer, +PatternText, +TemplateText, +ConditionsText, +Ts, +Te, -Id:string) is det.
+%
+%   Subscribe Consumer (rtl_subscribe/7). The three texts share variables by name;
+%   TemplateText `""` means the event itself. The conditions must be safe. Ts and Te are
+%   numbers or the strings `"now"`, `"inf"`, `"-inf"`. Id is the subscription id as text.
+
+rtl_api_subscribe(Consumer, PatternText, TemplateText, ConditionsText, Ts0, Te0, IdText) :-
+    must_be(text, Consumer),
+    rtl_program(M),
+    read_shared(PatternText, M, Pattern, [], B1),
+    (   TemplateText == ""
+    ->  B2 = B1
+    ;   read_shared(TemplateText, M, Template, B1, B2)
+    ),
+    read_shared(ConditionsText, M, Conds, B2, _),
+    subscribe(M, Consumer, Pattern, Conds, Template, Ts0, Te0, IdText).
+
+%!  rtl_api_subscribe_query(+Consumer, +QueryText, +TemplateText, -Id:string) is det.
+%
+%   The form of `retalisc run --subscribe CONSUMER=QUERY[=>TEMPLATE]`: QueryText is an event
+%   pattern or `Pattern-Conditions`; from the start of the input on.
+
+rtl_api_subscribe_query(Consumer, QueryText, TemplateText, IdText) :-
+    must_be(text, Consumer),
+    rtl_program(M),
+    read_shared(QueryText, M, Query, [], B1),
+    (   TemplateText == ""
+    ->  true
+    ;   read_shared(TemplateText, M, Template, B1, _)
+    ),
+    (   nonvar(Query), Query = Pattern-Conds
+    ->  true
+    ;   Pattern = Query, Conds = []
+    ),
+    subscribe(M, Consumer, Pattern, Conds, Template, "-inf", "inf", IdText).
+
+subscribe(M, Consumer, Pattern, Conds, Template, Ts0, Te0, IdText) :-
+    bound(Ts0, Ts),
+    bound(Te0, Te),
+    (   is_list(Conds), maplist(callable, Conds)
+    ->  maplist(rtl_check_goal(query([]), M), Conds)
+    ;   true                                    % rtl_subscribe/7 says what is wrong
+    ),
+    rtl_subscribe(Id, Consumer, Pattern, Conds, Template, Ts, Te),
+    term_string(Id, IdText).
+
+%   Read Text; variables of the same name as in Bindings0 are the same variable.
+read_shared(Text, M, Term, Bindings0, Bindings) :-
+    rtl_read_text(Text, Term, Bindings1, [module(M)]),
+    foldl(share_binding, Bindings1, Bindings0, Bindings).
+
+share_binding(Name=Var, Bindings0, Bindings) :-
+    (   memberchk(Name=Var0, Bindings0)
+    ->  Var = Var0,
+        Bindings = Bindings0
+    ;   Bindings = [Name=Var|Bindings0]
+    ).
+
+bound(Value, Bound) :-
+    (   number(Value)
+    ->  Bound = Value
+    ;   must_be(text, Value),
+        atom_string(Atom, Value),
+        must_be(oneof([now, inf, '-inf']), Atom),
+        (   Atom == '-inf' -> Bound = -inf ; Bound = Atom )
+    ).
+
+%!  rtl_api_unsubscribe(+IdText:text, +Te, -Out) is det.
+
+rtl_api_unsubscribe(IdText, Te0, "") :-
+    rtl_read_ground(IdText, Id),
+    bound(Te0, Te),
+    rtl_unsubscribe(Id, Te).
+
+%!  rtl_api_clear(-Out) is det.
+%
+%   Forget every event seen so far; output goes to the buffer again.
+
+rtl_api_clear("") :-
+    rtl_clear,
+    rtl_output_to(buffer).
+
+%!  rtl_api_end_of_input(+Mode:text, -Output:string) is det.
+
+rtl_api_end_of_input(ModeText, Output) :-
+    must_be(text, ModeText),
+    atom_string(Mode, ModeText),
+    must_be(oneof([run, drop]), Mode),
+    rtl_end_of_input(Mode, Output).
+
+%!  rtl_api_post_query(+QueryId:text, +GoalText:text, +At:number, +Timeout, -Output:string) is det.
+%
+%   Post the synchronized query <Goal, At> (rtl_sync_query/5); Timeout a number or
+%   `"inf"`. Output is what was output at once, or one line `!KIND<TAB>MESSAGE` when the
+%   query was refused.
+
+rtl_api_post_query(QueryIdText, GoalText, At, Timeout0, Output) :-
+    must_be(text, QueryIdText),
+    atom_string(QueryId, QueryIdText),
+    must_be(text, GoalText),
+    finite_time(At),
+    (   Timeout0 == "inf"
+    ->  Timeout = inf
+    ;   finite_time(Timeout0),
+        (   Timeout0 >= 0 -> Timeout = Timeout0 ; domain_error(non_negative_timeout, Timeout0) )
+    ),
+    rtl_output_to(buffer),
+    rtl_sync_query(GoalText, At, Timeout, QueryId, Error),
+    (   var(Error)
+    ->  rtl_take_output(Lines),
+        lines_output(Lines, Output)
+    ;   Error =.. [Kind, Message],
+        format(string(Output), "!~w\t~w", [Kind, Message])
+    ).
+
+%!  rtl_api_query(+GoalText:text, +At, +Limit:text, -Output:string) is det.
+%
+%   rtl_query_lines/4; At a number or `"inf"`, Limit `"first"` or `"all"`.
+
+rtl_api_query(GoalText, At0, LimitText, Output) :-
+    must_be(text, GoalText),
+    (   At0 == "inf" -> At = inf ; must_be(number, At0), At = At0 ),
+    atom_string(Limit, LimitText),
+    rtl_query_lines(GoalText, At, Limit, Output).
+
+%!  rtl_api_memory(+RequestText:text, -Output:string) is det.
+%
+%   rtl_memory_request/2; Output `""` or `!KIND<TAB>MESSAGE`.
+
+rtl_api_memory(Text, Output) :-
+    must_be(text, Text),
+    rtl_memory_request(Text, Error),
+    (   var(Error)
+    ->  Output = ""
+    ;   Error =.. [Kind, Message],
+        format(string(Output), "!~w\t~w", [Kind, Message])
+    ).
+
+%!  rtl_api_stats(-Text:string) is det.
+%
+%   The statistics as lines `Name<TAB>Value`.
+
+rtl_api_stats(Text) :-
+    findall(Line, ( rtl_stat(Name, Value), format(string(Line), "~w\t~w", [Name, Value]) ), Lines),
+    atomic_list_concat(Lines, "\n", Text).
+
+%!  rtl_api_summary(-Text:string) is det.
+
+rtl_api_summary(Text) :-
+    rtl_summary(Text).
+
+%!  rtl_api_store_size(-Size:integer) is det.
+
+rtl_api_store_size(Size) :-
+    rtl_store_size(Size).
+
+%!  rtl_api_clock(-Clock:number) is det.
+
+rtl_api_clock(Clock) :-
+    rtl_clock(Clock).
+
+% One line of text for an error, as print_message/2 would say it.
+message_line(Error, Text) :-
+    (   catch('$messages':translate_message(Error, Lines, []), _, fail)
+    ->  with_output_to(string(S), print_message_lines(current_output, '', Lines)),
+        split_string(S, "\n", " \t", Parts0),
+        exclude(==(""), Parts0, Parts),
+        atomic_list_concat(Parts, " ", Text)
+    ;   format(string(Text), "~q", [Error])
+    ).
+
+:- multifile prolog:error_message//1.
+
+prolog:error_message(bad_item(I, Error)) -->
+    { message_line(Error, Text) },
+    [ 'event ~w of the batch: ~w'-[I, Text] ].

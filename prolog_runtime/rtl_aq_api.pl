@@ -1,0 +1,100 @@
+:- module(rtl_aq_api,
+          [ aq_api_register/3,          % +Id, +GoalText, -AnswerLines
+            aq_api_unregister/2,        % +Id, -Out
+            aq_api_answers/2,           % +Id, -AnswerLines
+            aq_api_id_text/2,           % +Id, -Text
+            aq_api_assert/2,            % +FactTexts, -Out
+            aq_api_retract/2,           % +FactTexts, -Out
+            aq_api_events/1,            % -EventLines
+            aq_api_stats/1              % -StatLines
+          ]).
+
+/** <module> The entry points of the Python ActiveQueries class: values as data
+
+retalisc/driver/active_queries.py calls only these, through the bridge's fixed-goal call
+(`rtl_aq_api:Name(Args..., Out)`): query ids are integers or strings (a string id is the
+atom of that name), goals and facts are texts read here as exactly one term each
+(rtl_read_text/4), never pasted into goal text. A registered goal can only be one atom of a
+predicate of the program (aq_register/3 refuses anything else), so no other code runs; its
+arguments are data. Out is a string: lines of writeq text.
+*/
+
+:- use_module(library(apply)).
+:- use_module(library(lists)).
+:- use_module(rtl_aq).
+:- use_module(rtl_text).
+
+%!  aq_api_register(+Id, +GoalText:text, -Answers:string) is det.
+
+aq_api_register(Id0, GoalText, Out) :-
+    query_id(Id0, Id),
+    rtl_read_text(GoalText, Goal, _, [module(user)]),
+    aq_register(Id, user:Goal, Answers),
+    term_lines(Answers, Out).
+
+%!  aq_api_unregister(+Id, -Out) is det.
+
+aq_api_unregister(Id0, "") :-
+    query_id(Id0, Id),
+    aq_unregister(Id).
+
+%!  aq_api_answers(+Id, -Answers:string) is det.
+
+aq_api_answers(Id0, Out) :-
+    query_id(Id0, Id),
+    aq_answers(Id, Answers),
+    term_lines(Answers, Out).
+
+%!  aq_api_id_text(+Id, -Text:string) is det.
+%
+%   The writeq text of the query id, as aq_api_events/1 writes it.
+
+aq_api_id_text(Id0, Text) :-
+    query_id(Id0, Id),
+    format(string(Text), "~q", [Id]).
+
+%!  aq_api_assert(+FactTexts:list, -Out) is det.
+%!  aq_api_retract(+FactTexts:list, -Out) is det.
+%
+%   Assert (retract, in one DRed pass) the facts, each given as a text.
+
+aq_api_assert(Texts, "") :-
+    facts(Texts, Facts),
+    aq_assert_all(Facts).
+
+aq_api_retract(Texts, "") :-
+    facts(Texts, Facts),
+    aq_retract_all(Facts).
+
+facts(Texts, Facts) :-
+    must_be(list, Texts),
+    maplist(fact, Texts, Facts).
+
+fact(Text, Fact) :-
+    rtl_read_text(Text, Fact, _, [module(user)]).
+
+%!  aq_api_events(-Lines:string) is det.
+%
+%   The pending notifications, one line `Id<TAB>Op<TAB>Answer` each (writeq text).
+
+aq_api_events(Out) :-
+    aq_events(Events),
+    with_output_to(string(Out),
+                   forall(member(ev(I, O, A), Events), format("~q\t~w\t~q~n", [I, O, A]))).
+
+%!  aq_api_stats(-Lines:string) is det.
+
+aq_api_stats(Out) :-
+    aq_stats(Stats),
+    with_output_to(string(Out), forall(member(K=V, Stats), format("~w ~w~n", [K, V]))).
+
+query_id(Id0, Id) :-
+    (   integer(Id0)
+    ->  Id = Id0
+    ;   string(Id0)
+    ->  atom_string(Id, Id0)
+    ;   type_error(query_id, Id0)
+    ).
+
+term_lines(Terms, Out) :-
+    with_output_to(string(Out), forall(member(T, Terms), format("~q~n", [T]))).

@@ -1,0 +1,86 @@
+:- module(rtl_text,
+          [ rtl_read_text/4,            % +Text, -Term, -Bindings, +Options
+            rtl_read_event/2,           % +Text, -Event
+            rtl_read_ground/2           % +Text, -Term
+          ]).
+
+/** <module> Reading untrusted text as one term
+
+Text from outside the program (an event, a goal, a rule label, a flag value from Python or
+a service) is data: it is read with read_term/3 from a string, never pasted into program
+text. The whole text must be one term, optionally ended by a full stop; anything after it
+(`"a(1). halt"`) is a syntax error, as are an empty text and a variable where a term is
+needed. Syntax errors are raised as `error(syntax_error(What), string(Text, CharNo))`, as
+term_string/3 raises them.
+*/
+
+%!  rtl_read_text(+Text, -Term, -Bindings, +Options) is det.
+%
+%   Read Text (a string or atom) as exactly one term. Bindings are its `Name = Var` pairs.
+%   Options are passed to read_term/3 (e.g. `module(M)` for the operators of a program).
+
+rtl_read_text(Text, Term, Bindings, Options) :-
+    must_be(text, Text),
+    (   split_string(Text, "", " \t\r\n", [""])
+    ->  syntax_error_at(empty_text, Text, 0)
+    ;   true
+    ),
+    catch(read_term_from_atom(Text, Term0,
+                              [ variable_names(Bindings0), subterm_positions(Pos),
+                                syntax_errors(error) | Options ]),
+          error(syntax_error(What), Context),
+          string_error(What, Context, Text)),
+    arg(2, Pos, End),
+    sub_string(Text, End, _, 0, Rest0),
+    split_string(Rest0, "", " \t\r\n", [Rest1]),
+    (   sub_string(Rest1, 0, 1, _, ".")
+    ->  sub_string(Rest1, 1, _, 0, Rest)
+    ;   Rest = Rest1
+    ),
+    (   only_layout(Rest)
+    ->  Term = Term0,
+        Bindings = Bindings0
+    ;   syntax_error_at(end_of_clause_expected, Text, End)
+    ).
+
+%   Nothing but white space and comments.
+only_layout(Rest) :-
+    setup_call_cleanup(open_string(Rest, In),
+                       catch(read_term(In, T, []), error(syntax_error(_), _), T = '$bad'),
+                       close(In)),
+    T == end_of_file.
+
+string_error(What, Context, Text) :-
+    (   Context = stream(_, _, _, CharNo), integer(CharNo)
+    ->  true
+    ;   Context = file(_, _, _, CharNo), integer(CharNo)
+    ->  true
+    ;   string_length(Text, CharNo)
+    ),
+    syntax_error_at(What, Text, CharNo).
+
+syntax_error_at(What, Text, CharNo) :-
+    text_to_string(Text, String),
+    throw(error(syntax_error(What), string(String, CharNo))).
+
+%!  rtl_read_ground(+Text, -Term) is det.
+%
+%   Read Text as one ground term: a type error `ground` for a term with variables.
+
+rtl_read_ground(Text, Term) :-
+    rtl_read_text(Text, Term, _, []),
+    (   ground(Term)
+    ->  true
+    ;   throw(error(type_error(ground, Term), context(_, 'the term must not have variables')))
+    ).
+
+%!  rtl_read_event(+Text, -Event) is det.
+%
+%   Read an event: a ground atom or compound term.
+
+rtl_read_event(Text, Event) :-
+    rtl_read_ground(Text, Event),
+    (   callable(Event)
+    ->  true
+    ;   throw(error(type_error(event, Event), context(_, 'an event is an atom or a compound term')))
+    ).
