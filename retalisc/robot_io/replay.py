@@ -241,6 +241,9 @@ def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
     except OSError as error:
         click.echo(f"error: {error}", err=True)
         return 2
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        return 130
 
 
 def _open_sinks(bag: Recording, options: BagOptions, out_bag: Optional[str], foxglove: Optional[int],
