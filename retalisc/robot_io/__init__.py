@@ -8,10 +8,14 @@ into the robot's tools, and timeline pictures (docs/robot_io.md).
 - `bags`: opening ROS 1 `.bag` files, ROS 2 sqlite3 folders and MCAP files; writing small
   bags (tests, examples).
 - `replay`: `retalisc run PROGRAM --bag FILE`: feeding a recording to an Engine.
+- `publish`: `--out-bag FILE.mcap` and `--foxglove [PORT]`: what the program derived, back
+  into the robot's tools.
 - `plot`: `retalisc plot OUTPUT.jsonl -o timeline.png`.
+- `samples`: the sample recording of the NAO application (tests, benchmark, examples).
 
-`rosbags` (and `mcap` for writing MCAP) are optional dependencies: the extra `ros`
-(`pip install 'retalisc[ros]'`). `require()` turns their absence into a clear message.
+`rosbags`, `mcap` (writing MCAP), `foxglove-sdk` (the live server) and `matplotlib`
+(timelines) are optional dependencies: the extra `ros` (`pip install 'retalisc[ros]'`).
+`require()` turns their absence into a clear message.
 """
 from __future__ import annotations
 

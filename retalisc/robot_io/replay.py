@@ -128,15 +128,20 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     except BagError as error:
         click.echo(f"error: {error}", err=True)
         return 2
+    sink, consumers, sinks = None, None, []
     try:
         publisher, sinks = _open_sinks(bag, options, out_bag, foxglove, foxglove_wait)
+        sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
+        consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
     except BaseException:
         bag.__exit__(None, None, None)
+        for target in sinks:
+            target.close()
+        if sink is not None and sink is not sys.stdout:
+            sink.close()
         raise
     if foxglove is not None and options.rate is None:
         options = replace(options, rate=1.0)
-    sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
-    consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
     stats = ReplayStats()
     status = 0
     if options.topics:
@@ -241,6 +246,9 @@ def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
     except OSError as error:
         click.echo(f"error: {error}", err=True)
         return 2
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        return 130
 
 
 def _open_sinks(bag: Recording, options: BagOptions, out_bag: Optional[str], foxglove: Optional[int],
