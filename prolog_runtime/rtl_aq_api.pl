@@ -6,7 +6,8 @@
             aq_api_assert/2,            % +FactTexts, -Out
             aq_api_retract/2,           % +FactTexts, -Out
             aq_api_events/1,            % -EventLines
-            aq_api_stats/1              % -StatLines
+            aq_api_stats/1,             % -StatLines
+            aq_api_unload/2             % +File, -Out
           ]).
 
 /** <module> The entry points of the Python ActiveQueries class: values as data
@@ -87,6 +88,15 @@ aq_api_events(Out) :-
 aq_api_stats(Out) :-
     aq_stats(Stats),
     with_output_to(string(Out), forall(member(K=V, Stats), format("~w ~w~n", [K, V]))).
+
+%!  aq_api_unload(+File:text, -Out) is det.
+%
+%   Unload a program file loaded before (the Python side loads one program at a time).
+
+aq_api_unload(FileText, "") :-
+    must_be(text, FileText),
+    atom_string(File, FileText),
+    unload_file(File).
 
 query_id(Id0, Id) :-
     (   integer(Id0)

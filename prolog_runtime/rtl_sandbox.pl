@@ -129,9 +129,12 @@ builtin(rule, rtl_subscriptions:subscribe_between(_, Query, _, _, _), Conds) :- 
 builtin(rule, rtl_subscriptions:unsub(_, _), []).
 builtin(rule, rtl_subscriptions:delete_subscription(_, _), []).
 
-% `Event-Conds` or a bare event: the conditions must be known when the rule is checked.
+% `Event-Conds` or a bare event: the conditions must be known when the rule is checked (a
+% query only known at run time is refused, as a goal only known then).
 query_conditions(Query, Called) :-
-    (   nonvar(Query), Query = _-Conds
+    (   var(Query)
+    ->  Called = [Query]
+    ;   Query = _-Conds
     ->  condition_list(Conds, Called)
     ;   Called = []
     ).
@@ -165,7 +168,8 @@ rtl_check_goal(Policy, Module, Goal) :-
 rtl_check_rule(M, Id, Stores, Clauses0) :-
     (   atom(Id) -> true ; throw(error(rtl_unsafe(Id, rule_id, []), _)) ),
     forall(member(Store, Stores),
-           (   Store = store(N, A, _), atom(N), integer(A), rtl_rules:rule_pred_name(Id, N)
+           (   Store = store(N, A, W), atom(N), integer(A), rtl_rules:rule_pred_name(Id, N),
+               ( W == none ; number(W), W >= 0 )
            ->  true
            ;   throw(error(rtl_unsafe(Store, store, []), _))
            )),
@@ -188,9 +192,8 @@ check_clause(M, Policy, Clause, V0, V) :-
     clause_head(Clause, Head),
     Policy = rule(Id, _, _),
     check_head(Head, Id),
-    functor(Head, N, A),
     (   Clause = (_ :- Body) -> true ; Body = true ),
-    walk(Body, M, st(Policy, [N/A]), V0, V).
+    walk(Body, M, st(Policy, [rule(Id)]), V0, V).
 
 clause_head((Head :- _), Head) :- !.
 clause_head(Head, Head).
@@ -490,8 +493,13 @@ rtl_unsafe_message(rtl_unsafe(Culprit, Reason, Path), Message) :-
     ).
 
 atomic_list_concat_pis(PIs, Text) :-
-    maplist([PI, T]>>format(string(T), "~q", [PI]), PIs, Ts),
+    maplist(pi_text, PIs, Ts),
     atomic_list_concat(Ts, ' -> ', Text).
+
+pi_text(rule(Id), T) :- !,
+    format(string(T), "rule ~q", [Id]).
+pi_text(PI, T) :-
+    format(string(T), "~q", [PI]).
 
 reason_text(not_allowed, C, T) :-
     format(string(T), "unsafe goal: ~q", [C]).

@@ -236,3 +236,23 @@ def test_no_text_given_to_the_api_runs_code(engine, tmp_path, text):
     engine.set_flag("max_delay", "inf")
     engine.clear()
     usable(engine)
+
+
+def test_active_query_goals_facts_and_ids_are_data(tmp_path):
+    from retalisc.driver.active_queries import ActiveQueries
+
+    marker = tmp_path / "aq"
+    aq = ActiveQueries.from_source("path(X, Y) :- edge(X, Y).\nedge(0, 1).\n", "aq_data.pl")
+    for goal in (f"path(0, X)), {smuggle(marker)}, path(0, (X", f"path(0, X). {smuggle(marker)}", smuggle(marker)):
+        with pytest.raises(PrologError):
+            aq.register("q", goal)
+    with pytest.raises(PrologError):
+        aq.assert_fact(f"edge(1, 2)), {smuggle(marker)}, edge((3")
+    odd = "q'), shell('x"                        # an id is a name, whatever its characters
+    assert aq.register(odd, "path(0, X)") == ["path(0,1)"]
+    added = []
+    aq.on_add(lambda q, a: added.append((q, a)))
+    aq.assert_fact("edge(0, 2)")
+    assert added == [(odd, "path(0,2)")]
+    aq.unregister(odd)
+    assert not marker.exists()

@@ -189,3 +189,20 @@ def test_a_call_from_another_thread_costs_microseconds_not_milliseconds():
     # Both hand the call to the bridge's Prolog thread: a few tens of microseconds each,
     # far from the switch interval (5 ms) a GIL-bound handoff would wait.
     assert main < 0.002 and other[0] < 0.002
+
+
+def test_global_variables_are_the_same_from_every_thread():
+    bridge = Bridge()
+    bridge.once("nb_setval(threads_test_key, main_value)")
+    seen: List[str] = []
+    th = threading.Thread(target=lambda: seen.append(bridge.once("nb_getval(threads_test_key, V)", "V")))
+    th.start()
+    th.join()
+    assert seen == ["main_value"]
+
+
+def test_a_call_that_ends_the_prolog_thread_does_not_hang_the_bridge():
+    bridge = Bridge()
+    with pytest.raises(PrologError, match="thread ended"):
+        bridge.once("abort")            # trusted text only: the sandbox refuses abort/0 from outside
+    assert bridge.once("X is 6 * 7", "X") == "42"      # a new Prolog thread serves the next calls

@@ -63,6 +63,9 @@ UNSAFE_RULES = [
     ("null do format('~@', [shell('touch {m}')]) <- trig.", "unsafe goal: shell/1"),
     ("null do c_mem(m, trig(_)-[shell('touch {m}')], 1, inf) <- trig.", "unsafe goal: shell/1"),
     ("null do sub(1, c, trig(X)-[shell('touch {m}')], X, 0) <- trig.", "unsafe goal: shell/1"),
+    ("null do sub(1, c, Q, x, 0) <- trig(Q).", "only known when it runs"),       # conditions from data
+    ("null do c_mem(m, Q, 1, inf) <- trig(Q).", "only known when it runs"),
+    ("null do memorize(x(_), C, x, m, 1) <- trig(C).", "only known when it runs"),
 ]
 
 

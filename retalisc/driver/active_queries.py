@@ -21,7 +21,6 @@ from pathlib import Path
 from typing import Callable, Dict, Iterable, List, Optional, Union
 
 from ..compiler import AqOptions, compile_source
-from ..frontend.terms import quote_atom
 from .bridge import Bridge
 
 _API = "rtl_aq_api"
@@ -80,7 +79,7 @@ class ActiveQueries:
                 self.bridge.once("rtl_aq:aq_reset")
             # drop the facts asserted at run time too (reloading keeps them otherwise)
             self.bridge.once("forall(catch(user:'$aq_fact_pred'(F), _, fail), retractall(user:F))")
-            self.bridge.once(f"unload_file({quote_atom(previous)})")
+            self.bridge.apply(_API, "aq_api_unload", previous)
         self.bridge.consult(out)
         # the API module next to the runtime the program loaded (a constant goal, no values)
         self.bridge.once("module_property(rtl_aq, file(F)), file_directory_name(F, D), "

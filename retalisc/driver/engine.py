@@ -11,8 +11,10 @@ the Python values as Prolog strings and numbers (`Bridge.apply`), never as goal 
 that stands for a term (an event, a goal, a label) is read on the Prolog side as exactly
 one term; rules, queries and conditions from here must pass the sandbox (rtl_sandbox.pl).
 
-An Engine may be used from any thread: calls are serialised and all run in the bridge's one
-Prolog engine. Callbacks run in the thread whose call produced the output.
+An Engine may be used from any thread: its calls are serialised, and every bridge call runs
+in the bridge's one Prolog thread, where the runtime keeps its state (docs/runtime.md,
+"Threads"). Callbacks run in the thread whose call produced the output, before the next call
+of the Engine starts.
 """
 from __future__ import annotations
 
