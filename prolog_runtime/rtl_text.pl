@@ -1,7 +1,8 @@
 :- module(rtl_text,
           [ rtl_read_text/4,            % +Text, -Term, -Bindings, +Options
             rtl_read_event/2,           % +Text, -Event
-            rtl_read_ground/2           % +Text, -Term
+            rtl_read_ground/2,          % +Text, -Term
+            rtl_ground_canonical/2      % +Text, -Canonical
           ]).
 
 /** <module> Reading untrusted text as one term
@@ -83,4 +84,19 @@ rtl_read_event(Text, Event) :-
     (   callable(Event)
     ->  true
     ;   throw(error(type_error(event, Event), context(_, 'an event is an atom or a compound term')))
+    ).
+
+%!  rtl_ground_canonical(+Text, -Canonical:string) is det.
+%
+%   Read Text as one term and write it back with write_canonical/1 conventions (quoted, no
+%   operators): the form the Python data-term reader handles. A term with variables gives
+%   `"!not ground: variable Name"` instead.
+
+rtl_ground_canonical(Text, Canonical) :-
+    rtl_read_text(Text, Term, Bindings, []),
+    (   Bindings = [Name=_|_]
+    ->  format(string(Canonical), '!not ground: variable ~w', [Name])
+    ;   \+ ground(Term)
+    ->  Canonical = "!not ground"
+    ;   format(string(Canonical), '~k', [Term])
     ).

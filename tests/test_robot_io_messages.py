@@ -16,7 +16,13 @@ from robot_io_support import SHARED_NAMES, same_value, shared_bag
 import numpy as np  # noqa: E402  (rosbags brings numpy)
 
 from retalisc.driver.bridge import Bridge  # noqa: E402
-from retalisc.driver.engine import prolog_string  # noqa: E402
+
+
+def prolog_string(text: str) -> str:
+    """`text` as a Prolog string literal (test goals only; the product passes text as data)."""
+    escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n").replace("\r", "\\r")
+    return '"' + escaped + '"'
+
 from retalisc.frontend.terms import Atom, Compound, String  # noqa: E402
 from retalisc.robot_io.bags import Recording, typestore  # noqa: E402
 from retalisc.robot_io.data_terms import read_data_term, write_data_term  # noqa: E402

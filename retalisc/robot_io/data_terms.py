@@ -69,19 +69,29 @@ def _canonical(text: str) -> str:
     """`text` read by SWI-Prolog (read_term from a string, never pasted into a goal) and
     written back with write_canonical/1: no operators left, which the fast reader reads."""
     from ..driver.bridge import Bridge, PrologError
-    from ..driver.engine import prolog_string
 
-    goal = (f"term_string(T, {prolog_string(text)}, [variable_names(Vs)]), "
-            "(   Vs = [N=_|_] -> format(string(Out), '!not ground: variable ~w', [N])"
-            " ;  \\+ ground(T) -> Out = \"!not ground\""
-            " ;  format(string(Out), '~k', [T]) )")
+    bridge = Bridge()
+    _load_text_reader(bridge)
     try:
-        out = Bridge().call_text(goal)
+        out = bridge.apply("rtl_text", "rtl_ground_canonical", text)
     except PrologError as error:
         raise ValueError(f"not a term: {str(error).splitlines()[0]}") from None
     if out.startswith("!"):
         raise ValueError(out[1:])
     return out
+
+
+_TEXT_READER_LOADED = False
+
+
+def _load_text_reader(bridge) -> None:
+    """Load the runtime's reader of untrusted text (rtl_text.pl) once per process."""
+    global _TEXT_READER_LOADED
+    if not _TEXT_READER_LOADED:
+        from ..runtime_location import runtime_dir
+
+        bridge.consult(str(runtime_dir() / "rtl_text.pl"))
+        _TEXT_READER_LOADED = True
 
 
 def _tokens(text: str) -> list:
