@@ -207,6 +207,11 @@ def classify(clause: ReadClause) -> Clause:
         head = term.args[0]
         if _is(head, ":", 2) and isinstance(head.args[0], (Atom, Compound)) and not _is(head.args[1], ":", 2):
             return _event_rule(Compound("<-", (head.args[1], term.args[1]), term.span), clause, head.args[0])
+        if _is(head, "do", 2) and _is(head.args[0], ":", 2) and isinstance(head.args[0].args[0], (Atom, Compound)):
+            # `label : Head do Action <- Pattern` reads as `(label : Head) do Action`: `:` binds tighter
+            label_term, event = head.args[0].args
+            unlabelled = Compound("do", (event, head.args[1]), head.span)
+            return _event_rule(Compound("<-", (unlabelled, term.args[1]), term.span), clause, label_term)
         return _event_rule(term, clause, None)
     if isinstance(term, (Atom, Compound)) and term.name in DECLARATION_NAMES:
         return Declaration(term, clause.span, clause.text)
