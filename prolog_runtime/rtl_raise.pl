@@ -38,7 +38,7 @@ rtl_flush_raised/0).
 %   new_event/3. Event must be ground.
 
 new_event(Event) :-
-    (   prolog_load_context(module, _)          % a directive: the program's clock has not started
+    (   prolog_load_context(source, _)          % a directive: the program's clock has not started
     ->  T = 0
     ;   nb_current(rtl_clock, Clock), Clock =\= -inf
     ->  T = Clock
