@@ -38,7 +38,9 @@ rtl_flush_raised/0).
 %   new_event/3. Event must be ground.
 
 new_event(Event) :-
-    (   nb_current(rtl_clock, Clock), Clock =\= -inf       % unset while a program loads
+    (   prolog_load_context(source, _)          % a directive: the program's clock has not started
+    ->  T = 0
+    ;   nb_current(rtl_clock, Clock), Clock =\= -inf
     ->  T = Clock
     ;   T = 0
     ),

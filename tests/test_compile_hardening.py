@@ -182,6 +182,8 @@ def test_accepted_programs_load_and_run(tmp_path, swipl, program, events, expect
 def test_new_event_directive_through_the_engine():
     from retalisc.driver.engine import Engine
 
+    earlier = Engine.from_compiled(compile_source("y <- b.\n", "earlier.rtl", module="rtl_prog_hardening_earlier"))
+    earlier.feed("b", 50)           # another program's clock does not date the directive's event
     engine = Engine.from_compiled(compile_source(":- new_event(foo(1)).\nx <- foo(1) seq a.\n", "ne.rtl",
                                                  module="rtl_prog_hardening_ne"))
     assert [(o.event, o.start, o.end) for o in engine.feed("a", 3)] == [("x", 0, 3)]

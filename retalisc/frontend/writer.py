@@ -40,6 +40,13 @@ class _Writer:
             return text
         return self.compound(term, max_priority)
 
+    def operand(self, term: Term, max_priority: int) -> str:
+        """An operand of an operator: an atom that is itself an operator is bracketed
+        (`dynamic (-->)`, `- (-)`), which SWI-Prolog reads back as the atom."""
+        if isinstance(term, Atom) and self.ops.is_operator(term.name) and term.name not in ("[]", "{}", "!"):
+            return f"({quote_atom(term.name)})"
+        return self.write(term, max_priority)
+
     def compound(self, term: Compound, max_priority: int) -> str:
         name, args = term.name, term.args
         if name == "[|]" and len(args) == 2:
@@ -50,8 +57,8 @@ class _Writer:
             priority, kind = self.ops.infix_op(name)
             left_max = priority if kind == "yfx" else priority - 1
             right_max = priority if kind == "xfy" else priority - 1
-            left = self.write(args[0], left_max)
-            right = self.write(args[1], right_max)
+            left = self.operand(args[0], left_max)
+            right = self.operand(args[1], right_max)
             if name == ",":
                 text = f"{left}, {right}"
             else:
@@ -60,7 +67,7 @@ class _Writer:
         if len(args) == 1 and self.usable(name) and self.ops.prefix_op(name) and name not in ("-", "+"):
             priority, kind = self.ops.prefix_op(name)
             arg_max = priority if kind == "fy" else priority - 1
-            text = f"{quote_atom(name)} {self.write(args[0], arg_max)}"
+            text = f"{quote_atom(name)} {self.operand(args[0], arg_max)}"
             return f"({text})" if priority > max_priority else text
         inner = ", ".join(self.write(a, 999) for a in args)
         return f"{quote_atom(name)}({inner})"

@@ -44,12 +44,17 @@ name = "loadable"
 Indicator = Tuple[str, int]
 
 #: Terms that are not clause heads whatever SWI-Prolog makes of them.
-CONTROL_HEADS = {(":-", 1), (":-", 2), ("?-", 1), ("-->", 2), ("|", 2), ("<-", 2), ("rule:", 2)}
+CONTROL_HEADS = {(":-", 1), (":-", 2), ("?-", 1), ("-->", 2), ("|", 2), ("<-", 2), ("rule:", 2),
+                 (".", 2)}                            # SWI-Prolog 7: Dict.Key
+
+# What SWI-Prolog's grammar translation refuses as a non-terminal (boot/dcg.pl, dcg_no_extend/1).
+_NOT_NONTERMINALS = {("[]", 0), ("[|]", 2), ("{}", 1), ("{}", 0), ("!", 0), ("\\+", 1), (",", 2), (";", 2),
+                     ("|", 2), ("->", 2), ("*->", 2), ("-->", 2)}
 
 # Goal arguments of control constructs and of the meta-predicates SWI-Prolog compiles in place
 # (or that take a goal written in the clause): the positions that hold goals.
 _GOAL_POSITIONS = {
-    (",", 2): (0, 1), (";", 2): (0, 1), ("->", 2): (0, 1), ("*->", 2): (0, 1), ("\\+", 1): (0,),
+    (",", 2): (0, 1), (";", 2): (0, 1), ("|", 2): (0, 1), ("->", 2): (0, 1), ("*->", 2): (0, 1), ("\\+", 1): (0,),
     ("call", 1): (0,), ("once", 1): (0,), ("ignore", 1): (0,), ("forall", 2): (0, 1),
     ("findall", 3): (1,), ("findall", 4): (1,), ("aggregate_all", 3): (1,), ("aggregate_all", 4): (2,),
     ("catch", 3): (0, 2), ("call_cleanup", 2): (0, 1), ("setup_call_cleanup", 3): (0, 1, 2),
@@ -249,6 +254,9 @@ def _check_clause(clause: StaticClause, reserved: _Reserved) -> Optional[Indicat
         head, body = term.args
         if isinstance(head, Compound) and head.name == "," and head.arity == 2:
             head = head.args[0]                       # Head, PushBack --> Body
+        if indicator(head) in _NOT_NONTERMINALS:
+            raise RetalisSemanticError("the head of a grammar rule must be a non-terminal, not a list, "
+                                       "{...}, ! or a control construct", span_of(head) or clause.span)
         key = _check_head(head, clause, reserved, extra=2)
         _check_grammar_body(body, clause)
         return key
@@ -302,6 +310,9 @@ def _check_callable(goal: Term, fallback, what: str) -> None:
             raise RetalisSemanticError(f"{what} calls {shown!r}, which is not a goal (not callable)",
                                        span_of(g) or fallback)
         if isinstance(g, Compound) and g.name == ":" and g.arity == 2:
+            if not isinstance(g.args[0], (Atom, Var)):
+                raise RetalisSemanticError(f"{what} calls Module:Goal with a module that is not an atom",
+                                           span_of(g.args[0]) or span_of(g) or fallback)
             _check_callable(g.args[1], span_of(g) or fallback, what)
 
 

@@ -13,7 +13,7 @@ from typing import List
 import jinja2
 
 from ...frontend.program import Declaration, Directive, StaticClause
-from ...frontend.terms import Atom, Compound, Term, conjuncts, quote_atom
+from ...frontend.terms import Atom, Compound, Term, Var, conjuncts, quote_atom
 from ...frontend.writer import write_term as _write_term
 from ...passes.unit import GeneratedRule, Unit
 from ...runtime_location import runtime_dir
@@ -98,21 +98,31 @@ def _is_copied(clause) -> bool:
 
 def _static_text(clause) -> str:
     if isinstance(clause, Directive):
-        return f":- {write_term(clause.goal, 1199)}."
+        return _full_stop(f":- {write_term(clause.goal, 1199)}")
     return write_clause(clause.term)
+
+
+def _full_stop(text: str) -> str:
+    """`text.`, with a space before the full stop after a symbol character (`*.` would read as
+    one atom)."""
+    return text + (" ." if text and text[-1] in _SYMBOL_CHARS else ".")
+
+
+_SYMBOL_CHARS = set("+-*/\\^<>=~:.?@#&$")
 
 
 def write_clause(term: Term) -> str:
     """A clause as text: `Head :-` then one goal per line, indented by four spaces."""
     if isinstance(term, Compound) and term.name == ":-" and term.arity == 2:
         head, body = term.args
+        if isinstance(body, Var):
+            body = Compound("call", (body,))      # `H :- X.` means call(X); SWI-Prolog wants it written
         goals = conjuncts(body)
         lines = [write_term(head, 1199) + " :-"]
         for i, goal in enumerate(goals):
-            end = "." if i == len(goals) - 1 else ","
-            lines.append("    " + _goal_text(goal) + end)
+            lines.append("    " + (_full_stop(_goal_text(goal)) if i == len(goals) - 1 else _goal_text(goal) + ","))
         return "\n".join(lines)
-    return write_term(term, 1199) + "."
+    return _full_stop(write_term(term, 1199))
 
 
 def _goal_text(goal: Term) -> str:
