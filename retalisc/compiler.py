@@ -58,6 +58,8 @@ def compile_source(text: str, file: str, output_name: str = "PROGRAM.pl", dump_a
     Raises RetalisError (with a source location) on bad programs, ValueError for an unknown
     mode or a `dump_after` pass this compilation does not run."""
     _check_dump_after(dump_after, active_queries)
+    if text.startswith("\ufeff"):             # a UTF-8 byte-order mark
+        text = text[1:]
     if active_queries is not None:
         passes = active_query_passes(active_queries.mode)
         unit = AqUnit(read_definite_program(text, file), active_queries.mode, active_queries.subsumption)

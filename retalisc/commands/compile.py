@@ -102,18 +102,46 @@ def check_command(program: str) -> None:
 @click.option("--drop-pending", is_flag=True,
               help="At the end of the input, discard the synchronized matches still waiting instead of "
                    "running them.")
+@click.option("--allow-control", is_flag=True,
+              help="Obey control lines in the events ({\"op\": \"add_rule\", ...}, \"delete_rule\"); "
+                   "without it they are refused (an error each) and skipped.")
+@click.option("--strict", is_flag=True,
+              help="End the run with exit status 1 at the first line that is rejected or whose event "
+                   "fails, after writing everything produced before it.")
+@click.option("--max-steps", type=str, default=None, metavar="N",
+              help="Inferences one input event may take, everything it derives included, before it is "
+                   "stopped with an error (default 1000000; 'inf' for no limit).")
+@click.option("--action-output", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Write the text that actions and conditions print to FILE (default: standard error; "
+                   "standard output carries only JSON Lines).")
+@click.option("--progress/--no-progress", default=None,
+              help="Show a progress line on standard error (default: on a terminal, for inputs over 5 MB).")
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
-                consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool) -> None:
-    """Run PROGRAM over an event file, printing derived events as JSON Lines."""
-    from ..driver.engine import Engine
-    from ..driver.run import run_event_file
+                consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
+                allow_control: bool, strict: bool, max_steps, action_output, progress) -> None:
+    """Run PROGRAM over an event file, printing derived events as JSON Lines.
 
+    Example: retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
+    """
+    from ..driver.bridge import PrologError
+    from ..driver.engine import Engine
+    from ..driver.run import run_event_file, set_action_output
+
+    steps = _max_steps(max_steps)
     result = compile_or_exit(program)
     engine = Engine.from_compiled(result)
     if echo_input:
         engine.set_flag("echo_input", "true")
     if max_delay is not None:
         engine.set_flag("max_delay", repr(max_delay))
+    engine.set_flag("max_steps", str(steps))
+    if action_output is not None:
+        try:
+            set_action_output(engine, action_output)
+        except PrologError as error:
+            click.echo(f"error: --action-output {action_output}: cannot open the action output file ({error})",
+                       err=True)
+            sys.exit(2)
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
     for request in memories:
@@ -121,8 +149,27 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     posted = [post_cli_query(engine, number, at, goal, query_timeout)
               for number, (at, goal) in enumerate(queries, start=1)]
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
-                            drop_pending=drop_pending, first_output=posted)
+                            drop_pending=drop_pending, first_output=posted, allow_control=allow_control,
+                            strict=strict, progress=progress)
     sys.exit(status)
+
+
+DEFAULT_MAX_STEPS = 1_000_000
+
+
+def _max_steps(text):
+    """`--max-steps N`: a positive integer or 'inf' (usage error otherwise)."""
+    if text is None:
+        return DEFAULT_MAX_STEPS
+    if text.strip() == "inf":
+        return "inf"
+    try:
+        value = int(text.replace("_", "").replace(",", ""))
+    except ValueError:
+        value = 0
+    if value <= 0:
+        raise click.BadParameter(f"{text!r}: expected a positive integer or 'inf'", param_hint="--max-steps")
+    return value
 
 
 def post_cli_query(engine, number: int, at: float, goal: str, timeout):

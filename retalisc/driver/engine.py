@@ -71,8 +71,14 @@ def _raise_if_refused(output: str) -> str:
 
 @dataclass(frozen=True)
 class Rejection:
+    """An input line that was not processed: `kind` is "rejected" (malformed: bad JSON, a
+    non-ground term, a bad time...), "error" (a refused control line, or the program raised
+    an error or ran out of steps while processing the event) or "halt" (program code
+    called halt: processing stopped there). `line` is 0 for the end of the input."""
+
     line: int
     reason: str
+    kind: str = "rejected"
 
 
 def prolog_string(text: str) -> str:
@@ -175,16 +181,26 @@ class Engine:
         output = self.bridge.call_text(f"retalis:rtl_feed_events([{', '.join(items)}], Out)")
         return self._deliver(output)
 
-    def feed_lines(self, text: str, first_line: int = 1) -> Tuple[List[OutputEvent], List[Rejection]]:
+    def feed_lines(self, text: str, first_line: int = 1, *, allow_control: bool = False,
+                   strict: bool = False) -> Tuple[List[OutputEvent], List[Rejection]]:
         """Process event JSON Lines (SPEC section 11) exactly as `swipl PROGRAM.pl FILE` does;
-        return the output and the rejected lines with their reasons."""
-        output = self.bridge.call_text(f"retalis:rtl_feed_lines({prolog_string(text)}, {first_line}, Out)")
+        return the output and the lines not processed, with their reasons. Control lines
+        (`add_rule`, `delete_rule`) are refused unless `allow_control`. An event whose
+        processing raises is reported (kind "error") and the lines after it are processed;
+        with `strict`, processing stops at the first line not processed, as it does after a
+        halt (kind "halt"). The output of every line processed is returned, once."""
+        if not isinstance(first_line, int) or isinstance(first_line, bool):
+            raise TypeError("first_line must be an integer")
+        options = f"[allow_control({str(bool(allow_control)).lower()}), strict({str(bool(strict)).lower()})]"
+        output = self.bridge.call_text(
+            f"retalis:rtl_feed_lines({prolog_string(text)}, {first_line}, {options}, Out)")
         rejections = []
         lines = []
         for line in output.splitlines():
             if line.startswith("!"):
-                number, _, reason = line[1:].partition("\t")
-                rejections.append(Rejection(int(number), reason))
+                number, _, rest = line[1:].partition("\t")
+                kind, _, reason = rest.partition("\t")
+                rejections.append(Rejection(int(number), reason, kind))
             elif line:
                 lines.append(line)
         return self._deliver_lines(lines), rejections
