@@ -3,10 +3,13 @@
             rtl_main/0,
             rtl_run_jsonl_file/1,       % +File
             rtl_feed_lines/3,           % +Text, +FirstLineNo, -Output
+            rtl_feed_lines/4,           % +Text, +FirstLineNo, +Options, -Output
+            rtl_process_line/3,         % +Line, +Options, -Outcome
             rtl_feed_events/2,          % +Events, -Output
             rtl_action/1,               % :Goal
             rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
             rtl_summary/1,              % -Text
+            rtl_summary/2,              % +Seconds, -Text
             rtl_end_of_input/2          % +Mode, -Output
           ]).
 :- reexport(rtl_ele).
@@ -21,6 +24,8 @@
 :- reexport(rtl_math).
 :- reexport(rtl_sync).
 :- reexport(rtl_api).
+:- reexport(rtl_seen).
+:- reexport(rtl_halt).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 
@@ -41,6 +46,8 @@ two ways:
 %   Called by a compiled program when it has been loaded.
 
 rtl_program_loaded(Module) :-
+    get_time(Now),
+    nb_setval(rtl_loaded_at, Now),
     rtl_use_program(Module),
     forall(Module:ele_declaration(Goal), run_declaration(Module, Goal)).
 
@@ -63,30 +70,69 @@ run_declaration(Program, Goal) :-
 %   Script entry: process the event files named on the command line, in order. Does
 %   nothing when the program is loaded by the Python driver (flag `retalis_embedded`).
 %   Options: `--echo-input` also writes the input events; `--max-delay=SECONDS`;
-%   `--consumer-dir=DIR` writes subscription deliveries to `DIR/<consumer>.jsonl`.
+%   `--consumer-dir=DIR` writes subscription deliveries to `DIR/<consumer>.jsonl`;
+%   `--drop-pending`; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
+%   refused by default); `--strict` ends the run (status 1) at the first line that is
+%   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
+%   `--action-output=FILE` sends what program code prints to FILE instead of standard
+%   error. Exit status: 0 when the input was processed (rejected and failed lines
+%   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
+%   usage errors.
 
 rtl_main :-
     current_prolog_flag(retalis_embedded, true),
     !.
 rtl_main :-
+    get_time(T0),
+    nb_setval(rtl_run_started, T0),
     current_prolog_flag(argv, Argv),
     set_stream(user_output, encoding(utf8)),
     set_stream(user_error, encoding(utf8)),
-    catch(main_args(Argv, Files), error(Formal, _), (usage_error(Formal), halt(2))),
+    nb_setval(rtl_stream_options, []),
+    catch(main_args(Argv, Files), error(Formal, _), (usage_error(Formal), rtl_exit(2))),
     (   Files == []
-    ->  usage_error(no_event_file), halt(2)
+    ->  usage_error(no_event_file), rtl_exit(2)
     ;   true
     ),
-    catch(( rtl_flush_raised,
-            forall(member(File, Files), rtl_run_jsonl_file(File)),
-            ( nb_current(rtl_drop_pending, true) -> rtl_sync_finish(drop) ; rtl_sync_finish(run) ) ),
+    (   rtl_take_halted(Where)
+    ->  format(user_error, "~s~n", [Where]),
+        main_finish(1)
+    ;   true
+    ),
+    catch(main_run(Files, Status),
           Error,
-          ( print_message(error, Error), halt(1) )),
+          ( error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
+    main_finish(Status).
+
+main_run(Files, Status) :-
+    catch(( startup_events,
+            forall(member(File, Files), rtl_run_jsonl_file(File)),
+            ( nb_current(rtl_drop_pending, true) -> Mode = drop ; Mode = run ),
+            end_of_input(Mode, print_outcome(-)) ),
+          rtl_stop(Status),
+          true),
+    (   var(Status) -> Status = 0 ; true ).
+
+% The events raised while the program was loaded, processed before the first line.
+startup_events :-
+    catch(rtl_flush_raised, Error, true),
+    (   var(Error)
+    ->  true
+    ;   event_failure(Error, "the events raised while loading", Outcome),
+        print_outcome(-, 0, Outcome),
+        stop_if_needed(Outcome)
+    ).
+
+main_finish(Status) :-
     rtl_close_consumer_files,
-    flush_output,
-    rtl_summary(Summary),
+    rtl_close_action_output,
+    flush_output(user_output),
+    get_time(T1),
+    nb_getval(rtl_run_started, T0),
+    Seconds is T1 - T0,
+    rtl_summary(Seconds, Summary),
     format(user_error, "~s~n", [Summary]),
-    halt(0).
+    rtl_exit(Status).
 
 main_args([], []).
 main_args([Arg|Args], Files) :-
@@ -94,26 +140,50 @@ main_args([Arg|Args], Files) :-
     ->  rtl_set_flag(echo_input, true), Files = Rest
     ;   Arg == '--drop-pending'
     ->  nb_setval(rtl_drop_pending, true), Files = Rest
+    ;   Arg == '--allow-control'
+    ->  set_stream_option(allow_control(true)), Files = Rest
+    ;   Arg == '--strict'
+    ->  set_stream_option(strict(true)), Files = Rest
     ;   atom_concat('--consumer-dir=', Dir, Arg)
     ->  rtl_consumer_dir(Dir), Files = Rest
     ;   atom_concat('--max-delay=', D, Arg)
     ->  ( D == inf -> Delay = inf ; atom_number(D, Delay) ),
         rtl_set_flag(max_delay, Delay), Files = Rest
+    ;   atom_concat('--max-steps=', N, Arg)
+    ->  (   N == inf -> Steps = inf
+        ;   atom_number(N, Steps), integer(Steps), Steps > 0 -> true
+        ;   domain_error(max_steps, N)
+        ),
+        rtl_set_flag(max_steps, Steps), Files = Rest
+    ;   atom_concat('--action-output=', File, Arg)
+    ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
+        Files = Rest
     ;   sub_atom(Arg, 0, _, _, '--'), Arg \== '--'
     ->  domain_error(option, Arg)
     ;   Files = [Arg|Rest]
     ),
     main_args(Args, Rest).
 
+set_stream_option(Option) :-
+    nb_getval(rtl_stream_options, Options),
+    nb_setval(rtl_stream_options, [Option|Options]).
+
 usage_error(Formal) :-
     (   Formal = domain_error(option, Opt)
     ->  format(user_error, "error: unknown option ~w~n", [Opt])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--consumer-dir=DIR] [--drop-pending] EVENTS.jsonl...~n", [])
+    ;   Formal = domain_error(max_steps, N)
+    ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = action_output(File, E)
+    ->  error_text(error(E, _), Why),
+        format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--allow-control] [--strict] [--max-steps=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
 %
-%   Process every line of an event file (`-` for standard input).
+%   Process every line of an event file (`-` for standard input), writing the output to
+%   standard output and the rejected and failed lines to standard error. Throws
+%   `rtl_stop(1)` when the run must end (`--strict`, `halt` in program code).
 
 rtl_run_jsonl_file(-) :- !,
     set_stream(user_input, encoding(utf8)),
@@ -124,39 +194,135 @@ rtl_run_jsonl_file(File) :-
                        close(In)).
 
 run_stream(In, Name) :-
+    stream_options(Options),
     read_line_to_string(In, Line0),
-    run_lines(Line0, In, Name, 1).
+    without_bom(Line0, Line),
+    with_action_output(run_lines(Line, In, Name, 1, Options)).
 
-run_lines(end_of_file, _, _, _) :- !.
-run_lines(Line, In, Name, N) :-
-    process_line(Line, Name, N),
-    read_line_to_string(In, Next),
-    N1 is N + 1,
-    run_lines(Next, In, Name, N1).
-
-process_line(Line, Name, N) :-
-    handle_line(Line, Reason),
-    (   var(Reason)
-    ->  true
-    ;   format(user_error, "~w:~w: rejected: ~s~n", [Name, N, Reason])
+stream_options(Options) :-
+    (   nb_current(rtl_stream_options, Options0), Options0 \== []
+    ->  Options = Options0
+    ;   Options = []
     ).
 
-%   handle_line(+Line, -Reason) is det.
-%
-%   Process one input line: an event, its deletion, or a rule change. Reason stays unbound
-%   unless the line is rejected (then it is counted).
+run_lines(end_of_file, _, _, _, _) :- !.
+run_lines(Line, In, Name, N, Options) :-
+    rtl_process_line(Line, Options, Outcome),
+    print_outcome(Name, N, Outcome),
+    stop_if_needed(Outcome, Options),
+    read_line_to_string(In, Next),
+    N1 is N + 1,
+    run_lines(Next, In, Name, N1, Options).
 
-handle_line(Line, Reason) :-
-    rtl_parse_event_line(Line, Parsed),
-    (   Parsed = event(Op, Event, Start, End)
-    ->  process_event(Op, Event, Start, End)
-    ;   Parsed = rule(Change, Text)
-    ->  change_rules(Change, Text, Reason)
-    ;   Parsed = error(Reason)
-    ->  true
+print_outcome(Name, N, Outcome) :-
+    (   outcome_message(Outcome, Kind, Reason)
+    ->  flush_output(user_output),
+        (   Name == (-)
+        ->  format(user_error, "~w: ~s~n", [Kind, Reason])
+        ;   format(user_error, "~w:~w: ~w: ~s~n", [Name, N, Kind, Reason])
+        )
     ;   true
-    ),
-    (   nonvar(Reason) -> rtl_count(rejected) ; true ).
+    ).
+
+outcome_message(rejected(Reason), rejected, Reason).
+outcome_message(refused(Reason), error, Reason).
+outcome_message(failed(Reason), error, Reason).
+outcome_message(halted(Reason), error, Reason).
+
+stop_if_needed(Outcome) :-
+    stop_if_needed(Outcome, []).
+
+stop_if_needed(Outcome, Options) :-
+    (   Outcome = halted(_)
+    ->  throw(rtl_stop(1))
+    ;   Outcome \== ok, memberchk(strict(true), Options)
+    ->  throw(rtl_stop(1))
+    ;   true
+    ).
+
+without_bom(Line0, Line) :-
+    (   string(Line0), sub_string(Line0, 0, 1, After, "\uFEFF")
+    ->  sub_string(Line0, 1, After, 0, Line)
+    ;   Line = Line0
+    ).
+
+%   with_action_output(:Goal)
+%
+%   Run Goal with the current output sent where program code's printed text goes
+%   (standard error, or the file of --action-output); output lines go to user_output.
+
+with_action_output(Goal) :-
+    rtl_action_stream(Stream),
+    current_output(Old),
+    setup_call_cleanup(set_output(Stream), Goal, set_output(Old)).
+
+%!  rtl_process_line(+Line:string, +Options:list, -Outcome) is det.
+%
+%   Process one input line: an event, its deletion, or a rule change. Outcome is `ok`,
+%   `rejected(Reason)` (a malformed line, counted as rejected), `refused(Reason)` (a
+%   control line without `allow_control(true)` in Options, counted as rejected),
+%   `failed(Reason)` (the program raised an error or ran out of steps while processing
+%   the event, counted as failed) or `halted(Reason)` (program code called halt).
+
+rtl_process_line(Line, Options, Outcome) :-
+    rtl_flag(max_term_depth, MaxDepth),
+    rtl_parse_event_line(Line, MaxDepth, Parsed),
+    parsed_outcome(Parsed, Options, Outcome),
+    count_outcome(Outcome).
+
+parsed_outcome(blank, _, ok).
+parsed_outcome(error(Reason), _, rejected(Reason)).
+parsed_outcome(rule(Change, Text), Options, Outcome) :-
+    (   memberchk(allow_control(true), Options)
+    ->  change_rules(Change, Text, Reason),
+        ( var(Reason) -> Outcome = ok ; Outcome = rejected(Reason) )
+    ;   Outcome = refused("control lines are disabled (pass --allow-control)")
+    ).
+parsed_outcome(event(Op, Event, Start, End), _, Outcome) :-
+    (   Op == add
+    ->  rtl_seen_add(Event, Start, End),
+        run_event(add, Event, Start, End, Outcome)
+    ;   retraction_outcome(Event, Start, End, Outcome)
+    ).
+
+% A retraction of an event that was not added is refused; one of an event older than what
+% is remembered cannot be checked (rtl_seen.pl).
+retraction_outcome(Event, Start, End, Outcome) :-
+    (   rtl_seen_take(Event, Start, End)
+    ->  run_event(retract, Event, Start, End, Outcome)
+    ;   rtl_seen_horizon(Horizon), End < Horizon         % too old to check
+    ->  run_event(retract, Event, Start, End, Outcome)
+    ;   event_text(Event, Text),
+        format(string(Reason), "retraction of ~s [~w, ~w], which was not added (or was retracted already)",
+               [Text, Start, End]),
+        Outcome = rejected(Reason)
+    ).
+
+run_event(Op, Event, Start, End, Outcome) :-
+    catch(( rtl_input(Op, Event, Start, End), Outcome = ok ),
+          Error,
+          ( event_text(Event, Text), event_failure(Error, Text, Outcome) )).
+
+event_failure(rtl_halted(Why), Text, halted(Reason)) :- !,
+    format(string(Reason), "~s while processing ~s", [Why, Text]).
+event_failure(Error, Text, failed(Reason)) :-
+    error_text(Error, Why),
+    format(string(Reason), "~s while processing ~s", [Why, Text]).
+
+count_outcome(ok).
+count_outcome(rejected(_)) :- rtl_count(rejected).
+count_outcome(refused(_)) :- rtl_count(rejected).
+count_outcome(failed(_)) :- rtl_count(failed).
+count_outcome(halted(_)) :- rtl_count(failed).
+
+% An event as it is named in messages: writeq text, at most 200 characters.
+event_text(Event, Text) :-
+    format(string(Text0), "~q", [Event]),
+    (   string_length(Text0, L), L > 200
+    ->  sub_string(Text0, 0, 197, _, Head),
+        string_concat(Head, "...", Text)
+    ;   Text = Text0
+    ).
 
 change_rules(Change, Text, Reason) :-
     rtl_program(M),
@@ -165,6 +331,8 @@ change_rules(Change, Text, Reason) :-
           error_text(Error, Reason)).
 
 % One line of text for an error term, as print_message/2 would say it.
+error_text(error(rtl_step_limit(Max), _), Text) :- !,
+    format(string(Text), "more than ~D steps (--max-steps)", [Max]).
 error_text(Error, Text) :-
     (   catch('$messages':translate_message(Error, Lines, []), _, fail)
     ->  with_output_to(string(S), print_message_lines(current_output, '', Lines)),
@@ -176,33 +344,70 @@ error_text(Error, Text) :-
     ).
 
 process_event(Op, Event, Start, End) :-
+    (   Op == add
+    ->  rtl_seen_add(Event, Start, End)
+    ;   ignore(rtl_seen_take(Event, Start, End))
+    ),
     rtl_input(Op, Event, Start, End).         % then the events raised meanwhile (rtl_raise)
 
+% The end of the input: run or drop the postponed synchronized matches. Errors are
+% reported through Report (called as call(Report, 0, Outcome)).
+end_of_input(Mode, Report) :-
+    catch(( rtl_guarded(rtl_sync_finish(Mode)), Outcome = ok ),
+          Error,
+          event_failure(Error, "the matches postponed to the end of the input", Outcome)),
+    count_outcome(Outcome),
+    call(Report, 0, Outcome),
+    stop_if_needed(Outcome).
+
 %!  rtl_feed_lines(+Text:string, +FirstLineNo:integer, -Output:string) is det.
+%!  rtl_feed_lines(+Text:string, +FirstLineNo:integer, +Options:list, -Output:string) is det.
 %
 %   Process a batch of input JSON Lines. Output holds the output lines, each ended by a
-%   newline; a rejected input line shows up as `!N<TAB>Reason` with its line number N.
+%   newline; a line that is not processed shows up as `!N<TAB>Kind<TAB>Reason` with its
+%   line number N and Kind `rejected`, `error` or `halt`. Options: `allow_control(Bool)`
+%   (obey control lines; default false), `strict(Bool)` (stop at the first line that is
+%   not processed). Processing also stops after a halt. Everything output by the lines
+%   processed is in Output, once.
 
 rtl_feed_lines(Text, First, Output) :-
+    rtl_feed_lines(Text, First, [], Output).
+
+rtl_feed_lines(Text, First, Options, Output) :-
     rtl_output_to(buffer),
-    split_string(Text, "\n", "", Lines),
-    feed_lines(Lines, First, Rejections),
+    split_string(Text, "\n", "", Lines0),
+    (   First =:= 1, Lines0 = [L0|Ls]
+    ->  without_bom(L0, L1), Lines = [L1|Ls]
+    ;   Lines = Lines0
+    ),
+    with_action_output(feed_lines(Lines, First, Options, Rejections)),
     rtl_take_output(Out),
     append(Out, Rejections, All0),
     exclude(==(""), All0, All),
     atomic_list_concat(All, "\n", Joined),
     (   All == [] -> Output = "" ; string_concat(Joined, "\n", Output) ).
 
-feed_lines([], _, []).
-feed_lines([Line|Lines], N, Rejections) :-
-    handle_line(Line, Reason),
-    (   var(Reason)
-    ->  Rejections = Rest
-    ;   format(string(R), "!~w\t~s", [N, Reason]),
-        Rejections = [R|Rest]
-    ),
-    N1 is N + 1,
-    feed_lines(Lines, N1, Rest).
+feed_lines([], _, _, []).
+feed_lines([Line|Lines], N, Options, Rejections) :-
+    rtl_process_line(Line, Options, Outcome),
+    (   Outcome == ok
+    ->  Rejections = Rest,
+        N1 is N + 1,
+        feed_lines(Lines, N1, Options, Rest)
+    ;   outcome_kind(Outcome, Kind, Reason),
+        format(string(R), "!~w\t~w\t~s", [N, Kind, Reason]),
+        Rejections = [R|Rest],
+        (   ( Kind == halt ; memberchk(strict(true), Options) )
+        ->  Rest = []
+        ;   N1 is N + 1,
+            feed_lines(Lines, N1, Options, Rest)
+        )
+    ).
+
+outcome_kind(rejected(Reason), rejected, Reason).
+outcome_kind(refused(Reason), error, Reason).
+outcome_kind(failed(Reason), error, Reason).
+outcome_kind(halted(Reason), halt, Reason).
 
 %!  rtl_feed_events(+Events:list, -Output:string) is det.
 %
@@ -210,8 +415,8 @@ feed_lines([Line|Lines], N, Rejections) :-
 
 rtl_feed_events(Events, Output) :-
     rtl_output_to(buffer),
-    forall(member(event(Op, Event, Start, End), Events),
-           process_event(Op, Event, Start, End)),
+    with_action_output(forall(member(event(Op, Event, Start, End), Events),
+                              process_event(Op, Event, Start, End))),
     rtl_take_output(Lines),
     (   Lines == []
     ->  Output = ""
@@ -222,12 +427,22 @@ rtl_feed_events(Events, Output) :-
 %!  rtl_action(:Goal) is det.
 %
 %   Run the action of a `Head do Goal <- Pattern` rule. An action that fails or raises
-%   an error is reported on standard error; event processing goes on.
+%   an error is reported on standard error; event processing goes on. What it prints goes
+%   to the action output (standard error by default; rtl_set_action_output/1).
 
 rtl_action(Goal) :-
-    (   catch(Goal, Error, (print_message(warning, Error), fail))
+    (   rtl_action_context(Goal, catch(Goal, Error, action_error(Error)))
     ->  true
-    ;   print_message(warning, format("action failed: ~q", [Goal]))
+    ;   rtl_halt_check,                         % a halt in the action made it fail
+        print_message(warning, format("action failed: ~q", [Goal]))
+    ).
+
+% The step limit and halts are not the action's own errors: they end the event.
+action_error(Error) :-
+    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_) )
+    ->  throw(Error)
+    ;   print_message(warning, Error),
+        fail
     ).
 
 %!  rtl_aggregate(+Function, +Acc0, -Acc, -Value) is det.
@@ -253,11 +468,12 @@ rtl_aggregate(avg(X), Acc0, Sum-N, Avg) :-
 %!  rtl_end_of_input(+Mode, -Output:string) is det.
 %
 %   The input has ended: run (Mode `run`) or discard (`drop`) the postponed synchronized
-%   matches (rtl_sync_finish/1); Output as for rtl_feed_lines/3.
+%   matches (rtl_sync_finish/1); Output as for rtl_feed_lines/3. An error while they run
+%   is written to standard error (`error: REASON`) and counted as failed.
 
 rtl_end_of_input(Mode, Output) :-
     rtl_output_to(buffer),
-    rtl_sync_finish(Mode),
+    with_action_output(catch(end_of_input(Mode, print_outcome(-)), rtl_stop(_), true)),
     rtl_take_output(Lines),
     (   Lines == []
     ->  Output = ""
@@ -266,13 +482,32 @@ rtl_end_of_input(Mode, Output) :-
     ).
 
 %!  rtl_summary(-Text:string) is det.
+%!  rtl_summary(+Seconds:number, -Text:string) is det.
+%
+%   The one-line summary of a run: `retalis: N events in, M derived, K rejected, T s`,
+%   with `F failed`, `R retracted` and `L late` before the time when they are not zero.
+%   rtl_summary/1 gives the time since the program was loaded.
 
 rtl_summary(Text) :-
+    (   nb_current(rtl_run_started, T0), number(T0)
+    ->  true
+    ;   nb_current(rtl_loaded_at, T0), number(T0)
+    ->  true
+    ;   get_time(T0)
+    ),
+    get_time(T1),
+    Seconds is T1 - T0,
+    rtl_summary(Seconds, Text).
+
+rtl_summary(Seconds, Text) :-
     rtl_stat(events, Events),
-    rtl_stat(retracted, Retracted),
     rtl_stat(derived, Derived),
     rtl_stat(rejected, Rejected),
-    rtl_stat(late, Late),
-    format(string(Text),
-           "retalis: ~D events, ~D retracted, ~D rejected, ~D late, ~D derived",
-           [Events, Retracted, Rejected, Late, Derived]).
+    findall(Part,
+            ( member(Name, [failed, retracted, late]),
+              rtl_stat(Name, N), N > 0,
+              format(string(Part), ", ~D ~w", [N, Name]) ),
+            Parts),
+    atomic_list_concat(Parts, Extra),
+    format(string(Text), "retalis: ~D events in, ~D derived, ~D rejected~w, ~2f s",
+           [Events, Derived, Rejected, Extra, Seconds]).

@@ -3,7 +3,8 @@
             rtl_api_output_to_buffer/1, % -Out
             rtl_api_set_flag/3,         % +Name, +ValueText, -Out
             rtl_api_feed_events/2,      % +Items, -Output
-            rtl_api_feed_lines/3,       % +Text, +FirstLineNo, -Output
+            rtl_api_feed_lines/5,       % +Text, +FirstLineNo, +AllowControl, +Strict, -Output
+            rtl_api_set_action_output/2, % +Path, -Out
             rtl_api_fresh_rule_prefix/2,% +Module, -Prefix
             rtl_api_install_rules/3,    % +Module, +ClausesText, -Ids
             rtl_api_remove_rule/3,      % +Module, +Label, -Out
@@ -47,7 +48,8 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_subscriptions).
 :- use_module(rtl_sandbox).
 :- use_module(rtl_text).
-:- use_module(retalis, [rtl_feed_lines/3, rtl_end_of_input/2, rtl_summary/1]).
+:- use_module(rtl_seen).
+:- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1]).
 
 %!  rtl_api_use_program(+Module:text, -Out) is det.
 
@@ -90,7 +92,9 @@ rtl_api_feed_events(Items, Output) :-
     must_be(list, Items),
     foldl(read_item, Items, Events, 0, _),
     rtl_output_to(buffer),
-    process_events(Events, 0, Failure),
+    rtl_action_stream(Stream),              % what program code prints goes there, not into the output
+    current_output(Old),
+    setup_call_cleanup(set_output(Stream), process_events(Events, 0, Failure), set_output(Old)),
     rtl_take_output(Lines0),
     (   var(Failure)
     ->  Lines = Lines0
@@ -126,13 +130,19 @@ finite_time(T) :-
 
 process_events([], _, _).
 process_events([event(Op, Event, Start, End)|Events], I, Failure) :-
-    catch(( rtl_input(Op, Event, Start, End) -> true ; true ), Error, true),
+    catch(( seen(Op, Event, Start, End), rtl_input(Op, Event, Start, End) -> true ; true ), Error, true),
     (   var(Error)
     ->  I1 is I + 1,
         process_events(Events, I1, Failure)
     ;   message_line(Error, Message),
         format(string(Failure), "!error\t~w\t~w", [I, Message])
     ).
+
+% The events added are remembered, so that a later retraction line can be checked (rtl_seen.pl).
+seen(add, Event, Start, End) :-
+    rtl_seen_add(Event, Start, End).
+seen(retract, Event, Start, End) :-
+    ignore(rtl_seen_take(Event, Start, End)).
 
 lines_output(Lines, Output) :-
     (   Lines == []
@@ -141,14 +151,30 @@ lines_output(Lines, Output) :-
         string_concat(Joined, "\n", Output)
     ).
 
-%!  rtl_api_feed_lines(+Text:string, +FirstLineNo:integer, -Output:string) is det.
+%!  rtl_api_feed_lines(+Text:string, +FirstLineNo:integer, +AllowControl:text, +Strict:text, -Output:string) is det.
 %
-%   rtl_feed_lines/3: a batch of event JSON Lines.
+%   rtl_feed_lines/4: a batch of event JSON Lines, control lines obeyed when AllowControl is
+%   `true`, stopping at the first line not processed when Strict is `true`.
 
-rtl_api_feed_lines(Text, First, Output) :-
+rtl_api_feed_lines(Text, First, AllowControl0, Strict0, Output) :-
     must_be(text, Text),
     must_be(integer, First),
-    rtl_feed_lines(Text, First, Output).
+    api_boolean(AllowControl0, AllowControl),
+    api_boolean(Strict0, Strict),
+    rtl_feed_lines(Text, First, [allow_control(AllowControl), strict(Strict)], Output).
+
+api_boolean(Text, Boolean) :-
+    atom_string(Boolean, Text),
+    must_be(boolean, Boolean).
+
+%!  rtl_api_set_action_output(+Path:text, -Out) is det.
+%
+%   rtl_set_action_output/1 with the file Path (a string, never read as a term).
+
+rtl_api_set_action_output(Path, ok) :-
+    must_be(text, Path),
+    atom_string(File, Path),
+    rtl_set_action_output(File).
 
 %!  rtl_api_fresh_rule_prefix(+Module:text, -Prefix:atom) is det.
 

@@ -11,6 +11,10 @@
             rtl_clock/1,                % -Clock
             rtl_set_flag/2,             % +Flag, +Value
             rtl_flag/2,                 % ?Flag, ?Value
+            rtl_max_steps/1,            % -Steps
+            rtl_set_action_output/1,    % +Target
+            rtl_action_stream/1,        % -Stream
+            rtl_close_action_output/0,
             rtl_output_to/1,            % +Sink
             rtl_take_output/1,          % -Lines
             rtl_emit/5,                 % +Event, +Start, +End, +Consumer, +Op
@@ -61,6 +65,8 @@ flag_default(max_delay, 1.0).               % seconds an event may arrive behind
 flag_default(echo_input, false).            % write input events to the output too
 flag_default(event_consumption_policy, unrestricted).
 flag_default(query_time_limit, 10).          % seconds a query from outside may run
+flag_default(max_steps, 1000000).           % inferences per input event (inf: no limit)
+flag_default(max_term_depth, 1000).         % nesting of input event terms
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -83,8 +89,7 @@ rtl_program(Module) :-
 rtl_reset :-
     nb_setval(rtl_clock, -inf),
     nb_setval(rtl_next_sweep, inf),
-    forall(member(S, [events, retracted, derived, underived, late, rejected]),
-           nb_setval(S, 0)),
+    forall(counter(S), nb_setval(S, 0)),
     retractall(rtl_output_line(_)),
     (   nb_current(rtl_output_sink, _) -> true ; nb_setval(rtl_output_sink, print) ),
     schedule_sweep.
@@ -112,8 +117,10 @@ rtl_clear :-
 %
 %   Flags: `max_delay` (seconds, a non-negative number; `inf` keeps every partial match),
 %   `echo_input` (true or false), `event_consumption_policy` (unrestricted, recent,
-%   chronological) and `query_time_limit` (seconds, a positive number). A bad value raises
-%   a type or domain error and changes nothing.
+%   chronological), `query_time_limit` (seconds, a positive number), `max_steps` (the
+%   inferences one input event may take, everything it derives included; `inf` for no
+%   limit; default 1,000,000) and `max_term_depth` (how deep an input event term may be
+%   nested; default 1,000). A bad value raises a type or domain error and changes nothing.
 
 rtl_set_flag(Flag, Value) :-
     (   flag_default(Flag, _)
@@ -129,6 +136,7 @@ rtl_set_flag(Flag, Value) :-
     retractall(flag_value(Flag, _)),
     assertz(flag_value(Flag, Value)),
     (   Flag == echo_input -> nb_setval(rtl_echo_input, Value) ; true ),   % read on every event
+    (   Flag == max_steps -> nb_setval(rtl_max_steps, Value) ; true ),     % read on every event
     (   Flag == max_delay -> schedule_sweep ; true ).
 
 valid_flag_value(max_delay, V) :-
@@ -139,6 +147,54 @@ valid_flag_value(event_consumption_policy, V) :-
     atom(V), memberchk(V, [unrestricted, recent, chronological]).
 valid_flag_value(query_time_limit, V) :-
     number(V), V > 0, V =\= inf.
+valid_flag_value(max_steps, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
+valid_flag_value(max_term_depth, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
+
+%!  rtl_max_steps(-Steps) is det.
+%
+%   The flag `max_steps`, read on every input event.
+
+rtl_max_steps(Steps) :-
+    (   nb_current(rtl_max_steps, Steps0), Steps0 \== []
+    ->  Steps = Steps0
+    ;   rtl_flag(max_steps, Steps),
+        nb_setval(rtl_max_steps, Steps)
+    ).
+
+%!  rtl_set_action_output(+Target) is det.
+%
+%   Where the text that program code prints while events are processed goes (actions,
+%   conditions, static rules): `user_error` (the default) or a file name, opened for
+%   writing (UTF-8). Standard output carries only the output JSON Lines.
+
+rtl_set_action_output(Target) :-
+    rtl_close_action_output,
+    (   Target == user_error
+    ->  true
+    ;   open(Target, write, Stream, [encoding(utf8)]),
+        nb_setval(rtl_action_stream, Stream)
+    ).
+
+%!  rtl_action_stream(-Stream) is det.
+
+rtl_action_stream(Stream) :-
+    (   nb_current(rtl_action_stream, S), S \== []
+    ->  Stream = S
+    ;   Stream = user_error
+    ).
+
+%!  rtl_close_action_output is det.
+%
+%   Close the action output file, if any; printed text goes to standard error again.
+
+rtl_close_action_output :-
+    (   nb_current(rtl_action_stream, S), S \== []
+    ->  nb_setval(rtl_action_stream, []),
+        close(S)
+    ;   true
+    ).
 
 rtl_flag(Flag, Value) :-
     flag_default(Flag, Default),
@@ -277,12 +333,14 @@ rtl_emit(Event, Start, End, Consumer, Op) :-
 
 %!  rtl_emit_line(+Line:string) is det.
 %
-%   Deliver one output line given as JSON text (answers of synchronized queries).
+%   Deliver one output line given as JSON text (answers of synchronized queries). With
+%   sink `print` the line goes to `user_output`, whatever the current output is (the
+%   entry points send the text program code prints elsewhere).
 
 rtl_emit_line(Line) :-
     nb_getval(rtl_output_sink, Sink),
     (   Sink == print
-    ->  write(Line), nl
+    ->  format(user_output, "~s~n", [Line])     % one call: the step limit cannot split a line
     ;   assertz(rtl_output_line(Line))
     ).
 
@@ -295,11 +353,20 @@ rtl_take_output(Lines) :-
 
 %!  rtl_stat(?Name, ?Value) is nondet.
 %
-%   Counters: events, retracted, derived, underived, late, rejected.
+%   Counters: events, retracted, derived, underived, late, rejected (input lines refused),
+%   failed (input events whose processing raised an error).
 
 rtl_stat(Name, Value) :-
-    member(Name, [events, retracted, derived, underived, late, rejected]),
+    counter(Name),
     nb_getval(Name, Value).
+
+counter(events).
+counter(retracted).
+counter(derived).
+counter(underived).
+counter(late).
+counter(rejected).
+counter(failed).
 
 %!  rtl_count(+Name) is det.
 

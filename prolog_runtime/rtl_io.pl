@@ -1,5 +1,7 @@
 :- module(rtl_io,
           [ rtl_parse_event_line/2,      % +LineString, -Parsed
+            rtl_parse_event_line/3,      % +LineString, +MaxDepth, -Parsed
+            rtl_read_event_text/4,       % +Text, +MaxDepth, -Event, -Problem
             rtl_event_json/6,            % +Event, +Start, +End, +Consumer, +Op, -JsonString
             rtl_json_string_escape/2     % +Text, -Escaped
           ]).
@@ -22,20 +24,37 @@ input) go through library(http/json), which also names the reason of a rejection
 :- use_module(rtl_time).
 
 %!  rtl_parse_event_line(+Line:string, -Parsed) is det.
+%!  rtl_parse_event_line(+Line:string, +MaxDepth:integer, -Parsed) is det.
 %
 %   Parsed is `blank`, `event(Op, Event, Start, End)` with Op `add` or `retract`,
 %   `rule(add, RuleText)` or `rule(delete, Label)` for the control lines
 %   `{"op": "add_rule", "rule": TEXT}` and `{"op": "delete_rule", "rule": LABEL}`, or
 %   `error(Reason)` with Reason a string saying what is wrong with the line.
+%
+%   The line must be one JSON object and nothing else; the event a ground term and nothing
+%   else (a final full stop is allowed), nested at most MaxDepth levels deep (default
+%   1,000; list tails do not count); times finite JSON numbers of seconds or ROS stamps
+%   `[Secs, NSecs]` with integers and 0 =< NSecs < 10^9, `start` not after `end`.
 
 rtl_parse_event_line(Line, Parsed) :-
+    rtl_parse_event_line(Line, 1000, Parsed).
+
+rtl_parse_event_line(Line, MaxDepth, Parsed) :-
+    string_length(Line, Length),
+    (   Length > MaxDepth                       % only a long text can be deep
+    ->  Depth = MaxDepth
+    ;   Depth = short
+    ),
     (   blank_line(Line)
     ->  Parsed = blank
-    ;   catch(line_fields(Line, Fields), _, fail)
-    ->  fields_event(Fields, Parsed)
+    ;   Depth \== short, too_deep_text(Line, MaxDepth)
+    ->  depth_reason(MaxDepth, Reason),
+        Parsed = error(Reason)
+    ;   catch(line_fields(Line, Length, Fields), _, fail)
+    ->  fields_event(Fields, Depth, Parsed)
     ;   catch(json_fields(Line, Fields), error(Error, _), true)
     ->  (   var(Error)
-        ->  fields_event(Fields, Parsed)
+        ->  fields_event(Fields, Depth, Parsed)
         ;   json_error_reason(Error, Reason),
             Parsed = error(Reason)
         )
@@ -48,26 +67,129 @@ rule_change("delete_rule", delete).
 blank_line(Line) :-
     split_string(Line, "", " \t\r\n", [""]).
 
-% Fast path: the Prolog reader. Only accept what is also JSON: an object of "key": value.
-line_fields(Line, Fields) :-
-    term_string(Term, Line, [variable_names(Vars)]),
+% Fast path: the Prolog reader, which reads a JSON object as a term `{"k": V, ...}`. Only
+% what is also JSON is accepted here: string keys, values that are strings, JSON numbers
+% (checked on their text: Prolog also reads 0x10, 0'a, 1.0Inf, 1_000...), true, false,
+% null and arrays of those; nothing after the object. Anything else goes to the JSON reader.
+line_fields(Line, Length, Fields) :-
+    term_string(Term, Line, [variable_names(Vars), subterm_positions(Pos)]),
     Vars == [],
     Term = {Body},
+    Pos = brace_term_position(_, To, BodyPos),
+    (   To =:= Length
+    ->  true
+    ;   sub_string(Line, To, _, 0, Rest),
+        blank_line(Rest)
+    ),
     comma_list(Body, Pairs),
-    maplist(key_value, Pairs, Fields).
+    pair_positions(Pairs, BodyPos, Line, Fields).
 
-key_value(Key:Value, Key-Value) :-
-    string(Key).
+pair_positions([Pair], Pos, Line, [Field]) :- !,
+    pair_field(Pair, Pos, Line, Field).
+pair_positions([Pair|Pairs], term_position(_, _, _, _, [Pos, RestPos]), Line, [Field|Fields]) :-
+    pair_field(Pair, Pos, Line, Field),
+    pair_positions(Pairs, RestPos, Line, Fields).
+
+pair_field(Key:Value, term_position(_, _, _, _, [_, ValuePos]), Line, Key-Value) :-
+    string(Key),
+    json_value_text(Value, ValuePos, Line).
+
+json_value_text(V, _, _) :- string(V), !.
+json_value_text(V, From-To, Line) :- number(V), !,
+    Length is To - From,
+    (   integer(V)
+    ->  atom_length(V, Length),                 % as many characters as digits (and sign)
+        (   V =:= 0
+        ->  true
+        ;   ( V < 0 -> First is From + 2 ; First is From + 1 ),
+            string_code(First, Line, C),        % a leading 0: 0x.., 0'c, 0b.., 010...
+            C \== 0'0
+        )
+    ;   sub_string(Line, From, Length, _, Text),
+        json_number_text(Text)
+    ).
+json_value_text(V, _, _) :- atom(V), !, memberchk(V, [true, false, null]).
+json_value_text(V, list_position(_, _, Positions, none), Line) :-
+    is_list(V),
+    maplist(json_value_text_, V, Positions, Line).
+
+json_value_text_(V, Pos, Line) :- json_value_text(V, Pos, Line).
+
+% A JSON number: -?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)?. For a text Prolog read as a
+% number, it is enough that it has only those characters (no digit groups, Inf, NaN, 0x...)
+% and no leading zero.
+json_number_text(Text) :-
+    split_string(Text, "", "0123456789.eE+-", [""]),
+    (   sub_string(Text, 0, 1, _, "-") -> Skip = 1 ; Skip = 0 ),
+    \+ ( sub_string(Text, Skip, 2, _, Two), string_code(1, Two, 0'0), string_code(2, Two, D),
+          between(0'0, 0'9, D) ).
+
+json_number_codes(Codes) :-
+    phrase(json_num, Codes).
+
+json_num --> optional_minus, int_part, optional_fraction, optional_exponent.
+optional_minus --> "-", !.
+optional_minus --> [].
+int_part --> "0", !.
+int_part --> [D], { between(0'1, 0'9, D) }, digits0.
+optional_fraction --> ".", !, digit, digits0.
+optional_fraction --> [].
+optional_exponent --> [E], { E == 0'e ; E == 0'E }, !, optional_sign, digit, digits0.
+optional_exponent --> [].
+optional_sign --> [S], { S == 0'+ ; S == 0'- }, !.
+optional_sign --> [].
+digit --> [D], { between(0'0, 0'9, D) }.
+digits0 --> digit, !, digits0.
+digits0 --> [].
 
 json_fields(Line, Fields) :-
     setup_call_cleanup(open_string(Line, In),
-                       json_read(In, Term, [value_string_as(string)]),
+                       ( json_read(In, Term, [value_string_as(string)]),
+                         read_string(In, _, Rest) ),
                        close(In)),
     (   Term = json(Pairs)
     ->  true
     ;   throw(error(type_error(json_object, Term), _))
     ),
+    (   blank_line(Rest)
+    ->  true
+    ;   throw(error(syntax_error(json(text_after_the_object)), _))
+    ),
+    string_codes(Line, Codes),
+    (   json_numbers_valid(Codes)
+    ->  true
+    ;   throw(error(syntax_error(json(illegal_number)), _))
+    ),
     maplist(json_pair, Pairs, Fields).
+
+% The JSON reader accepts some numbers JSON does not (010): check every number outside
+% strings against the JSON grammar.
+json_numbers_valid([]).
+json_numbers_valid([C|Cs]) :-
+    (   C == 0'"
+    ->  skip_string(Cs, Rest),
+        json_numbers_valid(Rest)
+    ;   ( C == 0'- ; between(0'0, 0'9, C) )
+    ->  number_run(Cs, Run, Rest),
+        json_number_codes([C|Run]),
+        json_numbers_valid(Rest)
+    ;   json_numbers_valid(Cs)
+    ).
+
+skip_string([], []).
+skip_string([C|Cs], Rest) :-
+    (   C == 0'"
+    ->  Rest = Cs
+    ;   C == 0'\\, Cs = [_|Cs1]
+    ->  skip_string(Cs1, Rest)
+    ;   skip_string(Cs, Rest)
+    ).
+
+number_run([C|Cs], [C|Run], Rest) :-
+    ( between(0'0, 0'9, C) ; memberchk(C, `+-.eE`) ),
+    !,
+    number_run(Cs, Run, Rest).
+number_run(Cs, [], Cs).
 
 json_pair(Key=Value0, KeyString-Value) :-
     atom_string(Key, KeyString),
@@ -78,61 +200,130 @@ json_value(@(false), false) :- !.
 json_value(@(null), null) :- !.
 json_value(V, V).
 
+json_error_reason(syntax_error(json(text_after_the_object)), Reason) :- !,
+    Reason = "invalid JSON (text after the object)".
 json_error_reason(syntax_error(json(What)), Reason) :- !,
     format(string(Reason), "invalid JSON (~w)", [What]).
 json_error_reason(syntax_error(What), Reason) :- !,
     format(string(Reason), "invalid JSON (~w)", [What]).
 json_error_reason(type_error(_, _), "not a JSON object") :- !.
+json_error_reason(evaluation_error(float_overflow), Reason) :- !,
+    Reason = "\"t\" must be a finite number of seconds or [secs, nsecs] (float overflow)".
 json_error_reason(Error, Reason) :-
     format(string(Reason), "invalid JSON (~q)", [Error]).
 
-fields_event(Fields, Parsed) :-
-    memberchk("op"-Op, Fields),
-    rule_change(Op, Change),
-    !,
-    (   memberchk("rule"-Text, Fields), string(Text)
-    ->  Parsed = rule(Change, Text)
-    ;   format(string(Reason), "\"op\": ~q needs \"rule\": the rule text (add_rule) or label (delete_rule)",
-               [Op]),
+% The fields of a line in one record, f(Event, T, Start, End, Op, Rule), unset ones
+% unbound (the first of duplicate keys counts; unknown keys are ignored).
+fields_record(Fields, R) :-
+    R = f(_, _, _, _, _, _),
+    fill_record(Fields, R).
+
+fill_record([], _).
+fill_record([Key-Value|Fields], R) :-
+    (   key_slot(Key, I)
+    ->  arg(I, R, Slot),
+        ( var(Slot) -> Slot = Value ; true )
+    ;   true
+    ),
+    fill_record(Fields, R).
+
+key_slot("event", 1).
+key_slot("t", 2).
+key_slot("start", 3).
+key_slot("end", 4).
+key_slot("op", 5).
+key_slot("rule", 6).
+
+fields_event(Fields, MaxDepth, Parsed) :-
+    fields_record(Fields, R),
+    R = f(Text, T, S, E, Op, Rule),
+    interval(T, S, E, Start, End, TimeProblem),
+    (   nonvar(Op), rule_change(Op, Change)
+    ->  (   string(Rule)
+        ->  Parsed = rule(Change, Rule)
+        ;   format(string(Reason), "\"op\": ~q needs \"rule\": the rule text (add_rule) or label (delete_rule)",
+                   [Op]),
+            Parsed = error(Reason)
+        )
+    ;   var(Text)
+    ->  Parsed = error("missing \"event\"")
+    ;   \+ string(Text)
+    ->  Parsed = error("\"event\" must be a string holding a Prolog term")
+    ;   nonvar(Op), Op \== "add", Op \== "retract"
+    ->  format(string(Reason), "unknown \"op\" ~q (expected \"add\", \"retract\", \"add_rule\" or \"delete_rule\")", [Op]),
         Parsed = error(Reason)
-    ).
-fields_event(Fields, Parsed) :-
-    (   field_problem(Fields, Reason)
-    ->  Parsed = error(Reason)
-    ;   memberchk("event"-Text, Fields),
-        text_event(Text, Event, Problem),
+    ;   nonvar(TimeProblem)
+    ->  Parsed = error(TimeProblem)
+    ;   rtl_read_event_text(Text, MaxDepth, Event, Problem),
         (   nonvar(Problem)
         ->  Parsed = error(Problem)
-        ;   fields_op(Fields, Op),
-            fields_interval(Fields, Start, End),
-            Parsed = event(Op, Event, Start, End)
+        ;   ( Op == "retract" -> Op1 = retract ; Op1 = add ),
+            Parsed = event(Op1, Event, Start, End)
         )
     ).
 
-field_problem(Fields, Reason) :-
-    (   \+ memberchk("event"-_, Fields)
-    ->  Reason = "missing \"event\""
-    ;   memberchk("event"-Text, Fields), \+ string(Text)
-    ->  Reason = "\"event\" must be a string holding a Prolog term"
-    ;   memberchk("op"-Op, Fields), \+ memberchk(Op, ["add", "retract"])
-    ->  format(string(Reason), "unknown \"op\" ~q (expected \"add\", \"retract\", \"add_rule\" or \"delete_rule\")", [Op])
-    ;   interval_problem(Fields, Reason)
-    ->  true
+%!  rtl_read_event_text(+Text:string, +MaxDepth, -Event, -Problem) is det.
+%
+%   Read the term of an event: Problem stays unbound when Text holds one ground callable
+%   term (optionally followed by a full stop) nested at most MaxDepth levels deep, and is
+%   a string saying what is wrong otherwise. MaxDepth `short` says that Text is known to
+%   be shorter than the limit (so it cannot be deeper).
+
+rtl_read_event_text(Text, MaxDepth, Event, Problem) :-
+    (   MaxDepth \== short,
+        too_deep_text(Text, MaxDepth)
+    ->  depth_reason(MaxDepth, Problem)
+    ;   catch(read_one_term(Text, Event, Problem), error(Formal, _), read_error(Formal, Problem))
+    ->  (   nonvar(Problem)
+        ->  true
+        ;   \+ ground(Event)
+        ->  Problem = "\"event\" must be ground (it has variables)"
+        ;   \+ callable(Event)
+        ->  Problem = "\"event\" must be an atom or a compound term"
+        ;   MaxDepth \== short,
+            string_length(Text, Length), Length > MaxDepth,
+            term_too_deep(Event, MaxDepth)
+        ->  depth_reason(MaxDepth, Problem)
+        ;   true
+        )
+    ;   Problem = "\"event\" is not a Prolog term"
     ).
 
-% Read the event text once; Problem stays unbound when it is a ground callable term.
-text_event(Text, Event, Problem) :-
-    catch(term_string(Event, Text, [variable_names(Vars)]), error(syntax_error(E), _),
-          ( syntax_reason(E, Why),
-            format(string(Problem), "\"event\" is not a Prolog term (syntax error: ~w)", [Why]) )),
-    (   nonvar(Problem)
-    ->  true
-    ;   Vars \== []
-    ->  Problem = "\"event\" must be ground (it has variables)"
-    ;   \+ callable(Event)
-    ->  Problem = "\"event\" must be an atom or a compound term"
-    ;   true
+% term_string/2 stops at the first full stop; text after it is an error. The reader only
+% needs the positions when the text may hold a full stop followed by layout.
+read_one_term(Text, Term, Problem) :-
+    (   \+ split_string(Text, ".", "", [_]),      % it has a dot
+        may_end_early(Text)
+    ->  term_string(Term, Text, [subterm_positions(Pos)]),
+        position_end(Pos, To),
+        sub_string(Text, To, _, 0, Rest),
+        split_string(Rest, "", " \t\r\n", [Left]),
+        (   memberchk(Left, ["", "."])
+        ->  true
+        ;   Problem = "\"event\" has text after the term"
+        )
+    ;   term_string(Term, Text)
     ).
+
+may_end_early(Text) :-
+    sub_string(Text, Before, _, _, "."),
+    After is Before + 1,
+    (   sub_string(Text, After, 1, _, C)
+    ->  memberchk(C, [" ", "\t", "\n", "\r", "%"])
+    ;   true
+    ),
+    !.
+
+position_end(_-To, To) :- !.
+position_end(Pos, To) :- arg(2, Pos, To).
+
+read_error(syntax_error(E), Problem) :- !,
+    syntax_reason(E, Why),
+    format(string(Problem), "\"event\" is not a Prolog term (syntax error: ~w)", [Why]).
+read_error(resource_error(_), Problem) :- !,
+    Problem = "\"event\" is too large to read".
+read_error(Formal, Problem) :-
+    format(string(Problem), "\"event\" cannot be read (~q)", [Formal]).
 
 syntax_reason(end_of_clause, "unexpected end of the term") :- !.
 syntax_reason(end_of_clause_expected, "unexpected text after the term") :- !.
@@ -141,35 +332,103 @@ syntax_reason(cannot_start_term, "unexpected character") :- !.
 syntax_reason(end_of_file, "unexpected end of the term") :- !.
 syntax_reason(E, E).
 
-interval_problem(Fields, Reason) :-
-    (   memberchk("t"-_, Fields), ( memberchk("start"-_, Fields) ; memberchk("end"-_, Fields) )
-    ->  Reason = "give either \"t\" or \"start\" and \"end\", not both"
-    ;   memberchk("t"-T, Fields)
-    ->  \+ rtl_time_seconds(T, _),
-        Reason = "\"t\" must be a number of seconds or [secs, nsecs]"
-    ;   memberchk("start"-S, Fields), memberchk("end"-E, Fields)
-    ->  (   \+ rtl_time_seconds(S, _)
-        ->  Reason = "\"start\" must be a number of seconds or [secs, nsecs]"
-        ;   \+ rtl_time_seconds(E, _)
-        ->  Reason = "\"end\" must be a number of seconds or [secs, nsecs]"
-        ;   rtl_time_seconds(S, S1), rtl_time_seconds(E, E1), S1 > E1,
-            Reason = "\"start\" is after \"end\""
+depth_reason(MaxDepth, Reason) :-
+    format(string(Reason), "term nested deeper than ~D levels", [MaxDepth]).
+
+%   too_deep_text(+Text, +MaxDepth) is semidet.
+%
+%   Text opens more than MaxDepth brackets without closing them (quotes are not skipped,
+%   so brackets in quoted text count too). Checked before reading: the reader recurses on
+%   the C stack. A text no longer than MaxDepth cannot be that deep.
+
+too_deep_text(Text, MaxDepth) :-
+    string_length(Text, Length),
+    Length > MaxDepth,
+    split_string(Text, "([{", "", Parts),           % fewer brackets than MaxDepth: not deep
+    length(Parts, N),
+    N > MaxDepth + 1,
+    string_codes(Text, Codes),
+    bracket_depth_exceeds(Codes, 0, MaxDepth).
+
+bracket_depth_exceeds([C|Cs], D0, Max) :-
+    (   ( C == 0'( ; C == 0'[ ; C == 0'{ )
+    ->  D is D0 + 1,
+        (   D > Max -> true ; bracket_depth_exceeds(Cs, D, Max) )
+    ;   ( C == 0') ; C == 0'] ; C == 0'} )
+    ->  D is D0 - 1,
+        bracket_depth_exceeds(Cs, D, Max)
+    ;   bracket_depth_exceeds(Cs, D0, Max)
+    ).
+
+%   term_too_deep(+Term, +MaxDepth) is semidet.
+%
+%   Term has compound terms nested more than MaxDepth deep; the tail of a list is not a
+%   level deeper than the list (prefix and infix operators are: 1+1+...+1 is deep).
+
+term_too_deep(Term, MaxDepth) :-
+    \+ depth_within(Term, MaxDepth).
+
+depth_within(Term, Left) :-
+    (   compound(Term)
+    ->  Left > 0,
+        Left1 is Left - 1,
+        (   Term = [H|T]
+        ->  depth_within(H, Left1),
+            list_tail_within(T, Left)
+        ;   \+ ( arg(_, Term, Arg), \+ depth_within(Arg, Left1) )
         )
-    ;   Reason = "missing time: give \"t\", or \"start\" and \"end\""
+    ;   true
     ).
 
-fields_op(Fields, Op) :-
-    (   memberchk("op"-"retract", Fields)
-    ->  Op = retract
-    ;   Op = add
+list_tail_within(T, Left) :-
+    (   T = [H|T1]
+    ->  Left1 is Left - 1,
+        depth_within(H, Left1),
+        list_tail_within(T1, Left)
+    ;   depth_within(T, Left)
     ).
 
-fields_interval(Fields, Start, End) :-
-    (   memberchk("t"-T, Fields)
-    ->  rtl_time_seconds(T, Start), End = Start
-    ;   memberchk("start"-S, Fields), memberchk("end"-E, Fields),
-        rtl_time_seconds(S, Start), rtl_time_seconds(E, End)
+%   interval(?T, ?S, ?E, -Start, -End, -Problem) is det.
+%
+%   Start and End (seconds) of the time fields "t", "start", "end" (unbound when absent);
+%   Problem is bound to a string saying why they do not give a valid time.
+
+interval(T, S, E, Start, End, Problem) :-
+    (   nonvar(T)
+    ->  (   ( nonvar(S) ; nonvar(E) )
+        ->  Problem = "give either \"t\" or \"start\" and \"end\", not both"
+        ;   time_problem("t", T, Problem)
+        ->  true
+        ;   time_seconds(T, Start), End = Start
+        )
+    ;   nonvar(S), nonvar(E)
+    ->  (   time_problem("start", S, Problem)
+        ->  true
+        ;   time_problem("end", E, Problem)
+        ->  true
+        ;   time_seconds(S, Start), time_seconds(E, End),
+            (   Start > End -> Problem = "\"start\" is after \"end\"" ; true )
+        )
+    ;   Problem = "missing time: give \"t\", or \"start\" and \"end\""
     ).
+
+%   time_problem(+Key, +Value, -Reason) is semidet.
+%
+%   Value (of field Key) is not a valid input time; Reason says why.
+
+time_problem(Key, T, Reason) :-
+    (   integer(T)
+    ->  fail
+    ;   float(T), T =:= T, abs(T) =\= inf
+    ->  fail
+    ;   T = [Secs, NSecs], integer(Secs), integer(NSecs)
+    ->  \+ between(0, 999999999, NSecs),
+        format(string(Reason), "\"~s\": nanoseconds must be in [0, 1e9), not ~w", [Key, NSecs])
+    ;   format(string(Reason), "\"~s\" must be a finite number of seconds or [secs, nsecs]", [Key])
+    ).
+
+time_seconds(T, Seconds) :-
+    rtl_time_seconds(T, Seconds).
 
 %!  rtl_event_json(+Event, +Start, +End, +Consumer, +Op, -Json:string) is det.
 %

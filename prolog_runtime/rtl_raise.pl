@@ -4,7 +4,8 @@
             new_event/3,                % +Event, +Secs, +NSecs
             rtl_input/4,                % +Op, +Event, +Start, +End
             rtl_raise_internal/3,       % +Event, +Start, +End
-            rtl_flush_raised/0
+            rtl_flush_raised/0,
+            rtl_guarded/1               % :Goal
           ]).
 
 /** <module> Raising events from Prolog code (thesis Listing A.1)
@@ -24,6 +25,9 @@ rtl_flush_raised/0).
 
 :- use_module(rtl_ele).
 :- use_module(rtl_time).
+:- use_module(rtl_halt).
+
+:- meta_predicate rtl_guarded(0).
 
 :- dynamic raised/3.            % raised(Event, Start, End), oldest first
 
@@ -103,15 +107,66 @@ rtl_raise_internal(Event, Start, End) :-
 %!  rtl_input(+Op, +Event, +Start, +End) is det.
 %
 %   Process one input event (Op `add`) or deletion (Op `retract`), then every event raised
-%   meanwhile. Events raised before (at load time) are processed first.
+%   meanwhile. Events raised before (at load time) are processed first. Errors raised by
+%   the program's rules propagate (the JSON Lines readers report them per event): see
+%   guarded/1 for the step limit and halt.
 
 rtl_input(Op, Event, Start, End) :-
     (   nb_current(rtl_raise_busy, true)
     ->  process(Op, Event, Start, End)           % nested call from a rule: no draining here
+    ;   guarded(( drain,
+                  process(Op, Event, Start, End),
+                  drain ))
+    ).
+
+%   guarded(:Goal) is det.
+%
+%   Run Goal, the processing of one input event, as the one being processed (events raised
+%   meanwhile are queued) and within the step limit (the flag `max_steps`: inferences per
+%   input event, everything it derives and raises included). A derivation that does not
+%   end (a cyclic rule, a runaway recursion in a condition) raises
+%   `error(rtl_step_limit(Max), _)`. When Goal raises, the events it raised and that were
+%   not processed yet are dropped. A halt called by program code meanwhile is raised as
+%   `rtl_halted(Reason)` (rtl_halt.pl). (One catch/3 instead of setup_call_cleanup/3:
+%   this runs for every input event.)
+
+guarded(Goal) :-
+    nb_setval(rtl_raise_busy, true),
+    (   catch(limited(Goal), Error, true)
+    ->  true
+    ;   Error = error(failed(Goal), _)          % should not happen: processing is det
+    ),
+    nb_setval(rtl_raise_busy, false),
+    (   var(Error)
+    ->  rtl_halt_check
+    ;   retractall(raised(_, _, _)),
+        throw(Error)
+    ).
+
+limited(Goal) :-
+    rtl_max_steps(Max),
+    (   Max == inf
+    ->  call(Goal)
+    ;   call_with_inference_limit(Goal, Max, Result),
+        (   Result == inference_limit_exceeded
+        ->  throw(error(rtl_step_limit(Max), _))
+        ;   true
+        )
+    ).
+
+%!  rtl_guarded(:Goal) is det.
+%
+%   Run Goal (program code run outside an input event: the postponed matches at the end
+%   of the input) as an event is run: the events it raises are queued and processed after
+%   it, what it prints goes where the entry point sends it, and a halt in it is raised as
+%   `rtl_halted(Reason)`. There is no step limit.
+
+rtl_guarded(Goal) :-
+    (   nb_current(rtl_raise_busy, true)
+    ->  call(Goal)
     ;   setup_call_cleanup(nb_setval(rtl_raise_busy, true),
-                           ( drain,
-                             process(Op, Event, Start, End),
-                             drain ),
+                           ( catch(( call(Goal), drain ), Error, ( retractall(raised(_, _, _)), throw(Error) )),
+                             rtl_halt_check ),
                            nb_setval(rtl_raise_busy, false))
     ).
 
@@ -123,9 +178,7 @@ rtl_input(Op, Event, Start, End) :-
 rtl_flush_raised :-
     (   nb_current(rtl_raise_busy, true)
     ->  true
-    ;   setup_call_cleanup(nb_setval(rtl_raise_busy, true),
-                           drain,
-                           nb_setval(rtl_raise_busy, false))
+    ;   guarded(drain)
     ).
 
 process(add, Event, Start, End) :-

@@ -114,7 +114,7 @@ def test_swipl_without_event_file_is_a_usage_error(tmp_path, swipl):
 
 def test_rule_changes_in_the_event_stream_report_bad_lines():
     case = ROOT / "tests" / "golden" / "stream_rule_changes"
-    run = retalisc("run", case / "program.rtl", "--events", case / "events.jsonl")
+    run = retalisc("run", case / "program.rtl", "--events", case / "events.jsonl", "--allow-control")
     assert run.returncode == 0
     assert ":6: rejected: " in run.stderr and "does not occur in the pattern" in run.stderr
     assert ":10: rejected: event_rule `nosuch' does not exist" in run.stderr

@@ -123,19 +123,38 @@ Examples:
 @click.option("--drop-pending", is_flag=True,
               help="At the end of the input, discard the synchronized matches still waiting instead of "
                    "running them.")
+@click.option("--allow-control", is_flag=True,
+              help="Obey control lines in the events ({\"op\": \"add_rule\", ...}, \"delete_rule\"); "
+                   "without it they are refused (an error each) and skipped.")
+@click.option("--strict", is_flag=True,
+              help="End the run with exit status 1 at the first line that is rejected or whose event "
+                   "fails, after writing everything produced before it.")
+@click.option("--max-steps", type=str, default=None, metavar="N",
+              help="Inferences one input event may take, everything it derives included, before it is "
+                   "stopped with an error (default 1000000; 'inf' for no limit).")
+@click.option("--action-output", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Write the text that actions and conditions print to FILE (default: standard error; "
+                   "standard output carries only JSON Lines).")
+@click.option("--progress/--no-progress", default=None,
+              help="Show a progress line on standard error (default: on a terminal, for inputs over 5 MB).")
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
-                **bag) -> None:
-    """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines."""
+                allow_control: bool, strict: bool, max_steps, action_output, progress, **bag) -> None:
+    """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
+
+    Example: retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
+    """
+    from ..driver.bridge import PrologError
     from ..driver.engine import Engine
-    from ..driver.run import run_event_file
+    from ..driver.run import run_event_file, set_action_output
 
     if (events is None) == (bag["bag"] is None):
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
     if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
         raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
                                "--stamp, --typestore, --out-bag and --foxglove go with --bag")
+    steps = _max_steps(max_steps)
     result = compile_or_exit(program)
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
@@ -144,6 +163,14 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         engine.set_flag("echo_input", "true")
     if max_delay is not None:
         engine.set_flag("max_delay", repr(max_delay))
+    engine.set_flag("max_steps", str(steps))
+    if action_output is not None:
+        try:
+            set_action_output(engine, action_output)
+        except PrologError as error:
+            click.echo(f"error: --action-output {action_output}: cannot open the action output file ({error})",
+                       err=True)
+            sys.exit(2)
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
     for request in memories:
@@ -155,8 +182,27 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         sys.exit(replay_from_cli(engine, out, bag, batch_size=batch_size, consumer_dir=consumer_dir,
                                  drop_pending=drop_pending, first_output=posted))
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
-                            drop_pending=drop_pending, first_output=posted)
+                            drop_pending=drop_pending, first_output=posted, allow_control=allow_control,
+                            strict=strict, progress=progress)
     sys.exit(status)
+
+
+DEFAULT_MAX_STEPS = 1_000_000
+
+
+def _max_steps(text):
+    """`--max-steps N`: a positive integer or 'inf' (usage error otherwise)."""
+    if text is None:
+        return DEFAULT_MAX_STEPS
+    if text.strip() == "inf":
+        return "inf"
+    try:
+        value = int(text.replace("_", "").replace(",", ""))
+    except ValueError:
+        value = 0
+    if value <= 0:
+        raise click.BadParameter(f"{text!r}: expected a positive integer or 'inf'", param_hint="--max-steps")
+    return value
 
 
 def post_cli_query(engine, number: int, at: float, goal: str, timeout):

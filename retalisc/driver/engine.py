@@ -85,8 +85,14 @@ def _raise_if_refused(output: str) -> str:
 
 @dataclass(frozen=True)
 class Rejection:
+    """An input line that was not processed: `kind` is "rejected" (malformed: bad JSON, a
+    non-ground term, a bad time...), "error" (a refused control line, or the program raised
+    an error or ran out of steps while processing the event) or "halt" (program code
+    called halt: processing stopped there). `line` is 0 for the end of the input."""
+
     line: int
     reason: str
+    kind: str = "rejected"
 
 
 def _time(value: Number, what: str = "a time") -> Number:
@@ -216,19 +222,26 @@ class Engine:
             raise PrologError(f"event {index} of the batch ({items[int(index)][1]!r}): {message}")
         return delivered
 
-    def feed_lines(self, text: str, first_line: int = 1) -> Tuple[List[OutputEvent], List[Rejection]]:
+    def feed_lines(self, text: str, first_line: int = 1, *, allow_control: bool = False,
+                   strict: bool = False) -> Tuple[List[OutputEvent], List[Rejection]]:
         """Process event JSON Lines (SPEC section 11) exactly as `swipl PROGRAM.pl FILE` does;
-        return the output and the rejected lines with their reasons."""
+        return the output and the lines not processed, with their reasons. Control lines
+        (`add_rule`, `delete_rule`) are refused unless `allow_control`. An event whose
+        processing raises is reported (kind "error") and the lines after it are processed;
+        with `strict`, processing stops at the first line not processed, as it does after a
+        halt (kind "halt"). The output of every line processed is returned, once."""
         if isinstance(first_line, bool) or not isinstance(first_line, int):
             raise TypeError(f"first_line must be an int, not {first_line!r}")
         with self._lock:
-            output = self._call("rtl_api_feed_lines", _text(text, "event lines"), first_line)
+            output = self._call("rtl_api_feed_lines", _text(text, "event lines"), first_line,
+                                "true" if allow_control else "false", "true" if strict else "false")
             rejections = []
             lines = []
             for line in output.splitlines():
                 if line.startswith("!"):
-                    number, _, reason = line[1:].partition("\t")
-                    rejections.append(Rejection(int(number), reason))
+                    number, _, rest = line[1:].partition("\t")
+                    kind, _, reason = rest.partition("\t")
+                    rejections.append(Rejection(int(number), reason, kind))
                 elif line:
                     lines.append(line)
             return self._deliver_lines(lines), rejections

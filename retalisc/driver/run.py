@@ -2,70 +2,196 @@
 output and the same rejection messages as `swipl PROGRAM.pl FILE`."""
 from __future__ import annotations
 
+import io
 import os
 import sys
+import time
 from typing import IO, Dict, Iterator, List, Optional, Sequence, Tuple
-
-import click
 
 from .engine import Engine
 
+PROGRESS_THRESHOLD = 5_000_000     # bytes of input before a progress display is worth it
 
-def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str]]]:
-    first, batch = 1, []
+
+def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str], int]]:
+    """(first line number, lines, bytes read) per batch."""
+    first, batch, size = 1, [], 0
     for number, line in enumerate(stream, start=1):
+        size += len(line.encode("utf-8")) if not line.isascii() else len(line)
         batch.append(line.rstrip("\n"))
         if len(batch) >= batch_size:
-            yield first, batch
-            first, batch = number + 1, []
+            yield first, batch, size
+            first, batch, size = number + 1, [], 0
     if batch:
-        yield first, batch
+        yield first, batch, size
+
+
+class RunStopped(Exception):
+    """The run ended early: `--strict` met a bad line, or program code called halt."""
 
 
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
                    consumer_dir: Optional[str] = None, drop_pending: bool = False,
-                   first_output: Sequence = ()) -> int:
+                   first_output: Sequence = (), allow_control: bool = False, strict: bool = False,
+                   progress: Optional[bool] = None) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
-    `out` ('-' for stdout, None to drop it). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`;
-    a summary closes the run. At the end of the input the postponed synchronized matches run
-    (or are dropped with `drop_pending`). `first_output` holds outputs (lists of OutputEvents)
-    produced before the events, written first. With `consumer_dir`, subscription deliveries go to
-    `consumer_dir/<consumer>.jsonl` instead of `out`. Returns the exit status."""
+    `out` ('-' for stdout, None to drop it). Lines not processed go to stderr as
+    `FILE:LINE: rejected: REASON` (malformed) or `FILE:LINE: error: REASON` (a refused control
+    line, an event whose processing raised); a one-line summary closes the run. At the end
+    of the input the postponed synchronized matches run (or are dropped with `drop_pending`).
+    `first_output` holds outputs (lists of OutputEvents) produced before the events, written
+    first. With `consumer_dir`, subscription deliveries go to `consumer_dir/<consumer>.jsonl`
+    instead of `out`. Control lines are obeyed only with `allow_control`. With `strict` the
+    first line not processed ends the run (status 1) after everything produced before it
+    is written; a halt called by program code does so always. `progress`: True shows a
+    progress display on stderr, False never, None (default) on a terminal for inputs over
+    a few MB. Returns the exit status."""
+    started = time.perf_counter()
     name = "<stdin>" if events == "-" else events
-    source = sys.stdin if events == "-" else open(events, encoding="utf-8")
+    if events == "-":
+        source = io.TextIOWrapper(sys.stdin.buffer, encoding="utf-8-sig", errors="replace")
+    else:
+        source = open(events, encoding="utf-8-sig", errors="replace")
     sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
-    total = os.path.getsize(events) if events != "-" else 0
+    total = os.path.getsize(events) if events != "-" else None
     consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
-    show_progress = total > 5_000_000 and sys.stderr.isatty()
-    try:
-        with click.progressbar(length=total, label="events", file=sys.stderr) if show_progress else _NoBar() as bar:
-            def write(produced):
-                for event in produced:
-                    if consumers is not None and event.consumer is not None:
-                        consumers.write(event)
-                    else:
-                        sink.write(event.line + "\n")
+    display = Progress(stream=sys.stderr, total=total, enabled=progress)
+    status = 0
 
-            for produced in first_output:
-                write(produced)
-            for first, lines in _batches(source, batch_size):
-                text = "\n".join(lines)
-                produced, rejected = engine.feed_lines(text, first)
-                for rejection in rejected:
-                    print(f"{name}:{rejection.line}: rejected: {rejection.reason}", file=sys.stderr)
-                write(produced)
-                bar.update(len(text.encode("utf-8")) + len(lines))
-            write(engine.end_of_input(drop_pending))
-        sink.flush()
+    def write(produced):
+        for event in produced:
+            if consumers is not None and event.consumer is not None:
+                consumers.write(event)
+            else:
+                sink.write(event.line + "\n")
+
+    try:
+        halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
+        if halted:
+            print(halted, file=sys.stderr)
+            raise RunStopped()
+        for produced in first_output:
+            write(produced)
+        for first, lines, size in _batches(source, batch_size):
+            produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
+                                                   strict=strict)
+            write(produced)
+            if rejected:
+                sink.flush()
+                display.clear()
+            for rejection in rejected:
+                print(f"{name}:{rejection.line}: {'rejected' if rejection.kind == 'rejected' else 'error'}: "
+                      f"{rejection.reason}", file=sys.stderr)
+            display.update(size, len(lines), sum(1 for e in produced if e.consumer is None))
+            if rejected and (strict or rejected[-1].kind == "halt"):
+                raise RunStopped()
+        failed = engine.stats().get("failed", 0)
+        write(engine.end_of_input(drop_pending))
+        if strict and engine.stats().get("failed", 0) > failed:
+            raise RunStopped()
+    except RunStopped:
+        status = 1
     finally:
-        if source is not sys.stdin:
+        display.close()
+        sink.flush()
+        if events == "-":
+            source.detach()
+        else:
             source.close()
         if sink is not sys.stdout:
             sink.close()
         if consumers is not None:
             consumers.close()
-    print(engine.summary(), file=sys.stderr)
-    return 0
+        engine.bridge.once("retalis:rtl_close_action_output")
+    print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
+    return status
+
+
+def set_action_output(engine: Engine, path: str) -> None:
+    """Send what program code prints (actions, conditions) to the file `path`; raises
+    OSError-like PrologError when it cannot be opened."""
+    engine.bridge.apply("rtl_api", "rtl_api_set_action_output", path)
+
+
+def summary_line(stats: dict, seconds: float) -> str:
+    """`retalis: N events in, M derived, K rejected, T s` (as rtl_summary/2), with failed,
+    retracted and late events before the time when there are any."""
+    extra = "".join(f", {stats[name]:,} {name}" for name in ("failed", "retracted", "late") if stats.get(name))
+    return (f"retalis: {stats.get('events', 0):,} events in, {stats.get('derived', 0):,} derived, "
+            f"{stats.get('rejected', 0):,} rejected{extra}, {seconds:.2f} s")
+
+
+class Progress:
+    """A one-line progress display on a terminal: bytes read (with a bar and percentage when
+    the size is known), events, events per second, derived events. `enabled` None: shown
+    when `stream` is a terminal and the input is (or, from a pipe, has grown) over
+    `threshold` bytes; True: always; False: never. Redrawn at most every `interval` s."""
+
+    def __init__(self, stream: IO[str], total: Optional[int], enabled: Optional[bool] = None,
+                 threshold: int = PROGRESS_THRESHOLD, interval: float = 0.2):
+        self.stream = stream
+        self.total = total
+        self.enabled = enabled
+        self.threshold = threshold
+        self.interval = interval
+        self.read = self.events = self.derived = 0
+        self.started = time.perf_counter()
+        self.drawn_at = -1.0
+        self.shown = False
+        self.width = 0
+        isatty = getattr(stream, "isatty", None)
+        self.terminal = bool(isatty and isatty())
+
+    def _active(self) -> bool:
+        if self.enabled is not None:
+            return self.enabled
+        if not self.terminal:
+            return False
+        size = self.total if self.total is not None else self.read
+        return size > self.threshold
+
+    def update(self, read: int, events: int, derived: int) -> None:
+        self.read += read
+        self.events += events
+        self.derived += derived
+        now = time.perf_counter()
+        if self._active() and now - self.drawn_at >= self.interval:
+            self._draw(now)
+
+    def _draw(self, now: float) -> None:
+        elapsed = max(now - self.started, 1e-9)
+        parts = []
+        if self.total:
+            fraction = min(self.read / self.total, 1.0)
+            filled = int(fraction * 20)
+            parts.append(f"[{'#' * filled}{'.' * (20 - filled)}] {fraction:4.0%}")
+            parts.append(f"{self.read / 1e6:.1f}/{self.total / 1e6:.1f} MB")
+        else:
+            parts.append(f"{self.read / 1e6:.1f} MB")
+        parts.append(f"{self.events:,} events")
+        parts.append(f"{self.events / elapsed:,.0f} events/s")
+        parts.append(f"{self.derived:,} derived")
+        text = "  ".join(parts)
+        self.stream.write("\r" + text.ljust(self.width))
+        self.stream.flush()
+        self.width = len(text)
+        self.drawn_at = now
+        self.shown = True
+
+    def clear(self) -> None:
+        """Take the display line away (before other messages are written)."""
+        if self.shown:
+            self.stream.write("\r" + " " * self.width + "\r")
+            self.stream.flush()
+            self.drawn_at = -1.0
+
+    def close(self) -> None:
+        """Draw the final state and end the line."""
+        if self._active() and (self.shown or self.enabled):
+            self._draw(time.perf_counter())
+        if self.shown:
+            self.stream.write("\n")
+            self.stream.flush()
 
 
 def consumer_file_name(consumer: str) -> str:
@@ -94,14 +220,3 @@ class ConsumerFiles:
         for stream in self.files.values():
             stream.close()
         self.files.clear()
-
-
-class _NoBar:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
-
-    def update(self, n: int) -> None:
-        pass

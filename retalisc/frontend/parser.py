@@ -314,6 +314,8 @@ class _Builder:
         if node.data == "name":
             token = node.children[0]
             text = str(token)
+            if token.type == "NAME" and text[0].isupper():      # a non-ASCII capital: a variable
+                return _Operand(Var(text, self.span(token)), token.start_pos, token.end_pos, False)
             quoted = token.type == "QUOTED_NAME"
             name = self.unescape(text[1:-1], "'", token.start_pos + 1) if quoted else text
             return _Name(name, self.span(token), token.start_pos, token.end_pos, quoted)

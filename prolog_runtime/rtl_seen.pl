@@ -1,0 +1,106 @@
+:- module(rtl_seen,
+          [ rtl_seen_add/3,             % +Event, +Start, +End
+            rtl_seen_take/3,            % +Event, +Start, +End
+            rtl_seen_horizon/1          % -Time
+          ]).
+
+/** <module> The input events seen recently, to check retractions against
+
+A retraction (`"op": "retract"`) deletes an input event added before. To tell a retraction
+of an event that was never added (a typo, a replayed deletion) from a real one, the runtime
+remembers the input events it was given, each occurrence once, in arrival order, and
+forgets them as the clock moves on: an event ending more than `max_delay` plus the largest
+window of the program's stores before the clock is forgotten (with `max_delay` `inf`
+nothing is). A retraction of an event that is not remembered and ends after that horizon
+is refused; one of an older event cannot be checked and is processed as before.
+
+Memory is proportional to the event rate times `max_delay + window` (plus a few thousand
+events), as for the partial matches (docs/runtime.md).
+*/
+
+:- use_module(rtl_ele).
+
+:- dynamic generation/2.        % generation(Module, End): its events are Module:seen(Event, Start, End0)
+:- dynamic free_generation/1.   % free_generation(Module): not in use
+
+%!  rtl_seen_add(+Event, +Start, +End) is det.
+%
+%   Remember one input event. Events are remembered in generations of 1,024 input events,
+%   each in a module of its own (`rtl_seen_<N>:seen/3`); when a generation is closed, the generations
+%   whose events all end before the horizon are dropped whole (this runs for every input
+%   event: erasing events one by one would cost more than remembering them).
+
+rtl_seen_add(Event, Start, End) :-
+    (   nb_current(rtl_seen_generation, Name), Name \== []
+    ->  true
+    ;   open_generation(Name)
+    ),
+    assertz(Name:seen(Event, Start, End)),
+    nb_getval(events, N),                       % rtl_ele's count of input events
+    (   N /\ 1023 =:= 1023 -> close_generation(Name, End) ; true ).
+
+%!  rtl_seen_take(+Event, +Start, +End) is semidet.
+%
+%   Forget one remembered occurrence of the input event; fails when there is none.
+
+rtl_seen_take(Event, Start, End) :-
+    (   nb_current(rtl_seen_generation, Name), Name \== []
+    ;   generation(Name, _)
+    ),
+    clause(Name:seen(Event, Start0, End0), true, Ref),
+    Start0 =:= Start, End0 =:= End,
+    !,
+    erase(Ref).
+
+% The modules of dropped generations are used again (modules are never deleted).
+open_generation(Name) :-
+    (   retract(free_generation(Name))
+    ->  true
+    ;   flag(rtl_seen_generations, G, G + 1),
+        format(atom(Name), 'rtl_seen_~d', [G])
+    ),
+    dynamic(Name:seen/3),
+    nb_setval(rtl_seen_generation, Name).
+
+% Every event of the generation ends at the latest at the clock or at End (the last one,
+% not processed yet).
+close_generation(Name, End) :-
+    rtl_clock(Clock),
+    GenerationEnd is max(Clock, End),
+    assertz(generation(Name, GenerationEnd)),
+    nb_setval(rtl_seen_generation, []),
+    rtl_seen_horizon(Horizon),
+    forall(( generation(Old, OldEnd), OldEnd < Horizon ),
+           drop_generation(Old)).
+
+drop_generation(Name) :-
+    retractall(generation(Name, _)),
+    retractall(Name:seen(_, _, _)),
+    assertz(free_generation(Name)).
+
+%!  rtl_seen_horizon(-Time) is det.
+%
+%   Events ending before Time are no longer remembered (`-inf` when nothing is forgotten).
+
+rtl_seen_horizon(Horizon) :-
+    rtl_flag(max_delay, Delay),
+    (   Delay == inf
+    ->  Horizon = -inf
+    ;   rtl_clock(Clock),
+        (   rtl_program(M),
+            aggregate_all(max(W), ( M:ele_store(_, _, W), number(W) ), MaxWindow0)
+        ->  MaxWindow = MaxWindow0
+        ;   MaxWindow = 0
+        ),
+        (   Clock =:= -inf -> Horizon = -inf ; Horizon is Clock - Delay - MaxWindow )
+    ).
+
+:- multifile rtl_ele:clear_hook/0.
+rtl_ele:clear_hook :-
+    forall(generation(Name, _), drop_generation(Name)),
+    (   nb_current(rtl_seen_generation, Name), Name \== []
+    ->  retractall(Name:seen(_, _, _)),
+        assertz(free_generation(Name))
+    ;   true
+    ),
+    nb_setval(rtl_seen_generation, []).
