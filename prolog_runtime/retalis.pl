@@ -20,6 +20,7 @@
 :- reexport(rtl_query).
 :- reexport(rtl_math).
 :- reexport(rtl_sync).
+:- reexport(rtl_horizon).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 
@@ -62,6 +63,7 @@ run_declaration(Program, Goal) :-
 %   Script entry: process the event files named on the command line, in order. Does
 %   nothing when the program is loaded by the Python driver (flag `retalis_embedded`).
 %   Options: `--echo-input` also writes the input events; `--max-delay=SECONDS`;
+%   `--retraction-horizon=SECONDS` (or `inf`);
 %   `--consumer-dir=DIR` writes subscription deliveries to `DIR/<consumer>.jsonl`.
 
 rtl_main :-
@@ -98,6 +100,9 @@ main_args([Arg|Args], Files) :-
     ;   atom_concat('--max-delay=', D, Arg)
     ->  ( D == inf -> Delay = inf ; atom_number(D, Delay) ),
         rtl_set_flag(max_delay, Delay), Files = Rest
+    ;   atom_concat('--retraction-horizon=', H, Arg)
+    ->  ( H == inf -> Horizon = inf ; atom_number(H, Horizon), Horizon >= 0 ),
+        rtl_set_flag(retraction_horizon, Horizon), Files = Rest
     ;   sub_atom(Arg, 0, _, _, '--'), Arg \== '--'
     ->  domain_error(option, Arg)
     ;   Files = [Arg|Rest]
@@ -107,7 +112,7 @@ main_args([Arg|Args], Files) :-
 usage_error(Formal) :-
     (   Formal = domain_error(option, Opt)
     ->  format(user_error, "error: unknown option ~w~n", [Opt])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--consumer-dir=DIR] [--drop-pending] EVENTS.jsonl...~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] EVENTS.jsonl...~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -138,7 +143,9 @@ process_line(Line, Name, N) :-
     (   var(Reason)
     ->  true
     ;   format(user_error, "~w:~w: rejected: ~s~n", [Name, N, Reason])
-    ).
+    ),
+    rtl_take_warnings(Warnings),
+    forall(member(W, Warnings), format(user_error, "~w:~w: warning: ~s~n", [Name, N, W])).
 
 %   handle_line(+Line, -Reason) is det.
 %
@@ -180,7 +187,8 @@ process_event(Op, Event, Start, End) :-
 %!  rtl_feed_lines(+Text:string, +FirstLineNo:integer, -Output:string) is det.
 %
 %   Process a batch of input JSON Lines. Output holds the output lines, each ended by a
-%   newline; a rejected input line shows up as `!N<TAB>Reason` with its line number N.
+%   newline; a rejected input line shows up as `!N<TAB>Reason` with its line number N, a
+%   warning about line N (a deletion outside the retraction horizon) as `?N<TAB>Text`.
 
 rtl_feed_lines(Text, First, Output) :-
     rtl_output_to(buffer),
@@ -196,22 +204,29 @@ feed_lines([], _, []).
 feed_lines([Line|Lines], N, Rejections) :-
     handle_line(Line, Reason),
     (   var(Reason)
-    ->  Rejections = Rest
+    ->  Rejections = Rest0
     ;   format(string(R), "!~w\t~s", [N, Reason]),
-        Rejections = [R|Rest]
+        Rejections = [R|Rest0]
     ),
+    rtl_take_warnings(Warnings),
+    findall(W, ( member(T, Warnings), format(string(W), "?~w\t~s", [N, T]) ), Ws),
+    append(Ws, Rest, Rest0),
     N1 is N + 1,
     feed_lines(Lines, N1, Rest).
 
 %!  rtl_feed_events(+Events:list, -Output:string) is det.
 %
-%   Process a batch of `event(Op, Event, Start, End)` terms; Output as for rtl_feed_lines/3.
+%   Process a batch of `event(Op, Event, Start, End)` terms; Output as for rtl_feed_lines/3,
+%   with the warnings as `?<TAB>Text` (no line number).
 
 rtl_feed_events(Events, Output) :-
     rtl_output_to(buffer),
     forall(member(event(Op, Event, Start, End), Events),
            process_event(Op, Event, Start, End)),
-    rtl_take_output(Lines),
+    rtl_take_output(Lines0),
+    rtl_take_warnings(Warnings),
+    findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
+    append(Lines0, Ws, Lines),
     (   Lines == []
     ->  Output = ""
     ;   atomic_list_concat(Lines, "\n", Joined),
@@ -223,6 +238,9 @@ rtl_feed_events(Events, Output) :-
 %   Run the action of a `Head do Goal <- Pattern` rule. An action that fails or raises
 %   an error is reported on standard error; event processing goes on.
 
+rtl_action(_) :-
+    rtl_dry_running,                          % a deletion outside the horizon, counted only
+    !.
 rtl_action(Goal) :-
     (   catch(Goal, Error, (print_message(warning, Error), fail))
     ->  true
@@ -272,6 +290,7 @@ rtl_summary(Text) :-
     rtl_stat(derived, Derived),
     rtl_stat(rejected, Rejected),
     rtl_stat(late, Late),
+    rtl_stat(too_late, TooLate),
     format(string(Text),
-           "retalis: ~D events, ~D retracted, ~D rejected, ~D late, ~D derived",
-           [Events, Retracted, Rejected, Late, Derived]).
+           "retalis: ~D events, ~D retracted, ~D too late to retract, ~D rejected, ~D late, ~D derived",
+           [Events, Retracted, TooLate, Rejected, Late, Derived]).

@@ -81,6 +81,10 @@ def check_command(program: str) -> None:
 @click.option("--max-delay", type=float, default=None,
               help="Seconds an event may arrive behind the latest one and still be matched in full "
                    "(default 1.0).")
+@click.option("--retraction-horizon", type=click.FloatRange(min=0), default=None, metavar="SECONDS",
+              help="Keep what deletions need for this long: a deletion of an event that ended at most "
+                   "SECONDS before the latest one is exact (default and minimum: the delay bound plus the "
+                   "largest window; 'inf' keeps everything). Later deletions are reported and change nothing.")
 @click.option("--batch-size", type=click.IntRange(1), default=2000, show_default=True,
               help="Events handed to Prolog per call.")
 @click.option("--consumer-dir", type=click.Path(file_okay=False), default=None,
@@ -102,8 +106,8 @@ def check_command(program: str) -> None:
 @click.option("--drop-pending", is_flag=True,
               help="At the end of the input, discard the synchronized matches still waiting instead of "
                    "running them.")
-def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
-                consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool) -> None:
+def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon,
+                batch_size: int, consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool) -> None:
     """Run PROGRAM over an event file, printing derived events as JSON Lines."""
     from ..driver.engine import Engine
     from ..driver.run import run_event_file
@@ -114,6 +118,8 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         engine.set_flag("echo_input", "true")
     if max_delay is not None:
         engine.set_flag("max_delay", repr(max_delay))
+    if retraction_horizon is not None:
+        engine.set_flag("retraction_horizon", repr(retraction_horizon))
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
     for request in memories:

@@ -75,6 +75,14 @@ class Rejection:
     reason: str
 
 
+@dataclass(frozen=True)
+class EngineWarning:
+    """A warning about an input (a deletion outside the retraction horizon): its line in a
+    `feed_lines` batch, None for `feed`/`feed_batch`."""
+    line: Optional[int]
+    text: str
+
+
 def prolog_string(text: str) -> str:
     """`text` as a Prolog string literal."""
     escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n").replace("\r", "\\r")
@@ -110,6 +118,7 @@ class Engine:
         self._callbacks: List[Callable[[OutputEvent], None]] = []
         self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
         self._synchronized: Dict[str, "Future"] = {}
+        self._warnings: List[EngineWarning] = []
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")
         self.bridge.consult(str(prolog_file))
         if module:
@@ -192,8 +201,18 @@ class Engine:
     def _deliver(self, output: str) -> List[OutputEvent]:
         return self._deliver_lines([line for line in output.splitlines() if line])
 
+    def take_warnings(self) -> List[EngineWarning]:
+        """The warnings of the inputs fed since the last call (deletions outside the retraction
+        horizon, docs/runtime.md), in order."""
+        warnings, self._warnings = self._warnings, []
+        return warnings
+
     def _deliver_lines(self, lines: List[str]) -> List[OutputEvent]:
-        events = [OutputEvent.from_line(line) for line in lines if line]
+        for line in lines:
+            if line.startswith("?"):        # ?LINE<TAB>text: a warning (rtl_feed_lines/3)
+                number, _, text = line[1:].partition("\t")
+                self._warnings.append(EngineWarning(int(number) if number else None, text))
+        events = [OutputEvent.from_line(line) for line in lines if line and not line.startswith("?")]
         for event in events:
             if event.query is not None:
                 self._resolve(event.query)

@@ -26,7 +26,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                    consumer_dir: Optional[str] = None, drop_pending: bool = False,
                    first_output: Sequence = ()) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
-    `out` ('-' for stdout, None to drop it). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`;
+    `out` ('-' for stdout, None to drop it). Rejected lines go to stderr as `FILE:LINE: rejected: REASON`,
+    warnings (deletions outside the retraction horizon) as `FILE:LINE: warning: TEXT`;
     a summary closes the run. At the end of the input the postponed synchronized matches run
     (or are dropped with `drop_pending`). `first_output` holds outputs (lists of OutputEvents)
     produced before the events, written first. With `consumer_dir`, subscription deliveries go to
@@ -51,8 +52,10 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             for first, lines in _batches(source, batch_size):
                 text = "\n".join(lines)
                 produced, rejected = engine.feed_lines(text, first)
-                for rejection in rejected:
-                    print(f"{name}:{rejection.line}: rejected: {rejection.reason}", file=sys.stderr)
+                messages = [(r.line, f"rejected: {r.reason}") for r in rejected]
+                messages += [(w.line, f"warning: {w.text}") for w in engine.take_warnings()]
+                for line, message in sorted(messages, key=lambda m: m[0]):
+                    print(f"{name}:{line}: {message}", file=sys.stderr)
                 write(produced)
                 bar.update(len(text.encode("utf-8")) + len(lines))
             write(engine.end_of_input(drop_pending))
