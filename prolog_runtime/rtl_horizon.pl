@@ -13,6 +13,7 @@
             rtl_too_late_text/4,        % +End, +Retracted, +Derived, -Text
             rtl_warning/1,              % +Text
             rtl_take_warnings/1,        % -Texts
+            rtl_drop_twins/1,           % :Stored
             rtl_next_seq/1,             % -Seq
             rtl_aggregate_values/3,     % +Items, -Acc, -Values
             rtl_aggregate_redo/5        % +Items, +Removed, -Acc, -Retracts, -Adds
@@ -60,7 +61,7 @@ record, and deleting an A or a P replays the P's of the affected accumulators
 (rtl_aggregate_values/3, rtl_aggregate_redo/5).
 */
 
-:- meta_predicate rtl_dry_run(0, -, -).
+:- meta_predicate rtl_dry_run(0, -, -), rtl_drop_twins(:).
 
 :- dynamic warning_text/1.
 
@@ -317,6 +318,27 @@ rtl_warning(Text) :-
 
 rtl_take_warnings(Texts) :-
     findall(T, retract(warning_text(T)), Texts).
+
+%!  rtl_drop_twins(:Stored) is det.
+%
+%   Under `recent`, a partial match about to wait replaces its waiting twins: the stored
+%   matches (live or kept) of the same events at other times. Called by compiled rules when
+%   Stored is not ground (a partial match from one branch of an `or`, whose other branch's
+%   variables are unbound): a twin is then a variant of it, not anything that unifies.
+
+rtl_drop_twins(M:Stored) :-
+    Stored =.. [Name|Args],
+    append(Key, [_, _], Args),
+    (   program_fact(M, ele_kept_store(Name, kept(KeptA, KeptB), _))
+    ->  Names = [Name, KeptA, KeptB]
+    ;   Names = [Name]
+    ),
+    copy_term(Key, Pattern),
+    append(Pattern, [_, _], PatternArgs),
+    forall(member(N, Names),
+           (   Head =.. [N|PatternArgs],
+               forall(( clause(M:Head, true, Ref), Pattern =@= Key ), erase(Ref))
+           )).
 
 %!  rtl_next_seq(-Seq:integer) is det.
 %

@@ -46,6 +46,17 @@ def test_recent_still_replaces_an_identical_twin():
     assert outputs(engine, stream) == [("c(1)", 2, 3, "add")]
 
 
+def test_recent_does_not_take_events_of_the_two_branches_of_an_or_for_twins():
+    """A partial match from one branch of an `or` leaves the other branch's variables unbound;
+    it is not a twin of one from the other branch (that merely unifies with it)."""
+    program = ":- set_etalis_flag(event_consumption_policy, recent).\nr(K) <- (d(K, _) or c(K, _)) seq b(K).\n"
+    engine = fresh(Engine.from_source(program, "or_twins.rtl"))
+    stream = [("d(1, 1)", 1), ("c(1, 2)", 2), ("b(1)", 3), ("b(1)", 4), ("d(1, 1)", 5), ("d(1, 1)", 6), ("b(1)", 7),
+              ("b(1)", 8)]
+    # d(1, 1)@6 replaces its true twin d(1, 1)@5: b(1)@8 finds nothing
+    assert outputs(engine, stream) == [("r(1)", 2, 3, "add"), ("r(1)", 1, 4, "add"), ("r(1)", 6, 7, "add")]
+
+
 @pytest.mark.parametrize("policy", ["recent", "chronological", "unrestricted"])
 @pytest.mark.parametrize("pattern, stream, bogus", [
     # a join: the partner of b(1) differs only in the unnamed argument

@@ -372,8 +372,11 @@ class _RuleGenerator:
         store = "asserta" if self.policy == "recent" else "assertz"
         wait = C(store, own)
         if self.policy == "recent":
+            # a twin is the same events (a variant: a partial match from one branch of an `or`
+            # leaves the other branch's variables unbound, and must not unify with another)
             twin = Compound(own.name, tuple(own.args[:-2]) + (Var("_"), Var("_")))
-            wait = C(",", self.drop_all(step, twin), wait)
+            drop = C(";", C("->", C("ground", own), self.drop_all(step, twin)), C("rtl_drop_twins", own))
+            wait = C(",", drop, wait)
         consume = conj([self.take(step, partner), self.record_add(matched), output])
         return C(";", C("->", C("once", found), consume), wait)
 
