@@ -26,6 +26,7 @@
 :- reexport(rtl_api).
 :- reexport(rtl_seen).
 :- reexport(rtl_halt).
+:- reexport(rtl_horizon).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 
@@ -78,6 +79,7 @@ run_declaration(Program, Goal) :-
 %   error. Exit status: 0 when the input was processed (rejected and failed lines
 %   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
 %   usage errors.
+%   `--retraction-horizon=SECONDS` (or `inf`) keeps deletions exact that long.
 
 rtl_main :-
     current_prolog_flag(retalis_embedded, true),
@@ -158,6 +160,9 @@ main_args([Arg|Args], Files) :-
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
+    ;   atom_concat('--retraction-horizon=', H, Arg)
+    ->  ( H == inf -> Horizon = inf ; atom_number(H, Horizon), Horizon >= 0 ),
+        rtl_set_flag(retraction_horizon, Horizon), Files = Rest
     ;   sub_atom(Arg, 0, _, _, '--'), Arg \== '--'
     ->  domain_error(option, Arg)
     ;   Files = [Arg|Rest]
@@ -171,12 +176,7 @@ set_stream_option(Option) :-
 usage_error(Formal) :-
     (   Formal = domain_error(option, Opt)
     ->  format(user_error, "error: unknown option ~w~n", [Opt])
-    ;   Formal = domain_error(max_steps, N)
-    ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
-    ;   Formal = action_output(File, E)
-    ->  error_text(error(E, _), Why),
-        format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--allow-control] [--strict] [--max-steps=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--allow-control] [--strict] [--max-steps=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -209,6 +209,7 @@ run_lines(end_of_file, _, _, _, _) :- !.
 run_lines(Line, In, Name, N, Options) :-
     rtl_process_line(Line, Options, Outcome),
     print_outcome(Name, N, Outcome),
+    print_warnings(Name, N),
     stop_if_needed(Outcome, Options),
     read_line_to_string(In, Next),
     N1 is N + 1,
@@ -223,6 +224,15 @@ print_outcome(Name, N, Outcome) :-
         )
     ;   true
     ).
+
+% Warnings about line N (a deletion outside the retraction horizon, rtl_horizon.pl).
+print_warnings(Name, N) :-
+    rtl_take_warnings(Warnings),
+    forall(member(W, Warnings),
+           (   Name == (-)
+           ->  format(user_error, "warning: ~s~n", [W])
+           ;   format(user_error, "~w:~w: warning: ~s~n", [Name, N, W])
+           )).
 
 outcome_message(rejected(Reason), rejected, Reason).
 outcome_message(refused(Reason), error, Reason).
@@ -368,7 +378,8 @@ end_of_input(Mode, Report) :-
 %   line number N and Kind `rejected`, `error` or `halt`. Options: `allow_control(Bool)`
 %   (obey control lines; default false), `strict(Bool)` (stop at the first line that is
 %   not processed). Processing also stops after a halt. Everything output by the lines
-%   processed is in Output, once.
+%   processed is in Output, once. A warning about line N (a deletion outside the retraction
+%   horizon) shows up as `?N<TAB>Text`.
 
 rtl_feed_lines(Text, First, Output) :-
     rtl_feed_lines(Text, First, [], Output).
@@ -390,13 +401,16 @@ rtl_feed_lines(Text, First, Options, Output) :-
 feed_lines([], _, _, []).
 feed_lines([Line|Lines], N, Options, Rejections) :-
     rtl_process_line(Line, Options, Outcome),
+    rtl_take_warnings(Warnings),
+    findall(W, ( member(T, Warnings), format(string(W), "?~w\t~s", [N, T]) ), Ws),
+    append(Ws, Rejections0, Rejections),
     (   Outcome == ok
-    ->  Rejections = Rest,
+    ->  Rejections0 = Rest,
         N1 is N + 1,
         feed_lines(Lines, N1, Options, Rest)
     ;   outcome_kind(Outcome, Kind, Reason),
         format(string(R), "!~w\t~w\t~s", [N, Kind, Reason]),
-        Rejections = [R|Rest],
+        Rejections0 = [R|Rest],
         (   ( Kind == halt ; memberchk(strict(true), Options) )
         ->  Rest = []
         ;   N1 is N + 1,
@@ -411,13 +425,17 @@ outcome_kind(halted(Reason), halt, Reason).
 
 %!  rtl_feed_events(+Events:list, -Output:string) is det.
 %
-%   Process a batch of `event(Op, Event, Start, End)` terms; Output as for rtl_feed_lines/3.
+%   Process a batch of `event(Op, Event, Start, End)` terms; Output as for rtl_feed_lines/3,
+%   with the warnings as `?<TAB>Text` (no line number).
 
 rtl_feed_events(Events, Output) :-
     rtl_output_to(buffer),
     with_action_output(forall(member(event(Op, Event, Start, End), Events),
                               process_event(Op, Event, Start, End))),
-    rtl_take_output(Lines),
+    rtl_take_output(Lines0),
+    rtl_take_warnings(Warnings),
+    findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
+    append(Lines0, Ws, Lines),
     (   Lines == []
     ->  Output = ""
     ;   atomic_list_concat(Lines, "\n", Joined),
@@ -430,6 +448,9 @@ rtl_feed_events(Events, Output) :-
 %   an error is reported on standard error; event processing goes on. What it prints goes
 %   to the action output (standard error by default; rtl_set_action_output/1).
 
+rtl_action(_) :-
+    rtl_dry_running,                          % a deletion outside the horizon, counted only
+    !.
 rtl_action(Goal) :-
     (   rtl_action_context(Goal, catch(Goal, Error, action_error(Error)))
     ->  true
@@ -485,7 +506,8 @@ rtl_end_of_input(Mode, Output) :-
 %!  rtl_summary(+Seconds:number, -Text:string) is det.
 %
 %   The one-line summary of a run: `retalis: N events in, M derived, K rejected, T s`,
-%   with `F failed`, `R retracted` and `L late` before the time when they are not zero.
+%   with `F failed`, `R retracted`, `D too late to retract` and `L late` before the time
+%   when they are not zero.
 %   rtl_summary/1 gives the time since the program was loaded.
 
 rtl_summary(Text) :-
@@ -504,9 +526,10 @@ rtl_summary(Seconds, Text) :-
     rtl_stat(derived, Derived),
     rtl_stat(rejected, Rejected),
     findall(Part,
-            ( member(Name, [failed, retracted, late]),
+            ( member(Name-Label, [failed-failed, retracted-retracted,
+                                  too_late-'too late to retract', late-late]),
               rtl_stat(Name, N), N > 0,
-              format(string(Part), ", ~D ~w", [N, Name]) ),
+              format(string(Part), ", ~D ~w", [N, Label]) ),
             Parts),
     atomic_list_concat(Parts, Extra),
     format(string(Text), "retalis: ~D events in, ~D derived, ~D rejected~w, ~2f s",

@@ -96,9 +96,12 @@ rtl_api_feed_events(Items, Output) :-
     current_output(Old),
     setup_call_cleanup(set_output(Stream), process_events(Events, 0, Failure), set_output(Old)),
     rtl_take_output(Lines0),
+    rtl_take_warnings(Warnings),             % deletions outside the retraction horizon
+    findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
+    append(Lines0, Ws, Lines1),
     (   var(Failure)
-    ->  Lines = Lines0
-    ;   append(Lines0, [Failure], Lines)
+    ->  Lines = Lines1
+    ;   append(Lines1, [Failure], Lines)
     ),
     lines_output(Lines, Output).
 

@@ -49,10 +49,13 @@ hooks registered with rtl_add_output_hook/1 (subscriptions use this).
 The clock is the largest end time processed so far (event time, so replayed data behaves
 like live data). A stored partial match whose start lies more than Window + max_delay
 before the clock can no longer be part of any match with an event that respects the
-delay bound, and is removed by the periodic sweep.
+delay bound, and is removed by the periodic sweep; it is kept for deletions and late
+events until the retraction horizon has passed (rtl_horizon.pl, which also decides whether a
+deletion is too late).
 */
 
 :- use_module(rtl_io).
+:- use_module(rtl_horizon).
 
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
@@ -67,6 +70,7 @@ flag_default(event_consumption_policy, unrestricted).
 flag_default(query_time_limit, 10).          % seconds a query from outside may run
 flag_default(max_steps, 1000000).           % inferences per input event (inf: no limit)
 flag_default(max_term_depth, 1000).         % nesting of input event terms
+flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_horizon.pl)
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -90,7 +94,9 @@ rtl_reset :-
     nb_setval(rtl_clock, -inf),
     nb_setval(rtl_next_sweep, inf),
     forall(counter(S), nb_setval(S, 0)),
+    rtl_horizon_reset,
     retractall(rtl_output_line(_)),
+    rtl_take_warnings(_),
     (   nb_current(rtl_output_sink, _) -> true ; nb_setval(rtl_output_sink, print) ),
     schedule_sweep.
 
@@ -120,7 +126,8 @@ rtl_clear :-
 %   chronological), `query_time_limit` (seconds, a positive number), `max_steps` (the
 %   inferences one input event may take, everything it derives included; `inf` for no
 %   limit; default 1,000,000) and `max_term_depth` (how deep an input event term may be
-%   nested; default 1,000). A bad value raises a type or domain error and changes nothing.
+%   nested; default 1,000) and `retraction_horizon` (`auto`, seconds or `inf`: how long
+%   deletions stay exact, at least max_delay plus the largest window; rtl_horizon.pl). A bad value raises a type or domain error and changes nothing.
 
 rtl_set_flag(Flag, Value) :-
     (   flag_default(Flag, _)
@@ -137,7 +144,7 @@ rtl_set_flag(Flag, Value) :-
     assertz(flag_value(Flag, Value)),
     (   Flag == echo_input -> nb_setval(rtl_echo_input, Value) ; true ),   % read on every event
     (   Flag == max_steps -> nb_setval(rtl_max_steps, Value) ; true ),     % read on every event
-    (   Flag == max_delay -> schedule_sweep ; true ).
+    (   memberchk(Flag, [max_delay, retraction_horizon]) -> schedule_sweep ; true ).
 
 valid_flag_value(max_delay, V) :-
     (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
@@ -147,6 +154,8 @@ valid_flag_value(event_consumption_policy, V) :-
     atom(V), memberchk(V, [unrestricted, recent, chronological]).
 valid_flag_value(query_time_limit, V) :-
     number(V), V > 0, V =\= inf.
+valid_flag_value(retraction_horizon, V) :-
+    (   V == auto -> true ; V == inf -> true ; number(V), V >= 0, V =\= inf ).
 valid_flag_value(max_steps, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 valid_flag_value(max_term_depth, V) :-
@@ -221,7 +230,7 @@ rtl_event(Event, Start, End) :-
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true),
     nb_getval(rtl_next_sweep, Next),
-    (   End >= Next -> rtl_collect_garbage ; true ).
+    (   End >= Next -> periodic_sweep ; true ).
 
 late_check(End, Clock) :-
     rtl_flag(max_delay, Delay),
@@ -229,14 +238,23 @@ late_check(End, Clock) :-
 
 %!  rtl_retract_event(+Event, +Start, +End) is det.
 %
-%   Delete a previously added input event and everything derived from it.
+%   Delete a previously added input event and everything derived from it. A deletion
+%   outside the retraction horizon (rtl_horizon.pl) changes nothing: it is counted as
+%   `too_late` and reported by a warning (rtl_take_warnings/1) with what it would have
+%   taken back.
 
 rtl_retract_event(Event, Start, End) :-
-    rtl_count(retracted),
-    (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
-    run_output_hooks(Event, Start, End, retract),
     nb_getval(rtl_program, M),
-    forall(M:ele_untrigger(Event, Start, End), true).
+    (   rtl_retraction_too_late(End)
+    ->  rtl_count(too_late),
+        rtl_dry_run(M:ele_untrigger(Event, Start, End), Retracted, Derived),
+        rtl_too_late_text(End, Retracted, Derived, Text),
+        rtl_warning(Text)
+    ;   rtl_count(retracted),
+        (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
+        run_output_hooks(Event, Start, End, retract),
+        forall(M:ele_untrigger(Event, Start, End), true)
+    ).
 
 %!  rtl_derived(+Event, +Start, +End) is det.
 %
@@ -354,7 +372,8 @@ rtl_take_output(Lines) :-
 %!  rtl_stat(?Name, ?Value) is nondet.
 %
 %   Counters: events, retracted, derived, underived, late, rejected (input lines refused),
-%   failed (input events whose processing raised an error).
+%   failed (input events whose processing raised an error), too_late (deletions outside the
+%   retraction horizon, not counted as retracted).
 
 rtl_stat(Name, Value) :-
     counter(Name),
@@ -367,6 +386,7 @@ counter(underived).
 counter(late).
 counter(rejected).
 counter(failed).
+counter(too_late).
 
 %!  rtl_count(+Name) is det.
 
@@ -390,8 +410,10 @@ rtl_store_size(Size) :-
 
 %!  rtl_collect_garbage is det.
 %
-%   Remove the partial matches of windowed steps that can no longer take part in a match
-%   (their start lies more than Window + max_delay before the clock).
+%   Retire the partial matches of windowed steps that can no longer take part in a match
+%   with an event within the delay bound (their start lies more than Window + max_delay
+%   before the clock): they are kept for deletions and late events, and dropped when the
+%   retraction horizon has passed (rtl_horizon.pl).
 
 rtl_collect_garbage :-
     nb_getval(rtl_program, M),
@@ -400,26 +422,53 @@ rtl_collect_garbage :-
     (   Delay == inf
     ->  true
     ;   forall(M:ele_store(Name, Arity, Window),
-               sweep_store(M, Name, Arity, Clock - Window - Delay))
+               ( Before is Clock - Window - Delay,
+                 rtl_retire_store(M, Name, Arity, Before) )),
+        rtl_forget_kept(M, Clock),
+        rtl_swept(Clock)
     ),
-    schedule_sweep.
-
-sweep_store(M, Name, Arity, HorizonExpr) :-
-    Horizon is HorizonExpr,
-    functor(Head, Name, Arity),
-    StartArg is Arity - 1,
-    arg(StartArg, Head, Start),
-    forall(( clause(M:Head, true, Ref), Start < Horizon ), erase(Ref)).
+    schedule_next_sweep.
 
 % The next sweep is due when the clock has moved on by half of the smallest window plus
 % the delay bound: every stored match is then at most 1.5 times as old as it needs to be.
+% A program without windowed stores that keeps records for deletions (consumption
+% policies) sweeps them every half retraction horizon.
 schedule_sweep :-
+    rtl_flag(max_delay, Delay0),
+    rtl_flag(retraction_horizon, HorizonFlag),
+    (   nb_current(rtl_program, M0) -> true ; M0 = [] ),
+    rtl_horizon_setup(M0, Delay0, HorizonFlag),
+    schedule_next_sweep.
+
+schedule_next_sweep :-
     (   nb_current(rtl_program, M), M \== [],
         rtl_flag(max_delay, Delay), Delay \== inf,
-        aggregate_all(min(W), M:ele_store(_, _, W), MinWindow), MinWindow \== inf
+        sweep_period(M, Delay, Period, MinEvents)
     ->  nb_getval(rtl_clock, Clock),
-        Step is max((MinWindow + Delay) / 2, 1.0e-3),
+        Step is max(Period / 2, 1.0e-3),
         (   Clock =:= -inf -> Next = -inf ; Next is Clock + Step )
-    ;   Next = inf
+    ;   Next = inf, MinEvents = 0
     ),
+    nb_getval(events, Events),
+    SweepAfter is Events + MinEvents,
+    nb_setval(rtl_sweep_after, SweepAfter),
     nb_setval(rtl_next_sweep, Next).
+
+% A program with windowed stores sweeps every half of its smallest window plus the delay
+% bound; one whose only forgettable stores are records kept for deletions (consumption
+% policies without windows) every half retraction horizon, but only once 64 events came
+% since the last sweep: its horizon may be as short as the delay bound, and a sweep per
+% event would cost more than the few records it drops.
+sweep_period(M, Delay, Period, MinEvents) :-
+    (   aggregate_all(min(W), M:ele_store(_, _, W), MinWindow)
+    ->  Period is MinWindow + Delay,
+        MinEvents = 0
+    ;   rtl_horizon(H), H \== inf
+    ->  Period = H,
+        MinEvents = 64
+    ).
+
+periodic_sweep :-
+    nb_getval(events, Events),
+    nb_getval(rtl_sweep_after, After),
+    (   Events >= After -> rtl_collect_garbage ; true ).

@@ -93,6 +93,18 @@ install_rule(M, Id, Stores, Clauses) :-
                assertz(M:ele_partial_store(Name, Arity)),
                (   Window == none -> true ; assertz(M:ele_store(Name, Arity, Window)) )
            )),
+    forall(member(record(Name, Arity, KeptA, KeptB), Stores),   % kept for deletions (rtl_horizon)
+           (   dynamic([M:KeptA/Arity, M:KeptB/Arity, M:ele_record_store/3]),
+               assertz(M:ele_partial_store(KeptA, Arity)),
+               assertz(M:ele_partial_store(KeptB, Arity)),
+               assertz(M:ele_record_store(Name, Arity, kept(KeptA, KeptB)))
+           )),
+    forall(member(kept(Live, Arity, KeptA, KeptB, Order), Stores),
+           (   dynamic([M:KeptA/Arity, M:KeptB/Arity, M:ele_kept_store/3]),
+               assertz(M:ele_partial_store(KeptA, Arity)),
+               assertz(M:ele_partial_store(KeptB, Arity)),
+               assertz(M:ele_kept_store(Live, kept(KeptA, KeptB), Order))
+           )),
     forall(member(Clause, Clauses), assertz(M:Clause)),
     assertz(added_rule(M, Id)).
 
@@ -143,7 +155,16 @@ rtl_remove_rule(M, Id) :-
            ( functor(Head, Name, Arity),
              retractall(M:Head),
              retractall(M:ele_partial_store(Name, Arity)),
-             retractall(M:ele_store(Name, Arity, _)) )),
+             retractall(M:ele_store(Name, Arity, _)),
+             (   current_predicate(M:ele_kept_store/3)
+             ->  retractall(M:ele_kept_store(Name, _, _))
+             ;   true
+             ) )),
+    (   current_predicate(M:ele_record_store/3)
+    ->  forall(( M:ele_record_store(Name, Arity, Kept), rule_pred_name(Id, Name) ),
+               retractall(M:ele_record_store(Name, Arity, Kept)))
+    ;   true
+    ),
     forall(( current_predicate(M:Name/Arity), rule_pred_name(Id, Name),
              functor(Head, Name, Arity),
              \+ predicate_property(M:Head, imported_from(_)) ),

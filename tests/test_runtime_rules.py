@@ -92,7 +92,10 @@ def test_rules_that_do_not_compile_raise_with_a_location():
 def test_compile_rules_output_names_the_rules_and_their_stores():
     result = compile_rules("k : p(X) <- (a(X) seq b(X)).2.\nq(X) <- c(X).", "m", "rt5")
     assert result.rule_ids == ["k", "rt5_1"]
-    assert "'$rtl_rule'(k, [store(e_k_1_lefts, 3, 2), store(e_k_1_rights, 3, 2)])." in result.text
+    assert ("'$rtl_rule'(k, [store(e_k_1_lefts, 3, 2), store(e_k_1_rights, 3, 2), "
+            "kept(e_k_1_lefts, 3, e_k_1_lefts_kept_a, e_k_1_lefts_kept_b, oldest_first), "
+            "kept(e_k_1_rights, 3, e_k_1_rights_kept_a, e_k_1_rights_kept_b, oldest_first)])."
+            in result.text)
     assert "'$rtl_rule'(rt5_1, [])." in result.text
 
 

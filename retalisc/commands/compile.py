@@ -102,6 +102,10 @@ Examples:
 @click.option("--max-delay", type=Seconds(), default=None,
               help="Seconds an event may arrive behind the latest one and still be matched in full "
                    "(default 1.0; a number >= 0, or inf).")
+@click.option("--retraction-horizon", type=Seconds(), default=None, metavar="SECONDS",
+              help="Keep what deletions need for this long: a deletion of an event that ended at most "
+                   "SECONDS before the latest one is exact (default and minimum: the delay bound plus the "
+                   "largest window; 'inf' keeps everything). Later deletions are reported and change nothing.")
 @click.option("--batch-size", type=click.IntRange(1), default=2000, show_default=True,
               help="Events handed to Prolog per call.")
 @click.option("--consumer-dir", type=click.Path(file_okay=False), default=None,
@@ -138,7 +142,7 @@ Examples:
 @click.option("--progress/--no-progress", default=None,
               help="Show a progress line on standard error (default: on a terminal, for inputs over 5 MB).")
 @bag_options
-def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, batch_size: int,
+def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
                 allow_control: bool, strict: bool, max_steps, action_output, progress, **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
@@ -171,6 +175,8 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
             click.echo(f"error: --action-output {action_output}: cannot open the action output file ({error})",
                        err=True)
             sys.exit(2)
+    if retraction_horizon is not None:
+        engine.set_flag("retraction_horizon", repr(retraction_horizon))
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
     for request in memories:

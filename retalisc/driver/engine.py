@@ -104,6 +104,14 @@ def _time(value: Number, what: str = "a time") -> Number:
     return value
 
 
+@dataclass(frozen=True)
+class EngineWarning:
+    """A warning about an input (a deletion outside the retraction horizon): its line in a
+    `feed_lines` batch, None for `feed`/`feed_batch`."""
+    line: Optional[int]
+    text: str
+
+
 def _bound(value, default: str) -> Union[Number, str]:
     """A subscription time bound: a finite number, "now", "inf", "-inf", or the default."""
     if value is None:
@@ -134,6 +142,7 @@ class Engine:
         self._synchronized: Dict[str, "Future"] = {}
         self._lock = threading.RLock()    # one call (and its output delivery) at a time
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")     # constant text, no values
+        self._warnings: List[EngineWarning] = []
         self.bridge.consult(str(prolog_file))
         if module:
             self._call("rtl_api_use_program", module)
@@ -249,8 +258,18 @@ class Engine:
     def _deliver(self, output: str) -> List[OutputEvent]:
         return self._deliver_lines([line for line in output.splitlines() if line])
 
+    def take_warnings(self) -> List[EngineWarning]:
+        """The warnings of the inputs fed since the last call (deletions outside the retraction
+        horizon, docs/runtime.md), in order."""
+        warnings, self._warnings = self._warnings, []
+        return warnings
+
     def _deliver_lines(self, lines: List[str]) -> List[OutputEvent]:
-        events = [OutputEvent.from_line(line) for line in lines if line]
+        for line in lines:
+            if line.startswith("?"):        # ?LINE<TAB>text: a warning (rtl_feed_lines/3)
+                number, _, text = line[1:].partition("\t")
+                self._warnings.append(EngineWarning(int(number) if number else None, text))
+        events = [OutputEvent.from_line(line) for line in lines if line and not line.startswith("?")]
         for event in events:
             if event.query is not None:
                 self._resolve(event.query)

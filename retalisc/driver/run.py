@@ -37,7 +37,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout, None to drop it). Lines not processed go to stderr as
     `FILE:LINE: rejected: REASON` (malformed) or `FILE:LINE: error: REASON` (a refused control
-    line, an event whose processing raised); a one-line summary closes the run. At the end
+    line, an event whose processing raised), warnings (deletions outside the retraction
+    horizon) as `FILE:LINE: warning: TEXT`; a one-line summary closes the run. At the end
     of the input the postponed synchronized matches run (or are dropped with `drop_pending`).
     `first_output` holds outputs (lists of OutputEvents) produced before the events, written
     first. With `consumer_dir`, subscription deliveries go to `consumer_dir/<consumer>.jsonl`
@@ -79,9 +80,14 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             if rejected:
                 sink.flush()
                 display.clear()
-            for rejection in rejected:
-                print(f"{name}:{rejection.line}: {'rejected' if rejection.kind == 'rejected' else 'error'}: "
-                      f"{rejection.reason}", file=sys.stderr)
+            messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")
+                        for r in rejected]
+            messages += [(w.line, f"warning: {w.text}") for w in engine.take_warnings()]
+            if messages:
+                sink.flush()
+                display.clear()
+            for line, message in sorted(messages, key=lambda m: m[0]):
+                print(f"{name}:{line}: {message}", file=sys.stderr)
             display.update(size, len(lines), sum(1 for e in produced if e.consumer is None))
             if rejected and (strict or rejected[-1].kind == "halt"):
                 raise RunStopped()

@@ -6,6 +6,11 @@ rule's head. A window `(P).Q` applies to every step inside P (a partial match of
 spans more than the whole match), so the steps can check it early and forget old partial
 matches. Where-conditions are checked on the step they follow (or on the event atom they
 were pushed to by push_conditions).
+
+An anonymous variable `_` in an event atom gets a fresh name (`Any1`, `Any2`, ...): a partial
+match is the events themselves, so two events that differ only where the rule wrote `_` are
+different partial matches (for twin replacement under `recent`, and when an event is deleted),
+exactly as if the variable had been named.
 """
 from __future__ import annotations
 
@@ -13,7 +18,7 @@ from typing import List, Optional, Set
 
 from ..frontend.errors import RetalisSemanticError
 from ..frontend.program import Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
-from ..frontend.terms import Atom, Compound, Term, Var, conjuncts, distinct_variables, variables
+from ..frontend.terms import Atom, Compound, Term, Var, conjuncts, distinct_variables, variables, walk
 from .unit import BinaryRule, Operand, Step, Unit
 
 name = "binarize"
@@ -51,6 +56,8 @@ class _Binarizer:
         self.rule = rule
         self.rule_id = rule_id
         self.steps: List[Step] = []
+        self.names: Set[str] = {t.name for t in walk(_rule_terms(rule)) if isinstance(t, Var)}
+        self.anonymous = 0
 
     def binarize(self) -> BinaryRule:
         top = self.lower(self.rule.pattern, None)
@@ -68,9 +75,20 @@ class _Binarizer:
         self.steps.append(step)
         return step
 
+    def name_anonymous(self, term: Term) -> Term:
+        """`term` with every `_` replaced by a variable no other variable of the rule is called."""
+        if isinstance(term, Var) and term.is_anonymous:
+            self.anonymous += 1
+            while f"Any{self.anonymous}" in self.names:
+                self.anonymous += 1
+            return Var(f"Any{self.anonymous}", term.span)
+        if isinstance(term, Compound):
+            return Compound(term.name, tuple(self.name_anonymous(a) for a in term.args), term.span)
+        return term
+
     def lower(self, pattern: Pattern, window: Optional[float]) -> Operand:
         if isinstance(pattern, EventAtom):
-            return Operand(pattern.term, None, [], pattern.start, pattern.end, pattern.span)
+            return Operand(self.name_anonymous(pattern.term), None, [], pattern.start, pattern.end, pattern.span)
         if isinstance(pattern, Where):
             operand = self.lower(pattern.pattern, window)
             goals = conjuncts(pattern.condition)
@@ -131,6 +149,30 @@ class _Binarizer:
             raise RetalisSemanticError("aggregate(F, P, V) counts from a start event: write Start seq "
                                        "aggregate(F, P, V)", pattern.span)
         raise TypeError(pattern)
+
+
+def _rule_terms(rule: EventRule) -> Term:
+    """One term holding every term of `rule` (for the names of its variables)."""
+    parts = [rule.head] + [t for t in (rule.action, rule.synchronized) if t is not None]
+    parts += list(_pattern_terms(rule.pattern))
+    return Compound("rule", tuple(parts))
+
+
+def _pattern_terms(pattern: Pattern):
+    if isinstance(pattern, EventAtom):
+        yield pattern.term
+        for t in (pattern.start, pattern.end):
+            if t is not None:
+                yield t
+        return
+    for name_ in ("pattern", "left", "right", "first", "second", "negated"):
+        child = getattr(pattern, name_, None)
+        if child is not None and not isinstance(child, (Atom, Compound, Var)):
+            yield from _pattern_terms(child)
+    for name_ in ("condition", "value", "function"):
+        term = getattr(pattern, name_, None)
+        if isinstance(term, (Atom, Compound, Var)):
+            yield term
 
 
 def _mark_times(condition: Term) -> Term:

@@ -19,7 +19,15 @@ Negation (`cnot`: no N between L and R; `fnot`: no N before L) derives eagerly a
 result back when a blocking event arrives late; deleting the blocker derives it again.
 
 Under the `recent` and `chronological` consumption policies (ETALIS), an arriving event
-joins with the newest (or oldest) waiting partner only, and both are consumed.
+joins with the newest (or oldest) waiting partner only, and both are consumed; the match is
+recorded (`e_matched`), so that deleting either event takes its result back.
+
+Deletions and late events (prolog_runtime/rtl_horizon.pl): the runtime moves the partial
+matches a windowed step no longer needs for events within the delay bound to the store's kept
+generations (`_kept_a`, `_kept_b`), and keeps them there for the retraction horizon. Only an
+instance that is late (`rtl_late(End)`) searches them: an instance within the bound cannot
+match them. An aggregate numbers its instances in processing order and records its P's, so
+that deleting an A or a P replays the values it changed.
 """
 from __future__ import annotations
 
@@ -126,6 +134,8 @@ class _RuleGenerator:
         self.clauses: List[Term] = []
         self.triggers: List[Term] = []
         self.stores: List[tuple] = []
+        self.records: List[tuple] = []
+        self.kept: List[tuple] = []
         self.consumers: Dict[str, str] = {}
 
     def t(self, base: str) -> Var:
@@ -163,7 +173,8 @@ class _RuleGenerator:
             self.output_clauses(step)
         source = self.rule.rule
         comment = f"{source.span}: {source.source.strip()}"
-        return GeneratedRule(self.rule.rule_id, comment, self.clauses, self.triggers, self.stores)
+        return GeneratedRule(self.rule.rule_id, comment, self.clauses, self.triggers, self.stores,
+                             self.records, self.kept)
 
     # ---- arrivals ---------------------------------------------------------------------
 
@@ -194,10 +205,82 @@ class _RuleGenerator:
             return Compound(goal.name, tuple(self.times(a, start, end) for a in goal.args))
         return goal
 
-    def store(self, step: Step, suffix: str, args: List[Term]) -> Term:
+    def store(self, step: Step, suffix: str, args: List[Term], newest_first: bool = False) -> Term:
+        """A store of partial matches (its last two arguments are their interval); a windowed
+        step's store has two kept generations for deletions and late events."""
         name_ = f"{step.name}_{suffix}"
         self.stores.append((name_, len(args), step.window))
+        if step.window is not None:
+            self.kept.append((name_, len(args), name_ + "_kept_a", name_ + "_kept_b",
+                              "newest_first" if newest_first else "oldest_first"))
         return C(name_, *args)
+
+    def record(self, step: Step, suffix: str, args: List[Term], rotated: bool) -> Term:
+        """A store of records kept only for deletions. Rotated records live in two
+        generations (`_a`, `_b`) that the runtime empties in turn after the retraction
+        horizon; the others (of unwindowed aggregates) are kept as long as the program runs."""
+        name_ = f"{step.name}_{suffix}"
+        if rotated:
+            self.records.append((name_, len(args), name_ + "_a", name_ + "_b"))
+        else:
+            self.stores.append((name_, len(args), None))
+        return C(name_, *args)
+
+    def is_rotated(self, record: Term) -> bool:
+        return any(name_ == record.name for name_, _, _, _ in self.records)
+
+    @staticmethod
+    def generations(record: Term) -> List[Term]:
+        return [Compound(record.name + suffix, record.args) for suffix in ("_a", "_b")]
+
+    def record_add(self, record: Term) -> Term:
+        """Store a record, in the generation that receives records now."""
+        if not self.is_rotated(record):
+            return C("assertz", record)
+        a, b = self.generations(record)
+        return C(";", C("->", C("rtl_kept_generation", Atom("a")), C("assertz", a)), C("assertz", b))
+
+    def record_lookup(self, record: Term) -> Term:
+        if not self.is_rotated(record):
+            return record
+        a, b = self.generations(record)
+        return C(";", a, b)
+
+    def record_take(self, record: Term) -> Term:
+        """Remove one record (fails if there is none)."""
+        if not self.is_rotated(record):
+            return C("retract", record)
+        a, b = self.generations(record)
+        return C(";", C("->", C("retract", a), Atom("true")), C("retract", b))
+
+    @staticmethod
+    def kept_of(stored: Term) -> List[Term]:
+        """The two kept generations of a store, with the same arguments."""
+        return [Compound(stored.name + suffix, stored.args) for suffix in ("_kept_a", "_kept_b")]
+
+    def kept_lookup(self, stored: Term) -> Term:
+        a, b = self.kept_of(stored)
+        return C(";", a, b)
+
+    def lookup(self, step: Step, stored: Term, end: Term) -> Term:
+        """The stored partial matches: the live ones, and the kept ones for an instance that
+        ended late (at `end`)."""
+        if step.window is None:
+            return stored
+        return C(";", stored, C(",", C("rtl_late", end), self.kept_lookup(stored)))
+
+    def take(self, step: Step, stored: Term) -> Term:
+        """Remove one stored instance, live or kept."""
+        if step.window is None:
+            return C("retract", stored)
+        a, b = self.kept_of(stored)
+        return C(";", C("->", C("retract", stored), Atom("true")),
+                 C(";", C("->", C("retract", a), Atom("true")), C("retract", b)))
+
+    def drop_all(self, step: Step, stored: Term) -> Term:
+        if step.window is None:
+            return C("retractall", stored)
+        return conj([C("retractall", t) for t in [stored] + self.kept_of(stored)])
 
     def window_check(self, step: Step, s: Var, e: Var) -> Optional[Term]:
         if step.window is None:
@@ -229,41 +312,79 @@ class _RuleGenerator:
         left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
         key, left_other = _split(left_vars, right_vars)
         _, right_other = _split(right_vars, left_vars)
-        lefts = self.store(step, "lefts", key + left_other + [s1, e1])
-        rights = self.store(step, "rights", key + right_other + [s2, e2])
+        recent = self.policy == "recent"
+        lefts = self.store(step, "lefts", key + left_other + [s1, e1], newest_first=recent)
+        rights = self.store(step, "rights", key + right_other + [s2, e2], newest_first=recent)
         s, start_goals = self.interval(start_expr, self.t("S"))
         e, end_goals = self.interval(end_expr, self.t("E"))
         match = self.expr(relation) + start_goals + end_goals + [self.window_check(step, s, e)]
+        matched = self.matched_record(step, lefts, rights, s, e)
         sides = (("left", step.left, left_vars, lefts, rights), ("right", step.right, right_vars, rights, lefts))
         for side, operand, own_vars, own_store, partner_store in sides:
             handler = f"{step.name}_{side}"
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
             self.arrival(operand, handler, os_, oe)
-            found = conj([partner_store] + match)
-            if self.policy == "unrestricted":
-                add_body = [C("forall", found, self.output(step, s, e)), C("assertz", own_store)]
-            else:
-                add_body = [self.consuming_join(found, partner_store, own_store, self.output(step, s, e))]
-            self.clauses.append(clause(C(handler, *own_vars, os_, oe), add_body))
-            self.clauses.append(clause(C(handler + "_retract", *own_vars, os_, oe), [
-                self.if_stored(own_store, C("forall", found, self.output(step, s, e, retract=True)))]))
+            found = conj([self.lookup(step, partner_store, oe)] + match)
+            self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s, e)
 
-    def if_stored(self, stored: Term, then: Term) -> Term:
+    def join_handlers(self, step: Step, handler: str, own_vars: List[Var], os_: Var, oe: Var, own_store: Term,
+                      partner_store: Term, found: Term, matched: Optional[Term], s: Term, e: Term) -> None:
+        """The add and delete rules of one side of a join (also of `cnot`): unrestricted, every
+        partner found makes a result, and deleting takes back what the instance made with the
+        partners still stored; under a policy, see consuming_join/consumed_retract."""
+        head = C(handler, *own_vars, os_, oe)
+        retract_head = C(handler + "_retract", *own_vars, os_, oe)
+        if matched is None:
+            self.clauses.append(clause(head, [C("forall", found, self.output(step, s, e)), C("assertz", own_store)]))
+            self.clauses.append(clause(retract_head, [
+                self.if_stored(step, own_store, C("forall", found, self.output(step, s, e, retract=True)))]))
+            return
+        self.clauses.append(clause(head, [
+            self.consuming_join(step, found, partner_store, own_store, matched, self.output(step, s, e))]))
+        self.clauses.append(clause(retract_head, [
+            self.consumed_retract(step, own_store, matched, self.output(step, s, e, retract=True))]))
+
+    def matched_record(self, step: Step, lefts: Term, rights: Term, s: Term, e: Term) -> Optional[Term]:
+        """Under a consumption policy, the record of a match made: both instances and the
+        interval of the result (kept for the retraction horizon, by the end of the result)."""
+        if self.policy == "unrestricted":
+            return None
+        args = list(lefts.args) + self.partner_only_args(lefts, rights) + [s, e]
+        return self.record(step, "matched", args, rotated=True)
+
+    @staticmethod
+    def partner_only_args(lefts: Term, rights: Term) -> List[Term]:
+        """The arguments of `rights` that `lefts` does not have already (the join key)."""
+        seen = {a.name for a in lefts.args if isinstance(a, Var)}
+        return [a for a in rights.args if not (isinstance(a, Var) and a.name in seen)]
+
+    def if_stored(self, step: Step, stored: Term, then: Term) -> Term:
         """Delete one stored instance and, only if there was one, take back what it made: a
         deletion of an event that was never added (or was already forgotten) changes nothing."""
-        return C(";", C("->", C("retract", stored), then), Atom("true"))
+        return C(";", C("->", self.take(step, stored), then), Atom("true"))
 
-    def consuming_join(self, found: Term, partner: Term, own: Term, output: Term) -> Term:
+    def consuming_join(self, step: Step, found: Term, partner: Term, own: Term, matched: Term,
+                       output: Term) -> Term:
         """recent/chronological: join with one waiting partner, the newest (recent: stores
-        are filled with asserta, so it comes first) or the oldest, and consume both; with no
-        partner, wait. Under `recent` a waiting twin of the same event is replaced."""
+        are filled with asserta, so it comes first) or the oldest, and consume both, recording
+        the match; with no partner, wait. Under `recent` a waiting twin of the same event is
+        replaced."""
         store = "asserta" if self.policy == "recent" else "assertz"
         wait = C(store, own)
         if self.policy == "recent":
+            # a twin is the same events (a variant: a partial match from one branch of an `or`
+            # leaves the other branch's variables unbound, and must not unify with another)
             twin = Compound(own.name, tuple(own.args[:-2]) + (Var("_"), Var("_")))
-            wait = C(",", C("retractall", twin), wait)
-        consume = C(",", C("retract", partner), output)
+            drop = C(";", C("->", C("ground", own), self.drop_all(step, twin)), C("rtl_drop_twins", own))
+            wait = C(",", drop, wait)
+        consume = conj([self.take(step, partner), self.record_add(matched), output])
         return C(";", C("->", C("once", found), consume), wait)
+
+    def consumed_retract(self, step: Step, own: Term, matched: Term, output: Term) -> Term:
+        """Deleting an instance under a policy: a waiting one has made nothing yet; a consumed
+        one made one match, whose result is taken back (its partner stays consumed)."""
+        return C(";", C("->", self.take(step, own), Atom("true")),
+                 C(";", C("->", self.record_take(matched), output), Atom("true")))
 
     def negation_clauses(self, step: Step) -> None:
         """not(N).[L, R]: L seq R with no N strictly between L's end and R's start. Under a
@@ -275,40 +396,49 @@ class _RuleGenerator:
         _, right_other = _split(right_vars, left_vars)
         pair_vars = distinct_variables(left_vars + right_vars)
         negated_key, negated_other = _split(negated_vars, pair_vars)
-        lefts = self.store(step, "lefts", key + left_other + [s1, e1])
-        rights = self.store(step, "rights", key + right_other + [s2, e2])
+        recent = self.policy == "recent"
+        lefts = self.store(step, "lefts", key + left_other + [s1, e1], newest_first=recent)
+        rights = self.store(step, "rights", key + right_other + [s2, e2], newest_first=recent)
         negs = self.store(step, "negs", negated_key + negated_other + [sn, en])
-        blocked_name = f"{step.name}_blocked"
-        blocked = C(blocked_name, *negated_key, e1, s2)
-        self.clauses.append(clause(blocked, [negs, C("<", e1, sn), C("<", en, s2), Atom("!")]))
+        between = [C("<", e1, sn), C("<", en, s2), Atom("!")]
+        unblocked = self.unblocked(step, f"{step.name}_blocked", negated_key + [e1, s2], negs, between, e2)
         window = self.window_check(step, s1, e2)
-        pair = [C("<", e1, s2), window, C("\\+", blocked)]
+        pair = [C("<", e1, s2), window, unblocked]
+        matched = self.matched_record(step, lefts, rights, s1, e2)
         for side, operand, own_vars, own_store, partner_store in (
                 ("left", step.left, left_vars, lefts, rights), ("right", step.right, right_vars, rights, lefts)):
             handler = f"{step.name}_{side}"
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
             self.arrival(operand, handler, os_, oe)
-            found = conj([partner_store] + pair)
-            if self.policy == "unrestricted":
-                add_body = [C("forall", found, self.output(step, s1, e2)), C("assertz", own_store)]
-            else:
-                add_body = [self.consuming_join(found, partner_store, own_store, self.output(step, s1, e2))]
-            self.clauses.append(clause(C(handler, *own_vars, os_, oe), add_body))
-            self.clauses.append(clause(C(handler + "_retract", *own_vars, os_, oe), [
-                self.if_stored(own_store, C("forall", found, self.output(step, s1, e2, retract=True)))]))
+            found = conj([self.lookup(step, partner_store, oe)] + pair)
+            self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s1, e2)
         # a blocker takes back the results it falls inside of; deleting it restores them
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
-        inside = conj([lefts, C("<", e1, sn), rights, C("<", en, s2), window, C("\\+", blocked)])
+        inside = conj([self.lookup(step, lefts, en), C("<", e1, sn), self.lookup(step, rights, en), C("<", en, s2),
+                       window, unblocked])
         if self.policy != "unrestricted":
             self.clauses.append(clause(C(handler, *negated_vars, sn, en), [C("assertz", negs)]))
             self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-                C(";", C("->", C("retract", negs), Atom("true")), Atom("true"))]))
+                C(";", C("->", self.take(step, negs), Atom("true")), Atom("true"))]))
             return
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
             C("forall", inside, self.output(step, s1, e2, retract=True)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(negs, C("forall", inside, self.output(step, s1, e2)))]))
+            self.if_stored(step, negs, C("forall", inside, self.output(step, s1, e2)))]))
+
+    def unblocked(self, step: Step, name_: str, args: List[Term], negs: Term, check: List[Term],
+                  late_end: Term) -> Term:
+        """`\\+ Blocked`: no stored blocker passes `check`. The clause `name_(args)` searches the
+        live blockers; for a windowed step, `name__late` also the kept ones, for a match that
+        ends late (at `late_end`)."""
+        blocked = C(name_, *args)
+        self.clauses.append(clause(blocked, [negs] + check))
+        if step.window is None:
+            return C("\\+", blocked)
+        blocked_late = C(name_ + "_late", *args)
+        self.clauses.append(clause(blocked_late, [C(";", negs, self.kept_lookup(negs))] + check))
+        return C("\\+", C(";", C("->", C("rtl_late", late_end), blocked_late), blocked))
 
     def fnot_clauses(self, step: Step) -> None:
         """L fnot N: L, unless an N ended before L started (within the window, if any)."""
@@ -318,47 +448,89 @@ class _RuleGenerator:
         left_key, left_other = _split(left_vars, negated_vars)
         lefts = self.store(step, "lefts", left_key + left_other + [s1, e1])
         negs = self.store(step, "negs", negated_key + negated_other + [sn, en])
-        blocked = C(f"{step.name}_blocked", *negated_key, s1, e1)
-        self.clauses.append(clause(blocked, [negs, C("<", en, s1), self.window_check(step, sn, e1), Atom("!")]))
+        before = [C("<", en, s1), self.window_check(step, sn, e1), Atom("!")]
+        unblocked = self.unblocked(step, f"{step.name}_blocked", negated_key + [s1, e1], negs,
+                                   [g for g in before if g is not None], e1)
         handler = f"{step.name}_left"
         self.arrival(step.left, handler, s1, e1)
-        unblocked = conj([C("\\+", blocked), self.window_check(step, s1, e1)])
+        derivable = conj([unblocked, self.window_check(step, s1, e1)])
         self.clauses.append(clause(C(handler, *left_vars, s1, e1), [
-            C(";", C("->", unblocked, self.output(step, s1, e1)), Atom("true")), C("assertz", lefts)]))
+            C(";", C("->", derivable, self.output(step, s1, e1)), Atom("true")), C("assertz", lefts)]))
         self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
-            self.if_stored(lefts, C(";", C("->", unblocked, self.output(step, s1, e1, retract=True)), Atom("true")))]))
+            self.if_stored(step, lefts,
+                           C(";", C("->", derivable, self.output(step, s1, e1, retract=True)), Atom("true")))]))
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
-        after = conj([lefts, C("<", en, s1), self.window_check(step, sn, e1), C("\\+", blocked)])
+        after = conj([self.lookup(step, lefts, en), C("<", en, s1), self.window_check(step, sn, e1), unblocked])
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
             C("forall", after, self.output(step, s1, e1, retract=True)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(negs, C("forall", after, self.output(step, s1, e1)))]))
+            self.if_stored(step, negs, C("forall", after, self.output(step, s1, e1)))]))
 
     def aggregate_clauses(self, step: Step) -> None:
         """L seq aggregate(F, R, V): each L starts an accumulator; every later R updates the
         accumulators of the L's before it (within the window) and yields their new value V.
-        Values follow the order R's are processed in; deleting an R does not undo them."""
+        Values follow the order the instances are processed in: each gets a sequence number,
+        and the R's are recorded, so that deleting an L takes back its values and deleting an
+        R replays the values of the accumulators it counted in (`_redo`)."""
         function, value = step.aggregate
         s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
         acc0, acc = V(self.fresh("Acc0")), V(self.fresh("Acc"))
+        seq, rseq, removed = V(self.fresh("Seq")), V(self.fresh("RSeq")), V(self.fresh("Removed"))
+        items, values_, retracts, adds = (V(self.fresh(n)) for n in ("Items", "Values", "Retracts", "Adds"))
         left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
         key, left_other = _split(left_vars, right_vars)
-        # the accumulator sits before the times: the last two arguments of a store are its interval
-        lefts = self.store(step, "lefts", key + left_other + [acc0, s1, e1])
-        updated = C(lefts.name, *key, *left_other, acc, s1, e1)
+        _, right_other = _split(right_vars, left_vars)
+        # sequence number and accumulator before the times: the last two arguments of a store are its interval
+        lefts = self.store(step, "lefts", key + left_other + [seq, acc0, s1, e1])
+        rights = self.record(step, "rights", key + right_other + [rseq, s2, e2], rotated=step.window is not None)
+
+        def left_with(a: Term, kept: str = "") -> Term:
+            return C(lefts.name + kept, *key, *left_other, seq, a, s1, e1)
+
+        window = self.window_check(step, s1, e2)
+        # the R's an accumulator counted, as rtl_aggregate_values/3 items
+        counted = C("findall", C("-", rseq, C("-", C("-", function, s2), e2)),
+                    conj([self.record_lookup(rights), C(">", rseq, seq), C("<", e1, s2), window]), items)
         handler = f"{step.name}_left"
         self.arrival(step.left, handler, s1, e1)
-        initial = C(lefts.name, *key, *left_other, Atom("none"), s1, e1)
-        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [C("assertz", initial)]))
-        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [C("retractall", initial)]))
+        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [
+            C("rtl_next_seq", seq), C("assertz", left_with(Atom("none")))]))
+        values = conj([counted, C("rtl_aggregate_values", items, V("_"), values_),
+                       C("forall", C("member", C("-", V("_"), C("-", value, e2)), values_),
+                         self.output(step, s1, e2, retract=True))])
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
+            self.if_stored(step, left_with(V("_")), values)]))
         handler = f"{step.name}_right"
         self.arrival(step.right, handler, s2, e2)
-        found = conj([lefts, C("<", e1, s2), self.window_check(step, s1, e2)])
-        update = conj([C("rtl_aggregate", function, acc0, acc, value), C("retract", lefts),
-                       C("assertz", updated), self.output(step, s1, e2)])
-        self.clauses.append(clause(C(handler, *right_vars, s2, e2), [C("forall", found, update)]))
-        self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), []))
+        loops = []
+        for kept in (["", "_kept_a", "_kept_b"] if step.window is not None else [""]):
+            # an accumulator is updated where it is stored (live or kept)
+            found = conj([left_with(acc0, kept), C("<", e1, s2), window])
+            update = conj([C("rtl_aggregate", function, acc0, acc, value), C("retract", left_with(acc0, kept)),
+                           C("assertz", left_with(acc, kept)), self.output(step, s1, e2)])
+            loops.append(C("forall", found, update))
+        body = loops[:1]
+        if len(loops) > 1:
+            body.append(C(";", C("->", C("rtl_late", e2), conj(loops[1:])), Atom("true")))
+        body += [C("rtl_next_seq", rseq), self.record_add(rights)]
+        self.clauses.append(clause(C(handler, *right_vars, s2, e2), body))
+        redo = C(f"{step.name}_redo", *key, *left_other, seq, s1, e1, removed)
+        found = conj([self.lookup(step, left_with(V("_")), e2), C("<", seq, rseq), C("<", e1, s2), window])
+        self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
+            C(";", C("->", self.record_take(rights),
+                     C("forall", found, Compound(redo.name, redo.args[:-1] + (
+                         C("-", rseq, C("-", C("-", function, s2), e2)),)))), Atom("true"))]))
+        # one accumulator without the deleted R: take back its values from the R on, give the new ones
+        replace: Term = Atom("true")
+        for kept in (["_kept_b", "_kept_a", ""] if step.window is not None else [""]):
+            replace = C(";", C("->", C("retract", left_with(V("_"), kept)), C("assertz", left_with(acc, kept))),
+                        replace)
+        replace = [replace]
+        self.clauses.append(clause(redo, [
+            counted, C("rtl_aggregate_redo", items, removed, acc, retracts, adds),
+            C("forall", C("member", C("-", value, e2), retracts), self.output(step, s1, e2, retract=True)),
+            C("forall", C("member", C("-", value, e2), adds), self.output(step, s1, e2))] + replace))
 
     def fresh(self, base: str) -> str:
         """A variable name no source variable of the rule uses (and reserve it)."""

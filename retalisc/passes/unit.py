@@ -83,6 +83,11 @@ class GeneratedRule:
     clauses: List[Term]
     triggers: List[Term]            # ele_trigger/3 clauses
     stores: List[tuple]             # (name, arity, window or None)
+    # kept for deletions and late events (prolog_runtime/rtl_horizon.pl): record stores as
+    # (name, arity, its two generations), and (live store, arity, its two kept generations,
+    # "newest_first" or "oldest_first")
+    records: List[tuple] = field(default_factory=list)
+    kept: List[tuple] = field(default_factory=list)
 
 
 @dataclass(frozen=True)

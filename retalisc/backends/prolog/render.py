@@ -36,9 +36,15 @@ _COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print
 
 
 def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
-    stores = sorted({(name, arity) for g in unit.generated for name, arity, _ in g.stores})
+    stores = sorted({(name, arity) for g in unit.generated for name, arity, _ in g.stores}
+                    | {(k, arity) for g in unit.generated for _, arity, a, b, _ in g.kept for k in (a, b)}
+                    | {(k, arity) for g in unit.generated for _, arity, a, b in g.records for k in (a, b)})
     windowed = sorted({(name, arity, _number_text(window))
                        for g in unit.generated for name, arity, window in g.stores if window is not None})
+    records = sorted({(quote_atom(name), arity, quote_atom(a), quote_atom(b))
+                      for g in unit.generated for name, arity, a, b in g.records})
+    kept = sorted({(quote_atom(live), quote_atom(a), quote_atom(b), order)
+                   for g in unit.generated for live, _, a, b, order in g.kept})
     printed = None
     if unit.settings.printed is not None:
         printed = [_functor_pattern(name, arity) for name, arity in unit.settings.printed]
@@ -50,6 +56,8 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
         runtime_dir=quote_atom(str(runtime_dir())),
         stores=stores,
         windowed_stores=windowed,
+        record_stores=records,
+        kept_stores=kept,
         printed=printed,
         static_clauses=[_static_text(c) for c in unit.program.clauses if _is_copied(c)],
         declarations=[write_term(c.goal, 999) for c in unit.program.clauses
@@ -64,8 +72,12 @@ def render_added_rules(unit: Unit) -> str:
     comment, its `'$rtl_rule'(Id, [store(Name, Arity, Window), ...]).` marker, its clauses."""
     rules = []
     for generated in unit.generated:
-        stores = ", ".join(f"store({quote_atom(name)}, {arity}, {_window_text(window)})"
-                           for name, arity, window in generated.stores)
+        stores = ", ".join([f"store({quote_atom(name)}, {arity}, {_window_text(window)})"
+                            for name, arity, window in generated.stores]
+                           + [f"record({quote_atom(name)}, {arity}, {quote_atom(a)}, {quote_atom(b)})"
+                              for name, arity, a, b in generated.records]
+                           + [f"kept({quote_atom(live)}, {arity}, {quote_atom(a)}, {quote_atom(b)}, {order})"
+                              for live, arity, a, b, order in generated.kept])
         rules.append({"view": _RuleView(generated), "id": quote_atom(generated.rule_id), "stores": stores})
     return _ENV.get_template("added_rules.pl.j2").render(rules=rules)
 

@@ -1,0 +1,376 @@
+:- module(rtl_horizon,
+          [ rtl_late/1,                 % +End
+            rtl_swept/1,                % +Clock
+            rtl_kept_generation/1,      % ?Generation
+            rtl_horizon/1,              % -Seconds
+            rtl_horizon_setup/3,        % +Module, +MaxDelay, +Flag
+            rtl_horizon_reset/0,
+            rtl_retire_store/4,         % +Module, +Name, +Arity, +Before
+            rtl_forget_kept/2,          % +Module, +Clock
+            rtl_retraction_too_late/1,  % +End
+            rtl_dry_run/3,              % :Goal, -Retracted, -Derived
+            rtl_dry_running/0,
+            rtl_too_late_text/4,        % +End, +Retracted, +Derived, -Text
+            rtl_warning/1,              % +Text
+            rtl_take_warnings/1,        % -Texts
+            rtl_drop_twins/1,           % :Stored
+            rtl_next_seq/1,             % -Seq
+            rtl_aggregate_values/3,     % +Items, -Acc, -Values
+            rtl_aggregate_redo/5        % +Items, +Removed, -Acc, -Retracts, -Adds
+          ]).
+
+/** <module> The retraction horizon: what the runtime keeps so that deletions are exact
+
+A windowed step forgets a partial match whose start lies more than `Window + max_delay`
+before the clock: no event that respects the delay bound can complete it any more
+(rtl_ele's sweep). A *deletion* (`"op": "retract"`), or an event later than the bound, may
+still need it: deleting an event takes back every result it took part in, which the
+compiled delete rules find by joining with the partners the event had.
+
+So a swept partial match is not dropped but *kept* (in one of the step's two kept
+generations `<store>_kept_a` and `<store>_kept_b`, named by `ele_kept_store/3`) until it can
+no longer matter for a deletion inside the **retraction horizon** H: a deletion of an event
+that ended at most H seconds before the clock is exact. H is
+
+  - `inf` when the program forgets nothing (no window and the `unrestricted` policy) or the
+    delay bound is `inf`;
+  - otherwise `max_delay` plus the largest window of the program, or the flag
+    `retraction_horizon` if that is larger.
+
+A kept partial match of a step with window W is needed until its end lies H + W before the
+clock. The same holds for the records kept only for deletions (`ele_record_store/3`, in two
+generations too): the matches a consumption policy made (they consume their events, so the
+partners are gone from the stores) and the occurrences an aggregate counted. The generations
+are emptied in turn, in one retractall/1 each (much cheaper than erasing match by match):
+what the runtime keeps stays between H + Wmax and twice that (Wmax: the largest window). Kept records are only searched for an instance that is *late* (ends more than
+max_delay before the clock, rtl_late/1): an instance within the bound can never match them,
+since their match would be longer than the window. An event up to H late is therefore
+processed exactly too; a blocker (negation) that late takes back what it blocks.
+
+A deletion of an event that ended more than H before the clock is *too late*: it changes
+nothing (the runtime may have forgotten part of what the event derived). It is counted apart
+and reported with the number of derived events it took part in that the runtime can still
+find, by a dry run of the deletion inside snapshot/1 (rtl_dry_run/3): outputs, hooks and
+actions are off, the counters tell what it would have retracted or derived again, and every
+change to the database is undone. The count is exact when the runtime has forgotten nothing
+that the deletion of the event could need (rtl_too_late_text/4 says "at least" otherwise).
+
+Aggregates (`A seq aggregate(F, P, V)`) follow the order in which the P's are processed:
+every instance gets a processing sequence number (rtl_next_seq/1), each P is kept as a
+record, and deleting an A or a P replays the P's of the affected accumulators
+(rtl_aggregate_values/3, rtl_aggregate_redo/5).
+*/
+
+:- meta_predicate rtl_dry_run(0, -, -), rtl_drop_twins(:).
+
+:- dynamic warning_text/1.
+
+%!  rtl_late(+End:number) is semidet.
+%
+%   An instance that ended at End may match kept partial matches: it ended more than
+%   max_delay before the clock of the last sweep (every kept match was retired by a sweep
+%   at that clock or before, so its start lies more than Window + max_delay before it, and
+%   a match with an instance that ended later would be longer than the window). Called by
+%   compiled rules of windowed steps, once per arriving instance: one comparison.
+
+rtl_late(End) :-
+    nb_getval(rtl_late_before, Before),
+    End < Before.
+
+%!  rtl_swept(+Clock) is det.
+%
+%   A sweep at Clock retired partial matches: instances that ended more than max_delay
+%   before it are late from now on.
+
+rtl_swept(Clock) :-
+    nb_getval(rtl_late_delay, Delay),
+    nb_getval(rtl_late_before, Before0),
+    (   number(Delay), number(Clock), Clock - Delay > Before0   % the largest, if the bound changed
+    ->  Before is Clock - Delay,
+        nb_setval(rtl_late_before, Before)
+    ;   true
+    ).
+
+%!  rtl_horizon(-Seconds) is det.
+%
+%   The retraction horizon of the current program (`inf` or a number of seconds).
+
+rtl_horizon(H) :-
+    (   nb_current(rtl_horizon, H0) -> H = H0 ; H = inf ).
+
+%!  rtl_horizon_setup(+Module, +MaxDelay, +Flag) is det.
+%
+%   Compute the horizon of program Module for the delay bound MaxDelay and the value of the
+%   flag `retraction_horizon` (`auto`, `inf` or seconds). Called whenever one of them changes
+%   (program loaded, rules added or removed, flags set).
+
+rtl_horizon_setup(M, Delay, Flag) :-
+    nb_setval(rtl_late_delay, Delay),
+    (   nb_current(rtl_late_before, _) -> true ; rtl_horizon_reset ),
+    (   aggregate_all(max(W), program_fact(M, ele_store(_, _, W)), Wmax)
+    ->  true
+    ;   Wmax = 0
+    ),
+    (   Delay == inf
+    ->  H = inf
+    ;   \+ forgets(M)
+    ->  H = inf
+    ;   Base is Delay + Wmax,
+        (   Flag == auto -> H = Base
+        ;   Flag == inf -> H = inf
+        ;   H is max(Flag, Base)
+        )
+    ),
+    nb_setval(rtl_horizon, H),
+    nb_setval(rtl_largest_window, Wmax),
+    findall(Arity-Kept,
+            (   program_fact(M, ele_kept_store(Live, Kept, _)),
+                program_fact(M, ele_partial_store(Live, Arity))
+            ;   program_fact(M, ele_record_store(_, Arity, Kept))
+            ),
+            Generations),
+    nb_setval(rtl_kept_generations, Generations).
+
+% The program forgets something: a windowed store, or records kept for deletions.
+forgets(M) :-
+    (   program_fact(M, ele_store(_, _, _))
+    ->  true
+    ;   program_fact(M, ele_record_store(_, _, _))
+    ->  true
+    ).
+
+% Facts of a compiled program; a program compiled without them has none.
+program_fact(M, Goal) :-
+    atom(M),
+    functor(Goal, Name, Arity),
+    current_predicate(M:Name/Arity),
+    M:Goal.
+
+%!  rtl_horizon_reset is det.
+%
+%   Nothing was retired or forgotten yet (the clock starts again).
+
+rtl_horizon_reset :-
+    NoClock is -inf,
+    nb_setval(rtl_late_before, NoClock),
+    nb_setval(rtl_complete_since, NoClock),
+    nb_setval(rtl_kept_generation, a),
+    nb_setval(rtl_kept_rotated, none).
+
+%!  rtl_retire_store(+Module, +Name, +Arity, +Before) is det.
+%
+%   The sweep of live store Name/Arity: every partial match starting before Before moves to
+%   the current kept generation of the store (rtl_forget_kept/2), or is dropped when the
+%   store has none.
+%
+%   Kept generations: a store's retired matches go to one of its two kept generations
+%   (`_kept_a`, `_kept_b`; the same one for every store) until the kept matches are rotated,
+%   every H + the largest window: then the other generation is emptied at once (retractall/1,
+%   much cheaper than erasing match by match) and receives the matches from then on. A kept
+%   match thus stays between one and two rotation periods, at least as long as a deletion
+%   inside the horizon may need it.
+
+rtl_retire_store(M, Name, Arity, Before) :-
+    functor(Head, Name, Arity),
+    StartArg is Arity - 1,
+    arg(StartArg, Head, Start),
+    (   program_fact(M, ele_kept_store(Name, kept(KeptA, KeptB), Order))
+    ->  nb_getval(rtl_kept_generation, Generation),
+        ( Generation == a -> Kept = KeptA ; Kept = KeptB ),
+        Head =.. [_|Args],
+        KeptHead =.. [Kept|Args],               % instantiated by each clause found
+        retire(Order, M, Head, Start, Before, KeptHead)
+    ;   forall(( clause(M:Head, true, Ref), Start < Before ), erase(Ref))
+    ).
+
+% The retired matches are newer than every kept one: oldest-first stores get them at the
+% end, in their order; newest-first stores in front, the newest of them first.
+%
+% An oldest-first store holds its matches in the order they were stored, and a match starts
+% no later than the clock when it was stored: the scan stops at the first match that stays
+% (one behind it that could go is retired at a later sweep, at most the window plus the
+% delay bound after it was stored), so a sweep costs what it retires, not the store's size.
+retire(oldest_first, M, Head, Start, Before, KeptHead) :-
+    forall(( clause(M:Head, true, Ref), ( Start < Before -> true ; !, fail ) ),
+           ( erase(Ref), assertz(M:KeptHead) )).
+retire(newest_first, M, Head, Start, Before, KeptHead) :-
+    findall(KeptHead-Ref, ( clause(M:Head, true, Ref), Start < Before ), Retired),
+    reverse(Retired, Oldest),
+    forall(member(K-Ref, Oldest), ( erase(Ref), asserta(M:K) )).
+
+%!  rtl_forget_kept(+Module, +Clock) is det.
+%
+%   Once a rotation period (H + the largest window) has passed since the last rotation,
+%   empty the older generation of every kept store and record store: what it holds was
+%   retired or recorded before the last rotation, at least a rotation period ago, so no
+%   deletion inside the horizon needs it. It then receives from now on.
+
+rtl_forget_kept(M, Clock) :-
+    rtl_horizon(H),
+    nb_getval(rtl_kept_rotated, Last),
+    (   H == inf
+    ->  true
+    ;   Last == none
+    ->  nb_setval(rtl_kept_rotated, Clock)
+    ;   nb_getval(rtl_largest_window, Wmax),
+        Clock - Last >= H + Wmax
+    ->  nb_getval(rtl_kept_generation, Generation),
+        ( Generation == a -> Older = b ; Older = a ),
+        nb_getval(rtl_kept_generations, Generations),
+        forall(member(Arity-Kept, Generations), empty_generation(M, Arity, Kept, Older, Last + Wmax)),
+        nb_setval(rtl_kept_generation, Older),
+        nb_setval(rtl_kept_rotated, Clock)
+    ;   true
+    ).
+
+% Every match or record of the emptied generation ended before the last rotation (Last): a
+% deletion of an event that ended up to the largest window after it may have needed one;
+% rtl_complete_since is the latest such time.
+empty_generation(M, Arity, kept(KeptA, KeptB), Generation, CompleteAfter) :-
+    ( Generation == a -> Kept = KeptA ; Kept = KeptB ),
+    functor(Head, Kept, Arity),
+    (   predicate_property(M:Head, number_of_clauses(N)), N > 0
+    ->  retractall(M:Head),
+        Needed is CompleteAfter,
+        nb_getval(rtl_complete_since, C0),
+        ( C0 >= Needed -> true ; nb_setval(rtl_complete_since, Needed) )
+    ;   true
+    ).
+
+%!  rtl_kept_generation(?Generation) is semidet.
+%
+%   The generation (`a` or `b`) that receives retired matches and new records now. Called
+%   by compiled rules when they record a match (consumption policies) or an occurrence
+%   (aggregates).
+
+rtl_kept_generation(Generation) :-
+    nb_getval(rtl_kept_generation, Generation).
+
+%!  rtl_retraction_too_late(+End:number) is semidet.
+%
+%   A deletion of an event that ended at End is outside the retraction horizon.
+
+rtl_retraction_too_late(End) :-
+    rtl_horizon(H),
+    H \== inf,
+    nb_getval(rtl_clock, Clock),
+    number(Clock),
+    End < Clock - H.
+
+%!  rtl_dry_run(:Goal, -Retracted:integer, -Derived:integer) is det.
+%
+%   Run Goal without effect: outputs, output hooks and actions are off, and every change of
+%   the database is undone. Retracted and Derived count the derived events Goal would have
+%   taken back and derived.
+
+%
+%   Nothing on the path of ordinary events checks for a dry run: the output goes to the
+%   buffer (rtl_ele keeps buffered lines as clauses, undone), the output hooks are removed
+%   inside the snapshot (undone) and switched off, and the counters of rtl_ele are put back;
+%   only rtl_action/1 checks rtl_dry_running/0.
+
+rtl_dry_run(Goal, Retracted, Derived) :-
+    Saved = [rtl_output_sink, rtl_output_hooks, derived, underived],
+    findall(Key-Value, ( member(Key, Saved), nb_current(Key, Value) ), Values),
+    nb_getval(derived, Derived0),
+    nb_getval(underived, Retracted0),
+    setup_call_cleanup(( nb_setval(rtl_dry_run, true),
+                         nb_setval(rtl_output_sink, buffer),
+                         nb_setval(rtl_output_hooks, false) ),
+                       snapshot(( retractall(rtl_ele:type_output_hook(_, _)),
+                                  forall(Goal, true),
+                                  nb_getval(derived, Derived1),
+                                  nb_getval(underived, Retracted1) )),
+                       ( nb_setval(rtl_dry_run, false),
+                         forall(member(Key-Value, Values), nb_setval(Key, Value)) )),
+    Derived is Derived1 - Derived0,
+    Retracted is Retracted1 - Retracted0.
+
+%!  rtl_dry_running is semidet.
+%
+%   A dry run (rtl_dry_run/3) is going on.
+
+rtl_dry_running :-
+    nb_current(rtl_dry_run, true).
+
+%!  rtl_too_late_text(+End, +Retracted, +Derived, -Text:string) is det.
+%
+%   The warning for a deletion outside the horizon of an event that ended at End.
+
+rtl_too_late_text(End, Retracted, Derived, Text) :-
+    nb_getval(rtl_complete_since, Complete),
+    (   number(Complete), End =< Complete -> AtLeast = "at least " ; AtLeast = "" ),
+    (   Derived > 0
+    ->  format(string(Again), ", ~D not derived again", [Derived])
+    ;   Again = ""
+    ),
+    format(string(Text), "retraction too late: ~s~D derived events not retracted~s",
+           [AtLeast, Retracted, Again]).
+
+%!  rtl_warning(+Text) is det.
+%!  rtl_take_warnings(-Texts:list(string)) is det.
+%
+%   Warnings about the input being processed, in order; the readers of event lines take them
+%   after each line and report them with its number.
+
+rtl_warning(Text) :-
+    assertz(warning_text(Text)).
+
+rtl_take_warnings(Texts) :-
+    findall(T, retract(warning_text(T)), Texts).
+
+%!  rtl_drop_twins(:Stored) is det.
+%
+%   Under `recent`, a partial match about to wait replaces its waiting twins: the stored
+%   matches (live or kept) of the same events at other times. Called by compiled rules when
+%   Stored is not ground (a partial match from one branch of an `or`, whose other branch's
+%   variables are unbound): a twin is then a variant of it, not anything that unifies.
+
+rtl_drop_twins(M:Stored) :-
+    Stored =.. [Name|Args],
+    append(Key, [_, _], Args),
+    (   program_fact(M, ele_kept_store(Name, kept(KeptA, KeptB), _))
+    ->  Names = [Name, KeptA, KeptB]
+    ;   Names = [Name]
+    ),
+    copy_term(Key, Pattern),
+    append(Pattern, [_, _], PatternArgs),
+    forall(member(N, Names),
+           (   Head =.. [N|PatternArgs],
+               forall(( clause(M:Head, true, Ref), Pattern =@= Key ), erase(Ref))
+           )).
+
+%!  rtl_next_seq(-Seq:integer) is det.
+%
+%   The next processing sequence number (aggregates follow the processing order).
+
+rtl_next_seq(Seq) :-
+    flag(rtl_processing_seq, Seq, Seq + 1).
+
+%!  rtl_aggregate_values(+Items, -Acc, -Values) is det.
+%
+%   Items are `Seq-(Function-Start-End)` for the occurrences counted by one accumulator, in
+%   any order; fold them in Seq order from the empty accumulator. Acc is the final
+%   accumulator (`none` for no item), Values the value after each one as `Seq-(Value-End)`.
+
+rtl_aggregate_values(Items, Acc, Values) :-
+    keysort(Items, Sorted),
+    fold(Sorted, none, Acc, Values).
+
+fold([], Acc, Acc, []).
+fold([Seq-(F-_-End)|Items], Acc0, Acc, [Seq-(V-End)|Values]) :-
+    retalis:rtl_aggregate(F, Acc0, Acc1, V),
+    fold(Items, Acc1, Acc, Values).
+
+%!  rtl_aggregate_redo(+Items, +Removed, -Acc, -Retracts, -Adds) is det.
+%
+%   An accumulator counted Items plus Removed (`Seq-(Function-Start-End)`), which is deleted:
+%   Retracts are the values to take back (from Removed on), Adds the new values of the items
+%   after it, each `Value-End`; Acc is the new accumulator.
+
+rtl_aggregate_redo(Items, Removed, Acc, Retracts, Adds) :-
+    Removed = From-_,
+    rtl_aggregate_values([Removed|Items], _, Old),
+    rtl_aggregate_values(Items, Acc, New),
+    findall(V-E, ( member(S-(V-E), Old), S >= From ), Retracts),
+    findall(V-E, ( member(S-(V-E), New), S > From ), Adds).
