@@ -49,6 +49,8 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_sandbox).
 :- use_module(rtl_text).
 :- use_module(rtl_seen).
+:- use_module(rtl_horizon, [rtl_take_warnings/1]).
+
 :- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1]).
 
 %!  rtl_api_use_program(+Module:text, -Out) is det.
