@@ -112,6 +112,12 @@ builtin(any,  rtl_sync:rtl_goal_set(_, _, _), []).
 builtin(any,  rtl_math:G, []) :-
     (   var(G) -> true ; predicate_property(rtl_math:G, exported) ).
 builtin(rule, rtl_ele:rtl_derived(_, _, _), []).
+builtin(rule, rtl_horizon:rtl_late(_), []).                % deletions and late events
+builtin(rule, rtl_horizon:rtl_kept_generation(_), []).
+builtin(rule, rtl_horizon:rtl_next_seq(_), []).
+builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
+builtin(rule, rtl_horizon:rtl_aggregate_redo(_, _, _, _, _), []).
+builtin(rule, rtl_horizon:rtl_drop_twins(Stored), [retract(Stored)]).   % retracts from the rule's store
 builtin(rule, rtl_ele:rtl_underived(_, _, _), []).
 builtin(rule, rtl_sync:rtl_synchronized(_, Q, _, _, _), [Q]).
 builtin(rule, rtl_sync:rtl_synchronized_retract(_, Q, _, _, _), [Q]).
@@ -168,20 +174,42 @@ rtl_check_goal(Policy, Module, Goal) :-
 rtl_check_rule(M, Id, Stores, Clauses0) :-
     (   atom(Id) -> true ; throw(error(rtl_unsafe(Id, rule_id, []), _)) ),
     forall(member(Store, Stores),
-           (   Store = store(N, A, W), atom(N), integer(A), rtl_rules:rule_pred_name(Id, N),
-               ( W == none ; number(W), W >= 0 )
+           (   own_store(Id, Store)
            ->  true
            ;   throw(error(rtl_unsafe(Store, store, []), _))
            )),
     copy_term(Clauses0, Clauses),
     findall(N/A, ( member(C, Clauses), clause_head(C, H), callable(H),
                    functor(H, N, A), rtl_rules:rule_pred_name(Id, N)
-                 ; member(store(N, A, _), Stores) ), Local0),
+                 ; member(S, Stores), store_pred(S, N/A) ), Local0),
     sort(Local0, Local),
-    findall(pred(M, N/A), member(store(N, A, _), Stores), Writable),
+    findall(pred(M, PI), ( member(S, Stores), store_pred(S, PI) ), Writable),
     Policy = rule(Id, Writable, Local),
     empty_assoc(V0),
     foldl(check_clause(M, Policy), Clauses, V0, _).
+
+% A store of rule Id: its partial matches (`store/3`), or what is kept of them for deletions
+% (`record/4`, `kept/5`, rtl_horizon.pl); every name is one of the rule's own predicates.
+own_store(Id, store(N, A, W)) :-
+    own_names(Id, [N], A),
+    ( W == none ; number(W), W >= 0 ).
+own_store(Id, record(N, A, KA, KB)) :-
+    own_names(Id, [N, KA, KB], A).
+own_store(Id, kept(Live, A, KA, KB, Order)) :-
+    own_names(Id, [Live, KA, KB], A),
+    atom(Order).
+
+own_names(Id, Names, Arity) :-
+    integer(Arity),
+    forall(member(N, Names), ( atom(N), rtl_rules:rule_pred_name(Id, N) )).
+
+store_pred(store(N, A, _), N/A).
+store_pred(record(N, A, _, _), N/A).
+store_pred(record(_, A, KA, _), KA/A).
+store_pred(record(_, A, _, KB), KB/A).
+store_pred(kept(Live, A, _, _, _), Live/A).
+store_pred(kept(_, A, KA, _, _), KA/A).
+store_pred(kept(_, A, _, KB, _), KB/A).
 
 check_clause(M, Policy, Clause, V0, V) :-
     (   Clause = (:- Directive)
