@@ -275,6 +275,8 @@ def _check_head(head: Term, clause: StaticClause, reserved: _Reserved, extra: in
     if isinstance(head, Compound) and head.name == ":" and head.arity == 2:
         raise RetalisSemanticError("a program cannot define clauses of another module (Module:Head)", where)
     key = (head.name, (head.arity if isinstance(head, Compound) else 0) + extra)
+    if key == (":", 2):                               # `: --> ...` would define Module:Head
+        raise RetalisSemanticError("a program cannot define clauses of another module (Module:Head)", where)
     reason = reserved.why(key)
     if reason is not None:
         raise RetalisSemanticError(f"cannot define {key[0]}/{key[1]}: {reason}", where)
