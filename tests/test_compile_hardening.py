@@ -60,6 +60,11 @@ REJECTED = [
      "the variable P of min(P) does not occur"),
     ("aggregate_of_a_constant", "m(M) <- s seq aggregate(max(3), price(_), M).\n", 1, 29,
      "max(X) aggregates a variable"),
+    ("bar_disjunction_with_number", "p :- a | 8.\n", 1, 10, "calls 8, which is not a goal"),
+    ("module_not_an_atom", "p :- 9:q.\n", 1, 6, "module that is not an atom"),
+    ("grammar_head_control", "(a ; b) --> [x].\n", 1, 2, "head of a grammar rule must be a non-terminal"),
+    ("grammar_module_not_an_atom", "g --> 3:h.\n", 1, 7, "module that is not an atom"),
+    ("grammar_head_dot", "'.' --> [x].\n", 1, 1, "cannot define ./2"),
     ("dynamic_not_an_indicator", ":- dynamic foo/x.\n", 1, 12, "dynamic takes predicate indicators"),
     ("initialization_undefined", ":- initialization(nosuch).\n", 1, 19, "calls nosuch/0"),
     ("clause_for_generated_predicate", "x <- a seq b.\ne_r1_1(s, e).\n", 2, 1,
@@ -154,6 +159,8 @@ ACCEPTED = [
      ":- dynamic seen/1.\nx(N) <- a where seen(N).\n", _events(("a", 1)), [("x(1)", 1, 1)]),
     ("memory_recreated_after_d_mem", "c_mem(m, a(_)-[], 2, 5).\nd_mem(m).\nc_mem(m, a(_)-[], 2, 5).\n"
      "x(Y) <- b where prev(m, a(Y)^_, 9).\n", _events(("a(1)", 1), ("b", 2)), [("x(1)", 2, 2)]),
+    ("operator_atoms_as_operands", "* .\nwhere :- _.\nx(Y, Z) <- a where (Y = (\\ ;), Z = (- - -)).\n",
+     _events(("a", 1)), [("x(\\ (;),- - (-))", 1, 1)]),
     ("directive_calling_clause_above", "setup :- assertz(seen(0)).\n:- dynamic seen/1.\n:- setup.\n"
      "x(N) <- a where seen(N).\n", _events(("a", 1)), [("x(0)", 1, 1)]),
 ]

@@ -41,7 +41,7 @@ from retalisc.frontend.terms import Atom, Compound, Number, Var, indicator, to_p
 ROOT = Path(__file__).resolve().parent.parent
 SEED = int(os.environ.get("RETALISC_FUZZ_SEED", "20240611"))
 PROGRAMS = int(os.environ.get("RETALISC_FUZZ_PROGRAMS", "300"))
-RUNS = int(os.environ.get("RETALISC_FUZZ_RUNS", "40"))
+RUNS = int(os.environ.get("RETALISC_FUZZ_RUNS", "30"))
 
 SEED_PROGRAMS = [
     "a2(X) <- a(X) seq b(X).\nc2(X, Y) <- a(X) and b(Y) where X < Y.\nd2 <- (a(_) or b(_)).3.\n",

@@ -275,6 +275,8 @@ def _check_head(head: Term, clause: StaticClause, reserved: _Reserved, extra: in
     if isinstance(head, Compound) and head.name == ":" and head.arity == 2:
         raise RetalisSemanticError("a program cannot define clauses of another module (Module:Head)", where)
     key = (head.name, (head.arity if isinstance(head, Compound) else 0) + extra)
+    if key == (":", 2):                               # `: --> ...` would define Module:Head
+        raise RetalisSemanticError("a program cannot define clauses of another module (Module:Head)", where)
     reason = reserved.why(key)
     if reason is not None:
         raise RetalisSemanticError(f"cannot define {key[0]}/{key[1]}: {reason}", where)
@@ -326,6 +328,11 @@ def _check_grammar_body(body: Term, clause: StaticClause) -> None:
             stack.append(b.args[0])
         elif isinstance(b, Compound) and (b.name, b.arity) == ("{}", 1):
             _check_callable(b.args[0], clause.span, "a grammar rule")
+        elif isinstance(b, Compound) and (b.name, b.arity) == (":", 2):
+            if not isinstance(b.args[0], (Atom, Var)):
+                raise RetalisSemanticError("a grammar rule calls Module:NonTerminal with a module that is not an "
+                                           "atom", span_of(b.args[0]) or clause.span)
+            stack.append(b.args[1])
         elif isinstance(b, Number):
             raise RetalisSemanticError(f"a grammar rule body cannot contain the number {b.value}",
                                        span_of(b) or clause.span)
