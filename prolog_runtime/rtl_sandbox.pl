@@ -252,10 +252,12 @@ check_head(Head, _) :-
 walk(G, _, S, _, _) :-
     var(G), !,
     refuse(S, call/1, instantiation).
-walk(Q:G, _, S, V0, V) :- !,
+walk(Q:G, M, S, V0, V) :- !,
     (   atom(Q) -> true ; refuse(S, (:)/2, instantiation) ),
     (   current_module(Q) -> true ; refuse(S, Q:G, unknown_module) ),
+    (   Q == M -> true ; cross_module_call(Q, G, S) ),
     walk(G, Q, S, V0, V).
+
 walk(G, _, S, _, _) :-
     \+ callable(G), !,
     refuse(S, G, not_callable).
@@ -293,6 +295,26 @@ walk_list([G|Gs], M, S, V0, V) :-
     ;   walk(G, M, S, V0, V1)
     ),
     walk_list(Gs, M, S, V1, V).
+
+%   As library(sandbox): a qualified call into a library module may only call what it
+%   exports (its other predicates may rely on being called by its own code only).
+cross_module_call(Q, G, S) :-
+    (   var(G)
+    ->  true                                    % refused by the walk
+    ;   user_code(Q)
+    ->  true
+    ;   runtime_module(Q)
+    ->  true                                    % builtin/3 decides
+    ;   (   predicate_property(Q:G, exported)
+        ;   predicate_property(Q:G, public)
+        ;   predicate_property(Q:G, multifile)
+        ;   predicate_property(system:G, iso)
+        ;   db_change(G)                         % checked by check_db/4
+        )
+    ->  true
+    ;   goal_pi(Q:G, PI),
+        refuse(S, PI, not_exported)
+    ).
 
 %   Goals whose called goals library(sandbox) knows: control constructs, findall/3, call/N,
 %   catch/3, format/2 with ~@, with_output_to/2, phrase/2,3, ...
@@ -541,6 +563,8 @@ reason_text(database_rule, C, T) :-
     format(string(T), "unsafe goal: ~q of a clause with a body", [C]).
 reason_text(unknown, C, T) :-
     format(string(T), "unsafe goal: ~q is not defined", [C]).
+reason_text(not_exported, C, T) :-
+    format(string(T), "unsafe goal: ~q (not exported by its module)", [C]).
 reason_text(unknown_module, C, T) :-
     format(string(T), "unsafe goal: ~q names a module that does not exist", [C]).
 reason_text(not_callable, C, T) :-

@@ -189,6 +189,8 @@ def test_the_program_file_itself_is_trusted(tmp_path):
     ("set_prolog_flag(occurs_check, error)", "unsafe goal: set_prolog_flag/2"),
     ("abort", "unsafe goal: abort/0"),
     ("G = shell('touch {m}'), call(G)", "only known when it runs"),
+    ("system:'$set_source_module'(_)", "not exported by its module"),
+    ("sandbox:verify_safe_declaration(x)", "not exported by its module"),
 ])
 def test_queries_that_would_change_or_escape_the_program_are_refused(engine, tmp_path, goal, message):
     marker = tmp_path / "hacked"

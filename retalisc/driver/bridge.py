@@ -107,7 +107,7 @@ _HELPER_SRC = r"""
 %   Never raises: errors are reported as Status 2 with the printed
 %   message in Out and the writeq text of the error term in ErrTerm.
 %   Out and ErrTerm are always bound (janus cannot return unbound vars).
-%   The request runs in the owner engine (see serve/0).
+%   The request runs in the owner thread (see serve/0).
 bridge(Mode, GoalText, Aux, Status, Out, ErrTerm) :-
     post(text(Mode, GoalText, Aux), Status, Out, ErrTerm).
 
