@@ -176,6 +176,11 @@ set_stream_option(Option) :-
 usage_error(Formal) :-
     (   Formal = domain_error(option, Opt)
     ->  format(user_error, "error: unknown option ~w~n", [Opt])
+    ;   Formal = domain_error(max_steps, N)
+    ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = action_output(File, E)
+    ->  error_text(error(E, _), Why),
+        format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
     ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--allow-control] [--strict] [--max-steps=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 

@@ -77,9 +77,6 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
-            if rejected:
-                sink.flush()
-                display.clear()
             messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")
                         for r in rejected]
             messages += [(w.line, f"warning: {w.text}") for w in engine.take_warnings()]
