@@ -1,5 +1,6 @@
 :- module(rtl_api,
           [ rtl_api_use_program/2,      % +Module, -Out
+            rtl_api_default_flags/1,    % -Out
             rtl_api_output_to_buffer/1, % -Out
             rtl_api_set_flag/3,         % +Name, +ValueText, -Out
             rtl_api_feed_events/2,      % +Items, -Output
@@ -52,6 +53,13 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_horizon, [rtl_take_warnings/1]).
 
 :- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1]).
+
+%!  rtl_api_default_flags(-Out) is det.
+%
+%   rtl_default_flags/0: a new Engine does not inherit the flags another one set.
+
+rtl_api_default_flags("") :-
+    rtl_default_flags.
 
 %!  rtl_api_use_program(+Module:text, -Out) is det.
 

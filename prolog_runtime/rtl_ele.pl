@@ -12,6 +12,7 @@
             rtl_set_flag/2,             % +Flag, +Value
             rtl_flag/2,                 % ?Flag, ?Value
             rtl_max_steps/1,            % -Steps
+            rtl_default_flags/0,
             rtl_set_action_output/1,    % +Target
             rtl_action_stream/1,        % -Stream
             rtl_close_action_output/0,
@@ -160,6 +161,16 @@ valid_flag_value(max_steps, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 valid_flag_value(max_term_depth, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
+
+%!  rtl_default_flags is det.
+%
+%   Every flag back to its default (a new Engine in a process where another ran).
+
+rtl_default_flags :-
+    retractall(flag_value(_, _)),
+    nb_setval(rtl_echo_input, false),
+    nb_setval(rtl_max_steps, []),
+    schedule_sweep.
 
 %!  rtl_max_steps(-Steps) is det.
 %

@@ -143,6 +143,8 @@ class Engine:
         self._lock = threading.RLock()    # one call (and its output delivery) at a time
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")     # constant text, no values
         self._warnings: List[EngineWarning] = []
+        if self.bridge.once("current_predicate(rtl_api:rtl_api_default_flags/1)"):   # constant text
+            self._call("rtl_api_default_flags")          # flags another Engine set do not carry over
         self.bridge.consult(str(prolog_file))
         if module:
             self._call("rtl_api_use_program", module)
