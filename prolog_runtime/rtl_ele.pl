@@ -169,8 +169,7 @@ valid_flag_value(max_term_depth, V) :-
 rtl_default_flags :-
     retractall(flag_value(_, _)),
     nb_setval(rtl_echo_input, false),
-    nb_setval(rtl_max_steps, []),
-    schedule_sweep.
+    nb_setval(rtl_max_steps, []).
 
 %!  rtl_max_steps(-Steps) is det.
 %
