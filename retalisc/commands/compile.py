@@ -121,7 +121,9 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
                 allow_control: bool, strict: bool, max_steps, action_output, progress) -> None:
     """Run PROGRAM over an event file, printing derived events as JSON Lines.
 
-    Example: retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
+    \b
+    Example:
+      retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
     """
     from ..driver.bridge import PrologError
     from ..driver.engine import Engine
