@@ -120,7 +120,8 @@ startup_events :-
     catch(rtl_flush_raised, Error, true),
     (   var(Error)
     ->  true
-    ;   event_failure(Error, "the events raised while loading", Outcome),
+    ;   rtl_drop_raised,
+        event_failure(Error, "the events raised while loading", Outcome),
         print_outcome(-, 0, Outcome),
         stop_if_needed(Outcome)
     ).
@@ -316,7 +317,9 @@ retraction_outcome(Event, Start, End, Outcome) :-
 run_event(Op, Event, Start, End, Outcome) :-
     catch(( rtl_input(Op, Event, Start, End), Outcome = ok ),
           Error,
-          ( event_text(Event, Text), event_failure(Error, Text, Outcome) )).
+          ( rtl_drop_raised,
+            event_text(Event, Text),
+            event_failure(Error, Text, Outcome) )).
 
 event_failure(rtl_halted(Why), Text, halted(Reason)) :- !,
     format(string(Reason), "~s while processing ~s", [Why, Text]).
@@ -370,7 +373,8 @@ process_event(Op, Event, Start, End) :-
 end_of_input(Mode, Report) :-
     catch(( rtl_guarded(rtl_sync_finish(Mode)), Outcome = ok ),
           Error,
-          event_failure(Error, "the matches postponed to the end of the input", Outcome)),
+          ( rtl_drop_raised,
+            event_failure(Error, "the matches postponed to the end of the input", Outcome) )),
     count_outcome(Outcome),
     call(Report, 0, Outcome),
     stop_if_needed(Outcome).

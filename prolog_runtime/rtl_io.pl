@@ -50,11 +50,12 @@ rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     ;   Depth \== short, too_deep_text(Line, MaxDepth)
     ->  depth_reason(MaxDepth, Reason),
         Parsed = error(Reason)
-    ;   catch(line_fields(Line, Length, Fields), _, fail)
-    ->  fields_event(Fields, Depth, Parsed)
+    ;   catch(line_fields(Line, Length, Record), _, fail)
+    ->  record_event(Record, Depth, Parsed)
     ;   catch(json_fields(Line, Fields), error(Error, _), true)
     ->  (   var(Error)
-        ->  fields_event(Fields, Depth, Parsed)
+        ->  fields_record(Fields, Record),
+            record_event(Record, Depth, Parsed)
         ;   json_error_reason(Error, Reason),
             Parsed = error(Reason)
         )
@@ -71,28 +72,29 @@ blank_line(Line) :-
 % what is also JSON is accepted here: string keys, values that are strings, JSON numbers
 % (checked on their text: Prolog also reads 0x10, 0'a, 1.0Inf, 1_000...), true, false,
 % null and arrays of those; nothing after the object. Anything else goes to the JSON reader.
-line_fields(Line, Length, Fields) :-
-    term_string(Term, Line, [variable_names(Vars), subterm_positions(Pos)]),
-    Vars == [],
-    Term = {Body},
+line_fields(Line, Length, R) :-
+    term_string(Term, Line, [subterm_positions(Pos)]),
+    Term = {Body},                              % (a variable fails json_value_text/3)
     Pos = brace_term_position(_, To, BodyPos),
     (   To =:= Length
     ->  true
     ;   sub_string(Line, To, _, 0, Rest),
         blank_line(Rest)
     ),
-    comma_list(Body, Pairs),
-    pair_positions(Pairs, BodyPos, Line, Fields).
+    R = f(_, _, _, _, _, _),
+    body_record(Body, BodyPos, Line, R).
 
-pair_positions([Pair], Pos, Line, [Field]) :- !,
-    pair_field(Pair, Pos, Line, Field).
-pair_positions([Pair|Pairs], term_position(_, _, _, _, [Pos, RestPos]), Line, [Field|Fields]) :-
-    pair_field(Pair, Pos, Line, Field),
-    pair_positions(Pairs, RestPos, Line, Fields).
+% Walk the pairs `"key": Value, ...` and their positions, filling the record of fields.
+body_record((Pair, Pairs), term_position(_, _, _, _, [Pos, PairsPos]), Line, R) :- !,
+    pair_record(Pair, Pos, Line, R),
+    body_record(Pairs, PairsPos, Line, R).
+body_record(Pair, Pos, Line, R) :-
+    pair_record(Pair, Pos, Line, R).
 
-pair_field(Key:Value, term_position(_, _, _, _, [_, ValuePos]), Line, Key-Value) :-
+pair_record(Key:Value, term_position(_, _, _, _, [_, ValuePos]), Line, R) :-
     string(Key),
-    json_value_text(Value, ValuePos, Line).
+    json_value_text(Value, ValuePos, Line),
+    record_field(Key, Value, R).
 
 json_value_text(V, _, _) :- string(V), !.
 json_value_text(V, From-To, Line) :- number(V), !,
@@ -111,9 +113,9 @@ json_value_text(V, From-To, Line) :- number(V), !,
 json_value_text(V, _, _) :- atom(V), !, memberchk(V, [true, false, null]).
 json_value_text(V, list_position(_, _, Positions, none), Line) :-
     is_list(V),
-    maplist(json_value_text_, V, Positions, Line).
+    maplist(json_value_text_(Line), V, Positions).
 
-json_value_text_(V, Pos, Line) :- json_value_text(V, Pos, Line).
+json_value_text_(Line, V, Pos) :- json_value_text(V, Pos, Line).
 
 % A JSON number: -?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)?. For a text Prolog read as a
 % number, it is enough that it has only those characters (no digit groups, Inf, NaN, 0x...)
@@ -220,12 +222,15 @@ fields_record(Fields, R) :-
 
 fill_record([], _).
 fill_record([Key-Value|Fields], R) :-
+    record_field(Key, Value, R),
+    fill_record(Fields, R).
+
+record_field(Key, Value, R) :-
     (   key_slot(Key, I)
     ->  arg(I, R, Slot),
         ( var(Slot) -> Slot = Value ; true )
     ;   true
-    ),
-    fill_record(Fields, R).
+    ).
 
 key_slot("event", 1).
 key_slot("t", 2).
@@ -234,8 +239,7 @@ key_slot("end", 4).
 key_slot("op", 5).
 key_slot("rule", 6).
 
-fields_event(Fields, MaxDepth, Parsed) :-
-    fields_record(Fields, R),
+record_event(R, MaxDepth, Parsed) :-
     R = f(Text, T, S, E, Op, Rule),
     interval(T, S, E, Start, End, TimeProblem),
     (   nonvar(Op), rule_change(Op, Change)

@@ -5,7 +5,8 @@
             rtl_input/4,                % +Op, +Event, +Start, +End
             rtl_raise_internal/3,       % +Event, +Start, +End
             rtl_flush_raised/0,
-            rtl_guarded/1               % :Goal
+            rtl_guarded/1,              % :Goal
+            rtl_drop_raised/0
           ]).
 
 /** <module> Raising events from Prolog code (thesis Listing A.1)
@@ -99,9 +100,10 @@ rtl_raise_internal(Event, Start, End) :-
     ->  assertz(raised('$internal'(Event), Start, End))
     ;   prolog_load_context(module, _)
     ->  assertz(raised('$internal'(Event), Start, End))
-    ;   setup_call_cleanup(nb_setval(rtl_raise_busy, true),
-                           ( rtl_internal_event(Event, Start, End), drain ),
-                           nb_setval(rtl_raise_busy, false))
+    ;   b_setval(rtl_raise_busy, true),         % undone by an exception (see guarded/1)
+        rtl_internal_event(Event, Start, End),
+        drain,
+        b_setval(rtl_raise_busy, false)
     ).
 
 %!  rtl_input(+Op, +Event, +Start, +End) is det.
@@ -125,23 +127,24 @@ rtl_input(Op, Event, Start, End) :-
 %   meanwhile are queued) and within the step limit (the flag `max_steps`: inferences per
 %   input event, everything it derives and raises included). A derivation that does not
 %   end (a cyclic rule, a runaway recursion in a condition) raises
-%   `error(rtl_step_limit(Max), _)`. When Goal raises, the events it raised and that were
-%   not processed yet are dropped. A halt called by program code meanwhile is raised as
-%   `rtl_halted(Reason)` (rtl_halt.pl). (One catch/3 instead of setup_call_cleanup/3:
-%   this runs for every input event.)
+%   `error(rtl_step_limit(Max), _)`. A halt called by program code meanwhile is raised as
+%   `rtl_halted(Reason)` (rtl_halt.pl). This runs for every input event, so it has no
+%   catch/3 of its own: `rtl_raise_busy` is set with b_setval/2, which an exception or a
+%   failure undoes. (The caller that reports an error drops the events still queued with
+%   rtl_drop_raised/0.)
 
 guarded(Goal) :-
-    nb_setval(rtl_raise_busy, true),
-    (   catch(limited(Goal), Error, true)
-    ->  true
-    ;   Error = error(failed(Goal), _)          % should not happen: processing is det
-    ),
-    nb_setval(rtl_raise_busy, false),
-    (   var(Error)
-    ->  rtl_halt_check
-    ;   retractall(raised(_, _, _)),
-        throw(Error)
-    ).
+    b_setval(rtl_raise_busy, true),
+    limited(Goal),
+    b_setval(rtl_raise_busy, false),
+    rtl_halt_check.
+
+%!  rtl_drop_raised is det.
+%
+%   Forget the events raised and not processed yet (after an event failed).
+
+rtl_drop_raised :-
+    retractall(raised(_, _, _)).
 
 limited(Goal) :-
     rtl_max_steps(Max),
@@ -159,15 +162,17 @@ limited(Goal) :-
 %   Run Goal (program code run outside an input event: the postponed matches at the end
 %   of the input) as an event is run: the events it raises are queued and processed after
 %   it, what it prints goes where the entry point sends it, and a halt in it is raised as
-%   `rtl_halted(Reason)`. There is no step limit.
+%   `rtl_halted(Reason)`. There is no step limit. After an error the caller drops the
+%   events still queued (rtl_drop_raised/0).
 
 rtl_guarded(Goal) :-
     (   nb_current(rtl_raise_busy, true)
     ->  call(Goal)
-    ;   setup_call_cleanup(nb_setval(rtl_raise_busy, true),
-                           ( catch(( call(Goal), drain ), Error, ( retractall(raised(_, _, _)), throw(Error) )),
-                             rtl_halt_check ),
-                           nb_setval(rtl_raise_busy, false))
+    ;   b_setval(rtl_raise_busy, true),         % undone by an exception (see guarded/1)
+        call(Goal),
+        drain,
+        b_setval(rtl_raise_busy, false),
+        rtl_halt_check
     ).
 
 %!  rtl_flush_raised is det.

@@ -1,7 +1,8 @@
 :- module(rtl_seen,
           [ rtl_seen_add/3,             % +Event, +Start, +End
             rtl_seen_take/3,            % +Event, +Start, +End
-            rtl_seen_horizon/1          % -Time
+            rtl_seen_horizon/1,         % -Time
+            rtl_seen_count/1            % -Count
           ]).
 
 /** <module> The input events seen recently, to check retractions against
@@ -77,6 +78,15 @@ drop_generation(Name) :-
     retractall(generation(Name, _)),
     retractall(Name:seen(_, _, _)),
     assertz(free_generation(Name)).
+
+%!  rtl_seen_count(-Count) is det.
+%
+%   The number of input events remembered.
+
+rtl_seen_count(Count) :-
+    findall(Name, ( nb_current(rtl_seen_generation, Name), Name \== [] ; generation(Name, _) ), Names),
+    aggregate_all(sum(N), ( member(Name, Names),
+                            predicate_property(Name:seen(_, _, _), number_of_clauses(N)) ), Count).
 
 %!  rtl_seen_horizon(-Time) is det.
 %

@@ -2,15 +2,19 @@
 rejected with its location and reason, counted and skipped, on both paths; UTF-8 with a
 byte-order mark and non-ASCII atoms are accepted in programs and events."""
 import json
+import subprocess
+from pathlib import Path
 
 import pytest
 
+from retalisc.compiler import compile_source
 from retalisc.driver.engine import Engine
 
 from stream_paths import PATHS, jsonl, run_path
 
 PROGRAM = "seen(X) <- smoke(X).\nspan(X) <- smoke(X) where true.\n"
 
+ROOT = Path(__file__).resolve().parent.parent
 DEEP = 20_000
 
 # (line text, what the message must say)
@@ -110,3 +114,25 @@ def test_utf8_byte_order_mark_and_non_ascii_atoms(path, stdin, tmp_path, capfd):
     assert result.returncode == 0, result.stderr
     assert result.events == ["alarm(küche)", "alarm('Bad')"]
     assert "rejected" not in result.stderr.replace("0 rejected", "")
+
+
+def test_non_ascii_names_in_programs():
+    from retalisc.frontend.parser import read_term
+    from retalisc.frontend.terms import Compound, Var
+
+    term = read_term("alarm(Ort) <- rauch_ü(Ort) seq 'Hitze'(Über)")
+    assert isinstance(term, Compound) and term.name == "<-"
+    pattern = term.args[1]
+    assert pattern.args[0].name == "rauch_ü"
+    assert isinstance(pattern.args[1].args[0], Var) and pattern.args[1].args[0].name == "Über"
+    result = compile_source("p(X) <- größe(X, Ä).\n", "names.rtl")     # Ä is a variable
+    assert "ele_trigger('größe'(X, Ä)" in result.prolog
+
+
+def test_remembered_events_plunit(swipl):
+    """rtl_seen.pl (what retractions are checked against): bounded memory on a long stream,
+    and agreement with a list model on random adds and retractions."""
+    proc = subprocess.run([swipl, "--no-tty", "-q", "-g", "run_tests", "-t", "halt",
+                           str(ROOT / "prolog_runtime" / "tests" / "test_seen.pl")],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+    assert proc.returncode == 0 and "ERROR" not in proc.stdout, proc.stdout

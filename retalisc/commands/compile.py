@@ -147,7 +147,9 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
                 allow_control: bool, strict: bool, max_steps, action_output, progress, **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
 
-    Example: retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
+    \b
+    Example:
+      retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
     """
     from ..driver.bridge import PrologError
     from ..driver.engine import Engine

@@ -1,0 +1,82 @@
+/*  plunit tests of rtl_seen.pl: the input events remembered to check retractions. On a long
+    stream only the events of the last max_delay + window seconds (and at most a few
+    generations of 1,024 more) are kept, every event within the horizon can be retracted
+    exactly as often as it was added, and one never added cannot.
+
+        swipl -g run_tests -t halt prolog_runtime/tests/test_seen.pl
+*/
+:- use_module(library(plunit)).
+:- use_module(library(lists)).
+:- use_module(library(random)).
+:- use_module('../retalis').
+
+% A program with one store of window 10 s and no rules.
+:- dynamic seen_test_program:ele_trigger/3, seen_test_program:ele_untrigger/3,
+           seen_test_program:s_lefts/3.
+seen_test_program:ele_store(s_lefts, 3, 10).
+seen_test_program:ele_partial_store(s_lefts, 3).
+seen_test_program:ele_printed(_).
+
+setup :-
+    rtl_use_program(seen_test_program),
+    rtl_clear,
+    rtl_set_flag(max_delay, 1),
+    rtl_output_to(buffer).
+
+add(Event, T) :-
+    rtl_seen_add(Event, T, T),
+    rtl_event(Event, T, T).
+
+:- begin_tests(rtl_seen, [setup(setup)]).
+
+test(bounded_on_a_long_stream) :-
+    forall(between(1, 6000, I), ( K is I mod 7, add(e(K), I) )),
+    rtl_seen_count(N),
+    rtl_seen_horizon(H),
+    assertion(H =:= 6000 - 1 - 10),
+    assertion(N >= 11),
+    assertion(N =< 11 + 2 * 1024).
+
+test(recent_events_can_be_retracted_once, [setup(setup)]) :-
+    forall(between(1, 5000, I), add(e(I), I)),
+    assertion(rtl_seen_take(e(4995), 4995, 4995)),
+    assertion(\+ rtl_seen_take(e(4995), 4995, 4995)),          % retracted already
+    assertion(\+ rtl_seen_take(e(4996), 4995, 4995)),          % never added with that time
+    assertion(\+ rtl_seen_take(nope, 4990, 4990)),
+    rtl_seen_horizon(H),
+    assertion(4990 >= H).
+
+test(duplicates_are_counted, [setup(setup)]) :-
+    add(d, 1), add(d, 1), add(d, 2),
+    assertion(rtl_seen_take(d, 1, 1)),
+    assertion(rtl_seen_take(d, 1, 1)),
+    assertion(\+ rtl_seen_take(d, 1, 1)),
+    assertion(rtl_seen_take(d, 2, 2)).
+
+% Model: a random stream of adds (keys 0..4, one per second, some late) and retractions of
+% random recent keys; every retraction of an event within the horizon succeeds exactly when
+% the model holds it.
+test(agrees_with_a_list_model, [setup(setup)]) :-
+    set_random(seed(12)),
+    numlist(1, 3000, Ticks),
+    foldl(model_step, Ticks, [], _).
+
+model_step(T, Model0, Model) :-
+    random_between(0, 4, K),
+    (   random_between(1, 5, 1)
+    ->  random_between(0, 3, Back),
+        Time is T - Back,
+        rtl_seen_horizon(H),
+        (   Time >= H
+        ->  (   selectchk(k(K)-Time, Model0, Model)
+            ->  assertion(rtl_seen_take(k(K), Time, Time))
+            ;   assertion(\+ rtl_seen_take(k(K), Time, Time)),
+                Model = Model0
+            )
+        ;   Model = Model0
+        )
+    ;   add(k(K), T),
+        Model = [k(K)-T|Model0]
+    ).
+
+:- end_tests(rtl_seen).
