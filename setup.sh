@@ -17,4 +17,9 @@ if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,bench]'
+if command -v "${CC:-gcc}" >/dev/null 2>&1; then
+    bash prolog_runtime/c/build.sh
+else
+    echo "setup: no C compiler: the runtime reads event lines in Prolog (slower)" >&2
+fi
 echo "setup: ready ($(swipl --version), $(.venv/bin/python --version))" >&2

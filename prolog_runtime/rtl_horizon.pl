@@ -317,7 +317,10 @@ rtl_warning(Text) :-
     assertz(warning_text(Text)).
 
 rtl_take_warnings(Texts) :-
-    findall(T, retract(warning_text(T)), Texts).
+    (   warning_text(_)                         % taken after every line; rarely any
+    ->  findall(T, retract(warning_text(T)), Texts)
+    ;   Texts = []
+    ).
 
 %!  rtl_drop_twins(:Stored) is det.
 %

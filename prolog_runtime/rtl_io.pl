@@ -3,7 +3,8 @@
             rtl_parse_event_line/3,      % +LineString, +MaxDepth, -Parsed
             rtl_read_event_text/4,       % +Text, +MaxDepth, -Event, -Problem
             rtl_event_json/6,            % +Event, +Start, +End, +Consumer, +Op, -JsonString
-            rtl_json_string_escape/2     % +Text, -Escaped
+            rtl_json_string_escape/2,    % +Text, -Escaped
+            rtl_use_fast_reader/1        % +Bool
           ]).
 
 /** <module> Event JSON Lines in and out (SPEC section 11)
@@ -15,13 +16,46 @@ added identical event. Times are numbers of seconds, or ROS stamps `[Secs, NSecs
 Output: `{"event": TEXT, "start": N, "end": N}`, plus `"consumer": NAME` for subscription
 deliveries and `"op": "retract"` for deletions. Terms are written with writeq/1.
 
-A JSON object is also a Prolog term (`{"k": V, ...}`), so the common case is read by the
-Prolog reader in one call; lines it cannot read (JSON-only escapes such as `\/`, or bad
-input) go through library(http/json), which also names the reason of a rejection.
+The common case (plain keys, an event text of identifiers, numbers, quoted atoms without
+escapes and lists) is read in C by `foreign/rtl_fastread.so` when the set-up built it
+(`c/rtl_fastread.c`); it takes only lines whose reading is beyond doubt and fails for the
+others. A JSON object is also a Prolog term (`{"k": V, ...}`), so the remaining lines are
+read by the Prolog reader in one call; lines it cannot read (JSON-only escapes such as
+`\/`, or bad input) go through library(http/json), which also names the reason of a
+rejection. Without the C reader, every line takes the Prolog road, with the same results.
 */
 
 :- use_module(library(http/json)).
 :- use_module(rtl_time).
+
+:- dynamic fast_reader/0.
+
+% The C reader is optional: a runtime without it (not built, another platform) reads
+% every line in Prolog.
+load_fast_reader :-
+    prolog_load_context(directory, Dir),
+    atomic_list_concat([Dir, '/foreign/rtl_fastread'], Lib),
+    (   catch(use_foreign_library(Lib), _, fail)
+    ->  retractall(fast_reader),
+        assertz(fast_reader)
+    ;   true
+    ).
+
+:- load_fast_reader.
+
+%!  rtl_use_fast_reader(+Bool) is det.
+%
+%   Read the common case of event lines in C (`true`, the default when the C reader is
+%   built) or every line in Prolog (`false`). For tests comparing the two.
+
+rtl_use_fast_reader(true) :-
+    (   current_predicate(rtl_fast_event_line/7)
+    ->  retractall(fast_reader),
+        assertz(fast_reader)
+    ;   existence_error(foreign_library, rtl_fastread)
+    ).
+rtl_use_fast_reader(false) :-
+    retractall(fast_reader).
 
 %!  rtl_parse_event_line(+Line:string, -Parsed) is det.
 %!  rtl_parse_event_line(+Line:string, +MaxDepth:integer, -Parsed) is det.
@@ -39,6 +73,14 @@ input) go through library(http/json), which also names the reason of a rejection
 rtl_parse_event_line(Line, Parsed) :-
     rtl_parse_event_line(Line, 1000, Parsed).
 
+rtl_parse_event_line(Line, MaxDepth, Parsed) :-
+    fast_reader,
+    rtl_fast_event_line(Line, MaxDepth, Event, T, S, E, Op),
+    interval(T, S, E, Start, End, Problem),
+    var(Problem),
+    !,
+    ( Op == retract -> Op1 = retract ; Op1 = add ),
+    Parsed = event(Op1, Event, Start, End).
 rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     string_length(Line, Length),
     (   Length > MaxDepth                       % only a long text can be deep

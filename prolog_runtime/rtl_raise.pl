@@ -192,7 +192,8 @@ process(retract, Event, Start, End) :-
     rtl_retract_event(Event, Start, End).
 
 drain :-
-    (   retract(raised(Raised, Start, End))
+    (   raised(_, _, _),                        % (retract/1 on an empty predicate costs more)
+        retract(raised(Raised, Start, End))
     ->  (   Raised = '$internal'(Event)
         ->  rtl_internal_event(Event, Start, End)
         ;   rtl_event(Raised, Start, End)

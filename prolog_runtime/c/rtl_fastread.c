@@ -1,0 +1,398 @@
+/*  rtl_fastread: the common case of an event line, read in C.
+
+    rtl_fast_event_line(+Line, +MaxDepth, -Event, -T, -Start, -End, -Op) succeeds for a
+    line such as
+
+        {"event": "pose(r1, [1.5, -2], 'Frame A')", "t": 12.5}
+
+    and fails for everything else, which rtl_io.pl then reads with the Prolog reader (the
+    reference: this reader only takes lines whose meaning is beyond doubt, and returns
+    what the Prolog path would). Taken:
+
+      - one JSON object with string keys free of escapes, surrounded by JSON layout;
+        the keys "event", "t", "start", "end" and "op" at most once each; other keys
+        with a string, number, true, false, null or an array of numbers as value
+      - "event": a string without escapes holding a ground term made of lowercase
+        identifiers, quoted atoms without escapes, integers that fit 64 bits,
+        floats written digits.digits[e[+-]digits], a minus sign stuck to a number,
+        compound terms name(Args) and proper lists [A, B]; spaces between tokens;
+        a final full stop; nested at most MaxDepth (and 200) levels
+      - "t", "start", "end": a JSON number or an array of two JSON integers (the
+        caller checks the time values themselves)
+      - "op": "add" or "retract" (unbound Op when absent)
+
+    Only ASCII: a byte outside 0x20..0x7e anywhere in the line fails.
+*/
+
+#include <SWI-Prolog.h>
+#include <stdlib.h>
+#include <string.h>
+#include <errno.h>
+#include <math.h>
+
+#define MAX_ARITY 256
+#define MAX_NESTING 200
+
+typedef struct {
+    const char *p;              /* next character */
+    const char *end;            /* end of the text being read */
+    int max_depth;
+} reader;
+
+static int is_json_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+static int is_lower(char c) { return c >= 'a' && c <= 'z'; }
+static int is_digit(char c) { return c >= '0' && c <= '9'; }
+static int is_alnum(char c)
+{ return is_lower(c) || is_digit(c) || (c >= 'A' && c <= 'Z') || c == '_'; }
+
+static void skip_json_space(reader *r)
+{ while ( r->p < r->end && is_json_space(*r->p) ) r->p++; }
+
+static void skip_spaces(reader *r)
+{ while ( r->p < r->end && *r->p == ' ' ) r->p++; }
+
+static int peek(reader *r) { return r->p < r->end ? (unsigned char)*r->p : -1; }
+
+/* ---- Prolog terms ------------------------------------------------------------------ */
+
+static int read_term(reader *r, int depth, term_t t);
+
+/* digits[.digits[e[+-]digits]] with an optional minus sign stuck to it */
+static int read_number(reader *r, term_t t)
+{ const char *start = r->p;
+  int is_float = 0;
+
+  if ( *r->p == '-' ) r->p++;
+  if ( r->p >= r->end || !is_digit(*r->p) ) return FALSE;
+  while ( r->p < r->end && is_digit(*r->p) ) r->p++;
+  if ( r->p + 1 < r->end && r->p[0] == '.' && is_digit(r->p[1]) )
+  { is_float = 1;
+    r->p++;
+    while ( r->p < r->end && is_digit(*r->p) ) r->p++;
+    if ( r->p < r->end && (*r->p == 'e' || *r->p == 'E') )
+    { r->p++;
+      if ( r->p < r->end && (*r->p == '+' || *r->p == '-') ) r->p++;
+      if ( r->p >= r->end || !is_digit(*r->p) ) return FALSE;
+      while ( r->p < r->end && is_digit(*r->p) ) r->p++;
+    }
+  }
+  /* 0'c, 0x1F, 1_000, 1e10, 1.0Inf: the Prolog reader decides */
+  if ( r->p < r->end && (is_alnum(*r->p) || *r->p == '\'') ) return FALSE;
+
+  char buf[64];
+  size_t len = (size_t)(r->p - start);
+  if ( len >= sizeof(buf) ) return FALSE;
+  memcpy(buf, start, len);
+  buf[len] = '\0';
+  errno = 0;
+  if ( is_float )
+  { double d = strtod(buf, NULL);
+    if ( errno != 0 || !isfinite(d) ) return FALSE;
+    return PL_put_float(t, d);
+  } else
+  { if ( len > 18 ) return FALSE;           /* may not fit: leave it to the reader */
+    long long i = strtoll(buf, NULL, 10);
+    if ( errno != 0 ) return FALSE;
+    return PL_put_int64(t, (int64_t)i);
+  }
+}
+
+/* A name: a lowercase identifier or a quoted atom without escapes. */
+static int read_name(reader *r, const char **name, size_t *len)
+{ if ( is_lower(*r->p) )
+  { *name = r->p;
+    while ( r->p < r->end && is_alnum(*r->p) ) r->p++;
+    *len = (size_t)(r->p - *name);
+    return TRUE;
+  }
+  if ( *r->p == '\'' )
+  { const char *q = ++r->p;
+    while ( r->p < r->end && *r->p != '\'' )
+    { if ( *r->p == '\\' ) return FALSE;
+      r->p++;
+    }
+    if ( r->p >= r->end ) return FALSE;
+    *name = q;
+    *len = (size_t)(r->p - q);
+    r->p++;
+    if ( r->p < r->end && *r->p == '\'' ) return FALSE;   /* '' inside a quoted atom */
+    return TRUE;
+  }
+  return FALSE;
+}
+
+static int read_arguments(reader *r, int depth, atom_t name, term_t t)
+{ term_t args[MAX_ARITY];
+  int arity = 0;
+
+  r->p++;                                       /* ( */
+  for (;;)
+  { if ( arity == MAX_ARITY ) return FALSE;
+    args[arity] = PL_new_term_ref();
+    if ( !read_term(r, depth + 1, args[arity]) ) return FALSE;
+    arity++;
+    skip_spaces(r);
+    if ( peek(r) == ',' ) { r->p++; continue; }
+    if ( peek(r) == ')' ) { r->p++; break; }
+    return FALSE;
+  }
+  term_t av = PL_new_term_refs(arity);
+  for (int i = 0; i < arity; i++)
+  { if ( !PL_put_term(av + i, args[i]) ) return FALSE;
+  }
+  functor_t f = PL_new_functor(name, (size_t)arity);
+  return PL_cons_functor_v(t, f, av);
+}
+
+static int read_list(reader *r, int depth, term_t t)
+{ r->p++;                                       /* [ */
+  skip_spaces(r);
+  if ( peek(r) == ']' ) { r->p++; return PL_put_nil(t); }
+
+  term_t tail = PL_copy_term_ref(t);
+  term_t head = PL_new_term_ref();
+  term_t elem = PL_new_term_ref();
+  PL_put_variable(t);
+  if ( !PL_put_term(tail, t) ) return FALSE;
+  for (;;)
+  { if ( !read_term(r, depth + 1, elem) ) return FALSE;
+    if ( !PL_unify_list(tail, head, tail) || !PL_unify(head, elem) ) return FALSE;
+    skip_spaces(r);
+    if ( peek(r) == ',' ) { r->p++; continue; }
+    if ( peek(r) == ']' ) { r->p++; break; }
+    return FALSE;                               /* '|' tails and the rest: the reader */
+  }
+  return PL_unify_nil(tail);
+}
+
+static int read_term(reader *r, int depth, term_t t)
+{ if ( depth > r->max_depth || depth > MAX_NESTING ) return FALSE;
+  skip_spaces(r);
+  int c = peek(r);
+  if ( c < 0 ) return FALSE;
+  if ( is_digit((char)c) ) return read_number(r, t);
+  if ( c == '-' ) return read_number(r, t);
+  if ( c == '[' )
+  { if ( r->p + 1 < r->end && r->p[1] == ']' )      /* [] */
+    { r->p += 2;
+      return depth > 0 && PL_put_nil(t);            /* a bare [] is no event */
+    }
+    return depth > 0 && read_list(r, depth, t);
+  }
+  const char *name;
+  size_t len;
+  if ( !read_name(r, &name, &len) ) return FALSE;
+  atom_t a = PL_new_atom_nchars(len, name);
+  int ok;
+  if ( peek(r) == '(' )
+    ok = read_arguments(r, depth, a, t);
+  else
+    ok = PL_put_atom(t, a);
+  PL_unregister_atom(a);
+  return ok;
+}
+
+/* The whole event text: one term, then optionally a full stop, then spaces. */
+static int read_event_text(const char *s, const char *e, int max_depth, term_t t)
+{ reader r = { s, e, max_depth };
+  if ( !read_term(&r, 0, t) ) return FALSE;
+  if ( !PL_is_atom(t) && !PL_is_compound(t) ) return FALSE;
+  skip_spaces(&r);
+  if ( peek(&r) == '.' ) { r.p++; skip_spaces(&r); }
+  return r.p == r.end;
+}
+
+/* ---- JSON -------------------------------------------------------------------------- */
+
+/* A string without escapes: [*s, *e) is its content. */
+static int json_plain_string(reader *r, const char **s, const char **e)
+{ if ( peek(r) != '"' ) return FALSE;
+  const char *q = ++r->p;
+  while ( r->p < r->end && *r->p != '"' )
+  { if ( *r->p == '\\' || (unsigned char)*r->p < 0x20 ) return FALSE;
+    r->p++;
+  }
+  if ( r->p >= r->end ) return FALSE;
+  *s = q;
+  *e = r->p++;
+  return TRUE;
+}
+
+/* -?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)? */
+static int json_number(reader *r, term_t t, int integer_only)
+{ const char *start = r->p;
+  int is_float = 0;
+  if ( peek(r) == '-' ) r->p++;
+  if ( peek(r) == '0' ) r->p++;
+  else if ( peek(r) >= '1' && peek(r) <= '9' )
+  { while ( r->p < r->end && is_digit(*r->p) ) r->p++;
+  } else return FALSE;
+  if ( peek(r) == '.' )
+  { is_float = 1;
+    r->p++;
+    if ( r->p >= r->end || !is_digit(*r->p) ) return FALSE;
+    while ( r->p < r->end && is_digit(*r->p) ) r->p++;
+  }
+  if ( peek(r) == 'e' || peek(r) == 'E' )
+  { is_float = 1;
+    r->p++;
+    if ( peek(r) == '+' || peek(r) == '-' ) r->p++;
+    if ( r->p >= r->end || !is_digit(*r->p) ) return FALSE;
+    while ( r->p < r->end && is_digit(*r->p) ) r->p++;
+  }
+  if ( is_float && integer_only ) return FALSE;
+  char buf[64];
+  size_t len = (size_t)(r->p - start);
+  if ( len >= sizeof(buf) ) return FALSE;
+  memcpy(buf, start, len);
+  buf[len] = '\0';
+  errno = 0;
+  if ( is_float )
+  { double d = strtod(buf, NULL);
+    if ( errno != 0 || !isfinite(d) ) return FALSE;
+    return t ? PL_put_float(t, d) : TRUE;
+  }
+  if ( len > 18 ) return FALSE;
+  long long i = strtoll(buf, NULL, 10);
+  if ( errno != 0 ) return FALSE;
+  return t ? PL_put_int64(t, (int64_t)i) : TRUE;
+}
+
+/* A time: a number or [Integer, Integer]. */
+static int json_time(reader *r, term_t t)
+{ if ( peek(r) != '[' ) return json_number(r, t, 0);
+  r->p++;
+  term_t secs = PL_new_term_ref(), nsecs = PL_new_term_ref();
+  skip_json_space(r);
+  if ( !json_number(r, secs, 1) ) return FALSE;
+  skip_json_space(r);
+  if ( peek(r) != ',' ) return FALSE;
+  r->p++;
+  skip_json_space(r);
+  if ( !json_number(r, nsecs, 1) ) return FALSE;
+  skip_json_space(r);
+  if ( peek(r) != ']' ) return FALSE;
+  r->p++;
+  PL_put_nil(t);
+  return PL_cons_list(t, nsecs, t) && PL_cons_list(t, secs, t);
+}
+
+static int json_literal(reader *r, const char *word)
+{ size_t n = strlen(word);
+  if ( (size_t)(r->end - r->p) < n || strncmp(r->p, word, n) != 0 ) return FALSE;
+  r->p += n;
+  return TRUE;
+}
+
+/* The value of a key this reader does not use. */
+static int json_skip_value(reader *r)
+{ const char *s, *e;
+  switch ( peek(r) )
+  { case '"': return json_plain_string(r, &s, &e);
+    case 't': return json_literal(r, "true");
+    case 'f': return json_literal(r, "false");
+    case 'n': return json_literal(r, "null");
+    case '[':
+      r->p++;
+      skip_json_space(r);
+      if ( peek(r) == ']' ) { r->p++; return TRUE; }
+      for (;;)
+      { if ( !json_number(r, 0, 0) ) return FALSE;
+        skip_json_space(r);
+        if ( peek(r) == ',' ) { r->p++; skip_json_space(r); continue; }
+        if ( peek(r) == ']' ) { r->p++; return TRUE; }
+        return FALSE;
+      }
+    default: return json_number(r, 0, 0);
+  }
+}
+
+enum { K_EVENT, K_T, K_START, K_END, K_OP, K_OTHER };
+
+static int key_index(const char *s, const char *e)
+{ size_t n = (size_t)(e - s);
+  if ( n == 5 && memcmp(s, "event", 5) == 0 ) return K_EVENT;
+  if ( n == 1 && s[0] == 't' ) return K_T;
+  if ( n == 5 && memcmp(s, "start", 5) == 0 ) return K_START;
+  if ( n == 3 && memcmp(s, "end", 3) == 0 ) return K_END;
+  if ( n == 2 && memcmp(s, "op", 2) == 0 ) return K_OP;
+  return K_OTHER;
+}
+
+static foreign_t
+pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
+                   term_t start_out, term_t end_out, term_t op_out)
+{ char *text;
+  size_t len;
+  int depth_limit;
+
+  if ( !PL_get_nchars(line, &len, &text, CVT_STRING|CVT_ATOM) ) return FALSE;
+  if ( !PL_get_integer(max_depth, &depth_limit) ) return FALSE;
+  for (size_t i = 0; i < len; i++)
+  { unsigned char c = (unsigned char)text[i];
+    if ( (c < 0x20 && !is_json_space((char)c)) || c > 0x7e ) return FALSE;
+  }
+
+  reader r = { text, text + len, depth_limit };
+  const char *event_s = NULL, *event_e = NULL;
+  term_t times[3] = { PL_new_term_ref(), PL_new_term_ref(), PL_new_term_ref() };
+  int seen[5] = { 0, 0, 0, 0, 0 };
+  atom_t op = 0;
+
+  skip_json_space(&r);
+  if ( peek(&r) != '{' ) return FALSE;
+  r.p++;
+  skip_json_space(&r);
+  for (;;)
+  { const char *ks, *ke;
+    if ( !json_plain_string(&r, &ks, &ke) ) return FALSE;
+    skip_json_space(&r);
+    if ( peek(&r) != ':' ) return FALSE;
+    r.p++;
+    skip_json_space(&r);
+    int k = key_index(ks, ke);
+    if ( k != K_OTHER )
+    { if ( seen[k] ) return FALSE;                  /* duplicate keys: the reader */
+      seen[k] = 1;
+    }
+    switch ( k )
+    { case K_EVENT:
+        if ( !json_plain_string(&r, &event_s, &event_e) ) return FALSE;
+        break;
+      case K_T: case K_START: case K_END:
+        if ( !json_time(&r, times[k - K_T]) ) return FALSE;
+        break;
+      case K_OP:
+      { const char *os, *oe;
+        if ( !json_plain_string(&r, &os, &oe) ) return FALSE;
+        if ( oe - os == 3 && memcmp(os, "add", 3) == 0 ) op = PL_new_atom("add");
+        else if ( oe - os == 7 && memcmp(os, "retract", 7) == 0 ) op = PL_new_atom("retract");
+        else return FALSE;
+        PL_unregister_atom(op);                     /* add and retract never go away */
+        break;
+      }
+      default:
+        if ( !json_skip_value(&r) ) return FALSE;
+    }
+    skip_json_space(&r);
+    if ( peek(&r) == ',' ) { r.p++; skip_json_space(&r); continue; }
+    if ( peek(&r) == '}' ) { r.p++; break; }
+    return FALSE;
+  }
+  skip_json_space(&r);
+  if ( r.p != r.end || !event_s ) return FALSE;
+
+  term_t ev = PL_new_term_ref();
+  if ( !read_event_text(event_s, event_e, depth_limit, ev) ) return FALSE;
+  if ( !PL_unify(event, ev) ) return FALSE;
+  if ( seen[K_T] && !PL_unify(t_out, times[0]) ) return FALSE;
+  if ( seen[K_START] && !PL_unify(start_out, times[1]) ) return FALSE;
+  if ( seen[K_END] && !PL_unify(end_out, times[2]) ) return FALSE;
+  if ( op && !PL_unify_atom(op_out, op) ) return FALSE;
+  return TRUE;
+}
+
+install_t
+install_rtl_fastread(void)
+{ PL_register_foreign("rtl_fast_event_line", 7, pl_fast_event_line, 0);
+}
