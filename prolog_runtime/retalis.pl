@@ -503,7 +503,9 @@ rtl_aggregate(avg(X), Acc0, Sum-N, Avg) :-
 
 rtl_end_of_input(Mode, Output) :-
     rtl_output_to(buffer),
-    with_action_output(catch(end_of_input(Mode, print_outcome(-)), rtl_stop(_), true)),
+    nb_setval(rtl_end_stopped, false),          % a halt in a postponed match: the caller asks
+    with_action_output(catch(end_of_input(Mode, print_outcome(-)), rtl_stop(_),
+                             nb_setval(rtl_end_stopped, true))),
     rtl_take_output(Lines),
     (   Lines == []
     ->  Output = ""

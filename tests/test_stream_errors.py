@@ -85,6 +85,22 @@ def test_halt_in_program_code_flushes_output_and_exits_non_zero(path, where, tmp
     assert f"{result.location(2)} error: the program called halt {message}" in result.stderr
 
 
+POSTPONED_HALT = """
+memorize(tf(V), [], tf(V), odom, 100).
+place(T, X) :- prev(odom, tf(X)^_, T), halt.
+syncronized(pose(Name, X), place(T, X), [[odom, T]]) <- marker(Name)^T.
+"""
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_halt_in_a_match_postponed_to_the_end_of_the_input_exits_non_zero(path, tmp_path, capfd):
+    events = jsonl(("tf(1)", 1), ("marker(m1)", 2))
+    result = run_path(path, tmp_path, POSTPONED_HALT, events, capfd=capfd)
+    assert result.returncode == 1, result.stderr
+    assert "the program called halt while processing the matches postponed to the end of the input" \
+        in result.stderr
+
+
 @pytest.mark.parametrize("path", PATHS)
 def test_halt_in_a_directive_says_where_and_exits_non_zero(path, tmp_path, capfd):
     result = run_path(path, tmp_path, "out(X) <- a(X).\n:- halt.\n", jsonl(("a(1)", 1)), capfd=capfd)

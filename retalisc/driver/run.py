@@ -90,6 +90,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                 raise RunStopped()
         failed = engine.stats().get("failed", 0)
         write(engine.end_of_input(drop_pending))
+        if engine.bridge.call_text("( nb_current(rtl_end_stopped, true) -> R = \"yes\" ; R = \"\" )", "R"):
+            raise RunStopped()              # program code called halt in a postponed match
         if strict and engine.stats().get("failed", 0) > failed:
             raise RunStopped()
     except RunStopped:
