@@ -16,7 +16,7 @@ from robot_io_support import ROOT, ROS1_ROS2_PAIRS, SHARED_NAMES, shared_bag, wi
 from retalisc.driver.engine import Engine  # noqa: E402
 from retalisc.robot_io.bags import Recording  # noqa: E402
 from retalisc.robot_io.messages import Convention, MessageConverter  # noqa: E402
-from retalisc.robot_io.replay import BagOptions, replay_bag  # noqa: E402
+from retalisc.robot_io.replay import RATE_TICK, BagOptions, replay_bag  # noqa: E402
 from retalisc.robot_io.samples import TF_CHAIN, nao_records, sample_store, write_nao_bag  # noqa: E402
 
 NAO_PROGRAM = ROOT / "examples" / "nao_markers" / "nao_markers.rtl"
@@ -147,16 +147,48 @@ def test_wrap_topic_plain_strings_and_record_stamps(nao_bags, tmp_path):
     assert lines[0]["start"] == 1413748205.002          # recorded 2 ms after its stamp
 
 
-def test_rate_replays_in_real_time(nao_bags, tmp_path, capsys):
+class VirtualClock:
+    """A replay clock that only moves when the replay sleeps."""
+
+    def __init__(self):
+        self.time, self.sleeps = 100.0, []
+
+    def now(self):
+        return self.time
+
+    def sleep(self, seconds):
+        self.sleeps.append(seconds)
+        self.time += seconds
+
+
+def test_rate_paces_the_replay_by_the_recording_clock(nao_bags, capsys):
     engine = Engine.from_source("", "rate.rtl")
     engine.set_flag("echo_input", "false")
+    clock = VirtualClock()
     status = replay_bag(engine, str(nao_bags["ros2"]), None, BagOptions(topics=["/tf"], rate=4.0, duration=1.0),
-                        progress=True)
+                        progress=True, clock=clock)
     assert status == 0
     summary = capsys.readouterr().err
     assert f"replaying {nao_bags['ros2']}" in summary           # the progress bar's label
-    seconds = float(summary.split(" messages in ")[1].split(" s")[0])
-    assert 0.2 <= seconds < 3.0, summary          # 1 s of recording at 4x: about 0.25 s (not as fast as possible)
+    # 1 s of recording at 4x takes 0.25 s, fed in slices as the messages fall due
+    assert 0.24 <= sum(clock.sleeps) <= 0.25 + RATE_TICK, clock.sleeps
+    assert len(clock.sleeps) >= 10
+    assert all(s >= RATE_TICK for s in clock.sleeps)
+
+
+def test_a_message_whose_processing_fails_is_reported_and_the_replay_goes_on(nao_bags, tmp_path, capsys):
+    # the condition raises (foo is no number) for every tf message; the poses still go through
+    program = ("tf_seen <- tf2_msgs__0__TFMessage(_) where _ is foo + 1.\n"
+               "pose_seen <- geometry_msgs__0__PoseStamped(_, _).\n")
+    status, out = replay(program, nao_bags["ros1"], tmp_path, topics=["/tf", "/robot_pose"], batch_size=7)
+    err = capsys.readouterr().err
+    failures = [line for line in err.splitlines() if ": error: " in line]
+    assert status == 0, err
+    assert len(failures) == 3 * 50                          # every tf message (3 s at 50 Hz), once
+    assert all(f"{nao_bags['ros1']}:/tf#" in line for line in failures), err
+    assert "150 failed" in err
+    assert [event["event"] for event in out].count("pose_seen") == 3 * 10, out[:5]
+    assert "tf_seen" not in [event["event"] for event in out]
 
 
 def test_messages_that_cannot_be_decoded_are_rejected_and_the_replay_goes_on(tmp_path, capsys):

@@ -230,7 +230,10 @@ class Engine:
             delivered = self._deliver_lines(lines)
         if failure is not None:
             _, index, message = failure.split("\t", 2)
-            raise PrologError(f"event {index} of the batch ({items[int(index)][1]!r}): {message}")
+            error = PrologError(f"event {index} of the batch ({items[int(index)][1]!r}): {message}")
+            error.batch_index = int(index)      # the events after it were not processed
+            error.delivered = delivered
+            raise error
         return delivered
 
     def feed_lines(self, text: str, first_line: int = 1, *, allow_control: bool = False,

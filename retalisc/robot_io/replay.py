@@ -51,6 +51,7 @@ class ReplayStats:
 
     per_topic: Counter = field(default_factory=Counter)
     rejected: int = 0
+    failed: int = 0
     seconds: float = 0.0
 
     @property
@@ -60,11 +61,22 @@ class ReplayStats:
     def summary(self, name: str) -> str:
         topics = ", ".join(f"{topic} {count:,}" for topic, count in sorted(self.per_topic.items()))
         rejected = f", {self.rejected:,} rejected" if self.rejected else ""
+        rejected += f", {self.failed:,} failed" if self.failed else ""
         return (f"bag: {name}: {self.messages:,} messages in {self.seconds:.2f} s"
                 f"{rejected}{': ' + topics if topics else ''}")
 
 
 Event = Tuple[str, float]
+
+class ReplayClock:
+    """The clock that paces a replay with a rate: the wall clock (tests give their own)."""
+
+    def now(self) -> float:
+        return time.perf_counter()
+
+    def sleep(self, seconds: float) -> None:
+        time.sleep(seconds)
+
 
 RATE_TICK = 0.01
 """With --rate, the replay sleeps at least this many seconds at a time: a message is fed at
@@ -110,14 +122,18 @@ def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional
 def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[BagOptions] = None,
                batch_size: int = 2000, consumer_dir: Optional[str] = None, drop_pending: bool = False,
                first_output: Sequence = (), progress: Optional[bool] = None, out_bag: Optional[str] = None,
-               foxglove: Optional[int] = None, foxglove_wait: Optional[float] = None) -> int:
+               foxglove: Optional[int] = None, foxglove_wait: Optional[float] = None,
+               clock: Optional["ReplayClock"] = None) -> int:
     """Replay the recording at `path` into `engine`; write the output JSON Lines to `out`
     ('-' for stdout, None to drop it), as `run_event_file` does. A progress bar shows on a
     terminal (`progress` forces it on or off). `out_bag` writes the input messages and what
     the program derived to an MCAP file; `foxglove` serves them live on that port (0: any
     free port) after waiting up to `foxglove_wait` seconds (None: as long as it takes) for a
     client, replaying in real time unless the options give a rate (publish.py). Returns the
-    exit status: 0, 1 when the program raised an error, 2 when the recording cannot be read."""
+    exit status: 0; 1 when the engine fails outside a message; 2 when the recording cannot be
+    read. A message whose processing raises an error is reported with its topic and number,
+    counted as failed, and the replay goes on. `clock` paces a replay with a rate (default:
+    the wall clock)."""
     from ..driver.bridge import PrologError
     from ..driver.run import ConsumerFiles
 
@@ -169,37 +185,51 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     first_ns = start_ns if start_ns is not None else bag.start_ns
     last_ns = min(stop_ns, bag.end_ns) if stop_ns is not None else bag.end_ns
     show = progress if progress is not None else sys.stderr.isatty()
-    began = time.perf_counter()
+    clock = clock or ReplayClock()
+    began = clock.now()
     try:
         with (click.progressbar(length=max(1, (last_ns - first_ns) // 1_000_000), label=f"replaying {name}",
                                 file=sys.stderr) if show else _NoBar()) as bar:
             for produced in first_output:
                 write(produced)
-            batch: List[Tuple[str, float]] = []
+            batch: List[Tuple[str, float, Tuple[str, int]]] = []     # event, time, (topic, number)
             shown_ms = 0
 
             def feed(batch) -> None:
                 if publisher is not None:
-                    publisher.fed(batch)
-                write(engine.feed_batch(batch))
+                    publisher.fed([(text, seconds) for text, seconds, _ in batch])
+                while batch:
+                    try:
+                        write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
+                        return
+                    except PrologError as error:
+                        if getattr(error, "batch_index", None) is None:
+                            raise
+                        write(error.delivered)
+                        _, _, (topic, number) = batch[error.batch_index]
+                        reason = str(error).split(": ", 1)[-1]
+                        sink.flush()
+                        click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
+                        stats.failed += 1
+                        batch = batch[error.batch_index + 1:]
 
             for text, seconds, record in bag_events(bag, options, stats, report):
                 record_ns = record.time_ns
                 if options.rate is not None:
                     due = began + (record_ns - first_ns) / 1e9 / options.rate
-                    wait = due - time.perf_counter()
+                    wait = due - clock.now()
                     if wait > 0:
                         if batch:
                             feed(batch)
                             batch = []
                             sink.flush()
                         # sleep at least one tick: what fell due meanwhile goes in one batch
-                        time.sleep(max(wait, RATE_TICK))
+                        clock.sleep(max(wait, RATE_TICK))
                 if publisher is not None:
                     message = publisher.input(record.topic, record.msgtype, record_ns, record.msg)
                     for target in sinks:
                         target.write(message)
-                batch.append((text, seconds))
+                batch.append((text, seconds, (record.topic, stats.messages)))
                 if len(batch) >= batch_size:
                     feed(batch)
                     batch = []
@@ -225,7 +255,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
             consumers.close()
         for target in sinks:
             target.close()
-    stats.seconds = time.perf_counter() - began
+    stats.seconds = clock.now() - began
     click.echo(stats.summary(name), err=True)
     for target in sinks:
         click.echo(f"{target.describe()}: {target.count:,} messages", err=True)
