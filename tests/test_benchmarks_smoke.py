@@ -34,3 +34,15 @@ def test_slr_memory_quick(tmp_path):
     assert (tmp_path / "slr_memory_quick.json").exists()
     for name in ("instances", "sizes", "queries", "late"):
         assert (tmp_path / f"slr_memory_quick_{name}.png").exists()
+
+
+def test_cep_vs_etalis_quick(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "cep_vs_etalis.py"), "--events", "300",
+                           "--repeat", "1", "--only", "P3", "--out-dir", str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    targets = [line for line in proc.stdout.splitlines() if line.startswith("target ")]
+    assert any("P1 swipl end to end >= 100,000 events/s" in line for line in targets)
+    assert sum("retalisc run within 1.3x of swipl" in line for line in targets) == 3      # P0, P1, P3
+    assert "disagree" not in proc.stdout
+    assert (tmp_path / "cep_vs_etalis.png").exists()
