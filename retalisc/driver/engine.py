@@ -131,8 +131,13 @@ def _text(value, what: str) -> str:
     return value
 
 
+class InactiveEngineError(RuntimeError):
+    """An Engine was used after another Engine was loaded in the same process."""
+
+
 class Engine:
-    """A loaded Retalis program fed with events from Python."""
+    """A loaded Retalis program fed with events from Python. The runtime processes one
+    program per process: the Engine loaded (or activated) last is the one that can be used."""
 
     def __init__(self, prolog_file: Union[str, Path], bridge: Optional[Bridge] = None, module: str = ""):
         self.bridge = bridge or Bridge()
@@ -141,6 +146,7 @@ class Engine:
         self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
         self._synchronized: Dict[str, "Future"] = {}
         self._lock = threading.RLock()    # one call (and its output delivery) at a time
+        self.bridge.active_program = None                # this Engine takes over (see activate)
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")     # constant text, no values
         self._warnings: List[EngineWarning] = []
         if self.bridge.once("current_predicate(rtl_api:rtl_api_default_flags/1)"):   # constant text
@@ -149,6 +155,7 @@ class Engine:
         if module:
             self._call("rtl_api_use_program", module)
         self._call("rtl_api_output_to_buffer")
+        self.bridge.active_program = module
 
     # ---- loading -------------------------------------------------------------------------
 
@@ -180,7 +187,22 @@ class Engine:
 
     def _call(self, name: str, *args) -> str:
         """rtl_api:Name(Args..., Out): the values go to Prolog as data (Bridge.apply)."""
+        active = getattr(self.bridge, "active_program", None)
+        if active is not None and active != self.module:
+            raise InactiveEngineError(
+                f"this Engine ({self.module}) is not the active one: the runtime processes one program per "
+                f"process, and {active} was loaded or activated after it (call activate() to switch back)")
         return self.bridge.apply(_API, name, *args)
+
+    def activate(self) -> None:
+        """Make this Engine the one that processes events again, after another Engine was
+        loaded in the same process. Its partial matches and memories are kept; its clock and
+        statistics start again (they belong to the process, not to the program)."""
+        with self._lock:
+            self.bridge.active_program = None
+            self._call("rtl_api_use_program", self.module)
+            self._call("rtl_api_output_to_buffer")
+            self.bridge.active_program = self.module
 
     # ---- configuration -------------------------------------------------------------------
 

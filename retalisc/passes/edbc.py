@@ -339,8 +339,11 @@ class _RuleGenerator:
             self.clauses.append(clause(retract_head, [
                 self.if_stored(step, own_store, C("forall", found, self.output(step, s, e, retract=True)))]))
             return
+        # A partner that fails the step's conditions is not a match: it is neither chosen nor
+        # consumed, as when the condition is pushed onto an event (the output checks them again).
+        selected = conj([found] + [self.times(c, s, e) for c in step.conditions])
         self.clauses.append(clause(head, [
-            self.consuming_join(step, found, partner_store, own_store, matched, self.output(step, s, e))]))
+            self.consuming_join(step, selected, partner_store, own_store, matched, self.output(step, s, e))]))
         self.clauses.append(clause(retract_head, [
             self.consumed_retract(step, own_store, matched, self.output(step, s, e, retract=True))]))
 

@@ -3,7 +3,12 @@
 ETALIS evaluates a rule's `where` after the whole pattern has matched, so a selective
 condition on one event (`a(I, X) seq b(I, Y) where Y < K`) still stores and joins every `b`
 (thesis 3.5). Here each conjunct of a `where` whose variables all occur in one event atom of
-the pattern is moved onto that atom, and checked when the event arrives.
+the pattern is moved onto that atom, and checked when the event arrives. A conjunct that needs
+several atoms is moved onto the smallest part of the pattern that binds all its variables
+(`Y < X` onto `a(X) seq b(Y)` in `a(X) seq b(Y) seq c(Z) where Y < X`), and checked when that
+part matches. Besides saving work, this gives conditions one meaning under the consumption
+policies: a candidate that fails a condition is not chosen and consumes nothing, wherever the
+condition stands and whatever form it has (`Y < 3` and `Y < 3 + 0*X` mean the same).
 
 Only conjuncts whose answer cannot depend on when they run are moved: arithmetic
 comparisons, unification and type tests, and calls of static predicates of the program.
@@ -44,7 +49,7 @@ def _push(pattern: Pattern, static: Set) -> Pattern:
         inner = _push(pattern.pattern, static)
         kept: List[Term] = []
         for conjunct in conjuncts(pattern.condition):
-            target = _single_atom_for(conjunct, inner, static)
+            target = _single_atom_for(conjunct, inner, static) or _smallest_part_for(conjunct, inner, static)
             if target is None:
                 kept.append(conjunct)
             else:
@@ -72,6 +77,30 @@ def _single_atom_for(conjunct: Term, pattern: Pattern, static: Set) -> Optional[
     return None
 
 
+def _smallest_part_for(conjunct: Term, pattern: Pattern, static: Set) -> Optional[Binary]:
+    """The smallest binary part of `pattern` (not `pattern` itself, not inside or / negation)
+    whose every match binds all the variables of `conjunct`."""
+    key = indicator(conjunct)
+    if key is None or not (key in _PURE_BUILTINS or key in static):
+        return None
+    needed = {v.name for v in variables(conjunct)}
+    if not needed:
+        return None
+
+    def into(p: Pattern) -> bool:
+        return (isinstance(p, Binary) and p.op not in ("or", "fnot")) or isinstance(p, (Where, Window))
+
+    best, best_size = None, None
+    for part in walk_pattern(pattern, into):
+        if part is pattern or not isinstance(part, Binary) or part.op in ("or", "fnot"):
+            continue
+        atoms = list(_reachable_atoms(part))
+        bound = set().union(*(_atom_variables(a) for a in atoms)) if atoms else set()
+        if needed <= bound and (best_size is None or len(atoms) < best_size):
+            best, best_size = part, len(atoms)
+    return best
+
+
 def _reachable_atoms(pattern: Pattern):
     """Event atoms every match of `pattern` contains (not inside or / negation)."""
     def into(p: Pattern) -> bool:
@@ -90,7 +119,7 @@ def _atom_variables(atom: EventAtom) -> Set[str]:
     return names
 
 
-def _attach(pattern: Pattern, target: EventAtom, conjunct: Term) -> Pattern:
+def _attach(pattern: Pattern, target: Pattern, conjunct: Term) -> Pattern:
     if pattern is target:
         return Where(target, conjunct, target.span)
     if isinstance(pattern, Where) and pattern.pattern is target:
