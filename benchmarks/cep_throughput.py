@@ -32,6 +32,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from plotting import pyplot  # noqa: E402
 from retalisc.compiler import compile_source  # noqa: E402
 
 IDS = 100
@@ -190,13 +191,8 @@ def main() -> int:
 
 
 def plot(results, path: Path, n: int) -> None:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib not installed: no plot", file=sys.stderr)
+    plt = pyplot()
+    if plt is None:
         return
     names = [r["pattern"] for r in results]
     paths = ("engine", "swipl", "python")

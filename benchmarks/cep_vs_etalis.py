@@ -41,6 +41,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from cep_throughput import ENGINE_GOAL, make_stream  # noqa: E402
+from plotting import pyplot  # noqa: E402
 from retalisc.compiler import compile_source  # noqa: E402
 
 PATTERNS = {
@@ -179,13 +180,8 @@ def report(results, n: int, with_etalis: bool) -> None:
 
 
 def plot(results, path: Path, n: int) -> None:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib not installed: no plot", file=sys.stderr)
+    plt = pyplot()
+    if plt is None:
         return
     names = [r["pattern"] for r in results]
     paths = [p for p in PATHS if p in results[0]]

@@ -57,6 +57,26 @@ static int peek(reader *r) { return r->p < r->end ? (unsigned char)*r->p : -1; }
 
 static int read_term(reader *r, int depth, term_t t);
 
+/* The number written in [start, end) (already checked), into t (0: only check that it can
+   be represented: a finite double, an integer of at most 18 digits). */
+static int put_number_text(const char *start, const char *end, int is_float, term_t t)
+{ char buf[64];
+  size_t len = (size_t)(end - start);
+  if ( len >= sizeof(buf) ) return FALSE;
+  memcpy(buf, start, len);
+  buf[len] = '\0';
+  errno = 0;
+  if ( is_float )
+  { double d = strtod(buf, NULL);
+    if ( errno != 0 || !isfinite(d) ) return FALSE;
+    return t ? PL_put_float(t, d) : TRUE;
+  }
+  if ( len > 18 ) return FALSE;             /* may not fit: leave it to the reader */
+  long long i = strtoll(buf, NULL, 10);
+  if ( errno != 0 ) return FALSE;
+  return t ? PL_put_int64(t, (int64_t)i) : TRUE;
+}
+
 /* digits[.digits[e[+-]digits]] with an optional minus sign stuck to it */
 static int read_number(reader *r, term_t t)
 { const char *start = r->p;
@@ -78,23 +98,7 @@ static int read_number(reader *r, term_t t)
   }
   /* 0'c, 0x1F, 1_000, 1e10, 1.0Inf: the Prolog reader decides */
   if ( r->p < r->end && (is_alnum(*r->p) || *r->p == '\'') ) return FALSE;
-
-  char buf[64];
-  size_t len = (size_t)(r->p - start);
-  if ( len >= sizeof(buf) ) return FALSE;
-  memcpy(buf, start, len);
-  buf[len] = '\0';
-  errno = 0;
-  if ( is_float )
-  { double d = strtod(buf, NULL);
-    if ( errno != 0 || !isfinite(d) ) return FALSE;
-    return PL_put_float(t, d);
-  } else
-  { if ( len > 18 ) return FALSE;           /* may not fit: leave it to the reader */
-    long long i = strtoll(buf, NULL, 10);
-    if ( errno != 0 ) return FALSE;
-    return PL_put_int64(t, (int64_t)i);
-  }
+  return put_number_text(start, r->p, is_float, t);
 }
 
 /* A name: a lowercase identifier or a quoted atom without escapes. */
@@ -241,21 +245,7 @@ static int json_number(reader *r, term_t t, int integer_only)
     while ( r->p < r->end && is_digit(*r->p) ) r->p++;
   }
   if ( is_float && integer_only ) return FALSE;
-  char buf[64];
-  size_t len = (size_t)(r->p - start);
-  if ( len >= sizeof(buf) ) return FALSE;
-  memcpy(buf, start, len);
-  buf[len] = '\0';
-  errno = 0;
-  if ( is_float )
-  { double d = strtod(buf, NULL);
-    if ( errno != 0 || !isfinite(d) ) return FALSE;
-    return t ? PL_put_float(t, d) : TRUE;
-  }
-  if ( len > 18 ) return FALSE;
-  long long i = strtoll(buf, NULL, 10);
-  if ( errno != 0 ) return FALSE;
-  return t ? PL_put_int64(t, (int64_t)i) : TRUE;
+  return put_number_text(start, r->p, is_float, t);
 }
 
 /* A time: a number or [Integer, Integer]. */

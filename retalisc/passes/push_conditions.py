@@ -64,11 +64,16 @@ def _push(pattern: Pattern, static: Set) -> Pattern:
     return pattern
 
 
-def _single_atom_for(conjunct: Term, pattern: Pattern, static: Set) -> Optional[EventAtom]:
+def _movable_variables(conjunct: Term, static: Set) -> Set[str]:
+    """The variables of `conjunct` if it may be checked early (empty when it may not)."""
     key = indicator(conjunct)
     if key is None or not (key in _PURE_BUILTINS or key in static):
-        return None
-    needed = {v.name for v in variables(conjunct)}
+        return set()
+    return {v.name for v in variables(conjunct)}
+
+
+def _single_atom_for(conjunct: Term, pattern: Pattern, static: Set) -> Optional[EventAtom]:
+    needed = _movable_variables(conjunct, static)
     if not needed:
         return None
     for atom in _reachable_atoms(pattern):
@@ -80,10 +85,7 @@ def _single_atom_for(conjunct: Term, pattern: Pattern, static: Set) -> Optional[
 def _smallest_part_for(conjunct: Term, pattern: Pattern, static: Set) -> Optional[Binary]:
     """The smallest binary part of `pattern` (not `pattern` itself, not inside or / negation)
     whose every match binds all the variables of `conjunct`."""
-    key = indicator(conjunct)
-    if key is None or not (key in _PURE_BUILTINS or key in static):
-        return None
-    needed = {v.name for v in variables(conjunct)}
+    needed = _movable_variables(conjunct, static)
     if not needed:
         return None
 
