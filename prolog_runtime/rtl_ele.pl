@@ -93,6 +93,7 @@ rtl_program(Module) :-
 
 rtl_reset :-
     nb_setval(rtl_clock, -inf),
+    nb_setval(rtl_longest_event, 0),
     nb_setval(rtl_next_sweep, inf),
     forall(counter(S), nb_setval(S, 0)),
     rtl_horizon_reset,
@@ -229,6 +230,7 @@ rtl_clock(Clock) :-
 %   Process one input event: derive everything it completes, deliver the results.
 
 rtl_event(Event, Start, End) :-
+    note_duration(Start, End),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_setval(rtl_clock, End)
@@ -241,6 +243,17 @@ rtl_event(Event, Start, End) :-
     forall(M:ele_trigger(Event, Start, End), true),
     nb_getval(rtl_next_sweep, Next),
     (   End >= Next -> periodic_sweep ; true ).
+
+% The longest interval of an event seen so far: with the delay bound, it says how early a
+% later event can start (rtl_collect_garbage/0, negation stores).
+note_duration(Start, End) :-
+    (   End - Start > 0,
+        nb_getval(rtl_longest_event, Longest),
+        End - Start > Longest
+    ->  Duration is End - Start,
+        nb_setval(rtl_longest_event, Duration)
+    ;   true
+    ).
 
 late_check(End, Clock) :-
     rtl_flag(max_delay, Delay),
@@ -272,6 +285,7 @@ rtl_retract_event(Event, Start, End) :-
 
 rtl_derived(Event, Start, End) :-
     rtl_count(derived),
+    note_duration(Start, End),
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
@@ -283,6 +297,7 @@ rtl_derived(Event, Start, End) :-
 %   subscriptions, but not counted, not written as output and not moving the clock.
 
 rtl_internal_event(Event, Start, End) :-
+    note_duration(Start, End),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true).
@@ -435,9 +450,23 @@ rtl_collect_garbage :-
                ( Before is Clock - Window - Delay,
                  rtl_retire_store(M, Name, Arity, Before) )),
         rtl_forget_kept(M, Clock),
+        forget_blockers(M, Clock, Delay),
         rtl_swept(Clock)
     ),
     schedule_next_sweep.
+
+% Negated events of unwindowed negations that can no longer block anything, with the waiting
+% partial matches they block for good (the compiled `ele_forget_blockers/1`): those that
+% ended before every later event can start (the delay bound, and the longest interval seen)
+% and outside the retraction horizon.
+forget_blockers(M, Clock, Delay) :-
+    (   predicate_property(M:ele_forget_blockers(_), number_of_clauses(N)), N > 0,
+        rtl_horizon(Horizon), Horizon \== inf
+    ->  nb_getval(rtl_longest_event, Longest),
+        Before is Clock - max(Delay + Longest, Horizon),
+        forall(M:ele_forget_blockers(Before), true)
+    ;   true
+    ).
 
 % The next sweep is due when the clock has moved on by half of the smallest window plus
 % the delay bound: every stored match is then at most 1.5 times as old as it needs to be.

@@ -137,6 +137,9 @@ forgets(M) :-
     ->  true
     ;   program_fact(M, ele_record_store(_, _, _))
     ->  true
+    ;   atom(M),
+        predicate_property(M:ele_forget_blockers(_), number_of_clauses(N)), N > 0
+    ->  true
     ).
 
 % Facts of a compiled program; a program compiled without them has none.

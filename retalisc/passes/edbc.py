@@ -408,6 +408,7 @@ class _RuleGenerator:
         window = self.window_check(step, s1, e2)
         pair = [C("<", e1, s2), window, unblocked]
         matched = self.matched_record(step, lefts, rights, s1, e2)
+        self.forget_blockers(step, lefts, negs, s1, e1, sn, en)
         for side, operand, own_vars, own_store, partner_store in (
                 ("left", step.left, left_vars, lefts, rights), ("right", step.right, right_vars, rights, lefts)):
             handler = f"{step.name}_{side}"
@@ -429,6 +430,26 @@ class _RuleGenerator:
             C("forall", inside, self.output(step, s1, e2, retract=True)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
             self.if_stored(step, negs, C("forall", inside, self.output(step, s1, e2)))]))
+
+    def forget_blockers(self, step: Step, lefts: Term, negs: Term, s1: Var, e1: Var, sn: Var, en: Var) -> None:
+        """The sweep of an unwindowed `not(N).[L, R]` whose R is an event: `ele_forget_blockers(Before)`
+        drops each N that ended before `Before` together with the waiting Ls it blocks (those that
+        ended before it started). The runtime passes a `Before` that no later R can start before
+        (the delay bound and the longest event interval seen) and that lies outside the retraction
+        horizon: such an L can never pair again, and no later L can end before such an N starts,
+        so the N can block nothing more. Only when N's key is L's (else an N blocks an L only
+        for some Rs)."""
+        if step.window is not None or not step.right.is_event:
+            return
+        left_names = {v.name for v in operand_vars(step.left)}
+        if not {v.name for v in operand_vars(step.negated)} & (left_names | {v.name for v in operand_vars(step.right)}) \
+                <= left_names:
+            return
+        before = V(self.fresh("Before"))
+        blocked_lefts = conj([lefts, C("<", e1, sn)])
+        self.clauses.append(clause(C("ele_forget_blockers", before), [
+            C("forall", conj([negs, C("<", en, before)]),
+              conj([C("forall", blocked_lefts, C("retract", lefts)), C("retract", negs)]))]))
 
     def unblocked(self, step: Step, name_: str, args: List[Term], negs: Term, check: List[Term],
                   late_end: Term) -> Term:
