@@ -57,6 +57,7 @@ deletion is too late).
 
 :- use_module(rtl_io).
 :- use_module(rtl_horizon).
+:- use_module(rtl_timers).
 
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
@@ -72,6 +73,7 @@ flag_default(query_time_limit, 10).          % seconds a query from outside may 
 flag_default(max_steps, 1000000).           % inferences per input event (inf: no limit)
 flag_default(max_term_depth, 1000).         % nesting of input event terms
 flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_horizon.pl)
+flag_default(flush_timers, false).          % fire pending timers at the end of the input (rtl_timers.pl)
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -150,6 +152,8 @@ rtl_set_flag(Flag, Value) :-
 valid_flag_value(max_delay, V) :-
     (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
 valid_flag_value(echo_input, V) :-
+    ( V == true ; V == false ), !.
+valid_flag_value(flush_timers, V) :-
     ( V == true ; V == false ), !.
 valid_flag_value(event_consumption_policy, V) :-
     atom(V), memberchk(V, [unrestricted, recent, chronological]).
@@ -231,7 +235,8 @@ rtl_clock(Clock) :-
 rtl_event(Event, Start, End) :-
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
-    ->  nb_setval(rtl_clock, End)
+    ->  nb_setval(rtl_clock, End),
+        rtl_timers_run(before)
     ;   late_check(End, Clock0)
     ),
     rtl_count(events),
@@ -239,6 +244,7 @@ rtl_event(Event, Start, End) :-
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true),
+    rtl_timers_run(after),
     nb_getval(rtl_next_sweep, Next),
     (   End >= Next -> periodic_sweep ; true ).
 

@@ -73,6 +73,17 @@ class Negation:
 
 
 @dataclass
+class Absence:
+    """`not(negated).[first, Duration]`: no `negated` in the Duration seconds after `first` ends
+    (decided once the clock has passed that time plus the delay bound)."""
+
+    negated: "Pattern"
+    first: "Pattern"
+    duration: float
+    span: Optional[Span] = None
+
+
+@dataclass
 class Aggregate:
     """ETALIS `aggregate(Function, Pattern, Value)`: Function is count, sum(X), min(X), max(X)."""
 
@@ -82,7 +93,7 @@ class Aggregate:
     span: Optional[Span] = None
 
 
-Pattern = Union[EventAtom, Binary, Where, Check, Window, Negation, Aggregate]
+Pattern = Union[EventAtom, Binary, Where, Check, Window, Negation, Absence, Aggregate]
 
 LABEL = re.compile(r"[a-z][A-Za-z0-9_]*")
 
@@ -300,7 +311,13 @@ def to_pattern(term: Term, span: Span) -> Pattern:
             if _is(left, "not", 1):
                 items = list_items(right)
                 if items is None or len(items) != 2:
-                    raise RetalisSyntaxError("negation is written not(P).[P1, P2]", where)
+                    raise RetalisSyntaxError("negation is written not(P).[P1, P2] or not(P).[P1, Seconds]", where)
+                if isinstance(items[1], Number):
+                    duration = items[1].value
+                    if duration != duration or duration < 0 or duration == float("inf"):
+                        raise RetalisSyntaxError("the duration of an absence not(P).[P1, Seconds] must be a "
+                                                 "finite number of seconds, not negative", span_of(items[1]) or where)
+                    return Absence(to_pattern(left.args[0], span), to_pattern(items[0], span), duration, where)
                 return Negation(to_pattern(left.args[0], span), to_pattern(items[0], span),
                                 to_pattern(items[1], span), where)
             if isinstance(right, Number):
@@ -367,6 +384,8 @@ def pattern_children(pattern: Pattern) -> list:
         return [pattern.pattern]
     if isinstance(pattern, Negation):
         return [pattern.negated, pattern.first, pattern.second]
+    if isinstance(pattern, Absence):
+        return [pattern.negated, pattern.first]
     return []
 
 
@@ -414,6 +433,9 @@ def pattern_text(pattern: Pattern) -> str:
         return f"({pattern_text(pattern.pattern)}).{length}"
     if isinstance(pattern, Negation):
         return f"not({pattern_text(pattern.negated)}).[{pattern_text(pattern.first)}, {pattern_text(pattern.second)}]"
+    if isinstance(pattern, Absence):
+        length = int(pattern.duration) if float(pattern.duration).is_integer() else pattern.duration
+        return f"not({pattern_text(pattern.negated)}).[{pattern_text(pattern.first)}, {length}]"
     if isinstance(pattern, Aggregate):
         return (f"aggregate({write_term(pattern.function, 999)}, {pattern_text(pattern.pattern)}, "
                 f"{write_term(pattern.value, 999)})")

@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import List, Optional, Set
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.program import Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
+from ..frontend.program import Absence, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
 from ..frontend.terms import Atom, Compound, Term, Var, conjuncts, distinct_variables, variables, walk
 from .unit import BinaryRule, Operand, Step, Unit
 
@@ -144,6 +144,13 @@ class _Binarizer:
             negated = self.lower(pattern.negated, window)
             step = self.new_step("cnot", left, right, window)
             step.negated = negated
+            return Operand(step.output, step)
+        if isinstance(pattern, Absence):
+            left = self.lower(pattern.first, window)
+            negated = self.lower(pattern.negated, window)
+            step = self.new_step("absence", left, None, window)
+            step.negated = negated
+            step.duration = pattern.duration
             return Operand(step.output, step)
         if isinstance(pattern, Aggregate):
             raise RetalisSemanticError("aggregate(F, P, V) counts from a start event: write Start seq "

@@ -31,6 +31,7 @@ that deleting an A or a P replays the values it changed.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Dict, List, Optional, Set, Tuple
 
 from ..frontend.terms import Atom, Compound, Number, Term, Var, distinct_variables, substitute, variables
@@ -166,6 +167,8 @@ class _RuleGenerator:
                 self.fnot_clauses(step)
             elif step.op == "aggregate":
                 self.aggregate_clauses(step)
+            elif step.op == "absence":
+                self.absence_clauses(step)
             elif step.right is None or step.op == "or":
                 self.forward_clauses(step)
             else:
@@ -467,6 +470,53 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
             self.if_stored(step, negs, C("forall", after, self.output(step, s1, e1)))]))
 
+    def absence_clauses(self, step: Step) -> None:
+        """not(N).[L, D]: no N in the D seconds after L ends (N starts after L's end and ends by
+        L's end + D). Each L waits on a timer until the clock has passed its end + D + max_delay
+        (rtl_absence_wait/2): then no blocker within the delay bound can come any more, and the
+        result [L's start, L's end + D] is derived unless a stored N blocks it. The decided L's
+        are kept (window D) so that a late blocker takes the result back and deleting the
+        blocker derives it again; deleting L takes back its result or cancels its timer."""
+        duration = _number(step.duration)
+        s1, e1, sn, en = (self.t(n) for n in ("S1", "E1", "SN", "EN"))
+        close = V(self.fresh("Close"))
+        left_vars, negated_vars = operand_vars(step.left), operand_vars(step.negated)
+        negated_key, negated_other = _split(negated_vars, left_vars)
+        left_key, left_other = _split(left_vars, negated_vars)
+        # both stores count as windowed by 2D: a decided L is stored by [L's end, L's end + D],
+        # a blocker by its own interval; an L within the delay bound needs neither once it is
+        # older than D, and a result (decided D + max_delay after L) stays exact for deletions
+        # for another D (the retraction horizon is max_delay plus the largest window)
+        stores = replace(step, window=2 * float(step.duration))
+        decided = self.store(stores, "decided", left_key + left_other + [s1, e1, close])
+        negs = self.store(stores, "negs", negated_key + negated_other + [sn, en])
+        inside = [C("<", e1, sn), C("=<", en, close), Atom("!")]
+        unblocked = self.unblocked(stores, f"{step.name}_blocked", negated_key + [e1, close], negs, inside, e1)
+        closing = C("is", close, C("+", e1, Number(duration)))
+        decide = C(f"{step.name}_decide", *left_vars, s1, e1)
+        window = self.window_check(step, s1, close)
+        derivable = conj([window, unblocked])
+        # L arrives: wait for the clock; L is deleted: cancel the wait, or take back the result
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [closing, C("rtl_absence_wait", close, decide)]))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
+            closing,
+            C(";", C("->", C("rtl_timer_cancel", decide), Atom("true")),
+              self.if_stored(stores, decided, C(";", C("->", derivable, self.output(step, s1, close, retract=True)),
+                                                    Atom("true"))))]))
+        self.clauses.append(clause(decide, [
+            closing, C("assertz", decided),
+            C(";", C("->", derivable, self.output(step, s1, close)), Atom("true"))]))
+        # a blocker takes back the decided results it falls inside of; deleting it restores them
+        handler = f"{step.name}_negated"
+        self.arrival(step.negated, handler, sn, en)
+        found = conj([self.lookup(stores, decided, en), C("<", e1, sn), C("=<", en, close), derivable])
+        self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
+            C("forall", found, self.output(step, s1, close, retract=True)), C("assertz", negs)]))
+        self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
+            self.if_stored(stores, negs, C("forall", found, self.output(step, s1, close)))]))
+
     def aggregate_clauses(self, step: Step) -> None:
         """L seq aggregate(F, R, V): each L starts an accumulator; every later R updates the
         accumulators of the L's before it (within the window) and yields their new value V.
@@ -532,6 +582,30 @@ class _RuleGenerator:
             C("forall", C("member", C("-", value, e2), retracts), self.output(step, s1, e2, retract=True)),
             C("forall", C("member", C("-", value, e2), adds), self.output(step, s1, e2))] + replace))
 
+    def alarm(self, step: Step, head: Compound, e: Var, retract: bool) -> Term:
+        """`alarm(Event, D)` (ETALIS `exceptionAlarm(Event, D)`): raise Event at the match's end
+        + D, when the clock reaches that time (a timer: the clock does not move). A deleted
+        match cancels its timer, or takes back the Event it raised (recorded in `_alarms`,
+        kept for the retraction horizon when the rule has a window, else as long as the
+        program runs, like the records of an unwindowed aggregate)."""
+        event, delay = head.args
+        due = V(self.fresh("Due") if "Due" not in self.time_names else self.time_names["Due"])
+        self.time_names.setdefault("Due", due.name)
+        fire = C(f"{step.name}_alarm", event, due)
+        fired = self.record(step, "alarms", [event, due], rotated=step.window is not None)
+        if not any(c.name == ":-" and c.args[0].name == fire.name for c in self.clauses
+                   if isinstance(c, Compound) and isinstance(c.args[0], Compound)):
+            when = V(self.fresh("When"))
+            raised = V(self.fresh("Raised"))
+            self.clauses.append(clause(C(fire.name, raised, when), [
+                self.record_add(C(fired.name, raised, when)), C("rtl_derived", raised, when, when)]))
+        at = C("is", due, C("+", e, delay))
+        if not retract:
+            return conj([at, C("rtl_timer_add", due, Atom("at"), fire)])
+        return conj([at, C(";", C("->", C("rtl_timer_cancel", fire), Atom("true")),
+                           C(";", C("->", self.record_take(fired), C("rtl_underived", event, due, due)),
+                             Atom("true")))])
+
     def fresh(self, base: str) -> str:
         """A variable name no source variable of the rule uses (and reserve it)."""
         name_ = base
@@ -554,6 +628,8 @@ class _RuleGenerator:
                 if rule.synchronized is not None:
                     sync = "rtl_synchronized_retract" if retract else "rtl_synchronized"
                     result = C(sync, *rule.synchronized.args, s, e)
+                elif alarm_head(rule.head):
+                    result = self.alarm(step, rule.head, e, retract)
                 else:
                     result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
                 then = conj([action, result]) if (action or result) else Atom("true")
@@ -563,6 +639,11 @@ class _RuleGenerator:
             body = [C("forall", conj(conditions), then)] if conditions else [then]
             self.clauses.append(clause(head, body))
 
+
+
+def alarm_head(head: Term) -> bool:
+    """`alarm(Event, D)` or ETALIS's `exceptionAlarm(Event, D)`: a timer head."""
+    return isinstance(head, Compound) and head.name in ("alarm", "exceptionAlarm") and head.arity == 2
 
 
 def _number(value: float):
