@@ -10,7 +10,8 @@
             rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
             rtl_summary/1,              % -Text
             rtl_summary/2,              % +Seconds, -Text
-            rtl_end_of_input/2          % +Mode, -Output
+            rtl_end_of_input/2,         % +Mode, -Output
+            rtl_heartbeat/2             % +Time, -Output
           ]).
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
@@ -511,6 +512,30 @@ rtl_end_of_input(Mode, Output) :-
     ;   atomic_list_concat(Lines, "\n", Joined),
         string_concat(Joined, "\n", Output)
     ).
+
+%!  rtl_heartbeat(+Time:number, -Output:string) is det.
+%
+%   Move the clock to Time without an event (rtl_advance_clock/1): the timers it passes
+%   fire. Output as for rtl_feed_lines/3; an error is written to standard error and counted
+%   as failed.
+
+rtl_heartbeat(Time, Output) :-
+    rtl_output_to(buffer),
+    with_action_output(catch(heartbeat(Time, print_outcome(-)), rtl_stop(_), true)),
+    rtl_take_output(Lines),
+    (   Lines == []
+    ->  Output = ""
+    ;   atomic_list_concat(Lines, "\n", Joined),
+        string_concat(Joined, "\n", Output)
+    ).
+
+heartbeat(Time, Report) :-
+    catch(( rtl_guarded(rtl_advance_clock(Time)), Outcome = ok ),
+          Error,
+          event_failure(Error, "the heartbeat", Outcome)),
+    count_outcome(Outcome),
+    call(Report, 0, Outcome),
+    stop_if_needed(Outcome).
 
 %!  rtl_summary(-Text:string) is det.
 %!  rtl_summary(+Seconds:number, -Text:string) is det.

@@ -9,6 +9,7 @@
             rtl_internal_event/3,       % +Event, +Start, +End
             rtl_underived/3,            % +Event, +Start, +End
             rtl_clock/1,                % -Clock
+            rtl_advance_clock/1,        % +Time
             rtl_set_flag/2,             % +Flag, +Value
             rtl_flag/2,                 % ?Flag, ?Value
             rtl_max_steps/1,            % -Steps
@@ -247,6 +248,23 @@ rtl_event(Event, Start, End) :-
     rtl_timers_run(after),
     nb_getval(rtl_next_sweep, Next),
     (   End >= Next -> periodic_sweep ; true ).
+
+%!  rtl_advance_clock(+Time:number) is det.
+%
+%   A heartbeat: the clock moves to Time without an event (the live driver advances it with
+%   the wall clock while no event arrives), so the timers it passes fire (rtl_timers.pl). A
+%   Time not after the clock changes nothing.
+
+rtl_advance_clock(Time) :-
+    must_be(number, Time),
+    nb_getval(rtl_clock, Clock0),
+    (   Time > Clock0
+    ->  nb_setval(rtl_clock, Time),
+        rtl_timers_run(after),
+        nb_getval(rtl_next_sweep, Next),
+        (   Time >= Next -> periodic_sweep ; true )
+    ;   true
+    ).
 
 late_check(End, Clock) :-
     rtl_flag(max_delay, Delay),
