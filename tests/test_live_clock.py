@@ -56,7 +56,7 @@ def test_a_live_source_gets_its_absence_while_the_input_is_still_open(tmp_path):
         run.stdin.write('{"event": "door_closed(k)", "t": 100}\n')
         run.stdin.flush()
         first, second = run.stdout.readline(), run.stdout.readline()    # nothing else arrives
-        assert '"check(k)"' in first and '"start": 100.5' in first
+        assert first.strip() == '{"event": "check(k)", "start": 100, "end": 100.5}'
         assert second.strip() == '{"event": "empty(k)", "start": 100, "end": 101}'
     finally:
         run.stdin.close()
@@ -70,7 +70,7 @@ def test_flush_timers_at_the_end_of_the_input(tmp_path, swipl):
     events.write_text('{"event": "door_closed(k)", "t": 0}\n')
     compiled = tmp_path / "p.pl"
     compiled.write_text(compile_source(PROGRAM, str(program), output_name="p.pl").prolog)
-    expected = ['{"event": "check(k)", "start": 0.5, "end": 0.5}', '{"event": "empty(k)", "start": 0, "end": 1}']
+    expected = ['{"event": "check(k)", "start": 0, "end": 0.5}', '{"event": "empty(k)", "start": 0, "end": 1}']
     for flush in ([], ["--flush-timers"]):
         standalone = subprocess.run([swipl, str(compiled), *flush, str(events)], capture_output=True, text=True,
                                     timeout=60)

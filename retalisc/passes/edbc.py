@@ -582,28 +582,25 @@ class _RuleGenerator:
             C("forall", C("member", C("-", value, e2), retracts), self.output(step, s1, e2, retract=True)),
             C("forall", C("member", C("-", value, e2), adds), self.output(step, s1, e2))] + replace))
 
-    def alarm(self, step: Step, head: Compound, e: Var, retract: bool) -> Term:
-        """`alarm(Event, D)` (ETALIS `exceptionAlarm(Event, D)`): raise Event at the match's end
-        + D, when the clock reaches that time (a timer: the clock does not move). A deleted
-        match cancels its timer, or takes back the Event it raised (recorded in `_alarms`,
-        kept for the retraction horizon when the rule has a window, else as long as the
-        program runs, like the records of an unwindowed aggregate)."""
+    def alarm(self, step: Step, head: Compound, s: Var, e: Var, retract: bool) -> Term:
+        """`alarm(Event, D)` (ETALIS `exceptionAlarm(Event, D)`): raise Event over [the match's
+        start, its end + D] when the clock reaches the end + D (a timer: the clock does not
+        move). A deleted match cancels its timer, or takes back the Event it raised (recorded
+        in `_alarms`, kept for the retraction horizon when the rule has a window, else as long
+        as the program runs, like the records of an unwindowed aggregate)."""
         event, delay = head.args
-        due = V(self.fresh("Due") if "Due" not in self.time_names else self.time_names["Due"])
-        self.time_names.setdefault("Due", due.name)
-        fire = C(f"{step.name}_alarm", event, due)
-        fired = self.record(step, "alarms", [event, due], rotated=step.window is not None)
-        if not any(c.name == ":-" and c.args[0].name == fire.name for c in self.clauses
-                   if isinstance(c, Compound) and isinstance(c.args[0], Compound)):
-            when = V(self.fresh("When"))
-            raised = V(self.fresh("Raised"))
-            self.clauses.append(clause(C(fire.name, raised, when), [
-                self.record_add(C(fired.name, raised, when)), C("rtl_derived", raised, when, when)]))
+        due = V(self.time_names.setdefault("Due", self.fresh("Due")))
+        fire = C(f"{step.name}_alarm", event, s, due)
+        fired = self.record(step, "alarms", [event, s, due], rotated=step.window is not None)
+        if not retract:
+            raised, since, when = (V(self.fresh(n)) for n in ("Raised", "Since", "When"))
+            self.clauses.append(clause(C(fire.name, raised, since, when), [
+                self.record_add(C(fired.name, raised, since, when)), C("rtl_derived", raised, since, when)]))
         at = C("is", due, C("+", e, delay))
         if not retract:
             return conj([at, C("rtl_timer_add", due, Atom("at"), fire)])
         return conj([at, C(";", C("->", C("rtl_timer_cancel", fire), Atom("true")),
-                           C(";", C("->", self.record_take(fired), C("rtl_underived", event, due, due)),
+                           C(";", C("->", self.record_take(fired), C("rtl_underived", event, s, due)),
                              Atom("true")))])
 
     def fresh(self, base: str) -> str:
@@ -629,7 +626,7 @@ class _RuleGenerator:
                     sync = "rtl_synchronized_retract" if retract else "rtl_synchronized"
                     result = C(sync, *rule.synchronized.args, s, e)
                 elif alarm_head(rule.head):
-                    result = self.alarm(step, rule.head, e, retract)
+                    result = self.alarm(step, rule.head, s, e, retract)
                 else:
                     result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
                 then = conj([action, result]) if (action or result) else Atom("true")
