@@ -198,3 +198,19 @@ def test_deletions_equal_recomputation(engine, delayed, data):
         ops.insert(position, ("retract", arrival[index]))
     remaining = [e for i, e in enumerate(arrival) if i not in doomed]
     assert run(engine, ops, "2", horizon="1000") == oracle(remaining)
+
+
+# ---- the robot example (examples/room_empty; its golden output is checked by test_golden) ----
+
+def test_the_room_example_is_one_rule_and_a_late_sighting_takes_it_back():
+    from pathlib import Path
+
+    folder = Path(__file__).resolve().parent.parent / "examples" / "room_empty"
+    engine = fresh(Engine.load(folder / "room_empty.rtl"), "1")
+    produced, rejected = engine.feed_lines((folder / "events.jsonl").read_text().rstrip("\n"))
+    assert rejected == []
+    assert [(o.event, o.start, o.end) for o in produced if o.event.startswith("room_left_empty")] == [
+        ("room_left_empty(kitchen,alice)", 0, 35), ("room_left_empty(lab,dan)", 50, 82)]
+    # someone was in the lab at 70 after all: the message arrives late, inside the horizon
+    assert outputs(engine, [("seen(zed, lab)", 70)]) == [("room_left_empty(lab,dan)", 50, 82, "retract")]
+    fresh(engine)
