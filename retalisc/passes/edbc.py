@@ -36,6 +36,7 @@ from typing import Dict, List, Optional, Set, Tuple
 
 from ..frontend.terms import Atom, Compound, Number, Term, Var, distinct_variables, substitute, variables
 from .binarize import END_MARK, START_MARK
+from ..frontend.errors import RetalisSemanticError
 from .unit import BinaryRule, GeneratedRule, Operand, Step, Unit
 
 name = "edbc"
@@ -69,10 +70,29 @@ RELATIONS: Dict[str, Tuple[List[Term], Term, Term]] = {
 }
 
 
+#: The selections a rule may ask for with the property `consumption_policy`: the program's
+#: policies, and `first` (each left instance pairs with its first matching right instance).
+RULE_POLICIES = ("unrestricted", "recent", "chronological", "first")
+
+
 def run(unit: Unit) -> Unit:
-    policy = unit.settings.consumption_policy
-    unit.generated = [_RuleGenerator(rule, policy).generate() for rule in unit.rules]
+    unit.generated = [_RuleGenerator(rule, rule_policy(unit, rule)).generate() for rule in unit.rules]
     return unit
+
+
+def rule_policy(unit: Unit, rule: BinaryRule) -> str:
+    """The rule's own consumption policy (label property or `event_rule_property/3` fact
+    `consumption_policy`, or ETALIS's name `event_consumption_policy`), else the program's."""
+    properties = dict(rule.rule.properties or {})
+    if rule.rule.label is not None:
+        properties.update(unit.settings.rule_properties.get(rule.rule.label, {}))
+    value = properties.get("consumption_policy", properties.get("event_consumption_policy"))
+    if value is None:
+        return unit.settings.consumption_policy
+    if not (isinstance(value, Atom) and value.name in RULE_POLICIES):
+        raise RetalisSemanticError(f"the consumption_policy of a rule must be one of {', '.join(RULE_POLICIES)}",
+                                   rule.rule.span)
+    return value.name
 
 
 def V(name_: str) -> Var:
@@ -116,7 +136,9 @@ def _split(own: List[Var], other: List[Var]) -> Tuple[List[Var], List[Var]]:
 class _RuleGenerator:
     def __init__(self, rule: BinaryRule, policy: str):
         self.rule = rule
-        self.policy = policy
+        # `first` selects in the joins; every other step is unrestricted
+        self.first = policy == "first"
+        self.policy = "unrestricted" if self.first else policy
         used: Set[str] = set()
         source = rule.rule
         for t in [source.head] + ([source.action] if source.action is not None else []):
@@ -310,6 +332,9 @@ class _RuleGenerator:
                                            [window, self.output(step, s1, e1, retract)]))
 
     def join_clauses(self, step: Step) -> None:
+        if self.first:
+            self.first_join_clauses(step)
+            return
         relation, start_expr, end_expr = RELATIONS[step.op]
         s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
         left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
@@ -329,6 +354,84 @@ class _RuleGenerator:
             self.arrival(operand, handler, os_, oe)
             found = conj([self.lookup(step, partner_store, oe)] + match)
             self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s, e)
+
+    def first_join_clauses(self, step: Step) -> None:
+        """The `first` selection: each left instance L pairs with its first matching right
+        instance only (the smallest by start, end, then the term: by time, whatever the
+        arrival order), and a right instance may serve several L's. `_first` records the
+        pairing of each L: a right instance that arrives (late) before an L's partner takes its
+        place, and deleting the partner pairs the L with the next one; so the output is always
+        that of the events present."""
+        relation, start_expr, end_expr = RELATIONS[step.op]
+        s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
+        left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
+        key, left_other = _split(left_vars, right_vars)
+        _, right_other = _split(right_vars, left_vars)
+        # each stored L is numbered (identical L's pair each on their own)
+        lid = V(self.fresh("LId"))
+        lefts = self.store(step, "lefts", key + left_other + [lid, s1, e1])
+        rights = self.store(step, "rights", key + right_other + [s2, e2])
+        paired = self.record(step, "first", key + left_other + [lid, s1, e1] + right_other + [s2, e2],
+                             rotated=step.window is not None)
+
+        def with_right(r_other: List[Term], rs: Term, re_: Term):
+            """The goals and interval of a match of the L with right instance (r_other, rs, re_)."""
+            names = {"S1": s1, "E1": e1, "S2": rs, "E2": re_}
+            goals = [substitute(g, names) for g in relation]
+            start = substitute(start_expr, names)
+            end = substitute(end_expr, names)
+            s_, e_ = V(self.fresh("S")), V(self.fresh("E"))
+            bounds = [C("is", s_, start), C("is", e_, end)]
+            window = self.window_check(step, s_, e_)
+            rank = C("-", C("-", rs, re_), C("r", *r_other))
+            return goals, bounds + ([window] if window is not None else []), s_, e_, rank
+
+        def variant(tag: str):
+            """The right instance's terms with its variables renamed apart (`tag` "" keeps them)."""
+            if tag:
+                names = {v.name: V(self.fresh(v.name + tag)) for v in right_other + [s2, e2]}
+                r_other = [names[v.name] for v in right_other]
+                rs, re_ = names[s2.name], names[e2.name]
+            else:
+                names, r_other, rs, re_ = {}, right_other, s2, e2
+            goals_, bounds_, s_, e_, rank_ = with_right(r_other, rs, re_)
+            store = substitute(rights, names)
+            pairing = substitute(paired, names)
+            out = [a if not isinstance(a, Var) else names.get(a.name, a) for a in step.output.args]
+            return {"goals": goals_, "bounds": bounds_, "rank": rank_, "rights": store, "paired": pairing,
+                    "add": C(step.name, *out, s_, e_), "retract": C(step.name + "_retract", *out, s_, e_)}
+
+        def pair_best(late_end: Term) -> Term:
+            """Pair the L with its first right instance, if any (variables of its own)."""
+            q = variant("Q")
+            best = V(self.fresh("Ranks"))
+            found = conj([self.lookup(step, q["rights"], late_end)] + q["goals"] + q["bounds"])
+            return C(";", C("->", conj([C("findall", q["rank"], found, best), C("min_member", q["rank"], best)]),
+                             conj(q["bounds"] + [self.record_add(q["paired"]), q["add"]])), Atom("true"))
+
+        own = variant("")
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [C("rtl_next_seq", lid), C("assertz", lefts),
+                                                                     pair_best(e1)]))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
+            self.if_stored(step, lefts, C(";", C("->", self.record_take(paired), conj(own["bounds"] + [own["retract"]])),
+                                          Atom("true")))]))
+        # a right instance: the L's it matches take it if it comes before their partner
+        p_ = variant("P")
+        take_over = conj([C("@<", own["rank"], p_["rank"]), self.record_take(p_["paired"])] + p_["bounds"]
+                         + [p_["retract"], self.record_add(paired), own["add"]])
+        handler = f"{step.name}_right"
+        self.arrival(step.right, handler, s2, e2)
+        self.clauses.append(clause(C(handler, *right_vars, s2, e2), [
+            C("assertz", rights),
+            C("forall", conj([self.lookup(step, lefts, e2)] + own["goals"] + own["bounds"]),
+              C(";", C("->", self.record_lookup(p_["paired"]), C(";", C("->", take_over, Atom("true")), Atom("true"))),
+                conj([self.record_add(paired), own["add"]])))]))
+        # deleting a right instance: the L's paired with it take their next one
+        self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
+            self.if_stored(step, rights, C("forall", self.record_lookup(paired), conj(
+                [self.record_take(paired)] + own["bounds"] + [own["retract"], pair_best(e1)])))]))
 
     def join_handlers(self, step: Step, handler: str, own_vars: List[Var], os_: Var, oe: Var, own_store: Term,
                       partner_store: Term, found: Term, matched: Optional[Term], s: Term, e: Term) -> None:
