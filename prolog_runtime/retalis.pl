@@ -29,6 +29,7 @@
 :- reexport(rtl_halt).
 :- reexport(rtl_horizon).
 :- reexport(rtl_timers).
+:- reexport(rtl_sliding).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 

@@ -191,6 +191,8 @@ class _RuleGenerator:
                 self.aggregate_clauses(step)
             elif step.op == "absence":
                 self.absence_clauses(step)
+            elif step.op == "sliding":
+                self.sliding_clauses(step)
             elif step.right is None or step.op == "or":
                 self.forward_clauses(step)
             else:
@@ -619,6 +621,52 @@ class _RuleGenerator:
             C("forall", found, self.output(step, s1, close, retract=True)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
             self.if_stored(stores, negs, C("forall", found, self.output(step, s1, close)))]))
+
+    def sliding_clauses(self, step: Step) -> None:
+        """sliding(F, P, Group, D, V): the matches of P are stored by group (with the value F
+        aggregates, and their end twice: the interval the sweep reads), and so are the changes
+        output; an arrival or a deletion refreshes the changes of its group in [E, E + D] up to
+        the clock, and a timer at E + D refreshes that moment when the clock reaches it
+        (rtl_sliding.pl)."""
+        function, group, value = step.sliding
+        duration = _number(step.duration)
+        s1, e1 = self.t("S1"), self.t("E1")
+        inner_vars = operand_vars(step.left)
+        group_vars = distinct_variables(variables(group))
+        x = function.args[0] if isinstance(function, Compound) else Number(1)
+        stores = replace(step, window=float(step.duration))
+        matched = self.store(stores, "slid", group_vars + [V(self.fresh("X")), s1, e1, e1])
+        t = V(self.fresh("T"))
+        shown = self.store(stores, "changes", group_vars + [value, t, t])
+        base = step.name
+        x_, e_, v_, t_ = (V(self.fresh(n)) for n in ("Xs", "Es", "Vs", "Ts"))
+        # the group's matches and changes, live and kept
+        stored_match = C(matched.name, *group_vars, x_, V("_"), e_, V("_"))
+        self.clauses.append(clause(C(f"{base}_matches", *group_vars, x_, e_),
+                                   [C(";", stored_match, self.kept_lookup(stored_match))]))
+        stored_shown = C(shown.name, *group_vars, v_, t_, V("_"))
+        self.clauses.append(clause(C(f"{base}_shown", *group_vars, v_, t_),
+                                   [C(";", stored_shown, self.kept_lookup(stored_shown))]))
+        self.clauses.append(clause(C(f"{base}_show", *group_vars, value, t), [
+            C("assertz", shown), self.output(step, t, t)]))
+        self.clauses.append(clause(C(f"{base}_unshow", *group_vars, value, t), [
+            self.if_stored(stores, shown, self.output(step, t, t, retract=True))]))
+        frm, to = V(self.fresh("From")), V(self.fresh("To"))
+        self.clauses.append(clause(C(f"{base}_refresh", *group_vars, frm, to), [
+            C("rtl_sliding_refresh", function, Number(duration), frm, to,
+              *(C(f"{base}_{n}", *group_vars) for n in ("matches", "shown", "show", "unshow")))]))
+        # arrivals and deletions of P
+        leave, clock, upto = V(self.fresh("Leave")), V(self.fresh("Clock")), V(self.fresh("UpTo"))
+        refresh = [C("is", leave, C("+", e1, Number(duration))), C("rtl_clock", clock),
+                   C("is", upto, C("min", leave, clock)), C(f"{base}_refresh", *group_vars, e1, upto)]
+        stored = C(matched.name, *group_vars, x, s1, e1, e1)
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        self.clauses.append(clause(C(handler, *inner_vars, s1, e1), [
+            C("assertz", stored)] + refresh + [
+            C("rtl_timer_add", leave, Atom("at"), C(f"{base}_refresh", *group_vars, leave, leave))]))
+        self.clauses.append(clause(C(handler + "_retract", *inner_vars, s1, e1), [
+            self.if_stored(stores, stored, conj(refresh))]))
 
     def aggregate_clauses(self, step: Step) -> None:
         """L seq aggregate(F, R, V): each L starts an accumulator; every later R updates the

@@ -63,6 +63,7 @@ class Step:
                                         # fnot: no `negated` before left
     aggregate: Optional[tuple] = None   # (function, value variable) of `left seq aggregate(F, right, V)`
     duration: Optional[float] = None    # absence: no `negated` in the `duration` seconds after `left`
+    sliding: Optional[tuple] = None     # (function, group term, value variable) of a sliding aggregate
 
 
 @dataclass
