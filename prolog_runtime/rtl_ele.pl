@@ -82,6 +82,7 @@ flag_default(flush_timers, false).          % fire pending timers at the end of 
 
 rtl_use_program(Module) :-
     nb_setval(rtl_program, Module),
+    rtl_timers_program(Module),
     rtl_reset.
 
 %!  rtl_program(-Module) is semidet.

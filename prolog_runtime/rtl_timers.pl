@@ -6,6 +6,7 @@
             rtl_timers_flush/0,
             rtl_timers_clear/0,
             rtl_timers_drop/2,          % +Module, :NameTest
+            rtl_timers_program/1,       % +Module
             rtl_timers_pending/1        % -Count
           ]).
 
@@ -154,6 +155,15 @@ rtl_timers_drop(M, Test) :-
              functor(Goal, Name, _),
              call(Test, Name) ),
            erase(Ref)),
+    next_due.
+
+%!  rtl_timers_program(+Module) is det.
+%
+%   Module becomes the program that processes events: the pending timers of other programs
+%   are forgotten (they would call into a program that no longer receives events).
+
+rtl_timers_program(M) :-
+    forall(( clause(timer(_, _, _, M1:_), true, Ref), M1 \== M ), erase(Ref)),
     next_due.
 
 %!  rtl_timers_pending(-Count:integer) is det.

@@ -137,3 +137,17 @@ def test_alarms_match_the_oracle_under_delays_and_deletions(engine, delayed, dat
     remaining = [e for i, e in enumerate(arrival) if i not in doomed]
     clock = max(s + d for _, (k, i, x, s, d) in ops)
     assert net_output(produced) == oracle(remaining, None if flush else clock)
+
+
+def test_alarm_with_a_plain_second_argument_stays_an_ordinary_event():
+    program = "alarm(S, L) <- smoke(S, L).\nalarm(check(S), L * 2) <- heat(S, L).\n"
+    engine = fresh(Engine.from_source(program, "plain.rtl"))
+    assert outputs(engine, [("smoke(s1, high)", 1), ("heat(s2, 3)", 2), ("tick", 8)]) == [
+        ("alarm(s1,high)", 1, 1, "add"), ("check(s2)", 2, 8, "add")]
+
+
+def test_loading_another_program_forgets_the_pending_timers_of_the_previous_one():
+    first = fresh(Engine.from_source("alarm(beat, 1) <- start.\n", "first.rtl"))
+    outputs(first, [("start", 0)])
+    second = Engine.from_source("seen(X) <- x(X).\n", "second.rtl")      # no clear: only the switch
+    assert outputs(second, [("x(1)", 5)]) == [("seen(1)", 5, 5, "add")]

@@ -790,8 +790,19 @@ class _RuleGenerator:
 
 
 def alarm_head(head: Term) -> bool:
-    """`alarm(Event, D)` or ETALIS's `exceptionAlarm(Event, D)`: a timer head."""
-    return isinstance(head, Compound) and head.name in ("alarm", "exceptionAlarm") and head.arity == 2
+    """`alarm(Event, D)` with D a number or an arithmetic expression (`30`, `T * 2`), or
+    ETALIS's `exceptionAlarm(Event, D)`: a timer head. `alarm(Sensor, Level)`, with a plain
+    variable or atom as second argument, stays an ordinary event named alarm/2."""
+    if not (isinstance(head, Compound) and head.arity == 2):
+        return False
+    if head.name == "exceptionAlarm":
+        return True
+    delay = head.args[1]
+    return head.name == "alarm" and (isinstance(delay, Number) or (
+        isinstance(delay, Compound) and delay.arity in (1, 2) and delay.name in _ARITHMETIC))
+
+
+_ARITHMETIC = {"+", "-", "*", "/", "//", "min", "max", "abs"}
 
 
 def _number(value: float):
