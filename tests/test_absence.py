@@ -169,7 +169,7 @@ def test_the_oracle_is_not_trivial(engine):
     assert run(engine, [("add", e) for e in sorted(events, key=lambda e: e[3] + e[4])], "0") == expected
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(st.tuples(event, st.integers(0, 3)), min_size=2, max_size=16))
 def test_arrival_orders_within_the_delay_bound_match_the_oracle(engine, delayed):
     # each event arrives up to 3 s after its end; ties keep their stream order
@@ -177,7 +177,7 @@ def test_arrival_orders_within_the_delay_bound_match_the_oracle(engine, delayed)
     assert run(engine, [("add", e) for e in arrival], "3") == oracle([e for e, _ in delayed])
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(event, min_size=2, max_size=12), st.randoms(use_true_random=False))
 def test_any_arrival_order_with_an_unbounded_delay_matches_the_oracle(engine, events, random):
     arrival = list(events)
@@ -185,7 +185,7 @@ def test_any_arrival_order_with_an_unbounded_delay_matches_the_oracle(engine, ev
     assert run(engine, [("add", e) for e in arrival], "inf") == oracle(events)
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(st.tuples(event, st.integers(0, 2)), min_size=2, max_size=12), st.data())
 def test_deletions_equal_recomputation(engine, delayed, data):
     """Events arrive within the bound (absences are decided on the way); some are deleted

@@ -123,7 +123,7 @@ def oracle(events, clock=None):
     return result
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(st.tuples(event, st.integers(0, 3)), min_size=1, max_size=14), st.data(), st.booleans())
 def test_alarms_match_the_oracle_under_delays_and_deletions(engine, delayed, data, flush):
     arrival = [e for e, _ in sorted(delayed, key=lambda ed: ed[0][3] + ed[0][4] + ed[1])]

@@ -111,7 +111,7 @@ def run(engine, ops, max_delay):
     return net_output(engine.feed_batch([(f"{k}({i}, {x})", s, s + d, op) for op, (k, i, x, s, d) in ops]))
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(event, min_size=2, max_size=12), st.data())
 def test_first_matches_the_oracle_in_any_order_with_deletions(engine, events, data):
     arrival = data.draw(st.permutations(events))
@@ -123,7 +123,7 @@ def test_first_matches_the_oracle_in_any_order_with_deletions(engine, events, da
     assert run(engine, ops, "inf") == oracle(remaining)
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(st.tuples(event, st.integers(0, 2)), min_size=2, max_size=14))
 def test_first_matches_the_oracle_within_the_delay_bound(engine, delayed):
     arrival = [e for e, _ in sorted(delayed, key=lambda ed: ed[0][3] + ed[0][4] + ed[1])]

@@ -145,14 +145,14 @@ def test_the_oracle_is_not_trivial(engine):
     assert run(engine, [("add", e) for e in sorted(events, key=lambda e: e[2])], "0") == expected
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(st.tuples(event, st.integers(0, 3)), min_size=1, max_size=14))
 def test_arrival_orders_within_the_delay_bound_match_the_oracle(engine, delayed):
     arrival = [e for e, _ in sorted(delayed, key=lambda ed: ed[0][2] + ed[1])]
     assert run(engine, [("add", e) for e in arrival], "3") == oracle([e for e, _ in delayed])
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(st.tuples(event, st.integers(0, 2)), min_size=1, max_size=12), st.data())
 def test_deletions_equal_recomputation(engine, delayed, data):
     arrival = [e for e, _ in sorted(delayed, key=lambda ed: ed[0][2] + ed[1])]
