@@ -125,7 +125,7 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="a short stream (smoke test)")
     parser.add_argument("--out-dir", default=str(ROOT / "benchmarks" / "results"))
     args = parser.parse_args()
-    seconds = 2_000 if args.quick else args.seconds
+    seconds = 600 if args.quick else args.seconds
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rows = measure(seconds)

@@ -96,14 +96,15 @@ def test_an_absence_feeds_other_rules():
 def test_the_store_stays_flat_over_a_long_run(room):
     engine = fresh(room, "1")
     sizes = []
-    for block in range(6):
+    for block in range(5):
         batch = []
-        for i in range(200):
+        for i in range(80):
             t = block * 2000 + i * 10
             batch += [(f"door_closed(r{i % 7})", t), (f"seen(p, r{i % 5})", t + 3)]
         engine.feed_batch(batch)
         sizes.append(engine.store_size())
-    assert max(sizes[2:]) <= 2 * min(sizes[2:]) + 50
+    # a block holds 160 events; what the store keeps (the horizon's worth) does not grow with them
+    assert max(sizes) < 100 and max(sizes[1:]) - min(sizes[1:]) <= 10, sizes
 
 
 @pytest.mark.parametrize("text, message", [

@@ -71,11 +71,11 @@ def test_flush_timers_at_the_end_of_the_input(tmp_path, swipl):
     compiled = tmp_path / "p.pl"
     compiled.write_text(compile_source(PROGRAM, str(program), output_name="p.pl").prolog)
     expected = ['{"event": "check(k)", "start": 0, "end": 0.5}', '{"event": "empty(k)", "start": 0, "end": 1}']
-    for flush in ([], ["--flush-timers"]):
-        standalone = subprocess.run([swipl, str(compiled), *flush, str(events)], capture_output=True, text=True,
-                                    timeout=60)
-        cli = subprocess.run([sys.executable, "-m", "retalisc", "run", str(program), "--events", str(events),
-                              *flush], capture_output=True, text=True, timeout=60, env=_env())
-        for result in (standalone, cli):
-            assert result.returncode == 0, result.stderr
-            assert result.stdout.splitlines() == (expected if flush else [])
+    runs = [([swipl, str(compiled), str(events)], []),
+            ([swipl, str(compiled), "--flush-timers", str(events)], expected),
+            ([sys.executable, "-m", "retalisc", "run", str(program), "--events", str(events), "--flush-timers"],
+             expected)]
+    for command, output in runs:
+        result = subprocess.run(command, capture_output=True, text=True, timeout=60, env=_env())
+        assert result.returncode == 0, result.stderr
+        assert result.stdout.splitlines() == output
