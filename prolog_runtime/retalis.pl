@@ -10,7 +10,8 @@
             rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
             rtl_summary/1,              % -Text
             rtl_summary/2,              % +Seconds, -Text
-            rtl_end_of_input/2          % +Mode, -Output
+            rtl_end_of_input/2,         % +Mode, -Output
+            rtl_heartbeat/2             % +Time, -Output
           ]).
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
@@ -27,6 +28,8 @@
 :- reexport(rtl_seen).
 :- reexport(rtl_halt).
 :- reexport(rtl_horizon).
+:- reexport(rtl_timers).
+:- reexport(rtl_sliding).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 
@@ -72,7 +75,8 @@ run_declaration(Program, Goal) :-
 %   nothing when the program is loaded by the Python driver (flag `retalis_embedded`).
 %   Options: `--echo-input` also writes the input events; `--max-delay=SECONDS`;
 %   `--consumer-dir=DIR` writes subscription deliveries to `DIR/<consumer>.jsonl`;
-%   `--drop-pending`; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
+%   `--drop-pending`; `--flush-timers` fires the pending timers (absences, alarms) at the end
+%   of the input; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
 %   refused by default); `--strict` ends the run (status 1) at the first line that is
 %   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
 %   `--action-output=FILE` sends what program code prints to FILE instead of standard
@@ -143,6 +147,8 @@ main_args([Arg|Args], Files) :-
     ->  rtl_set_flag(echo_input, true), Files = Rest
     ;   Arg == '--drop-pending'
     ->  nb_setval(rtl_drop_pending, true), Files = Rest
+    ;   Arg == '--flush-timers'
+    ->  rtl_set_flag(flush_timers, true), Files = Rest
     ;   Arg == '--allow-control'
     ->  set_stream_option(allow_control(true)), Files = Rest
     ;   Arg == '--strict'
@@ -182,7 +188,7 @@ usage_error(Formal) :-
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--allow-control] [--strict] [--max-steps=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -371,7 +377,8 @@ process_event(Op, Event, Start, End) :-
 % The end of the input: run or drop the postponed synchronized matches. Errors are
 % reported through Report (called as call(Report, 0, Outcome)).
 end_of_input(Mode, Report) :-
-    catch(( rtl_guarded(rtl_sync_finish(Mode)), Outcome = ok ),
+    catch(( ( rtl_flag(flush_timers, true) -> rtl_guarded(rtl_timers_flush) ; true ),
+            rtl_guarded(rtl_sync_finish(Mode)), Outcome = ok ),
           Error,
           ( rtl_drop_raised,
             event_failure(Error, "the matches postponed to the end of the input", Outcome) )),
@@ -512,6 +519,30 @@ rtl_end_of_input(Mode, Output) :-
     ;   atomic_list_concat(Lines, "\n", Joined),
         string_concat(Joined, "\n", Output)
     ).
+
+%!  rtl_heartbeat(+Time:number, -Output:string) is det.
+%
+%   Move the clock to Time without an event (rtl_advance_clock/1): the timers it passes
+%   fire. Output as for rtl_feed_lines/3; an error is written to standard error and counted
+%   as failed.
+
+rtl_heartbeat(Time, Output) :-
+    rtl_output_to(buffer),
+    with_action_output(catch(heartbeat(Time, print_outcome(-)), rtl_stop(_), true)),
+    rtl_take_output(Lines),
+    (   Lines == []
+    ->  Output = ""
+    ;   atomic_list_concat(Lines, "\n", Joined),
+        string_concat(Joined, "\n", Output)
+    ).
+
+heartbeat(Time, Report) :-
+    catch(( rtl_guarded(rtl_advance_clock(Time)), Outcome = ok ),
+          Error,
+          event_failure(Error, "the heartbeat", Outcome)),
+    count_outcome(Outcome),
+    call(Report, 0, Outcome),
+    stop_if_needed(Outcome).
 
 %!  rtl_summary(-Text:string) is det.
 %!  rtl_summary(+Seconds:number, -Text:string) is det.

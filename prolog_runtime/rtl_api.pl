@@ -20,7 +20,8 @@
             rtl_api_stats/1,            % -Text
             rtl_api_summary/1,          % -Text
             rtl_api_store_size/1,       % -Size
-            rtl_api_clock/1             % -Clock
+            rtl_api_clock/1,            % -Clock
+            rtl_api_advance_clock/2     % +Time, -Output
           ]).
 
 /** <module> The entry points of the Python Engine: values as data, never as program text
@@ -52,7 +53,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_seen).
 :- use_module(rtl_horizon, [rtl_take_warnings/1]).
 
-:- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1]).
+:- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
 
 %!  rtl_api_default_flags(-Out) is det.
 %
@@ -373,6 +374,15 @@ rtl_api_store_size(Size) :-
 
 rtl_api_clock(Clock) :-
     rtl_clock(Clock).
+
+%!  rtl_api_advance_clock(+Time:number, -Output:string) is det.
+%
+%   A heartbeat: move the clock to Time (if later) without an event; the timers it passes
+%   fire (rtl_heartbeat/2).
+
+rtl_api_advance_clock(Time, Output) :-
+    must_be(number, Time),
+    rtl_heartbeat(Time, Output).
 
 % One line of text for an error, as print_message/2 would say it.
 message_line(Error, Text) :-

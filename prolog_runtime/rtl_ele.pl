@@ -9,6 +9,7 @@
             rtl_internal_event/3,       % +Event, +Start, +End
             rtl_underived/3,            % +Event, +Start, +End
             rtl_clock/1,                % -Clock
+            rtl_advance_clock/1,        % +Time
             rtl_set_flag/2,             % +Flag, +Value
             rtl_flag/2,                 % ?Flag, ?Value
             rtl_max_steps/1,            % -Steps
@@ -57,6 +58,7 @@ deletion is too late).
 
 :- use_module(rtl_io).
 :- use_module(rtl_horizon).
+:- use_module(rtl_timers).
 
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
@@ -72,6 +74,7 @@ flag_default(query_time_limit, 10).          % seconds a query from outside may 
 flag_default(max_steps, 1000000).           % inferences per input event (inf: no limit)
 flag_default(max_term_depth, 1000).         % nesting of input event terms
 flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_horizon.pl)
+flag_default(flush_timers, false).          % fire pending timers at the end of the input (rtl_timers.pl)
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -79,6 +82,7 @@ flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_
 
 rtl_use_program(Module) :-
     nb_setval(rtl_program, Module),
+    rtl_timers_program(Module),
     rtl_reset.
 
 %!  rtl_program(-Module) is semidet.
@@ -151,6 +155,8 @@ rtl_set_flag(Flag, Value) :-
 valid_flag_value(max_delay, V) :-
     (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
 valid_flag_value(echo_input, V) :-
+    ( V == true ; V == false ), !.
+valid_flag_value(flush_timers, V) :-
     ( V == true ; V == false ), !.
 valid_flag_value(event_consumption_policy, V) :-
     atom(V), memberchk(V, [unrestricted, recent, chronological]).
@@ -233,7 +239,8 @@ rtl_event(Event, Start, End) :-
     note_duration(Start, End),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
-    ->  nb_setval(rtl_clock, End)
+    ->  nb_setval(rtl_clock, End),
+        rtl_timers_run(before)
     ;   late_check(End, Clock0)
     ),
     rtl_count(events),
@@ -241,6 +248,7 @@ rtl_event(Event, Start, End) :-
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true),
+    rtl_timers_run(after),
     nb_getval(rtl_next_sweep, Next),
     (   End >= Next -> periodic_sweep ; true ).
 
@@ -252,6 +260,23 @@ note_duration(Start, End) :-
         End - Start > Longest
     ->  Duration is End - Start,
         nb_setval(rtl_longest_event, Duration)
+    ;   true
+    ).
+
+%!  rtl_advance_clock(+Time:number) is det.
+%
+%   A heartbeat: the clock moves to Time without an event (the live driver advances it with
+%   the wall clock while no event arrives), so the timers it passes fire (rtl_timers.pl). A
+%   Time not after the clock changes nothing.
+
+rtl_advance_clock(Time) :-
+    must_be(number, Time),
+    nb_getval(rtl_clock, Clock0),
+    (   Time > Clock0
+    ->  nb_setval(rtl_clock, Time),
+        rtl_timers_run(after),
+        nb_getval(rtl_next_sweep, Next),
+        (   Time >= Next -> periodic_sweep ; true )
     ;   true
     ).
 

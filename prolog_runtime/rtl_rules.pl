@@ -27,6 +27,7 @@ program file too, so del_event_rule/1 removes those as well.
 :- use_module(rtl_ele).
 :- use_module(rtl_library, [rtl_target_program/2]).
 :- use_module(rtl_sandbox, [rtl_check_rule/4]).
+:- use_module(rtl_timers, [rtl_timers_drop/2]).
 
 :- meta_predicate ins_event_rule(:), del_event_rule(:).
 
@@ -169,6 +170,7 @@ rtl_remove_rule(M, Id) :-
              functor(Head, Name, Arity),
              \+ predicate_property(M:Head, imported_from(_)) ),
            remove_predicate(M, Name, Arity)),
+    rtl_timers_drop(M, rule_pred_name(Id)),
     retractall(added_rule(M, Id)),
     reschedule_sweep.
 

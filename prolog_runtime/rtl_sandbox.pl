@@ -119,6 +119,11 @@ builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
 builtin(rule, rtl_horizon:rtl_aggregate_redo(_, _, _, _, _), []).
 builtin(rule, rtl_horizon:rtl_drop_twins(Stored), [retract(Stored)]).   % retracts from the rule's store
 builtin(rule, rtl_ele:rtl_underived(_, _, _), []).
+builtin(rule, rtl_timers:rtl_timer_add(_, _, Goal), [Goal]).   % absences and alarms
+builtin(rule, rtl_timers:rtl_absence_wait(_, Goal), [Goal]).
+builtin(rule, rtl_timers:rtl_timer_cancel(_), []).
+builtin(rule, rtl_sliding:rtl_sliding_refresh(_, _, _, _, A, B, C, D), Called) :-   % sliding aggregates
+    maplist(closure_goal(2), [A, B, C, D], Called).
 builtin(rule, rtl_sync:rtl_synchronized(_, Q, _, _, _), [Q]).
 builtin(rule, rtl_sync:rtl_synchronized_retract(_, Q, _, _, _), [Q]).
 builtin(rule, rtl_raise:new_event(_), []).
@@ -392,6 +397,15 @@ defined_in(G, M, S, IM) :-
         refuse(S, PI, unknown)
     ),
     predicate_property(M:G, implementation_module(IM)).
+
+% The goal call/N runs for Closure and N more arguments (a variable stays a variable).
+closure_goal(_, Closure, Closure) :-
+    var(Closure), !.
+closure_goal(N, Closure, Goal) :-
+    length(Extra, N),
+    Closure =.. List0,
+    append(List0, Extra, List),
+    Goal =.. List.
 
 runtime_module(retalisc_bridge).
 runtime_module(M) :-

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections import Counter
 from typing import Dict, List, Optional, Tuple
 
-from retalisc.frontend.program import Binary, Check, EventAtom, Negation, Pattern, Where, Window
+from retalisc.frontend.program import Absence, Binary, Check, EventAtom, Negation, Pattern, Where, Window
 from retalisc.frontend.terms import Atom, Compound, Number, Term, Var
 
 Match = Tuple[Dict[str, Term], float, float]
@@ -129,6 +129,17 @@ def matches(pattern: Pattern, events: List[tuple], window: float = float("inf"))
                 if any(merge(b, nb) is not None and e1 < ns and ne < s2 for nb, ns, ne in blockers):
                     continue
                 found.append((b, s1, e2))
+        return found
+    if isinstance(pattern, Absence):
+        # no blocker starting after L's end and ending by L's end + D; the result spans
+        # [L's start, L's end + D] (every absence decided: the clock passed them all)
+        blockers = matches(pattern.negated, events, window)
+        found = []
+        for b, s, e in matches(pattern.first, events, window):
+            close = e + pattern.duration
+            if any(merge(b, nb) is not None and e < ns and ne <= close for nb, ns, ne in blockers):
+                continue
+            found.append((b, s, close))
         return found
     raise TypeError(pattern)
 

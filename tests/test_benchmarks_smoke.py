@@ -46,3 +46,15 @@ def test_cep_vs_etalis_quick(tmp_path):
     assert sum("retalisc run within 1.3x of swipl" in line for line in targets) == 3      # P0, P1, P3
     assert "disagree" not in proc.stdout
     assert (tmp_path / "cep_vs_etalis.png").exists()
+
+
+def test_absence_quick(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "absence.py"), "--quick",
+                           "--out-dir", str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("target ")]
+    assert any(re.match(r"target (met|MISSED) +absence rule >= 5x cheaper than the tick version .*: [\d.]+x$", line)
+               for line in lines), lines
+    assert "target met    the same situations detected by both" in lines
+    assert (tmp_path / "absence_quick.json").exists() and (tmp_path / "absence_quick.png").exists()

@@ -127,6 +127,14 @@ Examples:
 @click.option("--drop-pending", is_flag=True,
               help="At the end of the input, discard the synchronized matches still waiting instead of "
                    "running them.")
+@click.option("--flush-timers", is_flag=True,
+              help="At the end of the input, fire the timers still pending (absences not(C).[A, D] and "
+                   "alarm(E, D) heads) as if the clock had passed them; by default they do not fire, since "
+                   "the clock never reached them.")
+@click.option("--heartbeat", type=click.FloatRange(min=0.001), default=None, metavar="SECONDS",
+              help="A live source (e.g. --events - fed by a robot): process lines as they arrive, and while "
+                   "none arrives advance the clock with the wall clock every SECONDS, so that absences and "
+                   "alarms fire on time.")
 @click.option("--allow-control", is_flag=True,
               help="Obey control lines in the events ({\"op\": \"add_rule\", ...}, \"delete_rule\"); "
                    "without it they are refused (an error each) and skipped.")
@@ -144,7 +152,8 @@ Examples:
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
-                allow_control: bool, strict: bool, max_steps, action_output, progress, **bag) -> None:
+                flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, action_output, progress,
+                **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
 
     \b
@@ -179,6 +188,8 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
             sys.exit(2)
     if retraction_horizon is not None:
         engine.set_flag("retraction_horizon", repr(retraction_horizon))
+    if flush_timers:
+        engine.set_flag("flush_timers", "true")
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
     for request in memories:
@@ -191,7 +202,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
                                  drop_pending=drop_pending, first_output=posted))
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
                             drop_pending=drop_pending, first_output=posted, allow_control=allow_control,
-                            strict=strict, progress=progress)
+                            strict=strict, progress=progress, heartbeat=heartbeat)
     sys.exit(status)
 
 

@@ -475,3 +475,12 @@ class Engine:
     def clock(self) -> float:
         with self._lock:
             return float(self._call("rtl_api_clock"))
+
+    def advance_clock(self, time: Number) -> List[OutputEvent]:
+        """A heartbeat: move the clock to `time` (event time, seconds) without an event, if
+        that is later than the clock; the timers it passes (absences, alarms) fire. Returns
+        what they produced."""
+        if isinstance(time, bool) or not isinstance(time, (int, float)) or not math.isfinite(time):
+            raise ValueError(f"advance_clock needs a finite number of seconds, not {time!r}")
+        with self._lock:
+            return self._deliver(self._call("rtl_api_advance_clock", time))

@@ -3,8 +3,11 @@ output and the same rejection messages as `swipl PROGRAM.pl FILE`."""
 from __future__ import annotations
 
 import io
+import math
 import os
+import queue
 import sys
+import threading
 import time
 from typing import IO, Dict, Iterator, List, Optional, Sequence, Tuple
 
@@ -26,6 +29,67 @@ def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str],
         yield first, batch, size
 
 
+def _live_batches(stream: IO[str], batch_size: int, heartbeat: float
+                  ) -> Iterator[Tuple[int, List[str], int]]:
+    """As `_batches`, for a live source: a batch is what has arrived when the reader catches
+    up (not `batch_size` lines), and a batch with no lines (first line number 0) comes every
+    `heartbeat` seconds while nothing arrives. A thread reads the lines."""
+    lines: "queue.Queue[Optional[str]]" = queue.Queue()
+
+    def read():
+        try:
+            for line in stream:
+                lines.put(line)
+        finally:
+            lines.put(None)
+
+    threading.Thread(target=read, name="retalisc-live-reader", daemon=True).start()
+    number, ended = 1, False
+    while not ended:
+        try:
+            item = lines.get(timeout=heartbeat)
+        except queue.Empty:
+            yield 0, [], 0
+            continue
+        batch: List[str] = []
+        size = 0
+        while True:
+            if item is None:
+                ended = True
+                break
+            batch.append(item.rstrip("\n"))
+            size += len(item.encode("utf-8"))
+            if len(batch) >= batch_size:
+                break
+            try:
+                item = lines.get_nowait()
+            except queue.Empty:
+                break
+        if batch:
+            yield number, batch, size
+            number += len(batch)
+
+
+class WallClock:
+    """The event time a live source has reached while no event arrives: the clock at the
+    latest event that moved it, plus the wall-clock time since (the stamps are taken to
+    follow the wall clock; an event lagging more than the delay bound behind is late)."""
+
+    def __init__(self, now=time.monotonic):
+        self.now = now
+        self.anchor: Optional[Tuple[float, float]] = None
+
+    def saw(self, clock: float) -> None:
+        if math.isfinite(clock) and (self.anchor is None or clock > self.anchor[0]):
+            self.anchor = (clock, self.now())
+
+    def estimate(self) -> Optional[float]:
+        if self.anchor is None:
+            return None
+        clock, wall = self.anchor
+        return clock + (self.now() - wall)
+
+
 class RunStopped(Exception):
     """The run ended early: `--strict` met a bad line, or program code called halt."""
 
@@ -33,7 +97,7 @@ class RunStopped(Exception):
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
                    consumer_dir: Optional[str] = None, drop_pending: bool = False,
                    first_output: Sequence = (), allow_control: bool = False, strict: bool = False,
-                   progress: Optional[bool] = None) -> int:
+                   progress: Optional[bool] = None, heartbeat: Optional[float] = None) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout, None to drop it). Lines not processed go to stderr as
     `FILE:LINE: rejected: REASON` (malformed) or `FILE:LINE: error: REASON` (a refused control
@@ -46,7 +110,9 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     first line not processed ends the run (status 1) after everything produced before it
     is written; a halt called by program code does so always. `progress`: True shows a
     progress display on stderr, False never, None (default) on a terminal for inputs over
-    a few MB. Returns the exit status."""
+    a few MB. `heartbeat` (seconds): a live source; batches are what has arrived, and while
+    nothing arrives the clock advances with the wall clock every `heartbeat` seconds
+    (`WallClock`), so absences and alarms fire on time. Returns the exit status."""
     started = time.perf_counter()
     name = "<stdin>" if events == "-" else events
     if events == "-":
@@ -73,7 +139,15 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             raise RunStopped()
         for produced in first_output:
             write(produced)
-        for first, lines, size in _batches(source, batch_size):
+        wall = WallClock()
+        batches = _batches(source, batch_size) if heartbeat is None else _live_batches(source, batch_size, heartbeat)
+        for first, lines, size in batches:
+            if not lines:                       # a heartbeat: nothing arrived
+                target = wall.estimate()
+                if target is not None and target > engine.clock():
+                    write(engine.advance_clock(target))
+                    sink.flush()
+                continue
             produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
@@ -86,6 +160,9 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             for line, message in sorted(messages, key=lambda m: m[0]):
                 print(f"{name}:{line}: {message}", file=sys.stderr)
             display.update(size, len(lines), sum(1 for e in produced if e.consumer is None))
+            if heartbeat is not None:
+                wall.saw(engine.clock())
+                sink.flush()
             if rejected and (strict or rejected[-1].kind == "halt"):
                 raise RunStopped()
         failed = engine.stats().get("failed", 0)

@@ -73,6 +73,17 @@ class Negation:
 
 
 @dataclass
+class Absence:
+    """`not(negated).[first, Duration]`: no `negated` in the Duration seconds after `first` ends
+    (decided once the clock has passed that time plus the delay bound)."""
+
+    negated: "Pattern"
+    first: "Pattern"
+    duration: float
+    span: Optional[Span] = None
+
+
+@dataclass
 class Aggregate:
     """ETALIS `aggregate(Function, Pattern, Value)`: Function is count, sum(X), min(X), max(X)."""
 
@@ -82,7 +93,21 @@ class Aggregate:
     span: Optional[Span] = None
 
 
-Pattern = Union[EventAtom, Binary, Where, Check, Window, Negation, Aggregate]
+@dataclass
+class Sliding:
+    """`sliding(Function, Pattern, Group, Seconds, Value)`: Function (count, sum(X), min(X),
+    max(X), avg(X)) of the Pattern matches of each Group that ended in the last Seconds, as it
+    changes (also when a match leaves the window)."""
+
+    function: Term
+    pattern: "Pattern"
+    group: Term
+    duration: float
+    value: Term
+    span: Optional[Span] = None
+
+
+Pattern = Union[EventAtom, Binary, Where, Check, Window, Negation, Absence, Aggregate, Sliding]
 
 LABEL = re.compile(r"[a-z][A-Za-z0-9_]*")
 
@@ -300,7 +325,13 @@ def to_pattern(term: Term, span: Span) -> Pattern:
             if _is(left, "not", 1):
                 items = list_items(right)
                 if items is None or len(items) != 2:
-                    raise RetalisSyntaxError("negation is written not(P).[P1, P2]", where)
+                    raise RetalisSyntaxError("negation is written not(P).[P1, P2] or not(P).[P1, Seconds]", where)
+                if isinstance(items[1], Number):
+                    duration = items[1].value
+                    if duration != duration or duration < 0 or duration == float("inf"):
+                        raise RetalisSyntaxError("the duration of an absence not(P).[P1, Seconds] must be a "
+                                                 "finite number of seconds, not negative", span_of(items[1]) or where)
+                    return Absence(to_pattern(left.args[0], span), to_pattern(items[0], span), duration, where)
                 return Negation(to_pattern(left.args[0], span), to_pattern(items[0], span),
                                 to_pattern(items[1], span), where)
             if isinstance(right, Number):
@@ -318,6 +349,24 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                                      span_of(function) or where)
         if term.name == "aggregate":
             raise RetalisSyntaxError("an aggregate is written aggregate(Function, Pattern, Value)", where)
+        if term.arity == 5 and term.name == "sliding":
+            function, inner, group, duration, value = term.args
+            key = (function.name, getattr(function, "arity", 0)) if isinstance(function, (Atom, Compound)) else None
+            if key not in AGGREGATE_FUNCTIONS:
+                known = ", ".join(f"{n}(X)" if a else n for n, a in sorted(AGGREGATE_FUNCTIONS))
+                raise RetalisSyntaxError(f"unknown aggregate function {_function_text(function)} (expected {known})",
+                                         span_of(function) or where)
+            if not (isinstance(duration, Number) and duration.value == duration.value and duration.value > 0
+                    and duration.value != float("inf")):
+                raise RetalisSyntaxError("the duration of sliding(F, Pattern, Group, Seconds, Value) must be a "
+                                         "positive number of seconds", span_of(duration) or where)
+            if not isinstance(value, Var) or value.is_anonymous:
+                raise RetalisSyntaxError("the value of sliding(F, Pattern, Group, Seconds, Value) must be a named "
+                                         "variable", span_of(value) or where)
+            return Sliding(function, to_pattern(inner, span), group, duration.value, value, where)
+        if term.name == "sliding":
+            raise RetalisSyntaxError("a sliding aggregate is written sliding(Function, Pattern, Group, Seconds, "
+                                     "Value)", where)
         if term.arity == 2 and term.name == "^":
             atom = to_pattern(term.args[0], span)
             if not isinstance(atom, EventAtom):
@@ -367,6 +416,10 @@ def pattern_children(pattern: Pattern) -> list:
         return [pattern.pattern]
     if isinstance(pattern, Negation):
         return [pattern.negated, pattern.first, pattern.second]
+    if isinstance(pattern, Absence):
+        return [pattern.negated, pattern.first]
+    if isinstance(pattern, Sliding):
+        return [pattern.pattern]
     return []
 
 
@@ -414,6 +467,13 @@ def pattern_text(pattern: Pattern) -> str:
         return f"({pattern_text(pattern.pattern)}).{length}"
     if isinstance(pattern, Negation):
         return f"not({pattern_text(pattern.negated)}).[{pattern_text(pattern.first)}, {pattern_text(pattern.second)}]"
+    if isinstance(pattern, Absence):
+        length = int(pattern.duration) if float(pattern.duration).is_integer() else pattern.duration
+        return f"not({pattern_text(pattern.negated)}).[{pattern_text(pattern.first)}, {length}]"
+    if isinstance(pattern, Sliding):
+        length = int(pattern.duration) if float(pattern.duration).is_integer() else pattern.duration
+        return (f"sliding({write_term(pattern.function, 999)}, {pattern_text(pattern.pattern)}, "
+                f"{write_term(pattern.group, 999)}, {length}, {write_term(pattern.value, 999)})")
     if isinstance(pattern, Aggregate):
         return (f"aggregate({write_term(pattern.function, 999)}, {pattern_text(pattern.pattern)}, "
                 f"{write_term(pattern.value, 999)})")

@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import List, Optional, Set
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.program import Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
+from ..frontend.program import Absence, Sliding, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where, Window
 from ..frontend.terms import Atom, Compound, Term, Var, conjuncts, distinct_variables, variables, walk
 from .unit import BinaryRule, Operand, Step, Unit
 
@@ -145,6 +145,28 @@ class _Binarizer:
             step = self.new_step("cnot", left, right, window)
             step.negated = negated
             return Operand(step.output, step)
+        if isinstance(pattern, Absence):
+            left = self.lower(pattern.first, window)
+            negated = self.lower(pattern.negated, window)
+            step = self.new_step("absence", left, None, window)
+            step.negated = negated
+            step.duration = pattern.duration
+            return Operand(step.output, step)
+        if isinstance(pattern, Sliding):
+            inner = self.lower(pattern.pattern, window)
+            inner_names = {v.name for v in _operand_variables(inner)}
+            for term, what in ((pattern.group, "group"), (_function_argument(pattern.function), "aggregated value")):
+                missing = [v.name for v in variables(term) if not v.is_anonymous and v.name not in inner_names] \
+                    if term is not None else []
+                if missing or (term is not None and any(v.is_anonymous for v in variables(term))):
+                    raise RetalisSemanticError(f"the {what} of a sliding aggregate must be made of variables of its "
+                                               f"pattern ({', '.join(missing) or '_'} is not)", pattern.span)
+            step = self.new_step("sliding", inner, None, None)
+            step.output = Compound(step.name, tuple(distinct_variables(list(variables(pattern.group))
+                                                                       + [pattern.value])))
+            step.sliding = (pattern.function, pattern.group, pattern.value)
+            step.duration = pattern.duration
+            return Operand(step.output, step)
         if isinstance(pattern, Aggregate):
             raise RetalisSemanticError("aggregate(F, P, V) counts from a start event: write Start seq "
                                        "aggregate(F, P, V)", pattern.span)
@@ -169,10 +191,15 @@ def _pattern_terms(pattern: Pattern):
         child = getattr(pattern, name_, None)
         if child is not None and not isinstance(child, (Atom, Compound, Var)):
             yield from _pattern_terms(child)
-    for name_ in ("condition", "value", "function"):
+    for name_ in ("condition", "value", "function", "group"):
         term = getattr(pattern, name_, None)
         if isinstance(term, (Atom, Compound, Var)):
             yield term
+
+
+def _function_argument(function: Term) -> Optional[Term]:
+    """X of sum(X), min(X), ...; None for count."""
+    return function.args[0] if isinstance(function, Compound) and function.arity == 1 else None
 
 
 def _mark_times(condition: Term) -> Term:

@@ -31,10 +31,12 @@ that deleting an A or a P replays the values it changed.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Dict, List, Optional, Set, Tuple
 
 from ..frontend.terms import Atom, Compound, Number, Term, Var, distinct_variables, substitute, variables
 from .binarize import END_MARK, START_MARK
+from ..frontend.errors import RetalisSemanticError
 from .unit import BinaryRule, GeneratedRule, Operand, Step, Unit
 
 name = "edbc"
@@ -68,10 +70,29 @@ RELATIONS: Dict[str, Tuple[List[Term], Term, Term]] = {
 }
 
 
+#: The selections a rule may ask for with the property `consumption_policy`: the program's
+#: policies, and `first` (each left instance pairs with its first matching right instance).
+RULE_POLICIES = ("unrestricted", "recent", "chronological", "first")
+
+
 def run(unit: Unit) -> Unit:
-    policy = unit.settings.consumption_policy
-    unit.generated = [_RuleGenerator(rule, policy).generate() for rule in unit.rules]
+    unit.generated = [_RuleGenerator(rule, rule_policy(unit, rule)).generate() for rule in unit.rules]
     return unit
+
+
+def rule_policy(unit: Unit, rule: BinaryRule) -> str:
+    """The rule's own consumption policy (label property or `event_rule_property/3` fact
+    `consumption_policy`, or ETALIS's name `event_consumption_policy`), else the program's."""
+    properties = dict(rule.rule.properties or {})
+    if rule.rule.label is not None:
+        properties.update(unit.settings.rule_properties.get(rule.rule.label, {}))
+    value = properties.get("consumption_policy", properties.get("event_consumption_policy"))
+    if value is None:
+        return unit.settings.consumption_policy
+    if not (isinstance(value, Atom) and value.name in RULE_POLICIES):
+        raise RetalisSemanticError(f"the consumption_policy of a rule must be one of {', '.join(RULE_POLICIES)}",
+                                   rule.rule.span)
+    return value.name
 
 
 def V(name_: str) -> Var:
@@ -115,7 +136,9 @@ def _split(own: List[Var], other: List[Var]) -> Tuple[List[Var], List[Var]]:
 class _RuleGenerator:
     def __init__(self, rule: BinaryRule, policy: str):
         self.rule = rule
-        self.policy = policy
+        # `first` selects in the joins; every other step is unrestricted
+        self.first = policy == "first"
+        self.policy = "unrestricted" if self.first else policy
         used: Set[str] = set()
         source = rule.rule
         for t in [source.head] + ([source.action] if source.action is not None else []):
@@ -166,6 +189,10 @@ class _RuleGenerator:
                 self.fnot_clauses(step)
             elif step.op == "aggregate":
                 self.aggregate_clauses(step)
+            elif step.op == "absence":
+                self.absence_clauses(step)
+            elif step.op == "sliding":
+                self.sliding_clauses(step)
             elif step.right is None or step.op == "or":
                 self.forward_clauses(step)
             else:
@@ -307,6 +334,9 @@ class _RuleGenerator:
                                            [window, self.output(step, s1, e1, retract)]))
 
     def join_clauses(self, step: Step) -> None:
+        if self.first:
+            self.first_join_clauses(step)
+            return
         relation, start_expr, end_expr = RELATIONS[step.op]
         s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
         left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
@@ -326,6 +356,84 @@ class _RuleGenerator:
             self.arrival(operand, handler, os_, oe)
             found = conj([self.lookup(step, partner_store, oe)] + match)
             self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s, e)
+
+    def first_join_clauses(self, step: Step) -> None:
+        """The `first` selection: each left instance L pairs with its first matching right
+        instance only (the smallest by start, end, then the term: by time, whatever the
+        arrival order), and a right instance may serve several L's. `_first` records the
+        pairing of each L: a right instance that arrives (late) before an L's partner takes its
+        place, and deleting the partner pairs the L with the next one; so the output is always
+        that of the events present."""
+        relation, start_expr, end_expr = RELATIONS[step.op]
+        s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
+        left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
+        key, left_other = _split(left_vars, right_vars)
+        _, right_other = _split(right_vars, left_vars)
+        # each stored L is numbered (identical L's pair each on their own)
+        lid = V(self.fresh("LId"))
+        lefts = self.store(step, "lefts", key + left_other + [lid, s1, e1])
+        rights = self.store(step, "rights", key + right_other + [s2, e2])
+        paired = self.record(step, "first", key + left_other + [lid, s1, e1] + right_other + [s2, e2],
+                             rotated=step.window is not None)
+
+        def with_right(r_other: List[Term], rs: Term, re_: Term):
+            """The goals and interval of a match of the L with right instance (r_other, rs, re_)."""
+            names = {"S1": s1, "E1": e1, "S2": rs, "E2": re_}
+            goals = [substitute(g, names) for g in relation]
+            start = substitute(start_expr, names)
+            end = substitute(end_expr, names)
+            s_, e_ = V(self.fresh("S")), V(self.fresh("E"))
+            bounds = [C("is", s_, start), C("is", e_, end)]
+            window = self.window_check(step, s_, e_)
+            rank = C("-", C("-", rs, re_), C("r", *r_other))
+            return goals, bounds + ([window] if window is not None else []), s_, e_, rank
+
+        def variant(tag: str):
+            """The right instance's terms with its variables renamed apart (`tag` "" keeps them)."""
+            if tag:
+                names = {v.name: V(self.fresh(v.name + tag)) for v in right_other + [s2, e2]}
+                r_other = [names[v.name] for v in right_other]
+                rs, re_ = names[s2.name], names[e2.name]
+            else:
+                names, r_other, rs, re_ = {}, right_other, s2, e2
+            goals_, bounds_, s_, e_, rank_ = with_right(r_other, rs, re_)
+            store = substitute(rights, names)
+            pairing = substitute(paired, names)
+            out = [a if not isinstance(a, Var) else names.get(a.name, a) for a in step.output.args]
+            return {"goals": goals_, "bounds": bounds_, "rank": rank_, "rights": store, "paired": pairing,
+                    "add": C(step.name, *out, s_, e_), "retract": C(step.name + "_retract", *out, s_, e_)}
+
+        def pair_best(late_end: Term) -> Term:
+            """Pair the L with its first right instance, if any (variables of its own)."""
+            q = variant("Q")
+            best = V(self.fresh("Ranks"))
+            found = conj([self.lookup(step, q["rights"], late_end)] + q["goals"] + q["bounds"])
+            return C(";", C("->", conj([C("findall", q["rank"], found, best), C("min_member", q["rank"], best)]),
+                             conj(q["bounds"] + [self.record_add(q["paired"]), q["add"]])), Atom("true"))
+
+        own = variant("")
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [C("rtl_next_seq", lid), C("assertz", lefts),
+                                                                     pair_best(e1)]))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
+            self.if_stored(step, lefts, C(";", C("->", self.record_take(paired), conj(own["bounds"] + [own["retract"]])),
+                                          Atom("true")))]))
+        # a right instance: the L's it matches take it if it comes before their partner
+        p_ = variant("P")
+        take_over = conj([C("@<", own["rank"], p_["rank"]), self.record_take(p_["paired"])] + p_["bounds"]
+                         + [p_["retract"], self.record_add(paired), own["add"]])
+        handler = f"{step.name}_right"
+        self.arrival(step.right, handler, s2, e2)
+        self.clauses.append(clause(C(handler, *right_vars, s2, e2), [
+            C("assertz", rights),
+            C("forall", conj([self.lookup(step, lefts, e2)] + own["goals"] + own["bounds"]),
+              C(";", C("->", self.record_lookup(p_["paired"]), C(";", C("->", take_over, Atom("true")), Atom("true"))),
+                conj([self.record_add(paired), own["add"]])))]))
+        # deleting a right instance: the L's paired with it take their next one
+        self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
+            self.if_stored(step, rights, C("forall", self.record_lookup(paired), conj(
+                [self.record_take(paired)] + own["bounds"] + [own["retract"], pair_best(e1)])))]))
 
     def join_handlers(self, step: Step, handler: str, own_vars: List[Var], os_: Var, oe: Var, own_store: Term,
                       partner_store: Term, found: Term, matched: Optional[Term], s: Term, e: Term) -> None:
@@ -491,6 +599,99 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
             self.if_stored(step, negs, C("forall", after, self.output(step, s1, e1)))]))
 
+    def absence_clauses(self, step: Step) -> None:
+        """not(N).[L, D]: no N in the D seconds after L ends (N starts after L's end and ends by
+        L's end + D). Each L waits on a timer until the clock has passed its end + D + max_delay
+        (rtl_absence_wait/2): then no blocker within the delay bound can come any more, and the
+        result [L's start, L's end + D] is derived unless a stored N blocks it. The decided L's
+        are kept (window D) so that a late blocker takes the result back and deleting the
+        blocker derives it again; deleting L takes back its result or cancels its timer."""
+        duration = _number(step.duration)
+        s1, e1, sn, en = (self.t(n) for n in ("S1", "E1", "SN", "EN"))
+        close = V(self.fresh("Close"))
+        left_vars, negated_vars = operand_vars(step.left), operand_vars(step.negated)
+        negated_key, negated_other = _split(negated_vars, left_vars)
+        left_key, left_other = _split(left_vars, negated_vars)
+        # both stores count as windowed by 2D: a decided L is stored by [L's end, L's end + D],
+        # a blocker by its own interval; an L within the delay bound needs neither once it is
+        # older than D, and a result (decided D + max_delay after L) stays exact for deletions
+        # for another D (the retraction horizon is max_delay plus the largest window)
+        stores = replace(step, window=2 * float(step.duration))
+        decided = self.store(stores, "decided", left_key + left_other + [s1, e1, close])
+        negs = self.store(stores, "negs", negated_key + negated_other + [sn, en])
+        inside = [C("<", e1, sn), C("=<", en, close), Atom("!")]
+        unblocked = self.unblocked(stores, f"{step.name}_blocked", negated_key + [e1, close], negs, inside, e1)
+        closing = C("is", close, C("+", e1, Number(duration)))
+        decide = C(f"{step.name}_decide", *left_vars, s1, e1)
+        window = self.window_check(step, s1, close)
+        derivable = conj([window, unblocked])
+        # L arrives: wait for the clock; L is deleted: cancel the wait, or take back the result
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [closing, C("rtl_absence_wait", close, decide)]))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
+            closing,
+            C(";", C("->", C("rtl_timer_cancel", decide), Atom("true")),
+              self.if_stored(stores, decided, C(";", C("->", derivable, self.output(step, s1, close, retract=True)),
+                                                    Atom("true"))))]))
+        self.clauses.append(clause(decide, [
+            closing, C("assertz", decided),
+            C(";", C("->", derivable, self.output(step, s1, close)), Atom("true"))]))
+        # a blocker takes back the decided results it falls inside of; deleting it restores them
+        handler = f"{step.name}_negated"
+        self.arrival(step.negated, handler, sn, en)
+        found = conj([self.lookup(stores, decided, en), C("<", e1, sn), C("=<", en, close), derivable])
+        self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
+            C("forall", found, self.output(step, s1, close, retract=True)), C("assertz", negs)]))
+        self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
+            self.if_stored(stores, negs, C("forall", found, self.output(step, s1, close)))]))
+
+    def sliding_clauses(self, step: Step) -> None:
+        """sliding(F, P, Group, D, V): the matches of P are stored by group (with the value F
+        aggregates, and their end twice: the interval the sweep reads), and so are the changes
+        output; an arrival or a deletion refreshes the changes of its group in [E, E + D] up to
+        the clock, and a timer at E + D refreshes that moment when the clock reaches it
+        (rtl_sliding.pl)."""
+        function, group, value = step.sliding
+        duration = _number(step.duration)
+        s1, e1 = self.t("S1"), self.t("E1")
+        inner_vars = operand_vars(step.left)
+        group_vars = distinct_variables(variables(group))
+        x = function.args[0] if isinstance(function, Compound) else Number(1)
+        stores = replace(step, window=float(step.duration))
+        matched = self.store(stores, "slid", group_vars + [V(self.fresh("X")), s1, e1, e1])
+        t = V(self.fresh("T"))
+        shown = self.store(stores, "changes", group_vars + [value, t, t])
+        base = step.name
+        x_, e_, v_, t_ = (V(self.fresh(n)) for n in ("Xs", "Es", "Vs", "Ts"))
+        # the group's matches and changes, live and kept
+        stored_match = C(matched.name, *group_vars, x_, V("_"), e_, V("_"))
+        self.clauses.append(clause(C(f"{base}_matches", *group_vars, x_, e_),
+                                   [C(";", stored_match, self.kept_lookup(stored_match))]))
+        stored_shown = C(shown.name, *group_vars, v_, t_, V("_"))
+        self.clauses.append(clause(C(f"{base}_shown", *group_vars, v_, t_),
+                                   [C(";", stored_shown, self.kept_lookup(stored_shown))]))
+        self.clauses.append(clause(C(f"{base}_show", *group_vars, value, t), [
+            C("assertz", shown), self.output(step, t, t)]))
+        self.clauses.append(clause(C(f"{base}_unshow", *group_vars, value, t), [
+            self.if_stored(stores, shown, self.output(step, t, t, retract=True))]))
+        frm, to = V(self.fresh("From")), V(self.fresh("To"))
+        self.clauses.append(clause(C(f"{base}_refresh", *group_vars, frm, to), [
+            C("rtl_sliding_refresh", function, Number(duration), frm, to,
+              *(C(f"{base}_{n}", *group_vars) for n in ("matches", "shown", "show", "unshow")))]))
+        # arrivals and deletions of P
+        leave, clock, upto = V(self.fresh("Leave")), V(self.fresh("Clock")), V(self.fresh("UpTo"))
+        refresh = [C("is", leave, C("+", e1, Number(duration))), C("rtl_clock", clock),
+                   C("is", upto, C("min", leave, clock)), C(f"{base}_refresh", *group_vars, e1, upto)]
+        stored = C(matched.name, *group_vars, x, s1, e1, e1)
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        self.clauses.append(clause(C(handler, *inner_vars, s1, e1), [
+            C("assertz", stored)] + refresh + [
+            C("rtl_timer_add", leave, Atom("at"), C(f"{base}_refresh", *group_vars, leave, leave))]))
+        self.clauses.append(clause(C(handler + "_retract", *inner_vars, s1, e1), [
+            self.if_stored(stores, stored, conj(refresh))]))
+
     def aggregate_clauses(self, step: Step) -> None:
         """L seq aggregate(F, R, V): each L starts an accumulator; every later R updates the
         accumulators of the L's before it (within the window) and yields their new value V.
@@ -556,6 +757,27 @@ class _RuleGenerator:
             C("forall", C("member", C("-", value, e2), retracts), self.output(step, s1, e2, retract=True)),
             C("forall", C("member", C("-", value, e2), adds), self.output(step, s1, e2))] + replace))
 
+    def alarm(self, step: Step, head: Compound, s: Var, e: Var, retract: bool) -> Term:
+        """`alarm(Event, D)` (ETALIS `exceptionAlarm(Event, D)`): raise Event over [the match's
+        start, its end + D] when the clock reaches the end + D (a timer: the clock does not
+        move). A deleted match cancels its timer, or takes back the Event it raised (recorded
+        in `_alarms`, kept for the retraction horizon when the rule has a window, else as long
+        as the program runs, like the records of an unwindowed aggregate)."""
+        event, delay = head.args
+        due = V(self.time_names.setdefault("Due", self.fresh("Due")))
+        fire = C(f"{step.name}_alarm", event, s, due)
+        fired = self.record(step, "alarms", [event, s, due], rotated=step.window is not None)
+        if not retract:
+            raised, since, when = (V(self.fresh(n)) for n in ("Raised", "Since", "When"))
+            self.clauses.append(clause(C(fire.name, raised, since, when), [
+                self.record_add(C(fired.name, raised, since, when)), C("rtl_derived", raised, since, when)]))
+        at = C("is", due, C("+", e, delay))
+        if not retract:
+            return conj([at, C("rtl_timer_add", due, Atom("at"), fire)])
+        return conj([at, C(";", C("->", C("rtl_timer_cancel", fire), Atom("true")),
+                           C(";", C("->", self.record_take(fired), C("rtl_underived", event, s, due)),
+                             Atom("true")))])
+
     def fresh(self, base: str) -> str:
         """A variable name no source variable of the rule uses (and reserve it)."""
         name_ = base
@@ -578,6 +800,8 @@ class _RuleGenerator:
                 if rule.synchronized is not None:
                     sync = "rtl_synchronized_retract" if retract else "rtl_synchronized"
                     result = C(sync, *rule.synchronized.args, s, e)
+                elif alarm_head(rule.head):
+                    result = self.alarm(step, rule.head, s, e, retract)
                 else:
                     result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
                 then = conj([action, result]) if (action or result) else Atom("true")
@@ -587,6 +811,22 @@ class _RuleGenerator:
             body = [C("forall", conj(conditions), then)] if conditions else [then]
             self.clauses.append(clause(head, body))
 
+
+
+def alarm_head(head: Term) -> bool:
+    """`alarm(Event, D)` with D a number or an arithmetic expression (`30`, `T * 2`), or
+    ETALIS's `exceptionAlarm(Event, D)`: a timer head. `alarm(Sensor, Level)`, with a plain
+    variable or atom as second argument, stays an ordinary event named alarm/2."""
+    if not (isinstance(head, Compound) and head.arity == 2):
+        return False
+    if head.name == "exceptionAlarm":
+        return True
+    delay = head.args[1]
+    return head.name == "alarm" and (isinstance(delay, Number) or (
+        isinstance(delay, Compound) and delay.arity in (1, 2) and delay.name in _ARITHMETIC))
+
+
+_ARITHMETIC = {"+", "-", "*", "/", "//", "min", "max", "abs"}
 
 
 def _number(value: float):

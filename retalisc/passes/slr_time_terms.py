@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Optional
 
-from ..frontend.program import Check, EventRule, StaticClause, Where, Binary, Negation, Window, Aggregate
+from ..frontend.program import Absence, Sliding, Check, EventRule, StaticClause, Where, Binary, Negation, Window, Aggregate
 from ..frontend.terms import Atom, Compound, Term, list_items, span_of
 from .unit import Unit
 
@@ -58,6 +58,10 @@ def _pattern(pattern):
     if isinstance(pattern, Negation):
         return replace(pattern, negated=_pattern(pattern.negated), first=_pattern(pattern.first),
                        second=_pattern(pattern.second))
+    if isinstance(pattern, Absence):
+        return replace(pattern, negated=_pattern(pattern.negated), first=_pattern(pattern.first))
+    if isinstance(pattern, Sliding):
+        return replace(pattern, pattern=_pattern(pattern.pattern))
     if isinstance(pattern, Aggregate):
         return replace(pattern, pattern=_pattern(pattern.pattern))
     return pattern

@@ -52,7 +52,7 @@ class Step:
     where-conditions checked on its result and the window its matches must fit in."""
 
     name: str                       # e_<rule>_<n>
-    op: str                         # seq, and, par, or, equals, ..., cnot, fnot, pass
+    op: str                         # seq, and, par, or, equals, ..., cnot, fnot, absence, pass
     left: Operand
     right: Optional[Operand]
     output: Term                    # e_<rule>_<n>(Vars...) or, for the last step, the head
@@ -62,6 +62,8 @@ class Step:
     negated: Optional[Operand] = None   # cnot: no `negated` between left and right;
                                         # fnot: no `negated` before left
     aggregate: Optional[tuple] = None   # (function, value variable) of `left seq aggregate(F, right, V)`
+    duration: Optional[float] = None    # absence: no `negated` in the `duration` seconds after `left`
+    sliding: Optional[tuple] = None     # (function, group term, value variable) of a sliding aggregate
 
 
 @dataclass

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Dict, Iterable, Set, Tuple
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.program import (DECLARATIONS, Aggregate, EventAtom, EventRule, Pattern, pattern_conditions,
+from ..frontend.program import (DECLARATIONS, Aggregate, EventAtom, EventRule, Pattern, Sliding, pattern_conditions,
                                 walk_pattern)
 from ..frontend.terms import Atom, Compound, Term, Var, indicator, span_of, variables
 from .unit import Unit
@@ -102,7 +102,7 @@ def _pattern_variables(pattern: Pattern) -> Set[str]:
 
 def _aggregates(pattern: Pattern):
     for p in walk_pattern(pattern):
-        if isinstance(p, Aggregate):
+        if isinstance(p, (Aggregate, Sliding)):
             yield p
 
 

@@ -51,6 +51,12 @@ def dump_binary_rule(rule: BinaryRule) -> str:
             right = f" seq {_operand_text(step.right)} with no {_operand_text(step.negated)} between"
         elif step.op == "fnot":
             right = f" fnot {_operand_text(step.negated)}"
+        elif step.op == "absence":
+            right = f" then no {_operand_text(step.negated)} for {step.duration:g} s"
+        elif step.op == "sliding":
+            function, group, value = step.sliding
+            right = (f" sliding {write_term(function, 999)} by {write_term(group, 999)} over {step.duration:g} s "
+                     f"as {write_term(value, 999)}")
         elif step.op == "aggregate":
             function, value = step.aggregate
             right = (f" seq aggregate({write_term(function, 999)}, {_operand_text(step.right)}, "
