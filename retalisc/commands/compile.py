@@ -19,7 +19,9 @@ def report_program_error(error: RetalisError) -> None:
     sys.exit(2)
 
 
-def compile_or_exit(program: str, **kwargs):
+def compile_or_exit(program: str, werror: bool = False, **kwargs):
+    """Compile `program` or exit with status 2 on errors; print the warnings on standard error.
+    With `werror`, the warnings are errors: printed as such, and exit status 2."""
     try:
         result = compile_file(program, **kwargs)
     except RetalisError as error:
@@ -27,9 +29,27 @@ def compile_or_exit(program: str, **kwargs):
     except UnicodeDecodeError as error:
         click.echo(f"{program}: error: not a UTF-8 text file ({error.reason})", err=True)
         sys.exit(2)
+    if werror and result.warnings:
+        for warning in result.warnings:
+            click.echo(_as_error(warning), err=True)
+        count = len(result.warnings)
+        click.echo(f"{program}: {count} warning{'s' if count != 1 else ''} treated as error{'s' if count != 1 else ''} "
+                   "(--werror)", err=True)
+        sys.exit(2)
     for warning in result.warnings:
         click.echo(warning, err=True)
     return result
+
+
+def _as_error(warning: str) -> str:
+    """A warning's text with its `warning:` tag made `error:` (--werror)."""
+    head, sep, rest = warning.partition(": warning: ")
+    return f"{head}: error: {rest}" if sep else warning
+
+
+WERROR = click.option("--werror", is_flag=True,
+                      help="Treat warnings (traps such as a window on the last operand only, an undefined "
+                           "predicate in a condition) as errors: exit status 2.")
 
 
 @click.command("compile", epilog="""\b
@@ -48,7 +68,9 @@ Examples:
               help="Compile PROGRAM as a definite program for active queries with this transformation "
                    "(aq_register/2, aq_assert/1, ...; see docs/active_queries.md).")
 @click.option("--subsumption", is_flag=True, help="With --active-queries tabled: reuse tables by subsumption.")
-def compile_command(program: str, output: str, dump_after: str, active_queries: str, subsumption: bool) -> None:
+@WERROR
+def compile_command(program: str, output: str, dump_after: str, active_queries: str, subsumption: bool,
+                    werror: bool) -> None:
     """Compile PROGRAM (.rtl) to a SWI-Prolog module.
 
     Run the result with `swipl OUT.pl EVENTS.jsonl`: it prints the derived events as JSON Lines.
@@ -62,7 +84,7 @@ def compile_command(program: str, output: str, dump_after: str, active_queries: 
                                    f"{', '.join(pass_names(options))}")
         compile_or_exit(program, dump_after=dump_after, dump=click.echo, active_queries=options)
         return
-    result = compile_or_exit(program, output_name=Path(output).name if output else "PROGRAM.pl",
+    result = compile_or_exit(program, werror, output_name=Path(output).name if output else "PROGRAM.pl",
                              active_queries=options)
     if output:
         try:
@@ -77,14 +99,18 @@ def compile_command(program: str, output: str, dump_after: str, active_queries: 
 Example:
   retalisc check examples/fire_alarm/fire_alarm.rtl    # examples/fire_alarm/fire_alarm.rtl: ok (1 event rule)""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
-def check_command(program: str) -> None:
+@WERROR
+def check_command(program: str, werror: bool) -> None:
     """Check PROGRAM for errors without writing anything (exit status 2 on errors).
 
     It runs the whole compilation, as `retalisc compile` does, and discards the result: a
-    program `check` accepts compiles, and its Prolog loads."""
-    result = compile_or_exit(program)
+    program `check` accepts compiles, and its Prolog loads. Programs that compile but cannot
+    mean what they say get warnings (`file:line:col: warning: ...` with a hint)."""
+    result = compile_or_exit(program, werror)
     rules = len(result.unit.rules)
-    click.echo(f"{program}: ok ({rules} event rule{'s' if rules != 1 else ''})", err=True)
+    warnings = len(result.warnings)
+    noted = f", {warnings} warning{'s' if warnings != 1 else ''}" if warnings else ""
+    click.echo(f"{program}: ok ({rules} event rule{'s' if rules != 1 else ''}{noted})", err=True)
 
 
 @click.command("run", epilog="""\b
