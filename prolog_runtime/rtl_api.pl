@@ -50,6 +50,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_sandbox).
 :- use_module(rtl_text).
 :- use_module(rtl_seen).
+:- use_module(rtl_time, [rtl_input_interval/6]).
 :- use_module(rtl_horizon, [rtl_take_warnings/1]).
 
 :- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1]).
@@ -94,9 +95,12 @@ rtl_api_set_flag(NameText, ValueText, "") :-
 
 %!  rtl_api_feed_events(+Items:list, -Output:string) is det.
 %
-%   Items are `[Op, EventText, Start, End]` lists: Op `"add"` or `"retract"`, Start and End
-%   finite numbers with Start =< End. The whole batch is read first: a bad item raises an
-%   error naming it and nothing is processed.
+%   Items are `[Op, EventText, Start, End]` lists: Op `"add"` or `"retract"`; Start and End
+%   times as an event file gives them (a number of seconds or `[Secs, NSecs]`), End `""` when
+%   the event has one time (a file's `"t"`). Times are checked by rtl_input_interval/6, the
+%   check of the file reader, so a time is refused here exactly when a file line with it is,
+%   for the same reason (`error(invalid_time(Reason), _)`). The whole batch is read first: a
+%   bad item raises an error naming it and nothing is processed.
 
 rtl_api_feed_events(Items, Output) :-
     must_be(list, Items),
@@ -120,16 +124,18 @@ read_item(Item, event(Op, Event, Start, End), I, I1) :-
     catch(item_event(Item, Op, Event, Start, End), Error,
           throw(error(bad_item(I, Error), _))).
 
-item_event([OpText, Text, Start, End], Op, Event, Start, End) :- !,
+item_event([OpText, Text, Start0, End0], Op, Event, Start, End) :- !,
     must_be(text, OpText),
     atom_string(Op, OpText),
     must_be(oneof([add, retract]), Op),
     rtl_read_event(Text, Event),
-    finite_time(Start),
-    finite_time(End),
-    (   Start =< End
+    (   End0 == ""
+    ->  rtl_input_interval(Start0, _, _, Start, End, Problem)
+    ;   rtl_input_interval(_, Start0, End0, Start, End, Problem)
+    ),
+    (   var(Problem)
     ->  true
-    ;   domain_error(interval_with_start_before_end, [Start, End])
+    ;   throw(error(invalid_time(Problem), _))
     ).
 item_event(Item, _, _, _, _) :-
     type_error(event_item, Item).
@@ -386,6 +392,8 @@ message_line(Error, Text) :-
 
 :- multifile prolog:error_message//1.
 
+prolog:error_message(invalid_time(Reason)) -->
+    [ '~s'-[Reason] ].
 prolog:error_message(bad_item(I, Error)) -->
     { message_line(Error, Text) },
     [ 'event ~w of the batch: ~w'-[I, Text] ].

@@ -176,7 +176,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     Example: retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
     """
     from ..driver.bridge import PrologError
-    from ..driver.engine import Engine
+    from ..driver.engine import Engine, _unique_module
     from ..driver.run import run_event_file, set_action_output
 
     if (events is None) == (bag["bag"] is None):
@@ -185,7 +185,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
                                "--stamp, --typestore, --out-bag and --foxglove go with --bag")
     steps = _max_steps(max_steps)
-    result = compile_or_exit(program)
+    result = compile_or_exit(program, module=_unique_module(program))    # a second run in one process loads anew
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
     engine = Engine.from_compiled(result)
