@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import io
 import os
+import select
+import stat
 import sys
 import time
 from typing import IO, Dict, Iterator, List, Optional, Sequence, Tuple
@@ -24,6 +26,60 @@ def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str],
             first, batch, size = number + 1, [], 0
     if batch:
         yield first, batch, size
+
+
+def _is_live(events: str, source: IO[str]) -> bool:
+    """Whether `events` is a live input (standard input, a pipe, a socket, a terminal) rather
+    than a regular file: its lines are processed as they arrive."""
+    if events == "-":
+        return True
+    try:
+        mode = os.stat(events).st_mode
+    except OSError:
+        return False
+    return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode) or stat.S_ISCHR(mode)
+
+
+def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[str], int]]:
+    """(first line number, lines, bytes read) per batch of a live input: the complete lines
+    that have arrived, as soon as they are there. Waits only when no complete line is waiting,
+    so a batch holds more than one line only while input is already waiting (at most
+    `batch_size` lines)."""
+    pending = b""
+    first = 1
+    started = False
+    while True:
+        lines: List[bytes] = []
+        size = 0
+        at_end = False
+        while True:
+            while b"\n" in pending and len(lines) < batch_size:
+                line, pending = pending.split(b"\n", 1)
+                lines.append(line)
+                size += len(line) + 1
+            if len(lines) >= batch_size:
+                break
+            waiting = select.select([fd], [], [], 0)[0] if lines else select.select([fd], [], [])[0]
+            if not waiting:
+                break
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                at_end = True
+                if pending:
+                    lines.append(pending)
+                    size += len(pending)
+                    pending = b""
+                break
+            pending += chunk
+        if lines:
+            texts = [line.decode("utf-8", errors="replace") for line in lines]
+            if not started:
+                texts[0] = texts[0].lstrip("\ufeff")
+                started = True
+            yield first, texts, size
+            first += len(lines)
+        if at_end:
+            return
 
 
 class RunStopped(Exception):
@@ -73,10 +129,15 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             raise RunStopped()
         for produced in first_output:
             write(produced)
-        for first, lines, size in _batches(source, batch_size):
+        fd = _fileno(source)
+        live = fd is not None and _is_live(events, source)
+        batches = _live_batches(fd, batch_size) if live else _batches(source, batch_size)
+        for first, lines, size in batches:
             produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
+            if live:
+                sink.flush()                    # each event's output leaves as it is processed
             messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")
                         for r in rejected]
             messages += [(w.line, f"warning: {w.text}") for w in engine.take_warnings()]
@@ -108,6 +169,15 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         engine.bridge.once("retalis:rtl_close_action_output")
     print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
     return status
+
+
+def _fileno(source) -> Optional[int]:
+    """The file descriptor under a text stream (standard input's buffer, or an open file), or
+    None when there is none (a stream in memory)."""
+    try:
+        return source.buffer.fileno() if hasattr(source, "buffer") else source.fileno()
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        return None
 
 
 def set_action_output(engine: Engine, path: str) -> None:
