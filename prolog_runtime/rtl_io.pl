@@ -6,7 +6,7 @@
             rtl_json_string_escape/2     % +Text, -Escaped
           ]).
 
-/** <module> Event JSON Lines in and out (SPEC section 11)
+/** <module> Event JSON Lines in and out (docs/runtime.md, "Event input" and "Output")
 
 Input, one object per line: `"event"` is a ground term in Prolog syntax (text); the time
 is `"t"` (an atomic event) or `"start"` and `"end"`; `"op": "retract"` deletes a previously

@@ -316,7 +316,7 @@ class Engine:
 
     def feed_lines(self, text: str, first_line: int = 1, *, allow_control: bool = False,
                    strict: bool = False) -> Tuple[List[OutputEvent], List[Rejection]]:
-        """Process event JSON Lines (SPEC section 11) exactly as `swipl PROGRAM.pl FILE` does;
+        """Process event JSON Lines (docs/runtime.md, "Event input") exactly as `swipl PROGRAM.pl FILE` does;
         return the output and the lines not processed, with their reasons. Control lines
         (`add_rule`, `delete_rule`) are refused unless `allow_control`. An event whose
         processing raises is reported (kind "error") and the lines after it are processed;
