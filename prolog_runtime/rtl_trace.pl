@@ -3,7 +3,11 @@
             rtl_trace_stop/1,           % -Out
             rtl_trace_feed_line/3,      % +Text, +LineNo, -Output
             rtl_trace_explain/4,        % +RulesText, +TargetText, +Limit, -Text
-            rtl_trace_why_not/3         % +RulesText, +PatternText, -Text
+            rtl_trace_why_not/3,        % +RulesText, +PatternText, -Text
+            rtl_trace_rules/2,          % +Specs, -Out
+            rtl_trace_report/1,         % -Text
+            rtl_trace_late/3,           % +File, +Rules, -Out
+            rtl_trace_end/1             % -Out
           ]).
 
 /** <module> Explaining detections: how a derived event came about, and why one did not
@@ -22,7 +26,16 @@ by an action while processing it). The explanations then read the log:
     none although its operands have some (which condition, relation or window rejected
     them).
 
-Both evaluate the rules' patterns over the log with the declarative semantics of the
+For `retalisc run --trace RULE`, rtl_trace_rules/2 watches the partial-match stores of rules
+(prolog_listen/2 on their dynamic predicates) and writes a line to standard error for each
+partial match created, consumed (by a consumption policy), expired (its window passed; kept
+for late events and deletions), dropped (past the retraction horizon), replaced (by a newer
+identical event, `recent` policy) or retracted (by a deletion); rtl_trace_report/1 gives the
+counts and the detections per rule. For `--late FILE`, rtl_trace_late/3 writes every input
+event that arrives more than the delay bound behind the clock, with its lateness and the
+rules whose partners it may have missed. Without these calls no listener or hook exists.
+
+Both evaluations of patterns below evaluate the rules' patterns over the log with the declarative semantics of the
 language (docs/language.md, "Patterns"): rules come from the compiler as terms
 `rule(Label, Place, Head, Pattern)`, Pattern built from `ev(Event, Start, End)`,
 `seq(P, Q)` (and the other binary operators), `where(P, Goal)`, `check(P, Goal)`,
@@ -33,6 +46,7 @@ Conditions run in the program module.
 :- use_module(library(apply)).
 :- use_module(library(lists)).
 :- use_module(rtl_ele).
+:- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(retalis, [rtl_feed_lines/3]).
 
 :- dynamic logged/6.            % logged(Seq, Line, Kind, Event, Start, End); Kind input or derived
@@ -365,3 +379,186 @@ read_rules(RulesText, Rules, Target, TargetText, Names) :-
     term_string(Rules, RulesText, [module(M), variable_names(Names)]),
     must_be(list, Rules),
     term_string(Target, TargetText, [module(M)]).
+
+% ---- tracing the partial matches of rules ------------------------------------------------------
+
+:- dynamic traced_store/5.      % traced_store(Module, StoreName, Rule, Kind, Description); Kind live or kept
+:- dynamic traced_head/2.       % traced_head(Rule, Skeleton)
+:- dynamic trace_count/3.       % trace_count(Rule, What, N)
+
+%!  rtl_trace_rules(+Specs, -Out) is det.
+%
+%   Specs are `[Rule, HeadName, HeadArity, Stores]` lists, Stores `[Name, Arity, Kind,
+%   Description]` lists (Kind "live" or "kept"). Starts watching those stores.
+
+rtl_trace_rules(Specs, "") :-
+    rtl_program(M),
+    retractall(traced_store(_, _, _, _, _)),
+    retractall(traced_head(_, _)),
+    retractall(trace_count(_, _, _)),
+    forall(member([Rule0, HeadName0, HeadArity, Stores], Specs),
+           ( atom_string(Rule, Rule0),
+             atom_string(HeadName, HeadName0),
+             functor(Skeleton, HeadName, HeadArity),
+             assertz(traced_head(Rule, Skeleton)),
+             forall(member(What, [created, consumed, expired, dropped, replaced, retracted, detections]),
+                    assertz(trace_count(Rule, What, 0))),
+             forall(member([Name0, Arity, Kind0, Desc], Stores),
+                    ( atom_string(Name, Name0), atom_string(Kind, Kind0),
+                      assertz(traced_store(M, Name, Rule, Kind, Desc)),
+                      functor(Head, Name, Arity),
+                      prolog_listen(M:Head, rtl_trace:store_changed(M, Name)) )) )),
+    nb_setval(rtl_trace_phase, add),
+    rtl_add_output_hook(rtl_trace:trace_phase).
+
+trace_phase(Event, _, _, Op) :-
+    nb_setval(rtl_trace_phase, Op),
+    (   Op == add
+    ->  forall(( traced_head(Rule, Skeleton), \+ Event \= Skeleton ), bump(Rule, detections))
+    ;   true
+    ).
+
+store_changed(M, Name, Action, Ref) :-
+    (   Action == assertz ; Action == asserta ; Action == retract ; Action == erase ),
+    traced_store(M, Name, Rule, Kind, Desc),
+    catch(clause(_:Head, true, Ref), _, fail),
+    !,
+    change(Action, Kind, What),
+    (   What == ignore
+    ->  true
+    ;   bump(Rule, What),
+        rtl_clock(Clock),
+        Head =.. [_|Args],
+        append(Values, [Start, End], Args),
+        format(user_error, "trace ~w at ~w: ~w ~w ~q over [~w, ~w]~n",
+               [Rule, Clock, What, Desc, Values, Start, End])
+    ).
+store_changed(_, _, _, _).
+
+%   change(+Action, +Kind, -What): what a change of a store means, from where it is made.
+
+change(assertz, live, created) :- !.
+change(asserta, live, created) :- !.
+change(assertz, kept, ignore) :- !.            % reported as `expired` when it left the live store
+change(asserta, kept, ignore) :- !.
+change(erase, Kind, What) :- !,
+    change(retract, Kind, What).
+change(retract, Kind, What) :-
+    (   in_ancestor(rtl_horizon:rtl_dry_run/3)
+    ->  What = ignore
+    ;   in_ancestor(rtl_ele:rtl_collect_garbage/0)          % the periodic sweep
+    ->  ( Kind == live -> What = expired ; What = dropped )
+    ;   in_ancestor(rtl_horizon:rtl_drop_twins/1)
+    ->  What = replaced
+    ;   nb_getval(rtl_trace_phase, retract)
+    ->  What = retracted
+    ;   Kind == kept
+    ->  What = dropped
+    ;   What = consumed
+    ).
+
+in_ancestor(PI) :-
+    prolog_current_frame(Frame),
+    ancestor(Frame, PI).
+
+ancestor(Frame, PI) :-
+    (   prolog_frame_attribute(Frame, predicate_indicator, PI0), PI0 == PI
+    ->  true
+    ;   prolog_frame_attribute(Frame, parent, Parent),
+        ancestor(Parent, PI)
+    ).
+
+bump(Rule, What) :-
+    retract(trace_count(Rule, What, N0)), !,
+    N is N0 + 1,
+    assertz(trace_count(Rule, What, N)).
+bump(_, _).
+
+%!  rtl_trace_report(-Text) is det.
+%
+%   One line per traced rule: its detections and what happened to its partial matches.
+
+rtl_trace_report(Text) :-
+    findall(Line,
+            ( traced_head(Rule, Skeleton),
+              functor(Skeleton, Name, Arity),
+              findall(N, ( member(W, [detections, created, consumed, expired, dropped, replaced, retracted]),
+                           trace_count(Rule, W, N) ), [D, C, U, E, X, R, T]),
+              format(string(Line), "trace ~w (~w/~w): ~d detections; partial matches: ~d created, ~d consumed, ~d expired, ~d dropped, ~d replaced, ~d retracted",
+                     [Rule, Name, Arity, D, C, U, E, X, R, T]) ),
+            Lines),
+    atomic_list_concat(Lines, "\n", Text).
+
+% ---- late events ---------------------------------------------------------------------------------
+
+%!  rtl_trace_late(+File, +Rules, -Out) is det.
+%
+%   Write to File (JSON Lines) every input event that ends more than the delay bound behind
+%   the clock: its lateness, and per rule whose pattern has an event of its kind, whether
+%   partners it would join may have been forgotten (lateness beyond the delay bound plus the
+%   rule's window). Rules are `[Label, Window, Skeletons]` lists (Window -1 for none,
+%   Skeletons the text of the event atoms of the rule's pattern).
+
+rtl_trace_late(File, Rules, "") :-
+    open(File, write, Stream, [encoding(utf8)]),
+    nb_setval(rtl_trace_late_stream, Stream),
+    rtl_program(M),
+    retractall(late_rule(_, _, _)),
+    forall(member([Label0, Window, Skeletons], Rules),
+           ( atom_string(Label, Label0),
+             forall(member(Text, Skeletons),
+                    ( term_string(Skeleton, Text, [module(M)]),
+                      assertz(late_rule(Label, Window, Skeleton)) )) )),
+    rtl_add_output_hook(rtl_trace:late_event).
+
+:- dynamic late_rule/3.
+
+late_event(Event, Start, End, add) :-
+    rtl_clock(Clock),
+    rtl_flag(max_delay, Delay),
+    Delay \== inf,
+    Lateness is Clock - End,
+    Lateness > Delay,
+    \+ in_ancestor(rtl_ele:rtl_derived/3),
+    \+ in_ancestor(rtl_ele:rtl_internal_event/3),
+    !,
+    findall(Label-Missed,
+            ( late_rule(Label, Window, Skeleton), \+ Event \= Skeleton,
+              (   Window >= 0, Lateness > Delay + Window -> Missed = true ; Missed = false ) ),
+            Pairs0),
+    sort(Pairs0, Pairs),
+    findall(L, member(L-_, Pairs), Rules0), sort(Rules0, Rules),
+    findall(L, member(L-true, Pairs), Missed0), sort(Missed0, Missed),
+    format(string(EventText), "~q", [Event]),
+    nb_getval(rtl_trace_late_stream, Stream),
+    json_list(Rules, RulesJson),
+    json_list(Missed, MissedJson),
+    rtl_json_string_escape(EventText, Escaped),
+    format(Stream, "{\"event\": \"~s\", \"start\": ~w, \"end\": ~w, \"clock\": ~w, \"lateness\": ~w, \"max_delay\": ~w, \"rules\": ~s, \"may_have_missed_partners_in\": ~s}~n",
+           [Escaped, Start, End, Clock, Lateness, Delay, RulesJson, MissedJson]),
+    flush_output(Stream).
+late_event(_, _, _, _).
+
+json_list(Atoms, Json) :-
+    findall(Q, ( member(A, Atoms), format(string(Q), "\"~w\"", [A]) ), Qs),
+    atomic_list_concat(Qs, ", ", Inner),
+    format(string(Json), "[~w]", [Inner]).
+
+%!  rtl_trace_end(-Out) is det.
+%
+%   Stop tracing rules and late events: remove the listeners and hooks, close the late file.
+
+rtl_trace_end("") :-
+    forall(retract(traced_store(M, Name, _, _, _)),
+           (   current_predicate(M:Name/Arity)
+           ->  functor(Head, Name, Arity),
+               catch(prolog_unlisten(M:Head, rtl_trace:store_changed(M, Name)), _, true)
+           ;   true
+           )),
+    rtl_remove_output_hook(rtl_trace:trace_phase),
+    rtl_remove_output_hook(rtl_trace:late_event),
+    (   nb_current(rtl_trace_late_stream, Stream), Stream \== []
+    ->  nb_setval(rtl_trace_late_stream, []),
+        close(Stream)
+    ;   true
+    ).

@@ -2,6 +2,7 @@
 live input (each event's output leaves as it is processed, before the input ends)."""
 from __future__ import annotations
 
+import json
 import os
 import select
 import shutil
@@ -143,3 +144,49 @@ def test_each_event_is_written_as_it_arrives(tmp_path, path):
         command = [shutil.which("swipl"), str(tmp_path / "p.pl"), "-"]
     line, _ = first_output_while_input_open(command, env)
     assert line == '{"event": "pong(1)", "start": 1, "end": 1}\n'
+
+
+# ---- run --trace RULE and --late FILE ------------------------------------------------------
+
+TRACED = """\
+{"event": "smoke(k1)", "t": 1}
+{"event": "smoke(k2)", "t": 2}
+{"event": "heat(k1, 90)", "t": 4}
+{"event": "smoke(k1)", "t": 1, "op": "retract"}
+{"event": "heat(k2, 30)", "t": 40}
+{"event": "smoke(k3)", "t": 20}
+{"event": "heat(k3, 1)", "t": 21}
+"""
+
+
+def test_trace_reports_created_retracted_expired_and_counts(tmp_path, capfd):
+    (tmp_path / "p.rtl").write_text("alarm(X, Y) <- (smoke(X) seq heat(X, Y)).10.\n")
+    (tmp_path / "e.jsonl").write_text(TRACED)
+    late = tmp_path / "late.jsonl"
+    result = CliRunner().invoke(main, ["run", str(tmp_path / "p.rtl"), "--events", str(tmp_path / "e.jsonl"),
+                                       "--trace", "r1", "--late", str(late)])
+    assert result.exit_code == 0
+    # the runtime writes trace lines to standard error itself (file descriptor 2), as they happen
+    written = capfd.readouterr().err + result.stderr
+    trace = [line for line in written.splitlines() if line.startswith("trace r1")]
+    assert trace[0] == "trace r1 at 1: created step 1 left (smoke(X) waiting for heat(X, Y)) [k1] over [1, 1]"
+    assert "trace r1 at 4: retracted step 1 left (smoke(X) waiting for heat(X, Y)) [k1] over [1, 1]" in trace
+    assert "trace r1 at 40: expired step 1 left (smoke(X) waiting for heat(X, Y)) [k2] over [2, 2]" in trace
+    assert trace[-1] == ("trace r1 (alarm/2): 2 detections; partial matches: 6 created, 0 consumed, 2 expired, "
+                         "0 dropped, 0 replaced, 1 retracted")
+    assert result.stderr.splitlines()[-1].startswith("retalis: 6 events in, 2 derived")
+    lines = [json.loads(line) for line in late.read_text().splitlines()]
+    assert [(x["event"], x["lateness"], x["may_have_missed_partners_in"]) for x in lines] == \
+        [("smoke(k3)", 20, ["r1"]), ("heat(k3,1)", 19, ["r1"])]
+
+
+def test_trace_consumed_under_a_policy_and_unknown_rule(tmp_path, capfd):
+    (tmp_path / "p.rtl").write_text(":- set_etalis_flag(event_consumption_policy, chronological).\n"
+                                    "r(K) <- a(K) seq b(K).\n")
+    (tmp_path / "e.jsonl").write_text('{"event": "a(1)", "t": 1}\n{"event": "b(1)", "t": 3}\n')
+    args = ["run", str(tmp_path / "p.rtl"), "--events", str(tmp_path / "e.jsonl")]
+    result = CliRunner().invoke(main, args + ["--trace", "r1"])
+    written = capfd.readouterr().err + result.stderr
+    assert "trace r1 at 3: consumed step 1 left (a(K) waiting for b(K)) [1] over [1, 1]" in written
+    bad = CliRunner().invoke(main, args + ["--trace", "r9"])
+    assert bad.exit_code == 2 and "no rule 'r9' in the program (its rules: r1)" in bad.stderr

@@ -167,10 +167,18 @@ Examples:
                    "standard output carries only JSON Lines).")
 @click.option("--progress/--no-progress", default=None,
               help="Show a progress line on standard error (default: on a terminal, for inputs over 5 MB).")
+@click.option("--trace", "traces", multiple=True, metavar="RULE",
+              help="Write to standard error every partial match of rule RULE (a label, r1 for the first "
+                   "rule) created, consumed, expired, dropped, replaced or retracted, and at the end its "
+                   "detections and counts. Repeatable.")
+@click.option("--late", "late_file", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Write every input event that arrives more than --max-delay behind the latest one to FILE "
+                   "(JSON Lines: its lateness and the rules whose partners it may have missed).")
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
-                allow_control: bool, strict: bool, max_steps, action_output, progress, **bag) -> None:
+                allow_control: bool, strict: bool, max_steps, action_output, progress, traces, late_file,
+                **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
 
     Example: retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
@@ -181,6 +189,8 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
 
     if (events is None) == (bag["bag"] is None):
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
+    if bag["bag"] is not None and (traces or late_file):
+        raise click.UsageError("--trace and --late go with --events")
     if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
         raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
                                "--stamp, --typestore, --out-bag and --foxglove go with --bag")
@@ -203,6 +213,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
             sys.exit(2)
     if retraction_horizon is not None:
         engine.set_flag("retraction_horizon", repr(retraction_horizon))
+    report = _start_tracing(engine, result.unit, traces, late_file) if traces or late_file else None
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
     for request in memories:
@@ -215,8 +226,34 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
                                  drop_pending=drop_pending, first_output=posted))
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
                             drop_pending=drop_pending, first_output=posted, allow_control=allow_control,
-                            strict=strict, progress=progress)
+                            strict=strict, progress=progress, report=report)
     sys.exit(status)
+
+
+def _start_tracing(engine, unit, traces, late_file):
+    """`--trace RULE` and `--late FILE`: start the runtime's tracing (prolog_runtime/rtl_trace.pl);
+    returns what gives the report printed before the summary."""
+    from ..driver.explain import late_rules, trace_specs
+
+    labels = list(dict.fromkeys(traces))
+    try:
+        specs = trace_specs(unit, labels) if labels else []
+    except KeyError as error:
+        known = ", ".join(b.rule_id for b in unit.rules)
+        raise click.BadParameter(f"no rule {error.args[0]!r} in the program (its rules: {known})",
+                                 param_hint="--trace") from None
+    engine.bridge.once("use_module(retalis_runtime(rtl_trace))")      # constant text
+    if late_file is not None:
+        output_file(late_file, "--late")
+        engine.bridge.apply("rtl_trace", "rtl_trace_late", late_file, late_rules(unit))
+    if specs:
+        engine.bridge.apply("rtl_trace", "rtl_trace_rules", specs)
+
+    def report() -> str:
+        text = engine.bridge.apply("rtl_trace", "rtl_trace_report") if specs else ""
+        engine.bridge.apply("rtl_trace", "rtl_trace_end")
+        return text
+    return report
 
 
 DEFAULT_MAX_STEPS = 1_000_000

@@ -95,3 +95,58 @@ class Explainer:
 
     def why_not(self, pattern: str) -> str:
         return self.engine.bridge.apply("rtl_trace", "rtl_trace_why_not", self.rules, pattern)
+
+
+# ---- run --trace RULE and --late FILE ------------------------------------------------------
+
+
+def _step_description(step, side: str) -> str:
+    from ..frontend.writer import write_term
+
+    mine, other = (step.left, step.right) if side == "left" else (step.right, step.left)
+    text = write_term(mine.term, 999)
+    if other is None:
+        return f"({text})"
+    return f"({text} waiting for {write_term(other.term, 999)})"
+
+
+def trace_specs(unit, labels: Iterable[str]) -> list:
+    """What rtl_trace_rules/2 watches for the rules `labels`: per rule its head and the stores of
+    its partial matches, each with a description. Raises KeyError for an unknown label."""
+    rules = {b.rule_id: b for b in unit.rules}
+    generated = {g.rule_id: g for g in unit.generated}
+    specs = []
+    for label in labels:
+        if label not in rules:
+            raise KeyError(label)
+        binary, code = rules[label], generated[label]
+        steps = {step.name: step for step in binary.steps}
+        stores = []
+        for name, arity, _window in code.stores:
+            step_name, _, side = name.rpartition("_")
+            step = steps.get(step_name)
+            number = step_name.rsplit("_", 1)[-1]
+            side_name = {"lefts": "left", "rights": "right"}.get(side)
+            what = (f"step {number} {side_name} {_step_description(step, side_name)}" if step and side_name
+                    else f"step {number} {side}")
+            stores.append([name, arity, "live", what])
+        for live, arity, kept_a, kept_b, _order in code.kept:
+            what = next((s[3] for s in stores if s[0] == live), live)
+            stores += [[kept_a, arity, "kept", what], [kept_b, arity, "kept", what]]
+        head = binary.rule.head
+        name = head.name if isinstance(head, (Atom, Compound)) else "null"
+        specs.append([label, name, head.arity if isinstance(head, Compound) else 0, stores])
+    return specs
+
+
+def late_rules(unit) -> list:
+    """Per rule: its label, the window of its pattern (-1 for none) and its event atoms, for
+    rtl_trace_late/3."""
+    from ..frontend.program import walk_pattern
+
+    found = []
+    for binary in unit.rules:
+        windows = [p.length for p in walk_pattern(binary.rule.pattern) if isinstance(p, Window)]
+        atoms = sorted({to_prolog(p.term) for p in walk_pattern(binary.rule.pattern) if isinstance(p, EventAtom)})
+        found.append([binary.rule_id, max(windows) if windows else -1, atoms])
+    return found

@@ -89,7 +89,7 @@ class RunStopped(Exception):
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
                    consumer_dir: Optional[str] = None, drop_pending: bool = False,
                    first_output: Sequence = (), allow_control: bool = False, strict: bool = False,
-                   progress: Optional[bool] = None) -> int:
+                   progress: Optional[bool] = None, report=None) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout, None to drop it). Lines not processed go to stderr as
     `FILE:LINE: rejected: REASON` (malformed) or `FILE:LINE: error: REASON` (a refused control
@@ -102,7 +102,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     first line not processed ends the run (status 1) after everything produced before it
     is written; a halt called by program code does so always. `progress`: True shows a
     progress display on stderr, False never, None (default) on a terminal for inputs over
-    a few MB. Returns the exit status."""
+    a few MB. `report()`, if given, returns text printed on stderr before the summary (the
+    counts of `--trace`). Returns the exit status."""
     started = time.perf_counter()
     name = "<stdin>" if events == "-" else events
     if events == "-":
@@ -167,6 +168,10 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         if consumers is not None:
             consumers.close()
         engine.bridge.once("retalis:rtl_close_action_output")
+    if report is not None:
+        text = report()
+        if text:
+            print(text, file=sys.stderr)
     print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
     return status
 
