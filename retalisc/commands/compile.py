@@ -169,8 +169,8 @@ Examples:
               help="Show a progress line on standard error (default: on a terminal, for inputs over 5 MB).")
 @click.option("--trace", "traces", multiple=True, metavar="RULE",
               help="Write to standard error every partial match of rule RULE (a label, r1 for the first "
-                   "rule) created, consumed, expired, dropped, replaced or retracted, and at the end its "
-                   "detections and counts. Repeatable.")
+                   "rule; 'all' for every rule) created, consumed, expired, dropped, replaced or retracted, "
+                   "and at the end its detections and counts. Repeatable.")
 @click.option("--late", "late_file", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Write every input event that arrives more than --max-delay behind the latest one to FILE "
                    "(JSON Lines: its lateness and the rules whose partners it may have missed).")
@@ -236,6 +236,8 @@ def _start_tracing(engine, unit, traces, late_file):
     from ..driver.explain import late_rules, trace_specs
 
     labels = list(dict.fromkeys(traces))
+    if "all" in labels:
+        labels = [b.rule_id for b in unit.rules]
     try:
         specs = trace_specs(unit, labels) if labels else []
     except KeyError as error:
