@@ -16,7 +16,6 @@ prolog_runtime/rtl_time.pl), the one the file reader uses.
 from __future__ import annotations
 
 import datetime as _dt
-import math
 from dataclasses import dataclass
 from typing import Any, List, Sequence, Tuple, Union
 

@@ -30,9 +30,9 @@ from dataclasses import dataclass
 from typing import Iterable, List, Optional, Set
 
 from ..frontend.errors import render_at
-from ..frontend.program import (Aggregate, Binary, Check, Directive, EventAtom, EventRule, Negation, Pattern,
+from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
                                 StaticClause, Where, Window, pattern_conditions, pattern_text, walk_pattern)
-from ..frontend.terms import Atom, Compound, Span, Term, indicator, span_of, variables, walk
+from ..frontend.terms import Atom, Compound, Span, indicator, span_of, variables, walk
 from ..frontend.writer import write_term
 from .loadable import _goals, _loads_code, _program_predicates
 from .unit import Unit
