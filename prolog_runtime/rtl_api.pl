@@ -20,7 +20,8 @@
             rtl_api_stats/1,            % -Text
             rtl_api_summary/1,          % -Text
             rtl_api_store_size/1,       % -Size
-            rtl_api_clock/1             % -Clock
+            rtl_api_clock/1,            % -Clock
+            rtl_api_term_data/2         % +Text, -Json
           ]).
 
 /** <module> The entry points of the Python Engine: values as data, never as program text
@@ -50,6 +51,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_sandbox).
 :- use_module(rtl_text).
 :- use_module(rtl_seen).
+:- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_time, [rtl_input_interval/6]).
 :- use_module(rtl_horizon, [rtl_take_warnings/1]).
 
@@ -389,6 +391,55 @@ message_line(Error, Text) :-
         atomic_list_concat(Parts, " ", Text)
     ;   format(string(Text), "~q", [Error])
     ).
+
+%!  rtl_api_term_data(+Text:string, -Json:string) is det.
+%
+%   The term written in Text (an output event, as writeq/1 wrote it) as JSON data, read by
+%   SWI-Prolog itself so that whatever writeq/1 writes reads back: an integer or a finite
+%   float is a number; an atom is `["a", Name]`, a string `["s", Text]`, a list `["l",
+%   Items]`, a compound `["c", Name, Args]`, a variable `["v", Name]`, and a float that is not
+%   finite `["f", Text]`. Read as data: nothing in Text runs.
+
+rtl_api_term_data(Text, Json) :-
+    must_be(text, Text),
+    term_string(Term, Text, [variable_names(Names)]),
+    maplist(name_variable, Names),
+    with_output_to(string(Json), term_json(Term)).
+
+name_variable(Name = '$rtl_var'(Name)).
+
+term_json(T) :-
+    (   T = '$rtl_var'(Name)
+    ->  json_tagged(v, Name)
+    ;   integer(T)
+    ->  format("~d", [T])
+    ;   float(T)
+    ->  (   T =:= T, abs(T) =\= inf
+        ->  format("~w", [T])
+        ;   format(string(F), "~w", [T]), json_tagged(f, F)
+        )
+    ;   string(T)
+    ->  json_tagged(s, T)
+    ;   atom(T)
+    ->  json_tagged(a, T)
+    ;   is_list(T)
+    ->  write("[\"l\", ["), json_items(T), write("]]")
+    ;   compound_name_arguments(T, Name, Args),
+        write("[\"c\", "), json_text(Name), write(", ["), json_items(Args), write("]]")
+    ).
+
+json_items([]).
+json_items([X|Xs]) :-
+    term_json(X),
+    forall(member(Y, Xs), ( write(", "), term_json(Y) )).
+
+json_tagged(Tag, Text) :-
+    format("[\"~w\", ", [Tag]), json_text(Text), write("]").
+
+json_text(Text) :-
+    format(string(S), "~w", [Text]),
+    rtl_json_string_escape(S, Escaped),
+    format("\"~s\"", [Escaped]).
 
 :- multifile prolog:error_message//1.
 

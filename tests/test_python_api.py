@@ -55,8 +55,10 @@ def test_retraction_and_consumer_as_attributes(engine):
 
 # ---- terms as data: a property test with the generated value as oracle ------------------
 
+# Unassigned and private-use code points are left out: SWI-Prolog's writeq/1 escapes them as
+# \xHEX\ and cannot read all of them back.
 ATOMS = st.one_of(st.from_regex(r"[a-z][a-zA-Z0-9_]{0,6}", fullmatch=True),
-                  st.text(st.characters(codec="utf-8", exclude_categories=("Cs", "Cc")), min_size=1, max_size=5))
+                  st.text(st.characters(codec="utf-8", exclude_categories=("Cs", "Cc", "Cn", "Co")), min_size=1, max_size=5))
 NUMBERS = st.one_of(st.integers(-10 ** 20, 10 ** 20),
                     st.floats(allow_nan=False, allow_infinity=False, width=64))
 
@@ -91,6 +93,13 @@ def test_output_values_are_the_values_fed(engine, value):
     got = out[0].args[0]
     assert got == value or (isinstance(value, float) and isinstance(got, float) and math.isclose(got, value))
     engine.feed(f"echo({prolog_text(value)})", 1, op="retract")
+
+
+def test_symbol_characters_writeq_leaves_unquoted(engine):
+    # writeq/1 writes out('¡') as out(¡): the term is read back by SWI-Prolog itself
+    [out] = [o for o in engine.feed("echo('¡')", 1) if o.consumer is None]
+    assert out.event == "out(¡)" and out.args == ("¡",)
+    engine.feed("echo('¡')", 1, op="retract")
 
 
 def test_parse_term_deep_and_bad():

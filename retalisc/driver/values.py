@@ -16,15 +16,13 @@ prolog_runtime/rtl_time.pl), the one the file reader uses.
 from __future__ import annotations
 
 import datetime as _dt
+import json
 from dataclasses import dataclass
 from typing import Any, List, Sequence, Tuple, Union
 
-from ..frontend import terms as _terms
 from ..frontend.depth import with_room_for_depth
-from ..frontend.errors import RetalisError
-from ..frontend.parser import read_term
 
-__all__ = ["Term", "Variable", "Value", "Time", "term_value", "parse_term", "time_value"]
+__all__ = ["Term", "Variable", "Value", "Time", "data_value", "parse_term", "time_value"]
 
 
 @dataclass(frozen=True)
@@ -55,53 +53,52 @@ Value = Union[str, int, float, list, Term, Variable]
 Time = Union[int, float, Sequence[int], _dt.datetime, Any]
 
 
-def term_value(term: _terms.Term) -> Value:
-    """The Python value of a term read by the frontend (iteratively: lists and terms may be
-    deep)."""
-    result: List[Value] = []
-    # a stack of (term, place to put its value); compounds are finished after their arguments
-    stack: List[Tuple[Any, Any]] = [("visit", term, result, 0)]
-    result.append(None)
-    while stack:
-        action, t, into, index = stack.pop()
-        if action == "build-list":
-            items, tail = t
-            into[index] = list(items)
-            continue
-        if action == "build-term":
-            name, args = t
-            into[index] = Term(name, tuple(args))
-            continue
-        if isinstance(t, _terms.Atom):
-            into[index] = [] if t.name == "[]" else t.name
-        elif isinstance(t, _terms.Number):
-            into[index] = t.value
-        elif isinstance(t, _terms.String):
-            into[index] = t.text
-        elif isinstance(t, _terms.Var):
-            into[index] = Variable(t.name)
-        else:
-            items = _terms.list_items(t)
-            if items is not None:
-                values: List[Value] = [None] * len(items)
-                stack.append(("build-list", (values, None), into, index))
-                for i, item in enumerate(items):
-                    stack.append(("visit", item, values, i))
-            else:
-                args: List[Value] = [None] * t.arity
-                stack.append(("build-term", (t.name, args), into, index))
-                for i, arg in enumerate(t.args):
-                    stack.append(("visit", arg, args, i))
-    return result[0]
+_runtime_loaded = False
 
 
 def parse_term(text: str) -> Value:
-    """The Python value of a term written as Prolog text (as output lines carry it)."""
+    """The Python value of a term written as Prolog text (as output lines carry it). The text
+    is read by SWI-Prolog (`rtl_api_term_data/2`), so whatever the runtime writes reads back."""
+    from .bridge import Bridge, PrologError
+
+    global _runtime_loaded
+    bridge = Bridge()
+    if not _runtime_loaded:
+        if not bridge.once("current_predicate(rtl_api:rtl_api_term_data/2)"):    # constant text
+            from ..runtime_location import runtime_dir
+
+            bridge.consult(str(runtime_dir() / "retalis.pl"))
+        _runtime_loaded = True
     try:
-        return term_value(with_room_for_depth(lambda: read_term(text.strip() + " .", "<output>")))
-    except RetalisError as error:
+        data = bridge.apply("rtl_api", "rtl_api_term_data", text)
+    except PrologError as error:
         shown = text if len(text) <= 80 else text[:77] + "..."
-        raise ValueError(f"not a Prolog term: {shown!r} ({error.message})") from None
+        message = " ".join(str(error).split())
+        raise ValueError(f"not a Prolog term: {shown!r} ({message})") from None
+    try:
+        return data_value(json.loads(data))
+    except RecursionError:                  # a deep term (input terms nest up to 1,000 levels)
+        return with_room_for_depth(lambda: data_value(json.loads(data)))
+
+
+def data_value(data) -> Value:
+    """The Python value of the JSON form of a term (see `rtl_api_term_data/2`)."""
+    if not isinstance(data, list):
+        return data                                     # a number
+    tag = data[0]
+    if tag == "a":
+        return [] if data[1] == "[]" else data[1]
+    if tag == "s":
+        return data[1]
+    if tag == "l":
+        return [data_value(item) for item in data[1]]
+    if tag == "c":
+        return Term(data[1], tuple(data_value(arg) for arg in data[2]))
+    if tag == "v":
+        return Variable(data[1])
+    if tag == "f":
+        return float(data[1].replace("1.0Inf", "inf").replace("1.5NaN", "nan"))
+    raise ValueError(f"unknown term data {data!r}")
 
 
 _EPOCH = _dt.datetime(1970, 1, 1, tzinfo=_dt.timezone.utc)
