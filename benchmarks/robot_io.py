@@ -1,4 +1,4 @@
-"""Robot data in: ROS message conversion and bag replay (issue 15; thesis 5.1).
+"""Robot data in: ROS message conversion and bag replay (thesis 5.1).
 
 (a) conversion: messages per second of CPU from a decoded ROS 2 message to event text, with
     the converter generated per type and with the generic walk over the type definitions,

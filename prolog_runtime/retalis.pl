@@ -223,9 +223,21 @@ run_lines(Line, In, Name, N, Options) :-
     print_outcome(Name, N, Outcome),
     print_warnings(Name, N),
     stop_if_needed(Outcome, Options),
+    (   Name == '<stdin>' -> flush_if_idle(In) ; true ),
     read_line_to_string(In, Next),
     N1 is N + 1,
     run_lines(Next, In, Name, N1, Options).
+
+%   flush_if_idle(+In): on a live input (standard input: a pipe, a socket, a terminal), write
+%   the output produced so far as soon as no more input is waiting, so that each event's
+%   output leaves when it is processed; while input is waiting, output is batched.
+
+flush_if_idle(In) :-
+    (   catch(wait_for_input([In], Ready, 0), _, Ready = [])
+    ->  true
+    ;   Ready = []
+    ),
+    (   Ready == [] -> flush_output(user_output) ; true ).
 
 print_outcome(Name, N, Outcome) :-
     (   outcome_message(Outcome, Kind, Reason)

@@ -21,7 +21,8 @@
             rtl_api_summary/1,          % -Text
             rtl_api_store_size/1,       % -Size
             rtl_api_clock/1,            % -Clock
-            rtl_api_advance_clock/2     % +Time, -Output
+            rtl_api_advance_clock/2,    % +Time, -Output
+            rtl_api_term_data/2         % +Text, -Json
           ]).
 
 /** <module> The entry points of the Python Engine: values as data, never as program text
@@ -51,6 +52,8 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_sandbox).
 :- use_module(rtl_text).
 :- use_module(rtl_seen).
+:- use_module(rtl_io, [rtl_json_string_escape/2]).
+:- use_module(rtl_time, [rtl_input_interval/6]).
 :- use_module(rtl_horizon, [rtl_take_warnings/1]).
 
 :- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
@@ -95,9 +98,12 @@ rtl_api_set_flag(NameText, ValueText, "") :-
 
 %!  rtl_api_feed_events(+Items:list, -Output:string) is det.
 %
-%   Items are `[Op, EventText, Start, End]` lists: Op `"add"` or `"retract"`, Start and End
-%   finite numbers with Start =< End. The whole batch is read first: a bad item raises an
-%   error naming it and nothing is processed.
+%   Items are `[Op, EventText, Start, End]` lists: Op `"add"` or `"retract"`; Start and End
+%   times as an event file gives them (a number of seconds or `[Secs, NSecs]`), End `""` when
+%   the event has one time (a file's `"t"`). Times are checked by rtl_input_interval/6, the
+%   check of the file reader, so a time is refused here exactly when a file line with it is,
+%   for the same reason (`error(invalid_time(Reason), _)`). The whole batch is read first: a
+%   bad item raises an error naming it and nothing is processed.
 
 rtl_api_feed_events(Items, Output) :-
     must_be(list, Items),
@@ -121,16 +127,18 @@ read_item(Item, event(Op, Event, Start, End), I, I1) :-
     catch(item_event(Item, Op, Event, Start, End), Error,
           throw(error(bad_item(I, Error), _))).
 
-item_event([OpText, Text, Start, End], Op, Event, Start, End) :- !,
+item_event([OpText, Text, Start0, End0], Op, Event, Start, End) :- !,
     must_be(text, OpText),
     atom_string(Op, OpText),
     must_be(oneof([add, retract]), Op),
     rtl_read_event(Text, Event),
-    finite_time(Start),
-    finite_time(End),
-    (   Start =< End
+    (   End0 == ""
+    ->  rtl_input_interval(Start0, _, _, Start, End, Problem)
+    ;   rtl_input_interval(_, Start0, End0, Start, End, Problem)
+    ),
+    (   var(Problem)
     ->  true
-    ;   domain_error(interval_with_start_before_end, [Start, End])
+    ;   throw(error(invalid_time(Problem), _))
     ).
 item_event(Item, _, _, _, _) :-
     type_error(event_item, Item).
@@ -394,8 +402,59 @@ message_line(Error, Text) :-
     ;   format(string(Text), "~q", [Error])
     ).
 
+%!  rtl_api_term_data(+Text:string, -Json:string) is det.
+%
+%   The term written in Text (an output event, as writeq/1 wrote it) as JSON data, read by
+%   SWI-Prolog itself so that whatever writeq/1 writes reads back: an integer or a finite
+%   float is a number; an atom is `["a", Name]`, a string `["s", Text]`, a list `["l",
+%   Items]`, a compound `["c", Name, Args]`, a variable `["v", Name]`, and a float that is not
+%   finite `["f", Text]`. Read as data: nothing in Text runs.
+
+rtl_api_term_data(Text, Json) :-
+    must_be(text, Text),
+    term_string(Term, Text, [variable_names(Names)]),
+    maplist(name_variable, Names),
+    with_output_to(string(Json), term_json(Term)).
+
+name_variable(Name = '$rtl_var'(Name)).
+
+term_json(T) :-
+    (   T = '$rtl_var'(Name)
+    ->  json_tagged(v, Name)
+    ;   integer(T)
+    ->  format("~d", [T])
+    ;   float(T)
+    ->  (   T =:= T, abs(T) =\= inf
+        ->  format("~w", [T])
+        ;   format(string(F), "~w", [T]), json_tagged(f, F)
+        )
+    ;   string(T)
+    ->  json_tagged(s, T)
+    ;   atom(T)
+    ->  json_tagged(a, T)
+    ;   is_list(T)
+    ->  write("[\"l\", ["), json_items(T), write("]]")
+    ;   compound_name_arguments(T, Name, Args),
+        write("[\"c\", "), json_text(Name), write(", ["), json_items(Args), write("]]")
+    ).
+
+json_items([]).
+json_items([X|Xs]) :-
+    term_json(X),
+    forall(member(Y, Xs), ( write(", "), term_json(Y) )).
+
+json_tagged(Tag, Text) :-
+    format("[\"~w\", ", [Tag]), json_text(Text), write("]").
+
+json_text(Text) :-
+    format(string(S), "~w", [Text]),
+    rtl_json_string_escape(S, Escaped),
+    format("\"~s\"", [Escaped]).
+
 :- multifile prolog:error_message//1.
 
+prolog:error_message(invalid_time(Reason)) -->
+    [ '~s'-[Reason] ].
 prolog:error_message(bad_item(I, Error)) -->
     { message_line(Error, Text) },
     [ 'event ~w of the batch: ~w'-[I, Text] ].

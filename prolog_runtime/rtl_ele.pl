@@ -393,7 +393,7 @@ rtl_output_to(Sink) :-
 
 %!  rtl_emit(+Event, +Start, +End, +Consumer, +Op) is det.
 %
-%   Deliver one output line (SPEC section 11 format).
+%   Deliver one output line (the JSON Lines format of docs/runtime.md, "Output").
 
 rtl_emit(Event, Start, End, Consumer, Op) :-
     rtl_event_json(Event, Start, End, Consumer, Op, Line),

@@ -7,7 +7,7 @@
             rtl_use_fast_reader/1        % +Bool
           ]).
 
-/** <module> Event JSON Lines in and out (SPEC section 11)
+/** <module> Event JSON Lines in and out (docs/runtime.md, "Event input" and "Output")
 
 Input, one object per line: `"event"` is a ground term in Prolog syntax (text); the time
 is `"t"` (an atomic event) or `"start"` and `"end"`; `"op": "retract"` deletes a previously
@@ -283,7 +283,7 @@ key_slot("rule", 6).
 
 record_event(R, MaxDepth, Parsed) :-
     R = f(Text, T, S, E, Op, Rule),
-    interval(T, S, E, Start, End, TimeProblem),
+    rtl_input_interval(T, S, E, Start, End, TimeProblem),
     (   nonvar(Op), rule_change(Op, Change)
     ->  (   string(Rule)
         ->  Parsed = rule(Change, Rule)
@@ -433,48 +433,6 @@ list_tail_within(T, Left) :-
         list_tail_within(T1, Left)
     ;   depth_within(T, Left)
     ).
-
-%   interval(?T, ?S, ?E, -Start, -End, -Problem) is det.
-%
-%   Start and End (seconds) of the time fields "t", "start", "end" (unbound when absent);
-%   Problem is bound to a string saying why they do not give a valid time.
-
-interval(T, S, E, Start, End, Problem) :-
-    (   nonvar(T)
-    ->  (   ( nonvar(S) ; nonvar(E) )
-        ->  Problem = "give either \"t\" or \"start\" and \"end\", not both"
-        ;   time_problem("t", T, Problem)
-        ->  true
-        ;   time_seconds(T, Start), End = Start
-        )
-    ;   nonvar(S), nonvar(E)
-    ->  (   time_problem("start", S, Problem)
-        ->  true
-        ;   time_problem("end", E, Problem)
-        ->  true
-        ;   time_seconds(S, Start), time_seconds(E, End),
-            (   Start > End -> Problem = "\"start\" is after \"end\"" ; true )
-        )
-    ;   Problem = "missing time: give \"t\", or \"start\" and \"end\""
-    ).
-
-%   time_problem(+Key, +Value, -Reason) is semidet.
-%
-%   Value (of field Key) is not a valid input time; Reason says why.
-
-time_problem(Key, T, Reason) :-
-    (   integer(T)
-    ->  fail
-    ;   float(T), T =:= T, abs(T) =\= inf
-    ->  fail
-    ;   T = [Secs, NSecs], integer(Secs), integer(NSecs)
-    ->  \+ between(0, 999999999, NSecs),
-        format(string(Reason), "\"~s\": nanoseconds must be in [0, 1e9), not ~w", [Key, NSecs])
-    ;   format(string(Reason), "\"~s\" must be a finite number of seconds or [secs, nsecs]", [Key])
-    ).
-
-time_seconds(T, Seconds) :-
-    rtl_time_seconds(T, Seconds).
 
 %!  rtl_event_json(+Event, +Start, +End, +Consumer, +Op, -Json:string) is det.
 %

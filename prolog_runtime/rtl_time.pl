@@ -1,6 +1,7 @@
 :- module(rtl_time,
           [ rtl_time_seconds/2,          % +TimeIn, -Seconds
-            rtl_interval_seconds/3       % +IntervalIn, -Start, -End
+            rtl_interval_seconds/3,      % +IntervalIn, -Start, -End
+            rtl_input_interval/6         % ?T, ?Start, ?End, -StartSec, -EndSec, -Problem
           ]).
 
 /** <module> Time stamps at the edges of Retalis
@@ -45,3 +46,46 @@ rtl_interval_seconds([T1, T2], Start, End) :-
     rtl_time_seconds(T2, End).
 rtl_interval_seconds(T, Start, Start) :-
     rtl_time_seconds(T, Start).
+
+%!  rtl_input_interval(?T, ?S, ?E, -Start, -End, -Problem) is det.
+%
+%   The time of an input event from its fields "t", "start" and "end" (unbound when absent):
+%   Start and End in seconds, or Problem bound to a string saying why they do not give a
+%   valid time. A time is a finite number of seconds or a ROS stamp `[Secs, NSecs]` with
+%   NSecs in [0, 1e9). The one check of input times: event files (rtl_io.pl) and the Python
+%   Engine (rtl_api.pl) both use it, so both accept and refuse the same times, with the same
+%   reasons.
+
+rtl_input_interval(T, S, E, Start, End, Problem) :-
+    (   nonvar(T)
+    ->  (   ( nonvar(S) ; nonvar(E) )
+        ->  Problem = "give either \"t\" or \"start\" and \"end\", not both"
+        ;   time_problem("t", T, Problem)
+        ->  true
+        ;   rtl_time_seconds(T, Start), End = Start
+        )
+    ;   nonvar(S), nonvar(E)
+    ->  (   time_problem("start", S, Problem)
+        ->  true
+        ;   time_problem("end", E, Problem)
+        ->  true
+        ;   rtl_time_seconds(S, Start), rtl_time_seconds(E, End),
+            (   Start > End -> Problem = "\"start\" is after \"end\"" ; true )
+        )
+    ;   Problem = "missing time: give \"t\", or \"start\" and \"end\""
+    ).
+
+%   time_problem(+Key, +Value, -Reason) is semidet.
+%
+%   Value (of field Key) is not a valid input time; Reason says why.
+
+time_problem(Key, T, Reason) :-
+    (   integer(T)
+    ->  fail
+    ;   float(T), T =:= T, abs(T) =\= inf
+    ->  fail
+    ;   T = [Secs, NSecs], integer(Secs), integer(NSecs)
+    ->  \+ between(0, 999999999, NSecs),
+        format(string(Reason), "\"~s\": nanoseconds must be in [0, 1e9), not ~w", [Key, NSecs])
+    ;   format(string(Reason), "\"~s\" must be a finite number of seconds or [secs, nsecs]", [Key])
+    ).

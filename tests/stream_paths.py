@@ -1,4 +1,4 @@
-"""Running one program over one event file on both paths users have (SPEC section 11):
+"""Running one program over one event file on both paths users have:
 `retalisc run PROGRAM --events EVENTS [OPTIONS]` (the Python driver) and
 `retalisc compile PROGRAM -o OUT.pl` then `swipl OUT.pl [OPTIONS] EVENTS` (no Python).
 

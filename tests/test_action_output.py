@@ -1,4 +1,4 @@
-"""Standard output carries only JSON Lines (issue 12 item 7): text that actions, conditions and
+"""Standard output carries only JSON Lines: text that actions, conditions and
 static rules print goes to standard error, or to the file named by `--action-output`."""
 import pytest
 

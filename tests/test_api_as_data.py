@@ -1,5 +1,5 @@
 """The Python API passes values to Prolog as data: no text handed to an Engine method runs as
-code (issue 12, item 1). Each test tries to smuggle a goal (`shell('touch MARKER')`, `halt`)
+code. Each test tries to smuggle a goal (`shell('touch MARKER')`, `halt`)
 through one argument; the marker file must never appear and the engine must stay usable."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The command line as users script it (SPEC section 11): outputs, exit codes, messages."""
+"""The command line as users script it : outputs, exit codes, messages."""
 import json
 import subprocess
 import sys

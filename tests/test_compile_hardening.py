@@ -1,4 +1,4 @@
-"""Everything `check` accepts compiles, loads and runs (issue 12, item 4), and the command line
+"""Everything `check` accepts compiles, loads and runs, and the command line
 fails cleanly (item 5).
 
 Each program `check` used to accept although SWI-Prolog could not load what `compile` made of it,

@@ -1,5 +1,5 @@
 """Control lines (`add_rule`, `delete_rule`) in an event stream are refused unless the run
-allows them (issue 12 item 1, SPEC section 13): event files are data."""
+allows them: event files are data."""
 import pytest
 
 from retalisc.driver.engine import Engine

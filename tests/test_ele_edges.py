@@ -1,4 +1,4 @@
-"""ELE at the edges (issue 20): partial matches are the events themselves (`_` is not a
+"""ELE at the edges: partial matches are the events themselves (`_` is not a
 wildcard that merges different events), retractions inside the retraction horizon are exact
 for every operator, retractions outside it are reported, and late blockers take back what
 they block while it is inside the horizon."""
@@ -34,7 +34,7 @@ ISSUE_STREAM = [("a(1, 10)", 1), ("a(1, 20)", 2), ("b(1)", 3), ("b(1)", 4)]
 
 @pytest.mark.parametrize("program", [RECENT_ANONYMOUS, RECENT_NAMED], ids=["anonymous", "named"])
 def test_recent_does_not_take_different_events_for_twins(program):
-    """The issue's minimal case: a(1,10) and a(1,20) are different events, so neither replaces
+    """The minimal case: a(1,10) and a(1,20) are different events, so neither replaces
     the other; b(1)@3 takes the newest, b(1)@4 the other (as ETALIS derives)."""
     engine = fresh(Engine.from_source(program, "twins.rtl"))
     assert outputs(engine, ISSUE_STREAM) == [("c(1)", 2, 3, "add"), ("c(1)", 1, 4, "add")]
@@ -105,7 +105,7 @@ def issue_engine():
 
 @pytest.mark.parametrize("k", list(range(1, 10)) + [20, 25])
 def test_a_retraction_inside_the_horizon_is_exact_and_one_outside_is_reported(issue_engine, k):
-    """The issue's case: window 5 + delay bound 1 = horizon 6. a(1)@1 is deleted when the
+    """A case: window 5 + delay bound 1 = horizon 6. a(1)@1 is deleted when the
     clock is 2 + k: exact while 1 >= 2 + k - 6 (k <= 5), reported on its line after that."""
     engine = fresh(issue_engine, "1")
     lines = issue_lines(k)
@@ -340,7 +340,7 @@ def test_deleting_a_blocker_inside_the_horizon_derives_again_what_it_blocked(neg
 
 
 def test_a_blocker_later_than_the_delay_bound_takes_back_what_it_blocks(negation_engine):
-    """The issue's case (part 3): delay bound 2, horizon 7; c(1)@3 arrives 6 s late."""
+    """A case with a late blocker: delay bound 2, horizon 7; c(1)@3 arrives 6 s late."""
     engine = fresh(negation_engine, "2")
     assert outputs(engine, [("a(1)", 0), ("b(1)", 5), ("z", 9)]) == [("f(1)", 0, 0, "add"), ("n(1)", 0, 5, "add")]
     assert outputs(engine, [("c(1)", 3)]) == [("n(1)", 0, 5, "retract")]

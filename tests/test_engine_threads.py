@@ -1,4 +1,4 @@
-"""An Engine works from any thread (issue 12, item 2): every call runs in the bridge's one
+"""An Engine works from any thread: every call runs in the bridge's one
 Prolog thread, so the runtime's per-thread state (clock, output buffer, program) is the same
 whoever calls. Concurrent feeding gives what one thread feeding the same events gives, and a
 bad value leaves the engine usable."""

@@ -1,4 +1,4 @@
-"""Differential test against the original ETALIS engine (issue 20, part 4).
+"""Differential test against the original ETALIS engine.
 
 Seeded random rules built from `seq`, `and`, `or` and `where`, with named and anonymous
 variables, over events with one or two keys, run by ETALIS (`../shared/peers/etalis`, in its

@@ -1,4 +1,4 @@
-"""Event input is validated strictly (issue 12 item 3, SPEC section 13): a bad line is
+"""Event input is validated strictly: a bad line is
 rejected with its location and reason, counted and skipped, on both paths; UTF-8 with a
 byte-order mark and non-ASCII atoms are accepted in programs and events."""
 import json

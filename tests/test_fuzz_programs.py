@@ -1,4 +1,4 @@
-"""Generated programs (issue 12, item 4): whatever the compiler is given, it either rejects the
+"""Generated programs: whatever the compiler is given, it either rejects the
 program with a located error or compiles it into Prolog that loads and runs.
 
 A few hundred programs are mutated from the examples, the golden tests and a few seed programs
@@ -312,10 +312,10 @@ def test_generated_programs_are_rejected_with_a_location_or_load_and_run(tmp_pat
             source = Path(unit.program.file).read_text()
             assert not _load_problems(proc.stderr, [out]), (source, proc.stderr)
             # (stdout is not parsed: text that `do write(...)` actions print goes there until
-            # issue 12, item 7, sends it to standard error)
+            # the run sends it to standard error)
             if proc.returncode == 0:
                 assert re.search(r"^retalis: [\d,]+ events", proc.stderr, re.M), (source, proc.stderr)
             else:
-                # until the runtime reports a failing event and goes on (issue 12, item 2), an
+                # until the runtime reports a failing event and goes on, an
                 # error raised by the program's own goals on an event may end the run
                 assert proc.returncode == 1 and "ERROR" in proc.stderr, (source, proc.returncode, proc.stderr)

@@ -1,4 +1,4 @@
-"""retalisc installs like a package (issue 12, item 6): the wheel holds every module and the
+"""retalisc installs like a package: the wheel holds every module and the
 Prolog runtime, and installed into a new virtualenv it works from a directory that has nothing to
 do with the repository: `python -m retalisc run`, `retalisc compile` + `swipl OUT.pl EVENTS`, and
 `ins_event_rule/1` in that standalone program.

@@ -1,4 +1,4 @@
-"""`retalisc run` progress display and its one-line closing summary (issue 12 item 5)."""
+"""`retalisc run` progress display and its one-line closing summary."""
 import io
 import re
 

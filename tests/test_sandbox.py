@@ -1,4 +1,4 @@
-"""Code from outside the program file passes the sandbox (issue 12, item 1): rules added at
+"""Code from outside the program file passes the sandbox: rules added at
 run time (Python, control lines, ins_event_rule), queries, subscription and memory
 conditions. The program file itself is trusted."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""One failing event is reported and the stream goes on (issue 12 item 2, SPEC section 13):
+"""One failing event is reported and the stream goes on:
 errors raised while processing an event, `--strict`, `halt` from program code, and
 derivations that never end (the step limit). Both paths: `retalisc run` and `swipl OUT.pl`."""
 import json

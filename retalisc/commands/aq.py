@@ -2,7 +2,7 @@
 
 Compiles the definite program with the chosen transformation and runs the script in a plain
 `swipl` process (`aq_script_main/1` of `prolog_runtime/rtl_aq.pl`), printing one JSON object
-per notification on standard output (SPEC section 11).
+per notification on standard output (docs/active_queries.md).
 """
 from __future__ import annotations
 

@@ -19,7 +19,9 @@ def report_program_error(error: RetalisError) -> None:
     sys.exit(2)
 
 
-def compile_or_exit(program: str, **kwargs):
+def compile_or_exit(program: str, werror: bool = False, **kwargs):
+    """Compile `program` or exit with status 2 on errors; print the warnings on standard error.
+    With `werror`, the warnings are errors: printed as such, and exit status 2."""
     try:
         result = compile_file(program, **kwargs)
     except RetalisError as error:
@@ -27,9 +29,27 @@ def compile_or_exit(program: str, **kwargs):
     except UnicodeDecodeError as error:
         click.echo(f"{program}: error: not a UTF-8 text file ({error.reason})", err=True)
         sys.exit(2)
+    if werror and result.warnings:
+        for warning in result.warnings:
+            click.echo(_as_error(warning), err=True)
+        count = len(result.warnings)
+        click.echo(f"{program}: {count} warning{'s' if count != 1 else ''} treated as error{'s' if count != 1 else ''} "
+                   "(--werror)", err=True)
+        sys.exit(2)
     for warning in result.warnings:
         click.echo(warning, err=True)
     return result
+
+
+def _as_error(warning: str) -> str:
+    """A warning's text with its `warning:` tag made `error:` (--werror)."""
+    head, sep, rest = warning.partition(": warning: ")
+    return f"{head}: error: {rest}" if sep else warning
+
+
+WERROR = click.option("--werror", is_flag=True,
+                      help="Treat warnings (traps such as a window on the last operand only, an undefined "
+                           "predicate in a condition) as errors: exit status 2.")
 
 
 @click.command("compile", epilog="""\b
@@ -48,7 +68,9 @@ Examples:
               help="Compile PROGRAM as a definite program for active queries with this transformation "
                    "(aq_register/2, aq_assert/1, ...; see docs/active_queries.md).")
 @click.option("--subsumption", is_flag=True, help="With --active-queries tabled: reuse tables by subsumption.")
-def compile_command(program: str, output: str, dump_after: str, active_queries: str, subsumption: bool) -> None:
+@WERROR
+def compile_command(program: str, output: str, dump_after: str, active_queries: str, subsumption: bool,
+                    werror: bool) -> None:
     """Compile PROGRAM (.rtl) to a SWI-Prolog module.
 
     Run the result with `swipl OUT.pl EVENTS.jsonl`: it prints the derived events as JSON Lines.
@@ -62,7 +84,7 @@ def compile_command(program: str, output: str, dump_after: str, active_queries: 
                                    f"{', '.join(pass_names(options))}")
         compile_or_exit(program, dump_after=dump_after, dump=click.echo, active_queries=options)
         return
-    result = compile_or_exit(program, output_name=Path(output).name if output else "PROGRAM.pl",
+    result = compile_or_exit(program, werror, output_name=Path(output).name if output else "PROGRAM.pl",
                              active_queries=options)
     if output:
         try:
@@ -77,14 +99,18 @@ def compile_command(program: str, output: str, dump_after: str, active_queries: 
 Example:
   retalisc check examples/fire_alarm/fire_alarm.rtl    # examples/fire_alarm/fire_alarm.rtl: ok (1 event rule)""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
-def check_command(program: str) -> None:
+@WERROR
+def check_command(program: str, werror: bool) -> None:
     """Check PROGRAM for errors without writing anything (exit status 2 on errors).
 
     It runs the whole compilation, as `retalisc compile` does, and discards the result: a
-    program `check` accepts compiles, and its Prolog loads."""
-    result = compile_or_exit(program)
+    program `check` accepts compiles, and its Prolog loads. Programs that compile but cannot
+    mean what they say get warnings (`file:line:col: warning: ...` with a hint)."""
+    result = compile_or_exit(program, werror)
     rules = len(result.unit.rules)
-    click.echo(f"{program}: ok ({rules} event rule{'s' if rules != 1 else ''})", err=True)
+    warnings = len(result.warnings)
+    noted = f", {warnings} warning{'s' if warnings != 1 else ''}" if warnings else ""
+    click.echo(f"{program}: ok ({rules} event rule{'s' if rules != 1 else ''}{noted})", err=True)
 
 
 @click.command("run", epilog="""\b
@@ -149,10 +175,18 @@ Examples:
                    "standard output carries only JSON Lines).")
 @click.option("--progress/--no-progress", default=None,
               help="Show a progress line on standard error (default: on a terminal, for inputs over 5 MB).")
+@click.option("--trace", "traces", multiple=True, metavar="RULE",
+              help="Write to standard error every partial match of rule RULE (a label, r1 for the first "
+                   "rule; 'all' for every rule) created, consumed, expired, dropped, replaced or retracted, "
+                   "and at the end its detections and counts. Repeatable.")
+@click.option("--late", "late_file", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Write every input event that arrives more than --max-delay behind the latest one to FILE "
+                   "(JSON Lines: its lateness and the rules whose partners it may have missed).")
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
                 flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, action_output, progress,
+                traces, late_file,
                 **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
 
@@ -161,16 +195,18 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
       retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
     """
     from ..driver.bridge import PrologError
-    from ..driver.engine import Engine
+    from ..driver.engine import Engine, _unique_module
     from ..driver.run import run_event_file, set_action_output
 
     if (events is None) == (bag["bag"] is None):
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
+    if bag["bag"] is not None and (traces or late_file):
+        raise click.UsageError("--trace and --late go with --events")
     if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
         raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
                                "--stamp, --typestore, --out-bag and --foxglove go with --bag")
     steps = _max_steps(max_steps)
-    result = compile_or_exit(program)
+    result = compile_or_exit(program, module=_unique_module(program))    # a second run in one process loads anew
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
     engine = Engine.from_compiled(result)
@@ -190,6 +226,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         engine.set_flag("retraction_horizon", repr(retraction_horizon))
     if flush_timers:
         engine.set_flag("flush_timers", "true")
+    report = _start_tracing(engine, result.unit, traces, late_file) if traces or late_file else None
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
     for request in memories:
@@ -202,8 +239,36 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
                                  drop_pending=drop_pending, first_output=posted))
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
                             drop_pending=drop_pending, first_output=posted, allow_control=allow_control,
-                            strict=strict, progress=progress, heartbeat=heartbeat)
+                            strict=strict, progress=progress, heartbeat=heartbeat, report=report)
     sys.exit(status)
+
+
+def _start_tracing(engine, unit, traces, late_file):
+    """`--trace RULE` and `--late FILE`: start the runtime's tracing (prolog_runtime/rtl_trace.pl);
+    returns what gives the report printed before the summary."""
+    from ..driver.explain import late_rules, trace_specs
+
+    labels = list(dict.fromkeys(traces))
+    if "all" in labels:
+        labels = [b.rule_id for b in unit.rules]
+    try:
+        specs = trace_specs(unit, labels) if labels else []
+    except KeyError as error:
+        known = ", ".join(b.rule_id for b in unit.rules)
+        raise click.BadParameter(f"no rule {error.args[0]!r} in the program (its rules: {known})",
+                                 param_hint="--trace") from None
+    engine.bridge.once("use_module(retalis_runtime(rtl_trace))")      # constant text
+    if late_file is not None:
+        output_file(late_file, "--late")
+        engine.bridge.apply("rtl_trace", "rtl_trace_late", late_file, late_rules(unit))
+    if specs:
+        engine.bridge.apply("rtl_trace", "rtl_trace_rules", specs)
+
+    def report() -> str:
+        text = engine.bridge.apply("rtl_trace", "rtl_trace_report") if specs else ""
+        engine.bridge.apply("rtl_trace", "rtl_trace_end")
+        return text
+    return report
 
 
 DEFAULT_MAX_STEPS = 1_000_000

@@ -21,15 +21,22 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import shutil
 import tempfile
 import threading
 from concurrent.futures import Future
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
-from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
+from types import TracebackType
+from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, module_name
 from .bridge import Bridge, PrologError
+from .values import Term, Time, Value, Variable, parse_term, time_value
+
+__all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", "PrologError", "Term",
+           "Variable", "Value", "Time"]
 
 Number = Union[int, float]
 
@@ -48,7 +55,11 @@ def _unique_module(program_name: str) -> str:
 class OutputEvent:
     """One output line: `event` is the term text (writeq), `consumer` is set for subscription
     deliveries, `op` is "add" or "retract"; or, with `op` "answer", the result of a synchronized
-    query (`query` holds its JSON object: query, at, status, answers, message)."""
+    query (`query` holds its JSON object: query, at, status, answers, message).
+
+    The term is also there as data: `term` is its Python value (`Term(name, args)`, or a `str`
+    for an atom), `name` and `args` its name and arguments (atoms as `str`, numbers, lists,
+    nested `Term`s), read from `event` the first time one of them is asked for."""
 
     event: str
     start: Number
@@ -57,6 +68,30 @@ class OutputEvent:
     op: str = "add"
     line: str = ""
     query: Optional[dict] = None     # op "answer": the result line of a synchronized query
+
+    @cached_property
+    def term(self) -> Value:
+        """The event term as a Python value (see `retalisc.driver.values`)."""
+        if self.op == "answer":
+            raise AttributeError("a query answer has no event term; see `query`")
+        return parse_term(self.event)
+
+    @property
+    def name(self) -> str:
+        """The event's name: `fire_alarm` for `fire_alarm(smoke_1, temp_1)`."""
+        term = self.term
+        return term.name if isinstance(term, Term) else str(term)
+
+    @property
+    def args(self) -> Tuple[Value, ...]:
+        """The event's arguments as Python values; `()` for an atom."""
+        term = self.term
+        return term.args if isinstance(term, Term) else ()
+
+    @property
+    def text(self) -> str:
+        """The event term as Prolog text (the same as `event`)."""
+        return self.event
 
     @classmethod
     def from_line(cls, line: str) -> "OutputEvent":
@@ -142,6 +177,8 @@ class Engine:
     def __init__(self, prolog_file: Union[str, Path], bridge: Optional[Bridge] = None, module: str = ""):
         self.bridge = bridge or Bridge()
         self.module = module
+        self._closed = False
+        self._directory: Optional[Path] = None      # the temporary directory of a compiled program
         self._callbacks: List[Callable[[OutputEvent], None]] = []
         self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
         self._synchronized: Dict[str, "Future"] = {}
@@ -183,10 +220,14 @@ class Engine:
         directory = Path(tempfile.mkdtemp(prefix="retalisc-"))
         path = directory / f"{module}.pl"
         path.write_text(prolog, encoding="utf-8")
-        return cls(path, bridge, module)
+        engine = cls(path, bridge, module)
+        engine._directory = directory
+        return engine
 
     def _call(self, name: str, *args) -> str:
         """rtl_api:Name(Args..., Out): the values go to Prolog as data (Bridge.apply)."""
+        if self._closed:
+            raise RuntimeError("this Engine is closed")
         active = getattr(self.bridge, "active_program", None)
         if active is not None and active != self.module:
             raise InactiveEngineError(
@@ -203,6 +244,35 @@ class Engine:
             self._call("rtl_api_use_program", self.module)
             self._call("rtl_api_output_to_buffer")
             self.bridge.active_program = self.module
+    # ---- as a context manager --------------------------------------------------------------
+
+    def __enter__(self) -> "Engine":
+        return self
+
+    def __exit__(self, kind: Optional[Type[BaseException]], error: Optional[BaseException],
+                 traceback: Optional[TracebackType]) -> None:
+        self.close(run_pending=kind is None)
+
+    def close(self, run_pending: bool = True) -> List["OutputEvent"]:
+        """End the input (running the postponed synchronized matches, delivered to the
+        callbacks, unless `run_pending` is false), forget every event and free the compiled
+        program's files. Returns what the end of the input produced. Later calls raise
+        RuntimeError; closing twice does nothing."""
+        with self._lock:
+            if self._closed:
+                return []
+            try:
+                produced = self.end_of_input(drop_pending=not run_pending)
+                self.clear()
+            finally:
+                self._closed = True
+                if self._directory is not None:
+                    shutil.rmtree(self._directory, ignore_errors=True)
+            return produced
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
 
     # ---- configuration -------------------------------------------------------------------
 
@@ -220,33 +290,43 @@ class Engine:
 
     # ---- feeding -------------------------------------------------------------------------
 
-    def feed(self, event: str, start: Number, end: Optional[Number] = None, op: str = "add") -> List[OutputEvent]:
-        """Process one event (term text); return what it produced."""
+    def feed(self, event: str, start: Time, end: Optional[Time] = None, op: str = "add") -> List[OutputEvent]:
+        """Process one event (term text) that occurred at `start` (or over [start, end]);
+        return what it produced. Times are seconds, `[secs, nsecs]`, a `datetime` or a ROS
+        time message, and are checked as an event file's are (`feed_batch`)."""
         return self.feed_batch([(event, start, end, op)])
 
     def feed_batch(self, events: Iterable[Sequence]) -> List[OutputEvent]:
         """Process `(event_text, start[, end[, op]])` tuples in order, in one Prolog call.
 
-        Each event text must be one ground term; times finite numbers, start <= end. A bad
-        item raises (TypeError/ValueError for Python values, PrologError for the text) before
+        Each event text must be one ground term. A time is a number of seconds, a ROS stamp
+        `[secs, nsecs]`, a `datetime.datetime` (UTC when naive) or a ROS time message; the
+        runtime checks it with the check of the event-file reader, so a time is refused
+        exactly when a file line with it is, with the same reason (ValueError: `"start" is
+        after "end"`, `"t": nanoseconds must be in [0, 1e9), not -2`). A bad item raises
+        (TypeError/ValueError for Python values and times, PrologError for the text) before
         anything of the batch is processed. An event whose processing raises an error stops
         the batch: what the events before it produced is delivered (callbacks included),
         then PrologError says which event failed; the engine stays usable."""
         items = []
         for item in events:
             event, start = item[0], item[1]
-            end = item[2] if len(item) > 2 and item[2] is not None else start
+            end = item[2] if len(item) > 2 else None
             op = item[3] if len(item) > 3 else "add"
             if op not in ("add", "retract"):
                 raise ValueError(f"op must be 'add' or 'retract', not {op!r}")
-            start, end = _time(start, "a start time"), _time(end, "an end time")
-            if start > end:
-                raise ValueError(f"the start time {start} is after the end time {end}")
-            items.append([op, _text(event, "an event"), start, end])
+            start_value = time_value(start, "a start time")
+            end_value = "" if end is None else time_value(end, "an end time")
+            items.append([op, _text(event, "an event"), start_value, end_value])
         if not items:
             return []
         with self._lock:
-            output = self._call("rtl_api_feed_events", items)
+            try:
+                output = self._call("rtl_api_feed_events", items)
+            except PrologError as error:
+                if (error.term or "").startswith("error(bad_item(") and "error(invalid_time(" in error.term:
+                    raise ValueError(str(error)) from None
+                raise
             lines = output.splitlines()
             failure = lines.pop() if lines and lines[-1].startswith("!error\t") else None
             delivered = self._deliver_lines(lines)
@@ -260,7 +340,7 @@ class Engine:
 
     def feed_lines(self, text: str, first_line: int = 1, *, allow_control: bool = False,
                    strict: bool = False) -> Tuple[List[OutputEvent], List[Rejection]]:
-        """Process event JSON Lines (SPEC section 11) exactly as `swipl PROGRAM.pl FILE` does;
+        """Process event JSON Lines (docs/runtime.md, "Event input") exactly as `swipl PROGRAM.pl FILE` does;
         return the output and the lines not processed, with their reasons. Control lines
         (`add_rule`, `delete_rule`) are refused unless `allow_control`. An event whose
         processing raises is reported (kind "error") and the lines after it are processed;

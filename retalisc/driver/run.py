@@ -6,6 +6,8 @@ import io
 import math
 import os
 import queue
+import select
+import stat
 import sys
 import threading
 import time
@@ -29,7 +31,61 @@ def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str],
         yield first, batch, size
 
 
-def _live_batches(stream: IO[str], batch_size: int, heartbeat: float
+def _is_live(events: str, source: IO[str]) -> bool:
+    """Whether `events` is a live input (standard input, a pipe, a socket, a terminal) rather
+    than a regular file: its lines are processed as they arrive."""
+    if events == "-":
+        return True
+    try:
+        mode = os.stat(events).st_mode
+    except OSError:
+        return False
+    return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode) or stat.S_ISCHR(mode)
+
+
+def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[str], int]]:
+    """(first line number, lines, bytes read) per batch of a live input: the complete lines
+    that have arrived, as soon as they are there. Waits only when no complete line is waiting,
+    so a batch holds more than one line only while input is already waiting (at most
+    `batch_size` lines)."""
+    pending = b""
+    first = 1
+    started = False
+    while True:
+        lines: List[bytes] = []
+        size = 0
+        at_end = False
+        while True:
+            while b"\n" in pending and len(lines) < batch_size:
+                line, pending = pending.split(b"\n", 1)
+                lines.append(line)
+                size += len(line) + 1
+            if len(lines) >= batch_size:
+                break
+            waiting = select.select([fd], [], [], 0)[0] if lines else select.select([fd], [], [])[0]
+            if not waiting:
+                break
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                at_end = True
+                if pending:
+                    lines.append(pending)
+                    size += len(pending)
+                    pending = b""
+                break
+            pending += chunk
+        if lines:
+            texts = [line.decode("utf-8", errors="replace") for line in lines]
+            if not started:
+                texts[0] = texts[0].lstrip("\ufeff")
+                started = True
+            yield first, texts, size
+            first += len(lines)
+        if at_end:
+            return
+
+
+def _heartbeat_batches(stream: IO[str], batch_size: int, heartbeat: float
                   ) -> Iterator[Tuple[int, List[str], int]]:
     """As `_batches`, for a live source: a batch is what has arrived when the reader catches
     up (not `batch_size` lines), and a batch with no lines (first line number 0) comes every
@@ -97,7 +153,7 @@ class RunStopped(Exception):
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
                    consumer_dir: Optional[str] = None, drop_pending: bool = False,
                    first_output: Sequence = (), allow_control: bool = False, strict: bool = False,
-                   progress: Optional[bool] = None, heartbeat: Optional[float] = None) -> int:
+                   progress: Optional[bool] = None, heartbeat: Optional[float] = None, report=None) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout, None to drop it). Lines not processed go to stderr as
     `FILE:LINE: rejected: REASON` (malformed) or `FILE:LINE: error: REASON` (a refused control
@@ -112,7 +168,9 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     progress display on stderr, False never, None (default) on a terminal for inputs over
     a few MB. `heartbeat` (seconds): a live source; batches are what has arrived, and while
     nothing arrives the clock advances with the wall clock every `heartbeat` seconds
-    (`WallClock`), so absences and alarms fire on time. Returns the exit status."""
+    (`WallClock`), so absences and alarms fire on time.
+    `report()`, if given, returns text printed on stderr before the summary (the counts of
+    `--trace`). Returns the exit status."""
     started = time.perf_counter()
     name = "<stdin>" if events == "-" else events
     if events == "-":
@@ -140,7 +198,14 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         for produced in first_output:
             write(produced)
         wall = WallClock()
-        batches = _batches(source, batch_size) if heartbeat is None else _live_batches(source, batch_size, heartbeat)
+        fd = _fileno(source)
+        live = heartbeat is not None or (fd is not None and _is_live(events, source))
+        if heartbeat is not None:
+            batches = _heartbeat_batches(source, batch_size, heartbeat)
+        elif live:
+            batches = _live_batches(fd, batch_size)
+        else:
+            batches = _batches(source, batch_size)
         for first, lines, size in batches:
             if not lines:                       # a heartbeat: nothing arrived
                 target = wall.estimate()
@@ -151,6 +216,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
+            if live:
+                sink.flush()                    # each event's output leaves as it is processed
             messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")
                         for r in rejected]
             messages += [(w.line, f"warning: {w.text}") for w in engine.take_warnings()]
@@ -185,8 +252,21 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         if consumers is not None:
             consumers.close()
         engine.bridge.once("retalis:rtl_close_action_output")
+    if report is not None:
+        text = report()
+        if text:
+            print(text, file=sys.stderr)
     print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
     return status
+
+
+def _fileno(source) -> Optional[int]:
+    """The file descriptor under a text stream (standard input's buffer, or an open file), or
+    None when there is none (a stream in memory)."""
+    try:
+        return source.buffer.fileno() if hasattr(source, "buffer") else source.fileno()
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        return None
 
 
 def set_action_output(engine: Engine, path: str) -> None:

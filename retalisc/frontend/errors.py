@@ -21,23 +21,29 @@ class RetalisError(Exception):
         """`file:line:col: message`, then the offending line with a caret under the column."""
         if self.span is None:
             return f"error: {self.message}"
-        head = f"{self.span}: {self.kind}: {self.message}"
-        text = source_text
-        if text is None:
-            try:
-                text = Path(self.span.file).read_text(encoding="utf-8", errors="replace")
-            except OSError:
-                text = None
-        if text is not None and text.startswith("\ufeff"):
-            text = text[1:]                 # a byte-order mark: columns count from after it
-        if text is None:
-            return head
-        lines = text.splitlines()
-        if not 1 <= self.span.line <= len(lines):
-            return head
-        line = lines[self.span.line - 1].replace("\t", " ")
-        caret = " " * (max(self.span.column, 1) - 1) + "^"
-        return f"{head}\n    {line}\n    {caret}"
+        return render_at(self.span, self.kind, self.message, source_text)
+
+
+def render_at(span: Span, kind: str, message: str, source_text: Optional[str] = None) -> str:
+    """`file:line:col: kind: message`, then the line at `span` with a caret under the column
+    (read from `span.file` unless `source_text` is given)."""
+    head = f"{span}: {kind}: {message}"
+    text = source_text
+    if text is None:
+        try:
+            text = Path(span.file).read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            text = None
+    if text is not None and text.startswith("\ufeff"):
+        text = text[1:]                 # a byte-order mark: columns count from after it
+    if text is None:
+        return head
+    lines = text.splitlines()
+    if not 1 <= span.line <= len(lines):
+        return head
+    line = lines[span.line - 1].replace("\t", " ")
+    caret = " " * (max(span.column, 1) - 1) + "^"
+    return f"{head}\n    {line}\n    {caret}"
 
 
 class RetalisSyntaxError(RetalisError):

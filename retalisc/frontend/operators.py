@@ -1,6 +1,6 @@
 """The operator table: SWI-Prolog's standard operators plus the Retalis/ETALIS event operators.
 
-Priorities follow ETALIS (SPEC section 12): all event operators are left-associative (yfx).
+Priorities follow ETALIS (docs/language.md, "Patterns"): all event operators are left-associative (yfx).
 `<-` separates an event rule's head from its pattern, `do` attaches an action to a head,
 `'rule:'` labels a rule, and `.` after a bracketed pattern is the thesis's window `(P).Q`
 and negation `not(P).[P1, P2]`.

@@ -10,16 +10,17 @@ from __future__ import annotations
 from typing import Callable, List, Optional, TypeVar
 
 from . import (added_rules, apply_rule_windows, aq_naive, aq_optimized, aq_program, aq_tabled, binarize,
-               collect_settings, edbc, loadable, push_conditions, slr_goal_sets, slr_stream_histories,
+               collect_settings, edbc, lint, loadable, push_conditions, slr_goal_sets, slr_stream_histories,
                slr_time_terms, validate)
 
 #: Event programs (`.rtl`, read by `frontend/program.py`), rendered by `backends/prolog/render.py`.
 EVENT_PIPELINE = [slr_time_terms, slr_stream_histories, slr_goal_sets, validate, collect_settings, apply_rule_windows, push_conditions, binarize, edbc,
-                  loadable]
+                  loadable, lint]
 
 #: Event rules added to a running program (`retalisc compile-rules`, `Engine.add_rules`): checked
-#: and named, then compiled like the rules of a program.
-ADDED_RULES_PIPELINE = [added_rules] + EVENT_PIPELINE
+#: and named, then compiled like the rules of a program (without `lint`: what they call is
+#: defined by the running program, which this compilation does not see).
+ADDED_RULES_PIPELINE = [added_rules] + [p for p in EVENT_PIPELINE if p is not lint]
 
 #: Definite programs for active queries (read by `frontend/definite.py`), rendered by
 #: `backends/prolog/aq_backend.py`. A pass with a `mode` attribute is one transformation

@@ -120,6 +120,8 @@ class Unit:
     # runtime library predicates (min/3, new_event/1, ...) the program defines itself: the
     # generated module does not import them (set by `loadable`)
     runtime_overrides: List[Tuple[str, int]] = field(default_factory=list)
+    # what the `lint` pass found (LintWarning objects; their text is also in `warnings`)
+    lint: list = field(default_factory=list)
 
 
 @dataclass

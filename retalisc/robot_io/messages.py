@@ -1,4 +1,4 @@
-"""ROS messages as Retalis events and back (thesis 2.2, Listing 2.3; SPEC section 8).
+"""ROS messages as Retalis events and back (thesis 2.2, Listing 2.3; docs/robot_io.md).
 
 The convention is the one of the 2015 Retalis release, which its programs expect:
 

@@ -1,0 +1,152 @@
+"""Explaining detections (`retalisc explain`): run a program over an event file with the
+runtime's event log on (prolog_runtime/rtl_trace.pl), then ask how a derived event came
+about or why a pattern was not detected.
+
+The rules go to the runtime as one term, `[rule(Label, Place, Head, Pattern), ...]`, with the
+pattern in the plain form rtl_trace.pl evaluates (`ev/3`, `seq/2`, ..., `where/2`, `win/2`,
+`neg/3`, `fnot/2`, `agg/3`), written by `retalisc.frontend.terms.to_prolog` and read back as
+data; the event file is fed line by line so that every event is logged with its line.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable, List
+
+from ..compiler import CompileResult
+from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where,
+                                Window)
+from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
+from .engine import Engine, OutputEvent, Rejection
+
+def _fresh(counter: List[int], what: str) -> Var:
+    counter[0] += 1
+    return Var(f"_RtlTrace{what}{counter[0]}")
+
+
+def pattern_term(pattern: Pattern, counter: List[int]) -> Term:
+    """The pattern in the form rtl_trace.pl evaluates."""
+    if isinstance(pattern, EventAtom):
+        start = pattern.start if pattern.start is not None else _fresh(counter, "S")
+        end = pattern.end if pattern.end is not None else (start if pattern.start is not None
+                                                           else _fresh(counter, "E"))
+        return Compound("ev", (pattern.term, start, end))
+    if isinstance(pattern, Binary):
+        left, right = pattern_term(pattern.left, counter), pattern_term(pattern.right, counter)
+        return Compound(pattern.op, (left, right))
+    if isinstance(pattern, Where):
+        return Compound("where", (pattern_term(pattern.pattern, counter), pattern.condition))
+    if isinstance(pattern, Check):
+        return Compound("check", (pattern_term(pattern.pattern, counter), pattern.condition))
+    if isinstance(pattern, Window):
+        return Compound("win", (pattern_term(pattern.pattern, counter), Number(pattern.length)))
+    if isinstance(pattern, Negation):
+        return Compound("neg", (pattern_term(pattern.negated, counter), pattern_term(pattern.first, counter),
+                                pattern_term(pattern.second, counter)))
+    if isinstance(pattern, Aggregate):
+        return Compound("agg", (pattern.function, pattern_term(pattern.pattern, counter), pattern.value))
+    raise TypeError(pattern)
+
+
+def rules_text(rules: Iterable[EventRule]) -> str:
+    """The event rules as the list rtl_trace.pl reads (rules without a derived head left out)."""
+    items = []
+    counter = [0]
+    for number, rule in enumerate(rules, start=1):
+        if rule.synchronized is not None or rule.head == Atom("null"):
+            continue
+        label = rule.label or f"r{number}"
+        place = f"{Path(rule.span.file).name}:{rule.span.line}"
+        items.append("rule(" + ", ".join([to_prolog(Atom(label)), to_prolog(Atom(place)), to_prolog(rule.head),
+                                          to_prolog(pattern_term(rule.pattern, counter))]) + ")")
+    return "[" + ",\n".join(items) + "]"
+
+
+class Explainer:
+    """A program run over an event file with every event logged, to be asked about."""
+
+    def __init__(self, result: CompileResult):
+        self.result = result
+        self.engine = Engine.from_compiled(result)
+        self.engine.bridge.once("use_module(retalis_runtime(rtl_trace))")      # constant text
+        self.rules = rules_text(result.unit.program.event_rules)
+        self.rejections: List[Rejection] = []
+        self.outputs: List[OutputEvent] = []
+
+    def feed_file(self, events: str) -> None:
+        """Feed the event file line by line, each event logged with its line number."""
+        bridge = self.engine.bridge
+        bridge.apply("rtl_trace", "rtl_trace_start")
+        try:
+            with open(events, encoding="utf-8-sig", errors="replace") as source:
+                for number, line in enumerate(source, start=1):
+                    output = bridge.apply("rtl_trace", "rtl_trace_feed_line", line, number)
+                    for text in output.splitlines():
+                        if text.startswith("!"):
+                            line_no, _, rest = text[1:].partition("\t")
+                            kind, _, reason = rest.partition("\t")
+                            self.rejections.append(Rejection(int(line_no), reason, kind))
+                        elif text and not text.startswith("?"):
+                            self.outputs.append(OutputEvent.from_line(text))
+        finally:
+            bridge.apply("rtl_trace", "rtl_trace_stop")
+
+    def explain(self, event: str, limit: int = 5) -> str:
+        return self.engine.bridge.apply("rtl_trace", "rtl_trace_explain", self.rules, event, limit)
+
+    def why_not(self, pattern: str) -> str:
+        return self.engine.bridge.apply("rtl_trace", "rtl_trace_why_not", self.rules, pattern)
+
+
+# ---- run --trace RULE and --late FILE ------------------------------------------------------
+
+
+def _step_description(step, side: str) -> str:
+    from ..frontend.writer import write_term
+
+    mine, other = (step.left, step.right) if side == "left" else (step.right, step.left)
+    text = write_term(mine.term, 999)
+    if other is None:
+        return f"({text})"
+    return f"({text} waiting for {write_term(other.term, 999)})"
+
+
+def trace_specs(unit, labels: Iterable[str]) -> list:
+    """What rtl_trace_rules/2 watches for the rules `labels`: per rule its head and the stores of
+    its partial matches, each with a description. Raises KeyError for an unknown label."""
+    rules = {b.rule_id: b for b in unit.rules}
+    generated = {g.rule_id: g for g in unit.generated}
+    specs = []
+    for label in labels:
+        if label not in rules:
+            raise KeyError(label)
+        binary, code = rules[label], generated[label]
+        steps = {step.name: step for step in binary.steps}
+        stores = []
+        for name, arity, _window in code.stores:
+            step_name, _, side = name.rpartition("_")
+            step = steps.get(step_name)
+            number = step_name.rsplit("_", 1)[-1]
+            side_name = {"lefts": "left", "rights": "right"}.get(side)
+            what = (f"step {number} {side_name} {_step_description(step, side_name)}" if step and side_name
+                    else f"step {number} {side}")
+            stores.append([name, arity, "live", what])
+        for live, arity, kept_a, kept_b, _order in code.kept:
+            what = next((s[3] for s in stores if s[0] == live), live)
+            stores += [[kept_a, arity, "kept", what], [kept_b, arity, "kept", what]]
+        head = binary.rule.head
+        name = head.name if isinstance(head, (Atom, Compound)) else "null"
+        specs.append([label, name, head.arity if isinstance(head, Compound) else 0, stores])
+    return specs
+
+
+def late_rules(unit) -> list:
+    """Per rule: its label, the window of its pattern (-1 for none) and its event atoms, for
+    rtl_trace_late/3."""
+    from ..frontend.program import walk_pattern
+
+    found = []
+    for binary in unit.rules:
+        windows = [p.length for p in walk_pattern(binary.rule.pattern) if isinstance(p, Window)]
+        atoms = sorted({to_prolog(p.term) for p in walk_pattern(binary.rule.pattern) if isinstance(p, EventAtom)})
+        found.append([binary.rule_id, max(windows) if windows else -1, atoms])
+    return found

@@ -1,0 +1,315 @@
+"""lint: warnings for programs that compile but cannot mean what they say.
+
+Each finding is a `LintWarning` (a place, a message and a hint); `retalisc check` and
+`retalisc compile` print them as `file:line:col: warning: ...` and `--werror` turns them into
+errors. The pass changes nothing in the unit but `unit.lint` and `unit.warnings`. It looks for:
+
+- `window-on-last-operand`: `a(X) seq b(X).10` puts the window on `b(X)` only (`.` binds
+  tighter than the event operators); the sequence needs `(a(X) seq b(X)).10`;
+- `prolog-control-in-pattern`: `,`, `;` or `->` inside an event pattern is read as an event
+  named `,` (or `;`, `->`) that never occurs; `and`, `or` and `where` are the event forms;
+- `event-operator-in-clause`: an event operator in the body of a `:-` clause (an event rule
+  written with the wrong arrow), and `no-event-rules`: a program without event rules whose
+  clauses use event operators;
+- `head-variable-unbound`: a head variable bound only in one branch of `or`, only inside an
+  aggregate or only in a negated pattern: the derived event would carry an unbound variable;
+- `undefined-predicate`: a `where`/`check` condition or an action calls a predicate that no
+  clause defines and that is neither a builtin nor a library or runtime predicate (the run
+  would stop with an existence error at the first event that gets there);
+- `keyless-join`: the two sides of a join have variables but share none, no condition
+  relates them and no window bounds them: every event of one side is paired with every
+  earlier event of the other, and a rule without window keeps its partial matches forever,
+  so each event costs more than the one before (not reported under the `recent` and
+  `chronological` policies, which consume partners).
+
+Runs last in the event pipeline, after the checks that make a program an error.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, List, Optional, Set
+
+from ..frontend.errors import render_at
+from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
+                                StaticClause, Where, Window, pattern_conditions, pattern_text, walk_pattern)
+from ..frontend.terms import Atom, Compound, Span, indicator, span_of, variables, walk
+from ..frontend.writer import write_term
+from .loadable import _goals, _loads_code, _program_predicates
+from .unit import Unit
+
+name = "lint"
+
+#: Operators that only mean something in an event pattern.
+EVENT_OPERATORS = {"seq", "and", "par", "or", "equals", "meets", "during", "starts", "finishes", "fnot", "cnot",
+                   "where", "check"}
+
+#: Joins: binary operators whose two sides are matched against each other.
+JOINS = {"seq", "and", "par", "equals", "meets", "during", "starts", "finishes"}
+
+_PROLOG_CONTROL = {(",", 2): "and", (";", 2): "or", ("->", 2): "where", ("*->", 2): "where", ("|", 2): "or"}
+
+
+@dataclass(frozen=True)
+class LintWarning:
+    """One finding: `code` names the kind (see the module doc), `span` the place."""
+
+    code: str
+    span: Optional[Span]
+    message: str
+    hint: str
+
+    def render(self, source_text: Optional[str] = None, kind: str = "warning") -> str:
+        """`file:line:col: warning: message`, the offending line, a caret, and the hint."""
+        body = render_at(self.span, kind, self.message, source_text) if self.span else f"{kind}: {self.message}"
+        return f"{body}\n    hint: {self.hint}"
+
+
+def run(unit: Unit) -> Unit:
+    found = lint_unit(unit)
+    unit.lint = found
+    text = unit.program.text or None
+    unit.warnings.extend(w.render(text) for w in found)
+    return unit
+
+
+def lint_unit(unit: Unit) -> List[LintWarning]:
+    program = unit.program
+    found: List[LintWarning] = []
+    for rule in program.event_rules:
+        found += _window_on_last_operand(rule, program.text)
+        found += _prolog_control(rule)
+        found += _unbound_head_variables(rule)
+        if unit.settings.consumption_policy == "unrestricted":
+            found += _keyless_joins(rule)
+    found += _event_operators_in_clauses(program)
+    found += _undefined_predicates(unit)
+    found.sort(key=lambda w: (w.span.line, w.span.column) if w.span else (0, 0))
+    return found
+
+
+# ---- window after the last operand ------------------------------------------------------
+
+
+def _window_on_last_operand(rule: EventRule, text: str) -> Iterable[LintWarning]:
+    for p in walk_pattern(rule.pattern):
+        if not isinstance(p, Binary):
+            continue
+        window = p.right
+        if isinstance(window, Window) and isinstance(window.pattern, EventAtom) and \
+                not _parenthesized(window.span, text):
+            length = write_term(_number(window.length), 0)
+            operand = pattern_text(window.pattern)
+            yield LintWarning(
+                "window-on-last-operand", window.span,
+                f"the window .{length} applies to {operand} only, not to the whole '{p.op}' pattern",
+                f"write ({pattern_text(p.left)} {p.op} {operand}).{length} to bound the whole pattern, "
+                f"or ({operand}).{length} if the window is meant for this event alone")
+
+
+def _number(value):
+    from ..frontend.terms import Number
+
+    return Number(int(value) if float(value).is_integer() else value)
+
+
+def _parenthesized(span: Optional[Span], text: str) -> bool:
+    """Whether the source has an opening bracket right before `span` (`(b(X)).10`)."""
+    if span is None or not text:
+        return False
+    lines = text.lstrip("\ufeff").splitlines()
+    row, column = span.line - 1, span.column - 2
+    while 0 <= row < len(lines):
+        line = lines[row]
+        column = min(column, len(line) - 1)
+        while column >= 0 and line[column].isspace():
+            column -= 1
+        if column >= 0:
+            return line[column] == "("
+        row, column = row - 1, 10 ** 9
+    return False
+
+
+# ---- Prolog control constructs used as events ---------------------------------------------
+
+
+def _prolog_control(rule: EventRule) -> Iterable[LintWarning]:
+    for p in walk_pattern(rule.pattern):
+        if isinstance(p, EventAtom) and isinstance(p.term, Compound) and (p.term.name, p.term.arity) in _PROLOG_CONTROL:
+            instead = _PROLOG_CONTROL[p.term.name, p.term.arity]
+            what = f"'{p.term.name}'"
+            hint = {"and": "write 'and' for two events that both occur, 'seq' for one after the other, or "
+                           "'P where (C1, C2)' for conditions",
+                    "or": "write 'or' for either of two events",
+                    "where": "write 'P where (C -> A ; B)' for a condition; a pattern has no if-then-else"}[instead]
+            yield LintWarning("prolog-control-in-pattern", p.span,
+                              f"{what} inside an event pattern is read as an event named {what}, which never occurs",
+                              hint)
+
+
+# ---- event operators under :- -------------------------------------------------------------
+
+
+def _event_operators_in_clauses(program) -> Iterable[LintWarning]:
+    defined = {key for key in _program_predicates(program.clauses)}
+    found = []
+    for clause in program.static_clauses:
+        body = clause.body
+        if body is None:
+            continue
+        for goal in _goals(body):
+            if isinstance(goal, Compound) and goal.arity == 2 and goal.name in EVENT_OPERATORS and \
+                    (goal.name, 2) not in defined:
+                found.append(LintWarning(
+                    "event-operator-in-clause", span_of(goal) or clause.span,
+                    f"'{goal.name}' is an event operator, but this clause is a Prolog rule (':-'), which calls "
+                    f"{goal.name}/2 instead of matching events",
+                    f"an event rule is written with '<-': {write_term(clause.head, 999)} <- "
+                    f"{write_term(body, 1199)}."))
+                break
+    if not found and not program.event_rules:
+        for clause in program.static_clauses + program.directives:
+            term = clause.term if isinstance(clause, StaticClause) else clause.goal
+            hit = next((t for t in walk(term) if isinstance(t, Compound) and t.arity == 2
+                        and t.name in EVENT_OPERATORS and (t.name, 2) not in defined), None)
+            if hit is not None:
+                found.append(LintWarning(
+                    "no-event-rules", span_of(hit) or clause.span,
+                    f"the program has 0 event rules, but this clause uses the event operator '{hit.name}'",
+                    "event rules are written 'Head <- Pattern.'; nothing is detected without one"))
+                break
+    return found
+
+
+# ---- head variables that may stay unbound -------------------------------------------------
+
+
+def _bound(pattern: Pattern) -> Set[str]:
+    """The variables every match of `pattern` binds."""
+    if isinstance(pattern, EventAtom):
+        names = {v.name for v in variables(pattern.term)}
+        for t in (pattern.start, pattern.end):
+            if t is not None:
+                names |= {v.name for v in variables(t)}
+        return names
+    if isinstance(pattern, Binary):
+        if pattern.op == "or":
+            return _bound(pattern.left) & _bound(pattern.right)
+        if pattern.op == "fnot":
+            return _bound(pattern.left)
+        return _bound(pattern.left) | _bound(pattern.right)
+    if isinstance(pattern, (Where, Check)):
+        return _bound(pattern.pattern) | {v.name for v in variables(pattern.condition)}
+    if isinstance(pattern, Window):
+        return _bound(pattern.pattern)
+    if isinstance(pattern, Negation):
+        return _bound(pattern.first) | _bound(pattern.second)
+    if isinstance(pattern, Aggregate):
+        return {v.name for v in variables(pattern.value)}
+    return set()
+
+
+def _where_only(pattern: Pattern, name_: str) -> str:
+    """Why variable `name_` is not bound by every match: the construct that hides it."""
+    for p in walk_pattern(pattern):
+        if isinstance(p, Aggregate) and name_ in _all_variables(p.pattern):
+            return "only inside an aggregate (the aggregate binds its value, not the events it counts)"
+        if isinstance(p, Negation) and name_ in _all_variables(p.negated):
+            return "only in a negated pattern (an event that must not occur binds nothing)"
+        if isinstance(p, Binary) and p.op == "fnot" and name_ in _all_variables(p.right):
+            return "only in a negated pattern (an event that must not occur binds nothing)"
+        if isinstance(p, Binary) and p.op == "or" and (name_ in _bound(p.left)) != (name_ in _bound(p.right)):
+            return "in only one branch of 'or' (a match of the other branch leaves it unbound)"
+    return "in only part of the pattern"
+
+
+def _mentioned(pattern: Pattern) -> Set[str]:
+    """Every variable a pattern mentions outside negated parts (a join key may be inside an
+    aggregate: `a(X) seq aggregate(count, b(X), N)`)."""
+    names = _bound(pattern)
+    for p in walk_pattern(pattern, into=lambda q: not isinstance(q, Negation)):
+        if isinstance(p, Aggregate):
+            names |= _all_variables(p.pattern)
+    return names
+
+
+def _all_variables(pattern: Pattern) -> Set[str]:
+    names: Set[str] = set()
+    for p in walk_pattern(pattern):
+        if isinstance(p, EventAtom):
+            names |= {v.name for v in variables(p.term)}
+    return names
+
+
+def _unbound_head_variables(rule: EventRule) -> Iterable[LintWarning]:
+    if rule.synchronized is not None:
+        return
+    bound = _bound(rule.pattern)
+    for var in variables(rule.head):
+        if var.name in bound:
+            continue
+        yield LintWarning(
+            "head-variable-unbound", span_of(var) or rule.span,
+            f"variable {var.name} of the rule head is bound {_where_only(rule.pattern, var.name)}; derived events "
+            f"would carry an unbound variable",
+            f"bind {var.name} in every match: use it in both branches of 'or', or outside the aggregate or "
+            "negation, or leave it out of the head")
+
+
+# ---- joins without a key -----------------------------------------------------------------
+
+
+def _keyless_joins(rule: EventRule) -> Iterable[LintWarning]:
+    related = [{v.name for v in variables(c)} for c in pattern_conditions(rule.pattern)]
+    for p in walk_pattern(rule.pattern, into=lambda q: not isinstance(q, (Window, Negation))):
+        if not (isinstance(p, Binary) and p.op in JOINS):
+            continue
+        left, right = _mentioned(p.left), _mentioned(p.right)
+        if not left or not right or left & right:
+            continue
+        if any(names & left and names & right for names in related):
+            continue            # a condition relates the two sides (a join on a computed key)
+        yield LintWarning(
+            "keyless-join", p.span,
+            f"the two sides of '{p.op}' share no variable ({pattern_text(p.left)} / {pattern_text(p.right)}) and "
+            "no window bounds them: every event of one side is paired with every earlier event of the other, "
+            "kept forever, so each event costs more than the one before",
+            "use the same variable on both sides for the thing they are about (a(X) seq b(X)), relate them "
+            "with a where condition, or bound the pattern with a window: (P).Seconds")
+
+
+# ---- predicates that do not exist -------------------------------------------------------
+
+
+def _undefined_predicates(unit: Unit) -> List[LintWarning]:
+    program = unit.program
+    target = unit.target
+    if not target.builtins:
+        return []                               # no list of what exists: nothing to compare with
+    if any(_loads_code(d.goal) for d in program.directives):
+        return []                               # use_module/consult: the program brings in more
+    defined = _program_predicates(program.clauses)
+    events = set()
+    for rule in program.event_rules:
+        if rule.head != Atom("null"):
+            events.add(indicator(rule.head))
+    found: List[LintWarning] = []
+    for rule in program.event_rules:
+        checks = {("t1", 1), ("t2", 1)} if any(isinstance(p, Check) for p in walk_pattern(rule.pattern)) else set()
+        goals = [(c, "condition") for c in pattern_conditions(rule.pattern)]
+        if rule.action is not None:
+            goals.append((rule.action, "action"))
+        for goal, what in goals:
+            for g in _goals(goal):
+                key = indicator(g)
+                if key is None or key == (":", 2) or key in defined or key in checks or key in events:
+                    continue
+                if target.known(key):
+                    continue
+                found.append(LintWarning(
+                    "undefined-predicate", span_of(g) or rule.span,
+                    f"this {what} calls {key[0]}/{key[1]}, which no clause of the program defines and which is "
+                    "not a builtin or library predicate: the run stops with an error at the first event "
+                    "that gets here",
+                    f"define {key[0]}/{key[1]} in the program (or declare it ':- dynamic {key[0]}/{key[1]}.' if "
+                    "it is added while the program runs), or correct the name"))
+    return found

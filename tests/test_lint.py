@@ -1,0 +1,161 @@
+"""The `lint` pass: warnings for programs that compile but cannot mean what they say, their
+place and hint, `--werror`, and no warnings on the shipped examples."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from retalisc.cli import main
+from retalisc.compiler import compile_file, compile_source
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def lint(text: str):
+    return compile_source(text, "robot.rtl").unit.lint
+
+
+def codes(text: str):
+    return [w.code for w in lint(text)]
+
+
+def test_window_after_the_last_operand_is_reported_at_the_operand():
+    [warning] = lint("alarm(X) <- smoke(X) seq heat(X).10.\n")
+    assert warning.code == "window-on-last-operand"
+    assert (warning.span.line, warning.span.column) == (1, 26)
+    assert "heat(X) only" in warning.message
+    assert "(smoke(X) seq heat(X)).10" in warning.hint
+
+
+@pytest.mark.parametrize("text", [
+    "alarm(X) <- (smoke(X) seq heat(X)).10.\n",       # the whole sequence
+    "alarm(X) <- smoke(X) seq (heat(X)).10.\n",       # explicitly this event alone
+    "alarm(X) <- smoke(X) seq\n    (heat(X)).10.\n",
+])
+def test_window_written_with_brackets_is_not_reported(text):
+    assert codes(text) == []
+
+
+@pytest.mark.parametrize("operator, advice", [(",", "'and'"), (";", "'or'"), ("->", "where")])
+def test_prolog_control_inside_a_pattern(operator, advice):
+    [warning] = lint(f"both(X) <- (a(X) {operator} b(X)) seq c(X).\n")
+    assert warning.code == "prolog-control-in-pattern"
+    assert f"event named '{operator}'" in warning.message
+    assert advice in warning.hint
+
+
+def test_event_operator_under_prolog_arrow():
+    [warning] = lint("alarm(X) :- smoke(X) seq heat(X).\n")
+    assert warning.code == "event-operator-in-clause"
+    assert warning.hint.endswith("alarm(X) <- smoke(X) seq heat(X).")
+
+
+def test_program_without_event_rules_that_uses_operators():
+    [warning] = lint("pattern(alarm(X), (smoke(X) seq heat(X))).\n")
+    assert warning.code == "no-event-rules"
+    assert "0 event rules" in warning.message
+
+
+def test_a_program_defining_the_operator_name_is_not_reported():
+    assert codes("seq(A, B) :- A, B.\nok :- seq(true, true).\nr(X) <- a(X) seq b(X).\n") == []
+
+
+@pytest.mark.parametrize("text, reason", [
+    ("r(X) <- a(X) or b(Y).\n", "one branch of 'or'"),
+    ("r(Y, N) <- (a(X) seq aggregate(count, b(X, Y), N)).5.\n", "inside an aggregate"),
+    ("r(X, N) <- not(n(N)).[a(X), b(X)].\n", "negated pattern"),
+    ("r(X, N) <- a(X) fnot n(N).\n", "negated pattern"),
+])
+def test_head_variable_bound_in_part_of_the_pattern(text, reason):
+    [warning] = lint(text)
+    assert warning.code == "head-variable-unbound"
+    assert reason in warning.message
+
+
+def test_head_variable_bound_in_both_branches_is_fine():
+    assert codes("r(X) <- a(X) or b(X).\ns(X, N) <- (a(X) seq aggregate(count, b(X), N)).5.\n") == []
+
+
+def test_undefined_predicate_in_a_condition_and_an_action():
+    found = lint("w(X) <- a(X) where (X > 1, undefined_thing(X)).\nnull do nothing_here(X) <- b(X).\n")
+    assert [w.code for w in found] == ["undefined-predicate", "undefined-predicate"]
+    assert "undefined_thing/1" in found[0].message and "condition" in found[0].message
+    assert "nothing_here/1" in found[1].message and "action" in found[1].message
+
+
+def test_defined_builtin_library_and_dynamic_predicates_are_known():
+    text = (":- dynamic seen/1.\nnear(a, b).\n"
+            "w(X, Y) <- (a(X) seq b(Y) where (near(X, Y), seen(X), atom_length(X, _), min(1, 2, _),"
+            " findall(Z, near(Z, _), _))).3.\n"
+            "c(X) <- a(X) check (t1(T), T > 0).\n")
+    assert codes(text) == []
+
+
+def test_undefined_predicate_is_not_reported_when_the_program_loads_code():
+    assert codes(":- use_module(library(lists)).\nw(X) <- a(X) where mine(X).\n") == []
+
+
+def test_keyless_join_without_a_window():
+    [warning] = lint("j(X, Y) <- a(X) and b(Y).\n")
+    assert warning.code == "keyless-join"
+    assert "share no variable" in warning.message
+
+
+@pytest.mark.parametrize("text", [
+    "j(X, Y) <- (a(X) and b(Y)).10.\n",                       # bounded by a window
+    "j(X, Y) <- a(X) and b(Y) where X < Y.\n",                 # related by a condition
+    "j(X) <- a(X) and b(X).\n",                                # a key
+    "j <- a and b.\n",                                         # nothing to key on
+    ":- set_etalis_flag(event_consumption_policy, recent).\nj(X, Y) <- a(X) and b(Y).\n",
+    "r1([property(event_rule_window, 4)]) 'rule:' j(X, Y) <- a(X) seq b(Y).\n",
+])
+def test_keyless_join_not_reported(text):
+    assert codes(text) == []
+
+
+def test_shipped_examples_give_no_warnings():
+    for program in sorted((ROOT / "examples").glob("*/*.rtl")):
+        assert compile_file(str(program)).warnings == [], program
+
+
+# The golden programs test operators on purpose with all-pairs joins and no window; those
+# findings are true (their cost grows with the run) and are the only ones.
+GOLDEN_KEYLESS = {"aggregates": 3, "and_or_hierarchy": 2, "figure_3_1": 7, "listing_3_1": 1}
+
+
+def test_golden_programs_give_only_their_true_warnings():
+    for program in sorted((ROOT / "tests" / "golden").glob("*/program.rtl")):
+        found = compile_file(str(program)).unit.lint
+        assert [w.code for w in found] == ["keyless-join"] * GOLDEN_KEYLESS.get(program.parent.name, 0), program
+
+
+def test_check_prints_warning_with_place_line_and_hint(tmp_path):
+    program = tmp_path / "robot.rtl"
+    program.write_text("alarm(X) <- smoke(X) seq heat(X).10.\n")
+    result = CliRunner().invoke(main, ["check", str(program)])
+    assert result.exit_code == 0
+    lines = result.stderr.splitlines() if hasattr(result, "stderr") else result.output.splitlines()
+    assert lines[0].startswith(f"{program}:1:26: warning: the window .10 applies to heat(X) only")
+    assert lines[1] == "    alarm(X) <- smoke(X) seq heat(X).10."
+    assert lines[2] == "    " + " " * 25 + "^"
+    assert lines[3].startswith("    hint: write (smoke(X) seq heat(X)).10")
+    assert lines[-1] == f"{program}: ok (1 event rule, 1 warning)"
+
+
+@pytest.mark.parametrize("command", ["check", "compile"])
+def test_werror_makes_warnings_errors(tmp_path, command):
+    program = tmp_path / "robot.rtl"
+    program.write_text("r(X) <- a(X) or b(Y).\n")
+    out = tmp_path / "out.pl"
+    args = [command, str(program), "--werror"] + (["-o", str(out)] if command == "compile" else [])
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 2
+    assert f"{program}:1:3: error: variable X of the rule head" in result.output
+    assert "1 warning treated as error (--werror)" in result.output
+    if command == "compile":
+        assert not out.exists() or out.read_text() == ""
+    clean = tmp_path / "clean.rtl"
+    clean.write_text("r(X) <- a(X) or b(X).\n")
+    assert CliRunner().invoke(main, [command, str(clean), "--werror"]).exit_code == 0
