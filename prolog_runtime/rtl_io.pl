@@ -76,7 +76,7 @@ rtl_parse_event_line(Line, Parsed) :-
 rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     fast_reader,
     rtl_fast_event_line(Line, MaxDepth, Event, T, S, E, Op),
-    interval(T, S, E, Start, End, Problem),
+    rtl_input_interval(T, S, E, Start, End, Problem),
     var(Problem),
     !,
     ( Op == retract -> Op1 = retract ; Op1 = add ),

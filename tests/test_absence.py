@@ -36,6 +36,7 @@ def room():
 
 
 def fresh(engine, max_delay="1", flush="false", horizon="auto"):
+    engine.activate()           # one program per process: another test may have loaded its own
     engine.clear()
     engine.set_flag("max_delay", max_delay)
     engine.set_flag("flush_timers", flush)

@@ -21,6 +21,7 @@ def outputs(engine, batch):
 
 
 def fresh(engine, max_delay="inf"):
+    engine.activate()           # one program per process: another test may have loaded its own
     engine.clear()
     engine.set_flag("max_delay", max_delay)
     return engine

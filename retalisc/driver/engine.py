@@ -262,8 +262,11 @@ class Engine:
             if self._closed:
                 return []
             try:
-                produced = self.end_of_input(drop_pending=not run_pending)
-                self.clear()
+                if getattr(self.bridge, "active_program", None) in (None, self.module):
+                    produced = self.end_of_input(drop_pending=not run_pending)
+                    self.clear()
+                else:                       # another Engine took over: nothing of it runs now
+                    produced = []
             finally:
                 self._closed = True
                 if self._directory is not None:

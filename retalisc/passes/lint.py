@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from typing import Iterable, List, Optional, Set
 
 from ..frontend.errors import render_at
-from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
+from ..frontend.program import (Absence, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Sliding,
                                 StaticClause, Where, Window, pattern_conditions, pattern_text, walk_pattern)
 from ..frontend.terms import Atom, Compound, Span, indicator, span_of, variables, walk
 from ..frontend.writer import write_term
@@ -203,8 +203,12 @@ def _bound(pattern: Pattern) -> Set[str]:
         return _bound(pattern.pattern)
     if isinstance(pattern, Negation):
         return _bound(pattern.first) | _bound(pattern.second)
+    if isinstance(pattern, Absence):
+        return _bound(pattern.first)
     if isinstance(pattern, Aggregate):
         return {v.name for v in variables(pattern.value)}
+    if isinstance(pattern, Sliding):
+        return {v.name for v in variables(pattern.group)} | {v.name for v in variables(pattern.value)}
     return set()
 
 
@@ -213,7 +217,7 @@ def _where_only(pattern: Pattern, name_: str) -> str:
     for p in walk_pattern(pattern):
         if isinstance(p, Aggregate) and name_ in _all_variables(p.pattern):
             return "only inside an aggregate (the aggregate binds its value, not the events it counts)"
-        if isinstance(p, Negation) and name_ in _all_variables(p.negated):
+        if isinstance(p, (Negation, Absence)) and name_ in _all_variables(p.negated):
             return "only in a negated pattern (an event that must not occur binds nothing)"
         if isinstance(p, Binary) and p.op == "fnot" and name_ in _all_variables(p.right):
             return "only in a negated pattern (an event that must not occur binds nothing)"
@@ -226,8 +230,8 @@ def _mentioned(pattern: Pattern) -> Set[str]:
     """Every variable a pattern mentions outside negated parts (a join key may be inside an
     aggregate: `a(X) seq aggregate(count, b(X), N)`)."""
     names = _bound(pattern)
-    for p in walk_pattern(pattern, into=lambda q: not isinstance(q, Negation)):
-        if isinstance(p, Aggregate):
+    for p in walk_pattern(pattern, into=lambda q: not isinstance(q, (Negation, Absence))):
+        if isinstance(p, (Aggregate, Sliding)):
             names |= _all_variables(p.pattern)
     return names
 
