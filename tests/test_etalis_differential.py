@@ -133,3 +133,20 @@ def test_retalisc_detects_what_etalis_detects(tmp_path, policy, keys):
                   for n in range(len(streams)) if etalis[n] != ours[n]]
     assert not mismatches, f"{len(mismatches)} of {len(streams)} streams differ; rules:\n{rules}\nfirst: " \
                            f"stream {mismatches[0][1]}\nonly ETALIS: {mismatches[0][2]}\nonly retalisc: {mismatches[0][3]}"
+
+
+CAPITALISED = """r1(X) <- a(X) 'SEQ' b(X).
+r2(X) <- a(X) 'AND' b(X) 'WHERE' X > 1.
+r3(X) <- a(X) 'OR' d(X) 'Seq' b(X).
+r4(X, Y) <- a(X) 'And' d(Y) 'Where' X < Y.
+"""
+
+
+def test_quoted_capitalised_operators_as_etalis(tmp_path, policy="recent"):
+    """ETALIS's own spelling of the operators ('SEQ', 'Seq', 'AND', 'WHERE', ...): both
+    engines read the same rules and detect the same."""
+    streams = [[("a(1)", 1), ("b(1)", 2), ("g(2)", 3), ("a(2)", 4), ("b(2)", 6), ("d(3)", 7), ("b(3)", 8)]]
+    etalis = run_etalis(tmp_path, policy, CAPITALISED, streams)
+    ours = run_retalisc(policy, CAPITALISED, streams)
+    assert sum(etalis[0].values()) >= 7
+    assert ours == etalis

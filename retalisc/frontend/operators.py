@@ -85,7 +85,21 @@ def _standard() -> OperatorTable:
     return table
 
 
-STANDARD_OPERATORS = _standard()
+# ETALIS's own examples write the event operators quoted and capitalised ('SEQ', 'Seq', ...):
+# the same operators, read as their lowercase forms (an unquoted SEQ is a variable).
+ETALIS_ALIASES = {spelling: name
+                  for name in EVENT_OPERATORS + ("do",)
+                  for spelling in (name.upper(), name.capitalize())}
+
+
+def _with_aliases(table: OperatorTable) -> OperatorTable:
+    for spelling, name in ETALIS_ALIASES.items():
+        priority, kind = table.infix[name]
+        table.add(priority, kind, spelling)
+    return table
+
+
+STANDARD_OPERATORS = _with_aliases(_standard())
 
 # The highest priority a clause may have: 1200, or 1210 for a labelled event rule.
 CLAUSE_PRIORITY = 1210

@@ -18,7 +18,8 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from .depth import MAX_TERM_DEPTH, deepest_tree, term_depth
 from .errors import RetalisSyntaxError
-from .operators import ARGUMENT_PRIORITY, CLAUSE_PRIORITY, EVENT_OPERATORS, STANDARD_OPERATORS, OperatorTable
+from .operators import (ARGUMENT_PRIORITY, CLAUSE_PRIORITY, ETALIS_ALIASES, EVENT_OPERATORS, STANDARD_OPERATORS,
+                        OperatorTable)
 from .terms import NIL, Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
 
 _GRAMMAR = (Path(__file__).with_name("retalis.lark")).read_text()
@@ -104,7 +105,7 @@ class _Resolver:
                     self.pos += 1
                     right, right_priority = item.term.args[0], 0
                     right, _ = self.parse_infix(right, right_priority, priority if kind == "xfy" else priority - 1)
-                    left = Compound(item.term.name, (left, right), _span_of(left))
+                    left = Compound(ETALIS_ALIASES.get(item.term.name, item.term.name), (left, right), _span_of(left))
                     left_priority = priority
                     continue
             if not isinstance(item, _Name):
@@ -117,7 +118,8 @@ class _Resolver:
                 if priority <= max_priority and left_priority <= left_max and self.peek(1) is not None:
                     self.pos += 1
                     right, _ = self.parse(right_max)
-                    left = Compound(item.name, (left, right), _span_of(left) or item.span)
+                    name = ETALIS_ALIASES.get(item.name, item.name) if item.quoted else item.name
+                    left = Compound(name, (left, right), _span_of(left) or item.span)
                     left_priority = priority
                     continue
             op = self.ops.postfix.get(item.name)
