@@ -59,6 +59,18 @@ rtl_program_loaded(Module) :-
 
 :- multifile rtl_declaration_handler/3.
 
+run_declaration(Program, '$directive'(Where, Goal)) :-
+    !,
+    % a directive that calls the runtime, run here (after the runtime has taken the program
+    % in) in program order; reported as the loader reports a directive
+    (   catch(Program:Goal, Error, true)
+    ->  (   var(Error)
+        ->  true
+        ;   error_text(Error, Text),
+            format(user_error, "ERROR: ~w: directive raised: ~s~n", [Where, Text])
+        )
+    ;   format(user_error, "Warning: ~w: directive failed: ~q~n", [Where, Goal])
+    ).
 run_declaration(Program, Goal) :-
     functor(Goal, Name, Arity),
     (   rtl_declaration_handler(Name, Arity, Handler)

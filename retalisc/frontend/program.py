@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import List, Optional, Union
 
 from .errors import RetalisSyntaxError
 from .parser import ReadClause, read_program
-from .terms import Atom, Compound, Number, Span, Term, Var, list_items, span_of, to_prolog
+from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, span_of, to_prolog
 
 
 # ---- patterns --------------------------------------------------------------------------
@@ -128,6 +129,9 @@ class Directive:
     goal: Term
     span: Span
     source: str
+    # set by `loadable`: the directive calls the runtime (`subscribe`, `new_event`, ...), so it
+    # runs after the runtime has taken the program in, with the start-up declarations
+    after_load: bool = False
 
 
 @dataclass
@@ -182,8 +186,121 @@ DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
 
 
 def parse_program(text: str, file: str) -> Program:
-    """Read and classify a whole program. Raises RetalisSyntaxError."""
-    return build_program(read_program(text, file), file, text)
+    """Read and classify a whole program. Raises RetalisSyntaxError.
+
+    Two forms of the original Retalis are read too: goal lines without a final period, one
+    per paragraph (`goalPredicates.txt`), and `compile_event_file(Path)`, which reads the
+    clauses of Path (relative to the file that names it) in its place."""
+    return build_program(_read_with_includes(text, file, [file]), file, text)
+
+
+def _read_with_includes(text: str, file: str, loading: List[str]) -> List[ReadClause]:
+    clauses = []
+    for clause in read_goal_lines(text, file):
+        path = _included_file(clause.term)
+        if path is None:
+            clauses.append(clause)
+            continue
+        target = _resolve_include(path, file, clause.span)
+        if str(target) in loading:
+            raise RetalisSyntaxError(f"compile_event_file: {path} is already being read (it includes itself)",
+                                     clause.span)
+        try:
+            included = target.read_text(encoding="utf-8-sig")
+        except (OSError, UnicodeDecodeError) as error:
+            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+            raise RetalisSyntaxError(f"compile_event_file: cannot read {path} ({target}): {reason}",
+                                     clause.span) from None
+        clauses.extend(_read_with_includes(included, str(target), loading + [str(target)]))
+    return clauses
+
+
+def _included_file(term: Term) -> Optional[str]:
+    """The path of a `compile_event_file(Path)` fact or directive, else None."""
+    if _is(term, ":-", 1):
+        term = term.args[0]
+    if _is(term, "compile_event_file", 1):
+        path = term.args[0]
+        if isinstance(path, (Atom, String)):
+            return path.name if isinstance(path, Atom) else path.text
+        raise RetalisSyntaxError("compile_event_file(Path) takes a file name", span_of(path))
+    return None
+
+
+def _resolve_include(path: str, file: str, span: Span) -> Path:
+    base = Path(file).parent if file and not file.startswith("<") else Path.cwd()
+    return (base / path) if not Path(path).is_absolute() else Path(path)
+
+
+# A paragraph: text between blank lines.
+_PARAGRAPH_BREAK = re.compile(r"\n[ \t\r]*\n")
+
+
+def read_goal_lines(text: str, file: str) -> List[ReadClause]:
+    """`read_program`, reading Retalis's goal files too: a paragraph (text between blank
+    lines) whose last line does not end with a full stop ends there, as if it had one. When
+    the text has such paragraphs, that reading comes first (`goal(a)` then a paragraph
+    `:- directive.` must not read as one clause `goal(a) :- directive`); when it cannot be
+    read, the text is read as written (a clause may go on after a blank line), and its
+    error stands."""
+    completed = complete_paragraphs(text)
+    if completed != text:
+        try:
+            return read_program(completed, file)
+        except RetalisSyntaxError:
+            pass
+    return read_program(text, file)
+
+
+def complete_paragraphs(text: str) -> str:
+    """`text` with " ." after the last token of every paragraph that does not end with a
+    full stop (a line comment after it is kept after the added period). Lines and columns
+    of everything else stay the same."""
+    out = []
+    position = 0
+    for match in list(_PARAGRAPH_BREAK.finditer(text)) + [None]:
+        end = match.start() if match is not None else len(text)
+        out.append(_complete(text[position:end]))
+        if match is not None:
+            out.append(match.group(0))
+            position = match.end()
+    return "".join(out)
+
+
+def _complete(paragraph: str) -> str:
+    lines = paragraph.split("\n")
+    for index in range(len(lines) - 1, -1, -1):
+        code = _without_line_comment(lines[index]).rstrip()
+        if not code:
+            continue
+        if code.endswith(".") or code.endswith("*/"):
+            return paragraph
+        lines[index] = code + " ." + lines[index][len(code):]
+        return "\n".join(lines)
+    return paragraph
+
+
+def _without_line_comment(line: str) -> str:
+    """The line up to a `%` comment outside quotes."""
+    quote = None
+    i = 0
+    while i < len(line):
+        c = line[i]
+        if quote:
+            if c == "\\":
+                i += 2
+                continue
+            if c == quote:
+                quote = None
+        elif c in "'\"`":
+            if c == "'" and i > 0 and line[i - 1] == "0" and (i < 2 or not line[i - 2].isalnum()):
+                i += 2
+                continue
+            quote = c
+        elif c == "%":
+            return line[:i]
+        i += 1
+    return line
 
 
 def build_program(clauses: List[ReadClause], file: str, text: str = "") -> Program:

@@ -96,8 +96,11 @@ def run(unit: Unit) -> Unit:
             for key in _declared(clause.goal, clause.span, reserved):
                 defined.add(key)
                 _note_override(unit, key)
+            clause.after_load = _calls_runtime(clause.goal, target)
             if not loaders_seen and target.builtins:
-                _check_calls_exist(clause.goal, defined, everything, target, clause.span)
+                # a directive that runs after the load sees every clause of the program
+                _check_calls_exist(clause.goal, everything if clause.after_load else defined, everything,
+                                   target, clause.span)
             loaders_seen = loaders_seen or _loads_code(clause.goal)
         elif isinstance(clause, Declaration):
             _check_directive_goal(clause.goal, clause.span)
@@ -542,6 +545,20 @@ def _check_calls_exist(goal: Term, defined: Set[Indicator], everything: Set[Indi
             f"this directive calls {key[0]}/{key[1]}, which does not exist when it runs (a directive runs "
             "while the program loads: it can call builtins, library and runtime predicates and the "
             "clauses above it)", span_of(g) or span)
+
+
+def _calls_runtime(goal: Term, target: TargetPredicates) -> bool:
+    """Whether a directive calls a predicate of the runtime (`:- subscribe(...), ...`,
+    `:- initialization(sub(...))`): such a directive runs after the runtime has taken the
+    program in (`rtl_program_loaded/1`), in program order with the start-up declarations."""
+    for g in _goals(goal):
+        key = indicator(g)
+        if key == ("initialization", 1):
+            if _calls_runtime(g.args[0], target):
+                return True
+        elif key is not None and key in target.runtime:
+            return True
+    return False
 
 
 def _loads_code(goal: Term) -> bool:

@@ -60,8 +60,9 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
         kept_stores=kept,
         printed=printed,
         static_clauses=[_static_text(c) for c in unit.program.clauses if _is_copied(c)],
-        declarations=[write_term(c.goal, 999) for c in unit.program.clauses
-                      if isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES],
+        declarations=[_start_up_text(c) for c in unit.program.clauses
+                      if (isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES)
+                      or (isinstance(c, Directive) and c.after_load)],
         rules=[_RuleView(g) for g in unit.generated],
         runtime_overrides=[f"{quote_atom(name)}/{arity}" for name, arity in unit.runtime_overrides],
     )
@@ -98,10 +99,24 @@ def _declaration_key(goal: Term):
     return (goal.name, getattr(goal, "arity", 0)) if isinstance(goal, (Atom, Compound)) else None
 
 
+def _start_up_text(clause) -> str:
+    """A start-up declaration, or `'$directive'(Where, Goal)` for a directive that calls the
+    runtime (run after the load, reported at Where when it fails or raises)."""
+    if isinstance(clause, Declaration):
+        return write_term(clause.goal, 999)
+    goal = clause.goal
+    if isinstance(goal, Compound) and goal.name == "initialization" and goal.arity == 1:
+        goal = goal.args[0]                 # it runs after the load anyway
+    where = Atom(f"{clause.span.file}:{clause.span.line}")
+    return write_term(Compound("$directive", (where, goal)), 999)
+
+
 def _is_copied(clause) -> bool:
     if isinstance(clause, StaticClause):
         return True
     if isinstance(clause, Directive):
+        if clause.after_load:
+            return False
         goal = clause.goal
         key = (goal.name, getattr(goal, "arity", 0)) if isinstance(goal, (Atom, Compound)) else None
         return key not in _COMPILED_DIRECTIVES

@@ -1,0 +1,113 @@
+"""Programs written for ETALIS and for Retalis 2015 (issue 14, docs/compatibility.md): the
+forms that are not covered by a golden case (tests/golden/etalis_*, retalis_2015_*)."""
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from retalisc.compiler import compile_file, compile_source
+from retalisc.driver.engine import Engine
+from retalisc.frontend.errors import RetalisError, RetalisSyntaxError
+from retalisc.frontend.program import complete_paragraphs, parse_program
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def retalisc(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "retalisc", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, timeout=120)
+
+
+# ---- Retalis 2015: goal lines without a final period -------------------------------------
+
+def test_goal_lines_without_period_one_per_paragraph():
+    text = ("memorize(seen(O), [], seen(O), m1, 5)\n\n"
+            "subscribe(\n  seen(_), [],\n  _, % template\n  topic, s1)   % a comment 'with' quotes\n\n"
+            "% a comment paragraph\n\n"
+            "a(1). b(2).\n")
+    program = parse_program(text, "goalPredicates.txt")
+    goals = [c.goal.name for c in program.declarations]
+    assert goals == ["memorize", "subscribe"]
+    assert [c.span.line for c in program.clauses] == [1, 3, 10, 10]
+
+
+def test_completing_paragraphs_keeps_lines_and_columns():
+    text = "a(1)\n\nb(2).\n\nc('%', \"x\")  % done\n"
+    assert complete_paragraphs(text) == "a(1) .\n\nb(2).\n\nc('%', \"x\") .  % done\n"
+
+
+def test_a_real_syntax_error_is_reported_where_it_is():
+    """Adding periods is tried only when the text cannot be read; when that fails too, the
+    error of the text as written stands."""
+    text = "a(1).\n\nh(X) :- b(X\n\nc(2).\n"
+    with pytest.raises(RetalisSyntaxError) as info:
+        parse_program(text, "bad.rtl")
+    assert (info.value.span.line, info.value.span.column) == (5, 5)
+
+
+def test_compile_event_file_relative_to_the_program(tmp_path):
+    (tmp_path / "rules").mkdir()
+    (tmp_path / "rules" / "eventRules.txt").write_text("c(X) <- a(X) seq b(X).\n")
+    (tmp_path / "goals.txt").write_text("compile_event_file('rules/eventRules.txt')\n\nprint_trigger(c/1)\n")
+    result = compile_file(str(tmp_path / "goals.txt"))
+    assert [r.span.file for r in result.unit.program.event_rules] == [str(tmp_path / "rules" / "eventRules.txt")]
+    engine = Engine.from_compiled(result)
+    assert [o.line for o in engine.feed_batch([("a(1)", 1), ("b(1)", 2)])] == \
+        ['{"event": "c(1)", "start": 1, "end": 2}']
+
+
+def test_compile_event_file_missing_is_a_located_error(tmp_path):
+    program = tmp_path / "goals.txt"
+    program.write_text("set_etalis_flag(event_consumption_policy, recent)\n\n:- compile_event_file(nowhere).\n")
+    run = retalisc("compile", program)
+    assert run.returncode == 2
+    assert run.stderr.startswith(f"{program}:3:1: syntax error: compile_event_file: cannot read nowhere")
+    assert ":- compile_event_file(nowhere)." in run.stderr and "Traceback" not in run.stderr
+
+
+def test_compile_event_file_errors_point_into_the_included_file(tmp_path):
+    (tmp_path / "eventRules.txt").write_text("ok(X) <- a(X).\nh(X) <- a(X) SEQ b(X).\n")
+    program = tmp_path / "goals.txt"
+    program.write_text("compile_event_file('eventRules.txt')\n")
+    run = retalisc("compile", program)
+    assert run.returncode == 2
+    assert run.stderr.startswith(f"{tmp_path / 'eventRules.txt'}:2:14: syntax error:")
+    assert "h(X) <- a(X) SEQ b(X)." in run.stderr
+
+
+def test_compile_event_file_that_includes_itself(tmp_path):
+    (tmp_path / "a.txt").write_text("compile_event_file('a.txt')\n")
+    with pytest.raises(RetalisSyntaxError, match="includes itself"):
+        compile_file(str(tmp_path / "a.txt"))
+
+
+# ---- directives that call the runtime ------------------------------------------------------
+
+DIRECTIVES = """c(X) <- a(X) seq b(X).
+:- subscribe(c(X), [X > 1], _, big, s1), sub(s2, all, c(Y)-[], got(Y), now).
+:- initialization(subscribe(c(_), [], _, late, s3)).
+"""
+
+
+def test_runtime_directives_run_after_the_load_in_program_order_with_the_driver():
+    engine = Engine.from_source(DIRECTIVES, "d.rtl")
+    lines = [o.line for o in engine.feed_batch([("a(1)", 1), ("b(1)", 2), ("a(2)", 3), ("b(2)", 4)])]
+    assert lines == ['{"event": "c(1)", "start": 1, "end": 2}',
+                     '{"event": "got(1)", "start": 1, "end": 2, "consumer": "all"}',
+                     '{"event": "c(1)", "start": 1, "end": 2, "consumer": "late"}',
+                     '{"event": "c(2)", "start": 3, "end": 4}',
+                     '{"event": "c(2)", "start": 3, "end": 4, "consumer": "big"}',
+                     '{"event": "got(2)", "start": 3, "end": 4, "consumer": "all"}',
+                     '{"event": "c(2)", "start": 3, "end": 4, "consumer": "late"}']
+
+
+def test_a_failing_runtime_directive_is_reported_with_its_line(tmp_path, swipl):
+    source = "c(X) <- a(X).\n:- true,\n   sub(s1, out, c(_)-[], x, never).\n"
+    program = tmp_path / "p.pl"
+    program.write_text(compile_source(source, "p.rtl").prolog)
+    run = subprocess.run([swipl, str(program), "-"], input='{"event": "a(1)", "t": 1}\n', capture_output=True,
+                         text=True, timeout=60)
+    assert run.returncode == 0
+    assert "p.rtl:2: directive raised:" in run.stderr
+    assert run.stdout == '{"event": "c(1)", "start": 1, "end": 1}\n'
