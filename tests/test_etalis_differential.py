@@ -135,18 +135,26 @@ def test_retalisc_detects_what_etalis_detects(tmp_path, policy, keys):
                            f"stream {mismatches[0][1]}\nonly ETALIS: {mismatches[0][2]}\nonly retalisc: {mismatches[0][3]}"
 
 
-CAPITALISED = """r1(X) <- a(X) 'SEQ' b(X).
+
+# ETALIS forms whose meaning retalisc shares (docs/compatibility.md): the operators spelled
+# 'SEQ', 'Seq', 'AND', 'WHERE', ...; the aggregates count and sum, which give 0 when the
+# start event opens them (min and max are left out: ETALIS gives -100000 / 100000 there).
+ETALIS_FORMS = """r1(X) <- a(X) 'SEQ' b(X).
 r2(X) <- a(X) 'AND' b(X) 'WHERE' X > 1.
 r3(X) <- a(X) 'OR' d(X) 'Seq' b(X).
 r4(X, Y) <- a(X) 'And' d(Y) 'Where' X < Y.
+r5(S, N) <- start(S) seq aggregate(count, price(_), N).
+r6(S, T) <- start(S) 'SEQ' aggregate(sum(P), price(P), T).
 """
 
 
-def test_quoted_capitalised_operators_as_etalis(tmp_path, policy="recent"):
-    """ETALIS's own spelling of the operators ('SEQ', 'Seq', 'AND', 'WHERE', ...): both
-    engines read the same rules and detect the same."""
-    streams = [[("a(1)", 1), ("b(1)", 2), ("g(2)", 3), ("a(2)", 4), ("b(2)", 6), ("d(3)", 7), ("b(3)", 8)]]
-    etalis = run_etalis(tmp_path, policy, CAPITALISED, streams)
-    ours = run_retalisc(policy, CAPITALISED, streams)
-    assert sum(etalis[0].values()) >= 7
+def test_etalis_forms_as_etalis(tmp_path):
+    """Both engines read the same rules and detect the same (under `unrestricted`: under
+    `recent` a new start event takes an open aggregate's place in ETALIS, docs/compatibility.md)."""
+    streams = [[("a(1)", 1), ("b(1)", 2), ("g(2)", 3), ("a(2)", 4), ("b(2)", 6), ("d(3)", 7), ("b(3)", 8)],
+               [("price(100)", 1), ("start(x)", 2), ("price(5)", 3), ("price(9)", 4), ("start(y)", 5),
+                ("price(2)", 6)]]
+    etalis = run_etalis(tmp_path, "unrestricted", ETALIS_FORMS, streams)
+    ours = run_retalisc("unrestricted", ETALIS_FORMS, streams)
+    assert sum(etalis[0].values()) >= 7 and etalis[1][("r5(x,0)", 2, 2)] == 1
     assert ours == etalis
