@@ -111,3 +111,41 @@ def test_a_failing_runtime_directive_is_reported_with_its_line(tmp_path, swipl):
     assert run.returncode == 0
     assert "p.rtl:2: directive raised:" in run.stderr
     assert run.stdout == '{"event": "c(1)", "start": 1, "end": 1}\n'
+
+
+# ---- ETALIS operators: timestamp, event_multiply, star_times, subpatterns ------------------
+
+def _lines(source, events):
+    engine = Engine.from_source(source, "ops.rtl")
+    return [(o.event, o.start, o.end) for o in engine.feed_batch(events)]
+
+
+def test_capitalised_timestamp_and_event_multiply():
+    source = ("p(1, x). p(1, y).\n"
+              "m(X, Y) <- a(X) 'EVENT_MULTIPLY' p(X, Y).\n"
+              "t(X, S) <- (a(X) seq b(X)) 'TIMESTAMP' t1(S).\n")
+    assert _lines(source, [("a(1)", 1), ("b(1)", 3)]) == [("m(1,x)", 1, 1), ("m(1,y)", 1, 1), ("t(1,1)", 1, 3)]
+
+
+def test_star_times_under_recent_keeps_one_start():
+    """Under `recent` a new start replaces the waiting one, as for any sequence."""
+    source = ":- set_etalis_flag(event_consumption_policy, recent).\ntrail(X) <- start(X) seq b(X) star_times.\n"
+    assert _lines(source, [("start(1)", 1), ("b(1)", 2), ("b(1)", 3)]) == [
+        ("trail(1)", 1, 1), ("trail(1)", 1, 2), ("trail(1)", 1, 3)]
+
+
+@pytest.mark.parametrize("source, words", [
+    ("h(Y) <- start(X) seq b(X, Y) star_times.\n", "occurs only in the pattern repeated by star_times"),
+    ("h(X) <- b(X) star_times.\n", "star_times repeats a pattern after a start event"),
+])
+def test_star_times_errors(source, words):
+    with pytest.raises(RetalisError, match=words):
+        compile_source(source, "bad.rtl")
+
+
+def test_nested_subpatterns_become_rules_of_their_own():
+    source = "f(Z) <- c(Z) seq (outer(X) <- (inner(X) <- b0(X) seq b1(X)) seq b2(X)).\n"
+    program = parse_program(source, "sub.rtl")
+    assert [(r.head.name, r.span.line) for r in program.event_rules] == [("inner", 1), ("outer", 1), ("f", 1)]
+    assert _lines(source, [("c(1)", 1), ("b0(2)", 2), ("b1(2)", 3), ("b2(2)", 4)]) == [
+        ("inner(2)", 2, 3), ("outer(2)", 2, 4), ("f(1)", 1, 4)]

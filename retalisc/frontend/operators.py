@@ -78,6 +78,10 @@ def _standard() -> OperatorTable:
         (1040, "yfx", ["and"]),
         (1031, "yfx", ["cnot", "fnot"]),
         (1025, "yfx", ["seq", "equals", "meets", "during", "starts", "finishes"]),
+        # ETALIS: `P timestamp C` is `P check C`; `P event_multiply G` derives once per
+        # solution of G; `P star_times` is P repeated (after a start: `A seq B star_times`)
+        (1050, "yfx", ["timestamp", "event_multiply"]),
+        (200, "xf", ["star_times"]),
         (100, "yfx", ["."]),
     ]:
         for name in names:
@@ -88,7 +92,7 @@ def _standard() -> OperatorTable:
 # ETALIS's own examples write the event operators quoted and capitalised ('SEQ', 'Seq', ...):
 # the same operators, read as their lowercase forms (an unquoted SEQ is a variable).
 ETALIS_ALIASES = {spelling: name
-                  for name in EVENT_OPERATORS + ("do",)
+                  for name in EVENT_OPERATORS + ("do", "timestamp", "event_multiply")
                   for spelling in (name.upper(), name.capitalize())}
 
 

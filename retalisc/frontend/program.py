@@ -7,6 +7,7 @@ the parser into these dataclasses; patterns become `Pattern` trees.
 """
 from __future__ import annotations
 
+import itertools
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -14,7 +15,7 @@ from typing import List, Optional, Union
 
 from .errors import RetalisSyntaxError
 from .parser import ReadClause, read_program
-from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, span_of, to_prolog
+from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list, span_of, to_prolog
 
 
 # ---- patterns --------------------------------------------------------------------------
@@ -81,6 +82,7 @@ class Aggregate:
     pattern: "Pattern"
     value: Term
     span: Optional[Span] = None
+    star: bool = False      # ETALIS `Start seq P star_times`: a count whose value is not used
 
 
 Pattern = Union[EventAtom, Binary, Where, Check, Window, Negation, Aggregate]
@@ -103,6 +105,7 @@ class EventRule:
     action: Optional[Term] = None   # `Head do Action <- Pattern`
     properties: dict = field(default_factory=dict)
     synchronized: Optional[Compound] = None   # `synchronized(E, Q, SyncConds)` head
+    subrules: List["EventRule"] = field(default_factory=list)   # ETALIS subpatterns `(H <- P)` in the pattern
 
 
 @dataclass
@@ -304,7 +307,23 @@ def _without_line_comment(line: str) -> str:
 
 
 def build_program(clauses: List[ReadClause], file: str, text: str = "") -> Program:
-    return Program(file, [classify(c) for c in clauses], text)
+    classified: List[Clause] = []
+    for read in clauses:
+        clause = classify(read)
+        if isinstance(clause, EventRule):
+            classified.extend(_with_subrules(clause))
+        else:
+            classified.append(clause)
+    return Program(file, classified, text)
+
+
+def _with_subrules(rule: EventRule) -> List[EventRule]:
+    """The rules of ETALIS subpatterns in `rule`'s pattern (innermost first), then `rule`."""
+    out: List[EventRule] = []
+    for sub in rule.subrules:
+        out.extend(_with_subrules(sub))
+    out.append(rule)
+    return out
 
 
 def classify(clause: ReadClause) -> Clause:
@@ -332,6 +351,9 @@ def classify(clause: ReadClause) -> Clause:
         return _event_rule(term, clause, None)
     if isinstance(term, (Atom, Compound)) and term.name in DECLARATION_NAMES:
         return Declaration(term, clause.span, clause.text)
+    if _is(term, "db", 1) and isinstance(term.args[0], (Atom, Compound)) and not _is(term.args[0], ":-", 2):
+        # ETALIS's facts of the static database: db(p(1, 2)). is the fact p(1, 2).
+        return StaticClause(term.args[0], clause.span, clause.text)
     if isinstance(term, (Var, Number)) or (hasattr(term, "text") and not isinstance(term, (Atom, Compound))):
         raise RetalisSyntaxError("a clause must be a rule, a fact or a directive", clause.span)
     return StaticClause(term, clause.span, clause.text)
@@ -352,8 +374,42 @@ def _event_rule(term: Compound, clause: ReadClause, label_term: Optional[Term]) 
         synchronized = head
     if not isinstance(head, (Atom, Compound)):
         raise RetalisSyntaxError("the head of an event rule must be an event atom", span_of(head) or clause.span)
+    subrules: List[EventRule] = []
+    body = _extract_subpatterns(body, clause, subrules)
     pattern = to_pattern(body, clause.span)
-    return EventRule(head, pattern, clause.span, clause.text, label, action, properties, synchronized)
+    return EventRule(head, pattern, clause.span, clause.text, label, action, properties, synchronized, subrules)
+
+
+def _extract_subpatterns(term: Term, clause: ReadClause, found: List["EventRule"]) -> Term:
+    """ETALIS subpatterns: `a seq (sub1 <- b0(X) seq b1(Y) where X < Y)` defines `sub1` by
+    a rule of its own (added to `found`) and uses `sub1` in its place. Only operands of
+    event operators are looked at (not the arguments of event atoms or conditions)."""
+    if _is(term, "<-", 2):
+        rule = _event_rule(term, clause, None)
+        found.append(rule)
+        return rule.head
+    if isinstance(term, Compound) and (term.name in _PATTERN_OPERATORS or term.name == "."):
+        count = term.arity if term.name in BINARY_OPERATORS + ("cnot", "star_times", ".") else 1
+        if term.name == "." and _is(term.args[0], "not", 1):
+            negated = Compound("not", (_extract_subpatterns(term.args[0].args[0], clause, found),), term.args[0].span)
+            items = list_items(term.args[1])
+            if items is not None:
+                return Compound(".", (negated, make_list([_extract_subpatterns(i, clause, found) for i in items])),
+                                term.span)
+            return term
+        args = tuple(_extract_subpatterns(a, clause, found) if i < count else a for i, a in enumerate(term.args))
+        return Compound(term.name, args, term.span)
+    if _is(term, "aggregate", 3):
+        function, pattern, value = term.args
+        return Compound("aggregate", (function, _extract_subpatterns(pattern, clause, found), value), term.span)
+    return term
+
+
+_STAR_COUNTER = itertools.count(1)
+
+# Operators whose operands (the first only for where, check, timestamp, event_multiply) are patterns.
+_PATTERN_OPERATORS = set(BINARY_OPERATORS) | {"cnot", "where", "check", "timestamp", "event_multiply",
+                                               "star_times"}
 
 
 def _label(term: Optional[Term], span: Span):
@@ -401,12 +457,24 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                                      where)
         if term.name == "not":
             raise RetalisSyntaxError("negation is written not(N).[P1, P2]: no N between P1 and P2", where)
+        if term.arity == 2 and term.name == "seq" and _is(term.args[1], "star_times", 1):
+            repeated = to_pattern(term.args[1].args[0], span)
+            return Binary("seq", to_pattern(term.args[0], span),
+                          Aggregate(Atom("count"), repeated, Var(f"StarTimes_{next(_STAR_COUNTER)}"),
+                                    span_of(term.args[1]) or where, True),
+                          where)
         if term.arity == 2 and term.name in BINARY_OPERATORS:
             return Binary(term.name, to_pattern(term.args[0], span), to_pattern(term.args[1], span), where)
         if term.arity == 2 and term.name == "where":
             return Where(to_pattern(term.args[0], span), term.args[1], where)
-        if term.arity == 2 and term.name == "check":
+        if term.arity == 2 and term.name in ("check", "timestamp"):
             return Check(to_pattern(term.args[0], span), term.args[1], where)
+        if term.arity == 2 and term.name == "event_multiply":
+            # ETALIS: one event per solution of the static goal, as a where condition gives
+            return Where(to_pattern(term.args[0], span), term.args[1], where)
+        if term.arity == 1 and term.name == "star_times":
+            raise RetalisSyntaxError("star_times repeats a pattern after a start event: Start seq P star_times",
+                                     where)
         if term.arity == 2 and term.name == "cnot":
             first = to_pattern(term.args[0], span)
             if not (isinstance(first, Binary) and first.op == "seq"):
@@ -531,6 +599,8 @@ def pattern_text(pattern: Pattern) -> str:
         return f"({pattern_text(pattern.pattern)}).{length}"
     if isinstance(pattern, Negation):
         return f"not({pattern_text(pattern.negated)}).[{pattern_text(pattern.first)}, {pattern_text(pattern.second)}]"
+    if isinstance(pattern, Aggregate) and pattern.star:
+        return f"{pattern_text(pattern.pattern)} star_times"
     if isinstance(pattern, Aggregate):
         return (f"aggregate({write_term(pattern.function, 999)}, {pattern_text(pattern.pattern)}, "
                 f"{write_term(pattern.value, 999)})")
