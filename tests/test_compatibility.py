@@ -149,3 +149,30 @@ def test_nested_subpatterns_become_rules_of_their_own():
     assert [(r.head.name, r.span.line) for r in program.event_rules] == [("inner", 1), ("outer", 1), ("f", 1)]
     assert _lines(source, [("c(1)", 1), ("b0(2)", 2), ("b1(2)", 3), ("b2(2)", 4)]) == [
         ("inner(2)", 2, 3), ("outer(2)", 2, 4), ("f(1)", 1, 4)]
+
+
+# ---- runtime rule goals in actions ------------------------------------------------------
+
+def test_a_rule_term_inserted_by_an_action_is_checked_like_added_rules(tmp_path, swipl):
+    """`ins_event_rule(Head <- Pattern)` with a goal that came with an event: the rule goes
+    through the sandbox of rules added at run time; a rule term without a label cannot be
+    deleted (rules are found by label)."""
+    marker = tmp_path / "hacked"
+    program = tmp_path / "p.pl"
+    program.write_text(compile_source("null do ins_event_rule(h <- a where G) <- install(G).\n"
+                                      "null do del_event_rule(h <- a) <- stop.\n", "p.rtl").prolog)
+    events = f'{{"event": "install(shell(\'touch {marker}\'))", "t": 1}}\n{{"event": "a", "t": 2}}\n' \
+             '{"event": "stop", "t": 3}\n'
+    run = subprocess.run([swipl, str(program), "-"], input=events, capture_output=True, text=True, timeout=60)
+    assert "unsafe goal: shell/1" in run.stderr
+    assert "rules are deleted by label" in run.stderr
+    assert not marker.exists() and run.stdout == ""
+
+
+def test_del_event_rule_takes_the_label_of_a_rule_term():
+    source = ("r1 'rule:' e(X) <- c(X).\n"
+              "null do del_event_rule(r1 'rule:' e(X) <- c(X)) <- stop.\n"
+              "null do del_event_rule(f(X) <- c(X)) <- stop2.\n")
+    engine = Engine.from_source(source, "p.rtl")
+    assert [o.event for o in engine.feed_batch([("c(1)", 1), ("stop", 2), ("c(2)", 3)])] == ["e(1)"]
+    assert engine.feed_batch([("stop2", 4)]) == []

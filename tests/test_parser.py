@@ -91,3 +91,12 @@ def test_quoted_capitalised_etalis_operators(text, expected):
     """'SEQ', 'Seq', 'AND', ... are the lowercase operators (same priorities); as operands
     they stay atoms."""
     assert to_prolog(read_program(text + "\n", "f.rtl")[0].term) == expected
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("x :- ins_event_rule(d(Y) <- c(Y)).", ":-(x, ins_event_rule(<-(d(Y), c(Y))))"),
+    ("x :- f(a :- b, c), g([h <- i, j]).", ":-(x, ','(f(:-(a, b), c), g([<-(h, i), j])))"),
+    ("x :- del_event_rule(r1 'rule:' h <- a).", ":-(x, del_event_rule('rule:'(r1, <-(h, a))))"),
+])
+def test_arguments_up_to_priority_1200_as_swi_prolog_reads_them(text, expected):
+    assert to_prolog(read_program(text + "\n", "f.rtl")[0].term) == expected

@@ -345,12 +345,14 @@ class _Builder:
             functor = str(node.children[0])[:-1]
             if functor.startswith("'"):
                 functor = self.unescape(functor[1:-1], "'", node.meta.start_pos + 1)
-            args = tuple(self.sequence(child, ARGUMENT_PRIORITY) for child in node.children[1:])
+            # SWI-Prolog reads an argument up to priority 1200 (`ins_event_rule(d(Y) <- c(Y))`,
+            # `f(a :- b)`), not 999 as ISO; a labelled rule (1210) may be an argument too
+            args = tuple(self.sequence(child, CLAUSE_PRIORITY) for child in node.children[1:])
             return Compound(functor, args, span)
         if kind == "empty_list":
             return Atom("[]", span)
         if kind == "list":
-            args = [self.sequence(child, ARGUMENT_PRIORITY) for child in node.children]
+            args = [self.sequence(child, CLAUSE_PRIORITY) for child in node.children]
             # the grammar cannot tell "[a, b | T]" from "[a, b]" by child count alone
             if self._has_tail(node):
                 return make_list(args[:-1], args[-1])
