@@ -176,3 +176,34 @@ def test_del_event_rule_takes_the_label_of_a_rule_term():
     engine = Engine.from_source(source, "p.rtl")
     assert [o.event for o in engine.feed_batch([("c(1)", 1), ("stop", 2), ("c(2)", 3)])] == ["e(1)"]
     assert engine.feed_batch([("stop2", 4)]) == []
+
+
+# ---- ETALIS housekeeping: print_trigger, flags, facts ----------------------------------------
+
+def test_etalis_flags_warn_only_where_meaningless():
+    source = (":- set_etalis_flag(subPatterns, on).\n:- set_etalis_flag(revision_flag, on).\n"
+              ":- set_etalis_flag(out_of_order, off).\nset_etalis_flag(store_fired_events, on).\nh <- a.\n")
+    warnings = compile_source(source, "f.rtl").warnings
+    assert len(warnings) == 2
+    assert warnings[0].startswith("f.rtl:3:1: warning: ETALIS flag out_of_order is ignored: events out of order")
+    assert warnings[1].startswith("f.rtl:4:1: warning: ETALIS flag store_fired_events has no meaning")
+
+
+@pytest.mark.parametrize("declarations, printed", [
+    ("print_trigger(_).\nprint_trigger(h/1).\n", ["h(1)", "g", "k(1,2)"]),
+    ("print_trigger(all_defined_events).\n", ["h(1)", "g", "k(1,2)"]),
+    ("print_trigger(_/_).\n", ["h(1)", "g", "k(1,2)"]),
+    ("print_trigger(_/2).\n", ["k(1,2)"]),
+    ("external_trigger(h/_).\n", ["h(1)"]),
+    ("print_trigger(k(_, 2)).\nprint_trigger(g/0).\n", ["g", "k(1,2)"]),
+])
+def test_print_trigger_forms(declarations, printed):
+    source = declarations + "h(X) <- a(X).\ng <- a(_).\nk(X, Y) <- a(X) seq b(Y).\n"
+    engine = Engine.from_source(source, "p.rtl")
+    assert [o.event for o in engine.feed_batch([("a(1)", 1), ("b(2)", 2)])] == printed
+
+
+def test_print_trigger_with_a_bad_indicator_is_a_located_error():
+    with pytest.raises(RetalisError, match="print_trigger takes Name/Arity") as info:
+        compile_source("h <- a.\nprint_trigger(h/x).\n", "p.rtl")
+    assert info.value.span.line == 2

@@ -179,7 +179,7 @@ DECLARATIONS = {
     ("c_mem", 4), ("d_mem", 1), ("sub", 5), ("unsub", 2), ("subscribe_between", 5),
     ("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3),
     ("set_retalis_flag", 2), ("c_mem", 5), ("stream_history", 1), ("stream_history", 3),
-    ("max_delay", 2), ("goal_set", 3),
+    ("max_delay", 2), ("goal_set", 3), ("print_event", 1), ("external_trigger", 1),
 }
 
 DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
@@ -206,28 +206,36 @@ def _read_with_includes(text: str, file: str, loading: List[str]) -> List[ReadCl
             continue
         target = _resolve_include(path, file, clause.span)
         if str(target) in loading:
-            raise RetalisSyntaxError(f"compile_event_file: {path} is already being read (it includes itself)",
+            raise RetalisSyntaxError(f"{_include_name(clause.term)}: {path} is already being read (it includes itself)",
                                      clause.span)
         try:
             included = target.read_text(encoding="utf-8-sig")
         except (OSError, UnicodeDecodeError) as error:
             reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
-            raise RetalisSyntaxError(f"compile_event_file: cannot read {path} ({target}): {reason}",
+            raise RetalisSyntaxError(f"{_include_name(clause.term)}: cannot read {path} ({target}): {reason}",
                                      clause.span) from None
         clauses.extend(_read_with_includes(included, str(target), loading + [str(target)]))
     return clauses
+
+
+# ETALIS's goals that load a file of rules (events rules, static rules, db/1 facts): read in place.
+INCLUDES = ("compile_event_file", "load_static_rules", "load_database")
 
 
 def _included_file(term: Term) -> Optional[str]:
     """The path of a `compile_event_file(Path)` fact or directive, else None."""
     if _is(term, ":-", 1):
         term = term.args[0]
-    if _is(term, "compile_event_file", 1):
+    if isinstance(term, Compound) and term.arity == 1 and term.name in INCLUDES:
         path = term.args[0]
         if isinstance(path, (Atom, String)):
             return path.name if isinstance(path, Atom) else path.text
-        raise RetalisSyntaxError("compile_event_file(Path) takes a file name", span_of(path))
+        raise RetalisSyntaxError(f"{term.name}(Path) takes a file name", span_of(path))
     return None
+
+
+def _include_name(term: Term) -> str:
+    return (term.args[0] if _is(term, ":-", 1) else term).name
 
 
 def _resolve_include(path: str, file: str, span: Span) -> Path:

@@ -31,7 +31,8 @@ _ENV = jinja2.Environment(
 )
 
 # Directives that only configure the compiler: they are compiled, not copied.
-_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print_trigger", 1),
+_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print_trigger", 1), ("print_event", 1),
+                        ("external_trigger", 1),
                         ("event_rule_property", 3), ("op", 3)}
 
 
@@ -47,7 +48,7 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
                    for g in unit.generated for live, _, a, b, order in g.kept})
     printed = None
     if unit.settings.printed is not None:
-        printed = [_functor_pattern(name, arity) for name, arity in unit.settings.printed]
+        printed = [_printed_clause(spec) for spec in unit.settings.printed]
     template = _ENV.get_template("program.pl.j2")
     return template.render(
         source_file=unit.program.file,
@@ -161,6 +162,19 @@ def _goal_text(goal: Term) -> str:
         return f"( {write_term(goal.args[0], 1099)}\n    ; {write_term(goal.args[1], 1099)}\n    )"
     return write_term(goal, 999)
 
+
+
+def _printed_clause(spec: tuple) -> str:
+    """The `ele_printed/1` clause for one print_trigger (collect_settings._printed)."""
+    if spec[0] == "pattern":
+        return f"ele_printed({write_term(spec[1], 999)})."
+    _, name, arity = spec
+    if name is not None and arity is not None:
+        return f"ele_printed({_functor_pattern(name, arity)})."
+    if name is None:
+        return "ele_printed(E) :- atom(E)." if arity == 0 else \
+            f"ele_printed(E) :- compound(E), compound_name_arity(E, _, {arity})."
+    return f"ele_printed(E) :- callable(E), functor(E, {quote_atom(name)}, _)."
 
 
 def _functor_pattern(name: str, arity: int) -> str:
