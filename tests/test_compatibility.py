@@ -207,3 +207,8 @@ def test_print_trigger_with_a_bad_indicator_is_a_located_error():
     with pytest.raises(RetalisError, match="print_trigger takes Name/Arity") as info:
         compile_source("h <- a.\nprint_trigger(h/x).\n", "p.rtl")
     assert info.value.span.line == 2
+
+
+def test_capitalised_operators_in_functional_notation():
+    assert _lines("h(X) <- 'SEQ'(a(X), 'AND'(b(X), c(X))).\n", [("a(1)", 1), ("c(1)", 2), ("b(1)", 3)]) == [
+        ("h(1)", 1, 3)]

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import List, Optional, Union
 
 from .errors import RetalisSyntaxError
+from .operators import ETALIS_ALIASES
 from .parser import ReadClause, read_program
 from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list, span_of, to_prolog
 
@@ -459,6 +460,8 @@ def _strip_time(head: Term) -> Term:
 def to_pattern(term: Term, span: Span) -> Pattern:
     """Turn an event pattern term into a Pattern tree."""
     where = span_of(term) or span
+    if isinstance(term, Compound) and term.arity == 2 and term.name in ETALIS_ALIASES:
+        term = Compound(ETALIS_ALIASES[term.name], term.args, term.span)     # 'SEQ'(A, B) in functional notation
     if isinstance(term, Compound):
         if (term.name, term.arity) in _NOT_PATTERNS:
             raise RetalisSyntaxError(f"'{term.name}' cannot stand inside a pattern ({_NOT_PATTERNS[term.name, term.arity]})",
