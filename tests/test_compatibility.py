@@ -5,11 +5,15 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from retalisc.compiler import compile_file, compile_source
 from retalisc.driver.engine import Engine
 from retalisc.frontend.errors import RetalisError, RetalisSyntaxError
-from retalisc.frontend.program import complete_paragraphs, parse_program
+from retalisc.frontend.parser import read_program
+from retalisc.frontend.program import complete_paragraphs, parse_program, read_goal_lines
+from retalisc.frontend.terms import to_prolog
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -212,3 +216,33 @@ def test_print_trigger_with_a_bad_indicator_is_a_located_error():
 def test_capitalised_operators_in_functional_notation():
     assert _lines("h(X) <- 'SEQ'(a(X), 'AND'(b(X), c(X))).\n", [("a(1)", 1), ("c(1)", 2), ("b(1)", 3)]) == [
         ("h(1)", 1, 3)]
+
+
+def test_blank_lines_inside_quotes_and_block_comments_do_not_end_a_paragraph():
+    text = "a(1)\n\n/* a comment\n\nover two paragraphs */\nb(2)\n\n\nc('%', \"x\n\ny\", 0'a)\n"
+    assert complete_paragraphs(text) == \
+        "a(1) .\n\n/* a comment\n\nover two paragraphs */\nb(2) .\n\n\nc('%', \"x\n\ny\", 0'a) .\n"
+
+
+_ATOMS = st.sampled_from(["a", "b1", "'x y'", "'%'", "\"s\"", "[]", "0'a", "1.5", "X", "_"])
+
+
+@st.composite
+def _goal(draw, depth=2):
+    name = draw(st.sampled_from(["memorize", "subscribe", "set_etalis_flag", "p", "q"]))
+    args = [draw(_goal(depth - 1)) if depth and draw(st.booleans()) else draw(_ATOMS)
+            for _ in range(draw(st.integers(1, 3)))]
+    layout = draw(st.sampled_from([", ", ",\n  ", " ,"]))
+    return f"{name}({layout.join(args)})"
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(_goal(), st.sampled_from(["", "  % note", " /* n */"])), min_size=1, max_size=5),
+       st.sampled_from(["\n\n", "\n\n\n", "\n \n"]))
+def test_goal_lines_read_as_the_same_goals_with_periods(goals, gap):
+    """Oracle: the goal lines without periods read as the same clauses as with them."""
+    with_periods = gap.join(f"{g}.{c}" for g, c in goals) + "\n"
+    without = gap.join(f"{g}{c}" for g, c in goals) + "\n"
+    expected = [to_prolog(c.term) for c in read_program(with_periods, "g.txt")]
+    assert [to_prolog(c.term) for c in read_goal_lines(without, "g.txt")] == expected
+    assert [to_prolog(c.term) for c in read_goal_lines(with_periods, "g.txt")] == expected

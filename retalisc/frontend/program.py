@@ -7,6 +7,7 @@ the parser into these dataclasses; patterns become `Pattern` trees.
 """
 from __future__ import annotations
 
+import bisect
 import itertools
 import re
 from dataclasses import dataclass, field
@@ -245,7 +246,7 @@ def _resolve_include(path: str, file: str, span: Span) -> Path:
 
 
 # A paragraph: text between blank lines.
-_PARAGRAPH_BREAK = re.compile(r"\n[ \t\r]*\n")
+_PARAGRAPH_BREAK = re.compile(r"\n(?:[ \t\r]*\n)+")
 
 
 def read_goal_lines(text: str, file: str) -> List[ReadClause]:
@@ -266,53 +267,77 @@ def read_goal_lines(text: str, file: str) -> List[ReadClause]:
 
 def complete_paragraphs(text: str) -> str:
     """`text` with " ." after the last token of every paragraph that does not end with a
-    full stop (a line comment after it is kept after the added period). Lines and columns
-    of everything else stay the same."""
+    full stop (comments after it stay after the added period). Paragraphs are separated by
+    blank lines outside quoted items and block comments. Lines and columns of everything
+    else stay the same."""
+    code, breaks = _scan(text)
     out = []
     position = 0
-    for match in list(_PARAGRAPH_BREAK.finditer(text)) + [None]:
-        end = match.start() if match is not None else len(text)
-        out.append(_complete(text[position:end]))
-        if match is not None:
-            out.append(match.group(0))
-            position = match.end()
+    for start, end in breaks + [(len(text), len(text))]:
+        last = _last_code(code, position, start)
+        if last is not None and text[last] != ".":
+            out.append(text[position:last + 1] + " ." + text[last + 1:start])
+        else:
+            out.append(text[position:start])
+        out.append(text[start:end])
+        position = end
     return "".join(out)
 
 
-def _complete(paragraph: str) -> str:
-    lines = paragraph.split("\n")
-    for index in range(len(lines) - 1, -1, -1):
-        code = _without_line_comment(lines[index]).rstrip()
-        if not code:
-            continue
-        if code.endswith(".") or code.endswith("*/"):
-            return paragraph
-        lines[index] = code + " ." + lines[index][len(code):]
-        return "\n".join(lines)
-    return paragraph
+def _last_code(code: List[int], start: int, end: int) -> Optional[int]:
+    """The last position in [start, end) that holds code (not layout or a comment)."""
+    index = bisect.bisect_left(code, end) - 1
+    return code[index] if index >= 0 and code[index] >= start else None
 
 
-def _without_line_comment(line: str) -> str:
-    """The line up to a `%` comment outside quotes."""
+def _scan(text: str):
+    """The positions of code characters (not layout, not inside comments; quoted items
+    count), in order, and (start, end) of each run of blank lines outside quoted items and
+    block comments."""
+    code: List[int] = []
+    breaks = []
+    i, n = 0, len(text)
     quote = None
-    i = 0
-    while i < len(line):
-        c = line[i]
-        if quote:
-            if c == "\\":
+    while i < n:
+        c = text[i]
+        if quote is not None:
+            code.append(i)
+            if c == "\\" and i + 1 < n:
+                code.append(i + 1)
                 i += 2
-                continue
-            if c == quote:
-                quote = None
-        elif c in "'\"`":
-            if c == "'" and i > 0 and line[i - 1] == "0" and (i < 2 or not line[i - 2].isalnum()):
+            elif c == quote and text.startswith(quote * 2, i):
+                code.append(i + 1)
                 i += 2
-                continue
-            quote = c
+            else:
+                quote = None if c == quote else quote
+                i += 1
         elif c == "%":
-            return line[:i]
-        i += 1
-    return line
+            end = text.find("\n", i)
+            i = n if end < 0 else end
+        elif text.startswith("/*", i):
+            end = text.find("*/", i + 2)
+            i = n if end < 0 else end + 2
+        elif text.startswith("0'", i) and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
+            width = 4 if text[i + 2:i + 3] == "\\" or text.startswith("''", i + 2) else 3     # a character code
+            code.extend(range(i, min(i + width, n)))
+            i += width
+        elif c in "'\"`":
+            quote = c
+            code.append(i)
+            i += 1
+        elif c == "\n":
+            match = _PARAGRAPH_BREAK.match(text, i)
+            if match:
+                breaks.append((match.start(), match.end()))
+                i = match.end()
+            else:
+                i += 1
+        else:
+            if not c.isspace():
+                code.append(i)
+            i += 1
+    return code, breaks
+
 
 
 def build_program(clauses: List[ReadClause], file: str, text: str = "") -> Program:
