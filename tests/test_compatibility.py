@@ -246,3 +246,20 @@ def test_goal_lines_read_as_the_same_goals_with_periods(goals, gap):
     expected = [to_prolog(c.term) for c in read_program(with_periods, "g.txt")]
     assert [to_prolog(c.term) for c in read_goal_lines(without, "g.txt")] == expected
     assert [to_prolog(c.term) for c in read_goal_lines(with_periods, "g.txt")] == expected
+
+
+def test_directives_after_one_that_calls_the_runtime_keep_their_order(tmp_path, swipl):
+    """A directive that reaches the runtime through the program's own predicates waits for
+    it too; the directives after it wait as well (program order), except what the load
+    needs (`dynamic`)."""
+    source = ("c(X) <- a(X).\nsetup(T) :- subscribe(c(_), [], _, T, T).\n"
+              ":- writeln(first).\n:- setup(out).\n:- dynamic seen/1.\n:- writeln(third).\n"
+              ":- assertz(seen(1)), writeln(fourth).\n")
+    program = tmp_path / "p.pl"
+    program.write_text(compile_source(source, "p.rtl").prolog)
+    assert ":- dynamic seen / 1." in program.read_text()
+    run = subprocess.run([swipl, str(program), "-"], input='{"event": "a(1)", "t": 1}\n', capture_output=True,
+                         text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.splitlines() == ["first", "third", "fourth", '{"event": "c(1)", "start": 1, "end": 1}',
+                                       '{"event": "c(1)", "start": 1, "end": 1, "consumer": "out"}']
