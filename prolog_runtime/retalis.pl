@@ -8,6 +8,7 @@
             rtl_feed_events/2,          % +Events, -Output
             rtl_action/1,               % :Goal
             rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
+            rtl_aggregate_initial/2,    % +Function, -Value
             rtl_summary/1,              % -Text
             rtl_summary/2,              % +Seconds, -Text
             rtl_end_of_input/2,         % +Mode, -Output
@@ -62,6 +63,18 @@ rtl_program_loaded(Module) :-
 
 :- multifile rtl_declaration_handler/3.
 
+run_declaration(Program, '$directive'(Where, Goal)) :-
+    !,
+    % a directive that calls the runtime, run here (after the runtime has taken the program
+    % in) in program order; reported as the loader reports a directive
+    (   catch(Program:Goal, Error, true)
+    ->  (   var(Error)
+        ->  true
+        ;   error_text(Error, Text),
+            format(user_error, "ERROR: ~w: directive raised: ~s~n", [Where, Text])
+        )
+    ;   format(user_error, "Warning: ~w: directive failed: ~q~n", [Where, Goal])
+    ).
 run_declaration(Program, Goal) :-
     functor(Goal, Name, Arity),
     (   rtl_declaration_handler(Name, Arity, Handler)
@@ -498,6 +511,16 @@ action_error(Error) :-
 %
 %   One step of an ETALIS aggregate: Function is `count`, `sum(X)`, `min(X)`, `max(X)` or
 %   `avg(X)` with X bound to the new occurrence's value; Acc0 is `none` at the start.
+
+%!  rtl_aggregate_initial(+Function, -Value) is semidet.
+%
+%   The value of an ETALIS aggregate over the empty set, given when the start event opens
+%   it: 0 for `count` and `sum(X)`; `min(X)`, `max(X)` and `avg(X)` have none (ETALIS
+%   gives 100000, -100000: numbers no occurrence had), so they fail and give nothing until
+%   the first occurrence.
+
+rtl_aggregate_initial(count, 0).
+rtl_aggregate_initial(sum(_), 0).
 
 rtl_aggregate(count, Acc0, N, N) :-
     ( Acc0 == none -> N = 1 ; N is Acc0 + 1 ).

@@ -55,16 +55,32 @@ ins_event_rule(Caller:Rule) :-
     run_compiler(M, Prefix, Text, Clauses),
     rtl_install_rules(M, Clauses, _).
 
-%!  del_event_rule(:Label) is det.
+%!  del_event_rule(:Rule) is det.
 %
-%   Remove the rule Label (added at runtime or compiled with the program): its triggers,
-%   its generated predicates and its stored partial matches. Raises an existence error
-%   when there is no such rule.
+%   Remove a rule (added at runtime or compiled with the program): its triggers, its
+%   generated predicates and its stored partial matches. Rule is its label, or as in
+%   ETALIS the labelled rule itself (`Label 'rule:' Head <- Pattern`, `Label : Head <-
+%   Pattern`: its label is used). Raises an existence error when there is no such rule, a
+%   domain error for an unlabelled rule term (rules are found by label).
 
-del_event_rule(Caller:Label) :-
+del_event_rule(Caller:Rule) :-
     rtl_target_program(Caller, M),
-    must_be(atom, Label),
+    rule_label(Rule, Label),
     rtl_remove_rule(M, Label).
+
+rule_label(Rule, Label) :-
+    (   var(Rule)
+    ->  instantiation_error(Rule)
+    ;   atom(Rule)
+    ->  Label = Rule
+    ;   ( Rule = 'rule:'(Label0, _) ; Rule = (Label0 : '<-'(_, _)) ),
+        callable(Label0)
+    ->  functor(Label0, Label, _)          % r2([property(...)]) 'rule:' ... is rule r2
+    ;   Rule = '<-'(_, _)
+    ->  throw(error(domain_error(labelled_event_rule, Rule),
+                    context(del_event_rule/1, 'rules are deleted by label: label the rule (r1 \'rule:\' Head <- Pattern) and delete r1')))
+    ;   throw(error(type_error(event_rule_label, Rule), context(del_event_rule/1, _)))
+    ).
 
 %!  rtl_install_rules(+Module, +Text:string, -Ids:list(atom)) is det.
 %

@@ -91,6 +91,7 @@ sandbox:safe_primitive(rtl_sandbox:'$rtl_checked'(_, _, _, _, _, _, _, _)).
 
 builtin(any,  retalis:rtl_action(G), [G]).
 builtin(any,  retalis:rtl_aggregate(_, _, _, _), []).
+builtin(any,  retalis:rtl_aggregate_initial(_, _), []).
 builtin(any,  rtl_library:min(_, _, _), []).
 builtin(any,  rtl_library:max(_, _, _), []).
 builtin(any,  rtl_library:datime_minus_datime(_, _, _), []).

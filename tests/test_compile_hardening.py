@@ -37,7 +37,7 @@ def cli(*args, input=None):
 
 # (id, program, line, column, words of the message)
 REJECTED = [
-    ("nested_rule_in_pattern", "x <- a seq (b <- c).\n", 1, 13, "cannot stand inside a pattern"),
+    ("nested_clause_in_pattern", "x <- a seq (b :- c).\n", 1, 13, "cannot stand inside a pattern"),
     ("nested_rule_in_where", "x <- a seq (b where (c <- d)).\n", 1, 22, "cannot stand inside a goal"),
     ("nested_clause_in_body", "p :- (q :- r).\n", 1, 7, "cannot stand inside a goal"),
     ("clause_body_not_callable", "foo :- 1.\n", 1, 8, "not callable"),

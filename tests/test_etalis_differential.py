@@ -133,3 +133,37 @@ def test_retalisc_detects_what_etalis_detects(tmp_path, policy, keys):
                   for n in range(len(streams)) if etalis[n] != ours[n]]
     assert not mismatches, f"{len(mismatches)} of {len(streams)} streams differ; rules:\n{rules}\nfirst: " \
                            f"stream {mismatches[0][1]}\nonly ETALIS: {mismatches[0][2]}\nonly retalisc: {mismatches[0][3]}"
+
+
+
+# ETALIS forms whose meaning retalisc shares (docs/compatibility.md): the operators spelled
+# 'SEQ', 'Seq', 'AND', 'WHERE', ...; the aggregates count and sum, which give 0 when the
+# start event opens them (min and max are left out: ETALIS gives -100000 / 100000 there);
+# timestamp, event_multiply over db/1 facts, star_times.
+ETALIS_FORMS = """r1(X) <- a(X) 'SEQ' b(X).
+r2(X) <- a(X) 'AND' b(X) 'WHERE' X > 1.
+r3(X) <- a(X) 'OR' d(X) 'Seq' b(X).
+r4(X, Y) <- a(X) 'And' d(Y) 'Where' X < Y.
+r5(S, N) <- start(S) seq aggregate(count, price(_), N).
+r6(S, T) <- start(S) 'SEQ' aggregate(sum(P), price(P), T).
+db(route(lab, door)).
+db(route(lab, window)).
+r7(X, D) <- (a(X) seq b(X)) timestamp (t1(T1), t2(T2), D is T2 - T1, D > 2).
+r8(P, To) <- move(P, From) 'event_multiply' route(From, To).
+r9(X) <- start(X) seq b(X) 'star_times'.
+"""
+
+
+def test_etalis_forms_as_etalis(tmp_path):
+    """Both engines read the same rules and detect the same (under `unrestricted`: under
+    `recent` a new start event takes an open aggregate's place in ETALIS, docs/compatibility.md)."""
+    streams = [[("a(1)", 1), ("b(1)", 2), ("g(2)", 3), ("a(2)", 4), ("b(2)", 6), ("d(3)", 7), ("b(3)", 8)],
+               [("price(100)", 1), ("start(x)", 2), ("price(5)", 3), ("price(9)", 4), ("start(y)", 5),
+                ("price(2)", 6)],
+               [("move(p1, lab)", 1), ("start(1)", 2), ("a(1)", 2), ("start(2)", 3), ("b(1)", 4), ("a(2)", 7),
+                ("b(2)", 8), ("b(1)", 9), ("move(p2, lab)", 10)]]
+    etalis = run_etalis(tmp_path, "unrestricted", ETALIS_FORMS, streams)
+    ours = run_retalisc("unrestricted", ETALIS_FORMS, streams)
+    assert sum(etalis[0].values()) >= 7 and etalis[1][("r5(x,0)", 2, 2)] == 1
+    assert etalis[2][("r8(p2,window)", 10, 10)] == 1 and etalis[2][("r9(1)", 2, 9)] == 1
+    assert ours == etalis

@@ -78,3 +78,25 @@ def test_syntax_errors_have_positions(text, line, column, message):
     rendered = error.render(text)
     assert rendered.startswith(f"bad.rtl:{line}:{column}: syntax error:")
     assert rendered.splitlines()[2].strip() == "^"
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("h(X) <- a(X) 'SEQ' b(X) 'AND' c 'WHERE' X > 1.", "<-(h(X), where(and(seq(a(X), b(X)), c), >(X, 1)))"),
+    ("h <- a 'OR' b 'PAR' c 'CNOT' d.", "<-(h, or(a, par(b, cnot(c, d))))"),
+    ("h <- a 'Seq' b 'Equals' c 'FNOT' d.", "<-(h, fnot(equals(seq(a, b), c), d))"),
+    ("h 'DO' true <- a 'CHECK' t1(_) 'DURING' b.", "<-(do(h, true), check(a, during(t1(_), b)))"),
+    ("x :- X = 'SEQ', Y = seq('SEQ').", ":-(x, ','(=(X, 'SEQ'), =(Y, seq('SEQ'))))"),
+])
+def test_quoted_capitalised_etalis_operators(text, expected):
+    """'SEQ', 'Seq', 'AND', ... are the lowercase operators (same priorities); as operands
+    they stay atoms."""
+    assert to_prolog(read_program(text + "\n", "f.rtl")[0].term) == expected
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("x :- ins_event_rule(d(Y) <- c(Y)).", ":-(x, ins_event_rule(<-(d(Y), c(Y))))"),
+    ("x :- f(a :- b, c), g([h <- i, j]).", ":-(x, ','(f(:-(a, b), c), g([<-(h, i), j])))"),
+    ("x :- del_event_rule(r1 'rule:' h <- a).", ":-(x, del_event_rule('rule:'(r1, <-(h, a))))"),
+])
+def test_arguments_up_to_priority_1200_as_swi_prolog_reads_them(text, expected):
+    assert to_prolog(read_program(text + "\n", "f.rtl")[0].term) == expected

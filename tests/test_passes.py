@@ -55,7 +55,7 @@ def test_settings_from_directives_and_facts():
                    "event_rule_property(r1, event_rule_window, 4).\nr1 : h(X) <- a(X) seq b(X).",
                    collect_settings)
     assert unit.settings.consumption_policy == "recent"
-    assert unit.settings.printed == [("h", 1)]
+    assert unit.settings.printed == [("functor", "h", 1)]
     assert unit.settings.rule_properties["r1"]["event_rule_window"].value == 4
 
 

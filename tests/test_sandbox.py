@@ -135,6 +135,8 @@ def test_every_rule_of_the_examples_passes_when_added_at_run_time():
         rules = []
         for rule in parse_program(text, path).event_rules:
             source = rule.source.strip()
+            if re.search(r"\b(ins|del)_(event|static)_rule\(", source):
+                continue        # a rule added at run time may not change the rules (refused on purpose)
             if rule.label:      # a fresh label, the rest (properties, operators) as written
                 source = re.sub(r"^\s*" + re.escape(rule.label), "again_" + rule.label, source, count=1)
             rules.append(source)

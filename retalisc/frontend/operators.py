@@ -78,6 +78,10 @@ def _standard() -> OperatorTable:
         (1040, "yfx", ["and"]),
         (1031, "yfx", ["cnot", "fnot"]),
         (1025, "yfx", ["seq", "equals", "meets", "during", "starts", "finishes"]),
+        # ETALIS: `P timestamp C` is `P check C`; `P event_multiply G` derives once per
+        # solution of G; `P star_times` is P repeated (after a start: `A seq B star_times`)
+        (1050, "yfx", ["timestamp", "event_multiply"]),
+        (200, "xf", ["star_times"]),
         (100, "yfx", ["."]),
     ]:
         for name in names:
@@ -85,7 +89,21 @@ def _standard() -> OperatorTable:
     return table
 
 
-STANDARD_OPERATORS = _standard()
+# ETALIS's own examples write the event operators quoted and capitalised ('SEQ', 'Seq', ...):
+# the same operators, read as their lowercase forms (an unquoted SEQ is a variable).
+ETALIS_ALIASES = {spelling: name
+                  for name in EVENT_OPERATORS + ("do", "timestamp", "event_multiply")
+                  for spelling in (name.upper(), name.capitalize())}
+
+
+def _with_aliases(table: OperatorTable) -> OperatorTable:
+    for spelling, name in ETALIS_ALIASES.items():
+        priority, kind = table.infix[name]
+        table.add(priority, kind, spelling)
+    return table
+
+
+STANDARD_OPERATORS = _with_aliases(_standard())
 
 # The highest priority a clause may have: 1200, or 1210 for a labelled event rule.
 CLAUSE_PRIORITY = 1210

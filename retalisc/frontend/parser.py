@@ -18,7 +18,8 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from .depth import MAX_TERM_DEPTH, deepest_tree, term_depth
 from .errors import RetalisSyntaxError
-from .operators import ARGUMENT_PRIORITY, CLAUSE_PRIORITY, EVENT_OPERATORS, STANDARD_OPERATORS, OperatorTable
+from .operators import (ARGUMENT_PRIORITY, CLAUSE_PRIORITY, ETALIS_ALIASES, EVENT_OPERATORS, STANDARD_OPERATORS,
+                        OperatorTable)
 from .terms import NIL, Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
 
 _GRAMMAR = (Path(__file__).with_name("retalis.lark")).read_text()
@@ -107,7 +108,7 @@ class _Resolver:
                     self.pos += 1
                     right, right_priority = item.term.args[0], 0
                     right, _ = self.parse_infix(right, right_priority, priority if kind == "xfy" else priority - 1)
-                    left = Compound(item.term.name, (left, right), _span_of(left))
+                    left = Compound(ETALIS_ALIASES.get(item.term.name, item.term.name), (left, right), _span_of(left))
                     left_priority = priority
                     continue
             if not isinstance(item, _Name):
@@ -120,7 +121,8 @@ class _Resolver:
                 if priority <= max_priority and left_priority <= left_max and self.peek(1) is not None:
                     self.pos += 1
                     right, _ = self.parse(right_max)
-                    left = Compound(item.name, (left, right), _span_of(left) or item.span)
+                    name = ETALIS_ALIASES.get(item.name, item.name) if item.quoted else item.name
+                    left = Compound(name, (left, right), _span_of(left) or item.span)
                     left_priority = priority
                     continue
             op = self.ops.postfix.get(item.name)
@@ -346,12 +348,14 @@ class _Builder:
             functor = str(node.children[0])[:-1]
             if functor.startswith("'"):
                 functor = self.unescape(functor[1:-1], "'", node.meta.start_pos + 1)
-            args = tuple(self.sequence(child, ARGUMENT_PRIORITY) for child in node.children[1:])
+            # SWI-Prolog reads an argument up to priority 1200 (`ins_event_rule(d(Y) <- c(Y))`,
+            # `f(a :- b)`), not 999 as ISO; a labelled rule (1210) may be an argument too
+            args = tuple(self.sequence(child, CLAUSE_PRIORITY) for child in node.children[1:])
             return Compound(functor, args, span)
         if kind == "empty_list":
             return Atom("[]", span)
         if kind == "list":
-            args = [self.sequence(child, ARGUMENT_PRIORITY) for child in node.children]
+            args = [self.sequence(child, CLAUSE_PRIORITY) for child in node.children]
             # the grammar cannot tell "[a, b | T]" from "[a, b]" by child count alone
             if self._has_tail(node):
                 return make_list(args[:-1], args[-1])

@@ -7,13 +7,17 @@ the parser into these dataclasses; patterns become `Pattern` trees.
 """
 from __future__ import annotations
 
+import bisect
+import itertools
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import List, Optional, Union
 
 from .errors import RetalisSyntaxError
+from .operators import ETALIS_ALIASES
 from .parser import ReadClause, read_program
-from .terms import Atom, Compound, Number, Span, Term, Var, list_items, span_of, to_prolog
+from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list, span_of, to_prolog
 
 
 # ---- patterns --------------------------------------------------------------------------
@@ -91,6 +95,7 @@ class Aggregate:
     pattern: "Pattern"
     value: Term
     span: Optional[Span] = None
+    star: bool = False      # ETALIS `Start seq P star_times`: a count whose value is not used
 
 
 @dataclass
@@ -127,6 +132,7 @@ class EventRule:
     action: Optional[Term] = None   # `Head do Action <- Pattern`
     properties: dict = field(default_factory=dict)
     synchronized: Optional[Compound] = None   # `synchronized(E, Q, SyncConds)` head
+    subrules: List["EventRule"] = field(default_factory=list)   # ETALIS subpatterns `(H <- P)` in the pattern
 
 
 @dataclass
@@ -153,6 +159,9 @@ class Directive:
     goal: Term
     span: Span
     source: str
+    # set by `loadable`: the directive calls the runtime (`subscribe`, `new_event`, ...), so it
+    # runs after the runtime has taken the program in, with the start-up declarations
+    after_load: bool = False
 
 
 @dataclass
@@ -197,7 +206,7 @@ DECLARATIONS = {
     ("c_mem", 4), ("d_mem", 1), ("sub", 5), ("unsub", 2), ("subscribe_between", 5),
     ("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3),
     ("set_retalis_flag", 2), ("c_mem", 5), ("stream_history", 1), ("stream_history", 3),
-    ("max_delay", 2), ("goal_set", 3),
+    ("max_delay", 2), ("goal_set", 3), ("print_event", 1), ("external_trigger", 1),
 }
 
 DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
@@ -207,12 +216,173 @@ DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
 
 
 def parse_program(text: str, file: str) -> Program:
-    """Read and classify a whole program. Raises RetalisSyntaxError."""
-    return build_program(read_program(text, file), file, text)
+    """Read and classify a whole program. Raises RetalisSyntaxError.
+
+    Two forms of the original Retalis are read too: goal lines without a final period, one
+    per paragraph (`goalPredicates.txt`), and `compile_event_file(Path)`, which reads the
+    clauses of Path (relative to the file that names it) in its place."""
+    return build_program(_read_with_includes(text, file, [file]), file, text)
+
+
+def _read_with_includes(text: str, file: str, loading: List[str]) -> List[ReadClause]:
+    clauses = []
+    for clause in read_goal_lines(text, file):
+        path = _included_file(clause.term)
+        if path is None:
+            clauses.append(clause)
+            continue
+        target = _resolve_include(path, file, clause.span)
+        if str(target) in loading:
+            raise RetalisSyntaxError(f"{_include_name(clause.term)}: {path} is already being read (it includes itself)",
+                                     clause.span)
+        try:
+            included = target.read_text(encoding="utf-8-sig")
+        except (OSError, UnicodeDecodeError) as error:
+            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+            raise RetalisSyntaxError(f"{_include_name(clause.term)}: cannot read {path} ({target}): {reason}",
+                                     clause.span) from None
+        clauses.extend(_read_with_includes(included, str(target), loading + [str(target)]))
+    return clauses
+
+
+# ETALIS's goals that load a file of rules (events rules, static rules, db/1 facts): read in place.
+INCLUDES = ("compile_event_file", "load_static_rules", "load_database")
+
+
+def _included_file(term: Term) -> Optional[str]:
+    """The path of a `compile_event_file(Path)` fact or directive, else None."""
+    if _is(term, ":-", 1):
+        term = term.args[0]
+    if isinstance(term, Compound) and term.arity == 1 and term.name in INCLUDES:
+        path = term.args[0]
+        if isinstance(path, (Atom, String)):
+            return path.name if isinstance(path, Atom) else path.text
+        raise RetalisSyntaxError(f"{term.name}(Path) takes a file name", span_of(path))
+    return None
+
+
+def _include_name(term: Term) -> str:
+    return (term.args[0] if _is(term, ":-", 1) else term).name
+
+
+def _resolve_include(path: str, file: str, span: Span) -> Path:
+    base = Path(file).parent if file and not file.startswith("<") else Path.cwd()
+    return (base / path) if not Path(path).is_absolute() else Path(path)
+
+
+# A paragraph: text between blank lines.
+_PARAGRAPH_BREAK = re.compile(r"\n(?:[ \t\r]*\n)+")
+
+
+def read_goal_lines(text: str, file: str) -> List[ReadClause]:
+    """`read_program`, reading Retalis's goal files too: a paragraph (text between blank
+    lines) whose last line does not end with a full stop ends there, as if it had one. When
+    the text has such paragraphs, that reading comes first (`goal(a)` then a paragraph
+    `:- directive.` must not read as one clause `goal(a) :- directive`); when it cannot be
+    read, the text is read as written (a clause may go on after a blank line), and its
+    error stands."""
+    completed = complete_paragraphs(text)
+    if completed != text:
+        try:
+            return read_program(completed, file)
+        except RetalisSyntaxError:
+            pass
+    return read_program(text, file)
+
+
+def complete_paragraphs(text: str) -> str:
+    """`text` with " ." after the last token of every paragraph that does not end with a
+    full stop (comments after it stay after the added period). Paragraphs are separated by
+    blank lines outside quoted items and block comments. Lines and columns of everything
+    else stay the same."""
+    code, breaks = _scan(text)
+    out = []
+    position = 0
+    for start, end in breaks + [(len(text), len(text))]:
+        last = _last_code(code, position, start)
+        if last is not None and text[last] != ".":
+            out.append(text[position:last + 1] + " ." + text[last + 1:start])
+        else:
+            out.append(text[position:start])
+        out.append(text[start:end])
+        position = end
+    return "".join(out)
+
+
+def _last_code(code: List[int], start: int, end: int) -> Optional[int]:
+    """The last position in [start, end) that holds code (not layout or a comment)."""
+    index = bisect.bisect_left(code, end) - 1
+    return code[index] if index >= 0 and code[index] >= start else None
+
+
+def _scan(text: str):
+    """The positions of code characters (not layout, not inside comments; quoted items
+    count), in order, and (start, end) of each run of blank lines outside quoted items and
+    block comments."""
+    code: List[int] = []
+    breaks = []
+    i, n = 0, len(text)
+    quote = None
+    while i < n:
+        c = text[i]
+        if quote is not None:
+            code.append(i)
+            if c == "\\" and i + 1 < n:
+                code.append(i + 1)
+                i += 2
+            elif c == quote and text.startswith(quote * 2, i):
+                code.append(i + 1)
+                i += 2
+            else:
+                quote = None if c == quote else quote
+                i += 1
+        elif c == "%":
+            end = text.find("\n", i)
+            i = n if end < 0 else end
+        elif text.startswith("/*", i):
+            end = text.find("*/", i + 2)
+            i = n if end < 0 else end + 2
+        elif text.startswith("0'", i) and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
+            width = 4 if text[i + 2:i + 3] == "\\" or text.startswith("''", i + 2) else 3     # a character code
+            code.extend(range(i, min(i + width, n)))
+            i += width
+        elif c in "'\"`":
+            quote = c
+            code.append(i)
+            i += 1
+        elif c == "\n":
+            match = _PARAGRAPH_BREAK.match(text, i)
+            if match:
+                breaks.append((match.start(), match.end()))
+                i = match.end()
+            else:
+                i += 1
+        else:
+            if not c.isspace():
+                code.append(i)
+            i += 1
+    return code, breaks
+
 
 
 def build_program(clauses: List[ReadClause], file: str, text: str = "") -> Program:
-    return Program(file, [classify(c) for c in clauses], text)
+    classified: List[Clause] = []
+    for read in clauses:
+        clause = classify(read)
+        if isinstance(clause, EventRule):
+            classified.extend(_with_subrules(clause))
+        else:
+            classified.append(clause)
+    return Program(file, classified, text)
+
+
+def _with_subrules(rule: EventRule) -> List[EventRule]:
+    """The rules of ETALIS subpatterns in `rule`'s pattern (innermost first), then `rule`."""
+    out: List[EventRule] = []
+    for sub in rule.subrules:
+        out.extend(_with_subrules(sub))
+    out.append(rule)
+    return out
 
 
 def classify(clause: ReadClause) -> Clause:
@@ -240,6 +410,9 @@ def classify(clause: ReadClause) -> Clause:
         return _event_rule(term, clause, None)
     if isinstance(term, (Atom, Compound)) and term.name in DECLARATION_NAMES:
         return Declaration(term, clause.span, clause.text)
+    if _is(term, "db", 1) and isinstance(term.args[0], (Atom, Compound)) and not _is(term.args[0], ":-", 2):
+        # ETALIS's facts of the static database: db(p(1, 2)). is the fact p(1, 2).
+        return StaticClause(term.args[0], clause.span, clause.text)
     if isinstance(term, (Var, Number)) or (hasattr(term, "text") and not isinstance(term, (Atom, Compound))):
         raise RetalisSyntaxError("a clause must be a rule, a fact or a directive", clause.span)
     return StaticClause(term, clause.span, clause.text)
@@ -260,8 +433,42 @@ def _event_rule(term: Compound, clause: ReadClause, label_term: Optional[Term]) 
         synchronized = head
     if not isinstance(head, (Atom, Compound)):
         raise RetalisSyntaxError("the head of an event rule must be an event atom", span_of(head) or clause.span)
+    subrules: List[EventRule] = []
+    body = _extract_subpatterns(body, clause, subrules)
     pattern = to_pattern(body, clause.span)
-    return EventRule(head, pattern, clause.span, clause.text, label, action, properties, synchronized)
+    return EventRule(head, pattern, clause.span, clause.text, label, action, properties, synchronized, subrules)
+
+
+def _extract_subpatterns(term: Term, clause: ReadClause, found: List["EventRule"]) -> Term:
+    """ETALIS subpatterns: `a seq (sub1 <- b0(X) seq b1(Y) where X < Y)` defines `sub1` by
+    a rule of its own (added to `found`) and uses `sub1` in its place. Only operands of
+    event operators are looked at (not the arguments of event atoms or conditions)."""
+    if _is(term, "<-", 2):
+        rule = _event_rule(term, clause, None)
+        found.append(rule)
+        return rule.head
+    if isinstance(term, Compound) and (term.name in _PATTERN_OPERATORS or term.name == "."):
+        count = term.arity if term.name in BINARY_OPERATORS + ("cnot", "star_times", ".") else 1
+        if term.name == "." and _is(term.args[0], "not", 1):
+            negated = Compound("not", (_extract_subpatterns(term.args[0].args[0], clause, found),), term.args[0].span)
+            items = list_items(term.args[1])
+            if items is not None:
+                return Compound(".", (negated, make_list([_extract_subpatterns(i, clause, found) for i in items])),
+                                term.span)
+            return term
+        args = tuple(_extract_subpatterns(a, clause, found) if i < count else a for i, a in enumerate(term.args))
+        return Compound(term.name, args, term.span)
+    if _is(term, "aggregate", 3):
+        function, pattern, value = term.args
+        return Compound("aggregate", (function, _extract_subpatterns(pattern, clause, found), value), term.span)
+    return term
+
+
+_STAR_COUNTER = itertools.count(1)
+
+# Operators whose operands (the first only for where, check, timestamp, event_multiply) are patterns.
+_PATTERN_OPERATORS = set(BINARY_OPERATORS) | {"cnot", "where", "check", "timestamp", "event_multiply",
+                                               "star_times"}
 
 
 def _label(term: Optional[Term], span: Span):
@@ -303,18 +510,32 @@ def _strip_time(head: Term) -> Term:
 def to_pattern(term: Term, span: Span) -> Pattern:
     """Turn an event pattern term into a Pattern tree."""
     where = span_of(term) or span
+    if isinstance(term, Compound) and term.arity == 2 and term.name in ETALIS_ALIASES:
+        term = Compound(ETALIS_ALIASES[term.name], term.args, term.span)     # 'SEQ'(A, B) in functional notation
     if isinstance(term, Compound):
         if (term.name, term.arity) in _NOT_PATTERNS:
             raise RetalisSyntaxError(f"'{term.name}' cannot stand inside a pattern ({_NOT_PATTERNS[term.name, term.arity]})",
                                      where)
         if term.name == "not":
             raise RetalisSyntaxError("negation is written not(N).[P1, P2]: no N between P1 and P2", where)
+        if term.arity == 2 and term.name == "seq" and _is(term.args[1], "star_times", 1):
+            repeated = to_pattern(term.args[1].args[0], span)
+            return Binary("seq", to_pattern(term.args[0], span),
+                          Aggregate(Atom("count"), repeated, Var(f"StarTimes_{next(_STAR_COUNTER)}"),
+                                    span_of(term.args[1]) or where, True),
+                          where)
         if term.arity == 2 and term.name in BINARY_OPERATORS:
             return Binary(term.name, to_pattern(term.args[0], span), to_pattern(term.args[1], span), where)
         if term.arity == 2 and term.name == "where":
             return Where(to_pattern(term.args[0], span), term.args[1], where)
-        if term.arity == 2 and term.name == "check":
+        if term.arity == 2 and term.name in ("check", "timestamp"):
             return Check(to_pattern(term.args[0], span), term.args[1], where)
+        if term.arity == 2 and term.name == "event_multiply":
+            # ETALIS: one event per solution of the static goal, as a where condition gives
+            return Where(to_pattern(term.args[0], span), term.args[1], where)
+        if term.arity == 1 and term.name == "star_times":
+            raise RetalisSyntaxError("star_times repeats a pattern after a start event: Start seq P star_times",
+                                     where)
         if term.arity == 2 and term.name == "cnot":
             first = to_pattern(term.args[0], span)
             if not (isinstance(first, Binary) and first.op == "seq"):
@@ -474,6 +695,8 @@ def pattern_text(pattern: Pattern) -> str:
         length = int(pattern.duration) if float(pattern.duration).is_integer() else pattern.duration
         return (f"sliding({write_term(pattern.function, 999)}, {pattern_text(pattern.pattern)}, "
                 f"{write_term(pattern.group, 999)}, {length}, {write_term(pattern.value, 999)})")
+    if isinstance(pattern, Aggregate) and pattern.star:
+        return f"{pattern_text(pattern.pattern)} star_times"
     if isinstance(pattern, Aggregate):
         return (f"aggregate({write_term(pattern.function, 999)}, {pattern_text(pattern.pattern)}, "
                 f"{write_term(pattern.value, 999)})")

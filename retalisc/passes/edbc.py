@@ -719,9 +719,14 @@ class _RuleGenerator:
                     conj([self.record_lookup(rights), C(">", rseq, seq), C("<", e1, s2), window]), items)
         handler = f"{step.name}_left"
         self.arrival(step.left, handler, s1, e1)
+        # the value over the empty set when the start event opens the aggregate (count, sum);
+        # forall/2 leaves V unbound for the values that follow
+        initial = C("rtl_aggregate_initial", function, value)
         self.clauses.append(clause(C(handler, *left_vars, s1, e1), [
-            C("rtl_next_seq", seq), C("assertz", left_with(Atom("none")))]))
-        values = conj([counted, C("rtl_aggregate_values", items, V("_"), values_),
+            C("rtl_next_seq", seq), C("assertz", left_with(Atom("none"))),
+            C("forall", initial, self.output(step, s1, e1))]))
+        values = conj([C("forall", initial, self.output(step, s1, e1, retract=True)),
+                       counted, C("rtl_aggregate_values", items, V("_"), values_),
                        C("forall", C("member", C("-", V("_"), C("-", value, e2)), values_),
                          self.output(step, s1, e2, retract=True))])
         self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [

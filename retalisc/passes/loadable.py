@@ -84,6 +84,8 @@ def run(unit: Unit) -> Unit:
     everything = _program_predicates(unit.program.clauses)      # what initialization/1 goals can call
     loaders_seen = False
     start_up = _StartUp()
+    runtime_callers = _runtime_callers(unit.program.clauses, target)
+    deferring = False
     for clause in unit.program.clauses:
         _check_no_dots(clause)
         if isinstance(clause, StaticClause):
@@ -96,8 +98,15 @@ def run(unit: Unit) -> Unit:
             for key in _declared(clause.goal, clause.span, reserved):
                 defined.add(key)
                 _note_override(unit, key)
+            # once a directive waits for the runtime, the later ones wait too (program order),
+            # except those the load itself needs (op/3, dynamic/1, use_module/1, ...)
+            clause.after_load = _calls_runtime(clause.goal, target, runtime_callers) or \
+                (deferring and not _needed_by_the_load(clause.goal))
+            deferring = deferring or clause.after_load
             if not loaders_seen and target.builtins:
-                _check_calls_exist(clause.goal, defined, everything, target, clause.span)
+                # a directive that runs after the load sees every clause of the program
+                _check_calls_exist(clause.goal, everything if clause.after_load else defined, everything,
+                                   target, clause.span)
             loaders_seen = loaders_seen or _loads_code(clause.goal)
         elif isinstance(clause, Declaration):
             _check_directive_goal(clause.goal, clause.span)
@@ -542,6 +551,49 @@ def _check_calls_exist(goal: Term, defined: Set[Indicator], everything: Set[Indi
             f"this directive calls {key[0]}/{key[1]}, which does not exist when it runs (a directive runs "
             "while the program loads: it can call builtins, library and runtime predicates and the "
             "clauses above it)", span_of(g) or span)
+
+
+def _calls_runtime(goal: Term, target: TargetPredicates, callers: Set[Indicator] = frozenset()) -> bool:
+    """Whether a directive calls a predicate of the runtime (`:- subscribe(...), ...`,
+    `:- initialization(sub(...))`), directly or through the program's own predicates
+    (`callers`): such a directive runs after the runtime has taken the program in
+    (`rtl_program_loaded/1`), in program order with the start-up declarations."""
+    for g in _goals(goal):
+        key = indicator(g)
+        if key == ("initialization", 1):
+            if _calls_runtime(g.args[0], target, callers):
+                return True
+        elif key is not None and (key in target.runtime or key in callers):
+            return True
+    return False
+
+
+def _runtime_callers(clauses, target: TargetPredicates) -> Set[Indicator]:
+    """The program's predicates whose clauses call the runtime, directly or through others."""
+    calls = {}
+    for clause in clauses:
+        if isinstance(clause, StaticClause):
+            key = indicator(clause.head)
+            if key is not None and clause.body is not None:
+                calls.setdefault(key, set()).update(k for k in map(indicator, _goals(clause.body)) if k is not None)
+    found: Set[Indicator] = set()
+    changed = True
+    while changed:
+        changed = False
+        for key, called in calls.items():
+            if key not in found and any(k in target.runtime or k in found for k in called):
+                found.add(key)
+                changed = True
+    return found
+
+
+# Directives the load of the generated file itself needs where they stand.
+_LOAD_TIME = _DECLARATIONS | _LOADERS | {"op", "set_prolog_flag", "style_check", "encoding", "meta_predicate",
+                                         "license", "module"}
+
+
+def _needed_by_the_load(goal: Term) -> bool:
+    return all(isinstance(g, (Atom, Compound)) and g.name in _LOAD_TIME for g in _goals(goal))
 
 
 def _loads_code(goal: Term) -> bool:

@@ -26,7 +26,7 @@ class Settings:
     """Program-wide settings collected from directives and declarations."""
 
     consumption_policy: str = "unrestricted"
-    printed: Optional[List[tuple]] = None     # print_trigger(F/A) indicators; None = all
+    printed: Optional[List[tuple]] = None     # print_trigger selections (collect_settings._printed); None = all
     rule_properties: Dict[str, dict] = field(default_factory=dict)  # label -> {name: value}
 
 

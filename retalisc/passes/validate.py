@@ -11,8 +11,8 @@ from __future__ import annotations
 from typing import Dict, Iterable, Set, Tuple
 
 from ..frontend.errors import RetalisSemanticError
-from ..frontend.program import (DECLARATIONS, Aggregate, EventAtom, EventRule, Pattern, Sliding, pattern_conditions,
-                                walk_pattern)
+from ..frontend.program import (DECLARATIONS, Aggregate, Check, EventAtom, EventRule, Pattern, Sliding, Where,
+                                pattern_conditions, walk_pattern)
 from ..frontend.terms import Atom, Compound, Term, Var, indicator, span_of, variables
 from .unit import Unit
 
@@ -110,12 +110,34 @@ def _check_head_variables(rule: EventRule) -> None:
     if rule.synchronized is not None:
         return                      # the query binds the event's variables (thesis A.2.5.2)
     bound = _pattern_variables(rule.pattern)
+    repeated = set()
+    for node in _aggregates(rule.pattern):
+        if node.star:           # `A seq P star_times` derives at A already, before any P binds them
+            repeated |= _pattern_variables(node.pattern)
+    bound_at_start = _pattern_variables_outside_stars(rule.pattern)
     head = rule.head
     for var in variables(head):
         if var.name not in bound:
             raise RetalisSemanticError(
                 f"variable {var.name} of the rule head does not occur in the pattern (it would stay unbound)",
                 span_of(var) or rule.span)
+        if var.name in repeated and var.name not in bound_at_start:
+            raise RetalisSemanticError(
+                f"variable {var.name} of the rule head occurs only in the pattern repeated by star_times (the rule "
+                "derives at the start event already, where it would stay unbound)", span_of(var) or rule.span)
+
+
+def _pattern_variables_outside_stars(pattern: Pattern) -> Set[str]:
+    names = set()
+    for p in walk_pattern(pattern, into=lambda p: not (isinstance(p, Aggregate) and p.star)):
+        if isinstance(p, EventAtom):
+            names.update(v.name for v in variables(p.term))
+            for t in (p.start, p.end):
+                if t is not None:
+                    names.update(v.name for v in variables(t))
+        elif isinstance(p, (Where, Check)):
+            names.update(v.name for v in variables(p.condition))
+    return names
 
 
 def _check_aggregate_variables(rule: EventRule) -> None:

@@ -31,7 +31,8 @@ _ENV = jinja2.Environment(
 )
 
 # Directives that only configure the compiler: they are compiled, not copied.
-_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print_trigger", 1),
+_COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print_trigger", 1), ("print_event", 1),
+                        ("external_trigger", 1),
                         ("event_rule_property", 3), ("op", 3)}
 
 
@@ -47,7 +48,7 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
                    for g in unit.generated for live, _, a, b, order in g.kept})
     printed = None
     if unit.settings.printed is not None:
-        printed = [_functor_pattern(name, arity) for name, arity in unit.settings.printed]
+        printed = [_printed_clause(spec) for spec in unit.settings.printed]
     template = _ENV.get_template("program.pl.j2")
     return template.render(
         source_file=unit.program.file,
@@ -60,8 +61,9 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
         kept_stores=kept,
         printed=printed,
         static_clauses=[_static_text(c) for c in unit.program.clauses if _is_copied(c)],
-        declarations=[write_term(c.goal, 999) for c in unit.program.clauses
-                      if isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES],
+        declarations=[_start_up_text(c) for c in unit.program.clauses
+                      if (isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES)
+                      or (isinstance(c, Directive) and c.after_load)],
         rules=[_RuleView(g) for g in unit.generated],
         runtime_overrides=[f"{quote_atom(name)}/{arity}" for name, arity in unit.runtime_overrides],
     )
@@ -98,10 +100,24 @@ def _declaration_key(goal: Term):
     return (goal.name, getattr(goal, "arity", 0)) if isinstance(goal, (Atom, Compound)) else None
 
 
+def _start_up_text(clause) -> str:
+    """A start-up declaration, or `'$directive'(Where, Goal)` for a directive that calls the
+    runtime (run after the load, reported at Where when it fails or raises)."""
+    if isinstance(clause, Declaration):
+        return write_term(clause.goal, 999)
+    goal = clause.goal
+    if isinstance(goal, Compound) and goal.name == "initialization" and goal.arity == 1:
+        goal = goal.args[0]                 # it runs after the load anyway
+    where = Atom(f"{clause.span.file}:{clause.span.line}")
+    return write_term(Compound("$directive", (where, goal)), 999)
+
+
 def _is_copied(clause) -> bool:
     if isinstance(clause, StaticClause):
         return True
     if isinstance(clause, Directive):
+        if clause.after_load:
+            return False
         goal = clause.goal
         key = (goal.name, getattr(goal, "arity", 0)) if isinstance(goal, (Atom, Compound)) else None
         return key not in _COMPILED_DIRECTIVES
@@ -146,6 +162,19 @@ def _goal_text(goal: Term) -> str:
         return f"( {write_term(goal.args[0], 1099)}\n    ; {write_term(goal.args[1], 1099)}\n    )"
     return write_term(goal, 999)
 
+
+
+def _printed_clause(spec: tuple) -> str:
+    """The `ele_printed/1` clause for one print_trigger (collect_settings._printed)."""
+    if spec[0] == "pattern":
+        return f"ele_printed({write_term(spec[1], 999)})."
+    _, name, arity = spec
+    if name is not None and arity is not None:
+        return f"ele_printed({_functor_pattern(name, arity)})."
+    if name is None:
+        return "ele_printed(E) :- atom(E)." if arity == 0 else \
+            f"ele_printed(E) :- compound(E), compound_name_arity(E, _, {arity})."
+    return f"ele_printed(E) :- callable(E), functor(E, {quote_atom(name)}, _)."
 
 
 def _functor_pattern(name: str, arity: int) -> str:
