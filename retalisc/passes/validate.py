@@ -112,7 +112,7 @@ def _check_head_variables(rule: EventRule) -> None:
     bound = _pattern_variables(rule.pattern)
     repeated = set()
     for node in _aggregates(rule.pattern):
-        if node.star:           # `A seq P star_times` derives at A already, before any P binds them
+        if isinstance(node, Aggregate) and node.star:     # `A seq P star_times` derives at A already, before any P binds them
             repeated |= _pattern_variables(node.pattern)
     bound_at_start = _pattern_variables_outside_stars(rule.pattern)
     head = rule.head
