@@ -127,9 +127,31 @@ def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay,
     sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe))
 
 
+@click.command("ros2", epilog="""\b
+Example: two components on one machine, the second consuming what the first delivers:
+  retalisc ros2 first.rtl --config first.xml &
+  retalisc ros2 second.rtl --config second.xml""")
+@_common
+@click.option("--domain", type=click.IntRange(0, 232), default=None,
+              help="The DDS domain (default: $ROS_DOMAIN_ID, else 0).")
+def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, domain) -> None:
+    """Run PROGRAM as a live component on ROS 2 topics, over DDS (cyclonedds) without a ROS 2
+    installation: ROS 2's topic and type names, CDR and default QoS (docs/ros.md). DDS stays
+    on the loopback interface unless CYCLONEDDS_URI configures it."""
+
+    def make():
+        from ..live.dds import DdsTransport
+        return DdsTransport(domain)
+
+    def describe(node):
+        return f"ros2: DDS domain {node.transport.domain}: subscribed to {_inputs(node)}"
+
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe))
+
+
 def _master() -> str:
     import os
     return os.environ.get("ROS_MASTER_URI", "http://localhost:11311")
 
 
-COMMANDS = [ros_command]
+COMMANDS = [ros_command, ros2_command]
