@@ -149,9 +149,37 @@ def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay
     sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe))
 
 
+@click.command("zenoh", epilog="""\b
+Example: two components, the second consuming what the first delivers:
+  retalisc zenoh first.rtl --config first.xml --listen tcp/127.0.0.1:7447 --connect tcp/127.0.0.1:7448 &
+  retalisc zenoh second.rtl --config second.xml --listen tcp/127.0.0.1:7448 --connect tcp/127.0.0.1:7447""")
+@_common
+@click.option("--listen", multiple=True, metavar="ENDPOINT",
+              help="Listen for other components here (tcp/127.0.0.1:PORT); repeatable.")
+@click.option("--connect", multiple=True, metavar="ENDPOINT",
+              help="Connect to a component listening here; repeatable; retried until it is up.")
+def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, listen,
+                  connect) -> None:
+    """Run PROGRAM as a live component over Zenoh, without a ROS master: a Zenoh peer with
+    multicast scouting off and explicit endpoints; topic /name is key `name`, messages are
+    ROS 2 CDR (docs/ros.md)."""
+    if not listen and not connect:
+        raise click.UsageError("give at least one --listen or --connect endpoint (tcp/127.0.0.1:PORT)")
+
+    def make():
+        from ..live.zenoh_transport import ZenohTransport
+        return ZenohTransport(listen, connect)
+
+    def describe(node):
+        return (f"zenoh: peer listening on {', '.join(listen) or 'nothing'}, connecting to "
+                f"{', '.join(connect) or 'nothing'}: subscribed to {_inputs(node)}")
+
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe))
+
+
 def _master() -> str:
     import os
     return os.environ.get("ROS_MASTER_URI", "http://localhost:11311")
 
 
-COMMANDS = [ros_command, ros2_command]
+COMMANDS = [ros_command, ros2_command, zenoh_command]
