@@ -169,11 +169,35 @@ def nao(seconds: float) -> dict:
     return {"received": received, "published": len(records)}
 
 
+def chain(first: str, second: str) -> dict:
+    """Two components from one launch file: tf into the first, positions out of the second."""
+    rospy.wait_for_service(f"/{second}/query_all", timeout=30)
+    rospy.wait_for_service(f"/{first}/query_all", timeout=30)
+    query_all = rospy.ServiceProxy(f"/{second}/query_all", service_class("query_all"))
+    tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=None)
+    wait_for(lambda: tf_pub.get_num_connections() > 0)
+
+    def positions():
+        reply = query_all(query="mem(positions, pos(X, _, _))", at="")
+        return [float(answer.values[0]) for answer in reply.answers]
+
+    deadline = time.monotonic() + 20
+    while not positions() and time.monotonic() < deadline:     # until the chain is connected
+        tf_pub.publish(tf_message(time.time(), 0.0))
+        time.sleep(0.2)
+    for i in range(1, 6):
+        tf_pub.publish(tf_message(time.time(), float(i)))
+    wait_for(lambda: len([x for x in positions() if x > 0]) >= 5, 10)
+    return {"positions": [x for x in positions() if x > 0]}
+
+
 def main() -> None:
     rospy.init_node("retalisc_test_client", anonymous=True, disable_signals=True)
     scenario = sys.argv[1]
     if scenario == "services":
         result = services(sys.argv[2], sys.argv[3])
+    elif scenario == "chain":
+        result = chain(sys.argv[2], sys.argv[3])
     elif scenario == "nao":
         result = nao(float(sys.argv[2]))
     else:

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
+import signal
 import subprocess
 from pathlib import Path
 
@@ -145,3 +147,38 @@ def test_ros1_nao_markers_live_as_replayed(ros, tmp_path):
         name, message = converter.message(event)
         want.append(["/" + consumer, converter.term(message, name)])
     assert published == sorted(want)
+
+
+def test_ros1_two_iecs_from_one_launch_file(ros, tmp_path):
+    """ros/retalis/launch/two_iecs.launch: roslaunch starts two components; the second
+    consumes what the first derives. roslaunch is stopped by its pid (SIGINT, as on a
+    terminal), which stops the nodes it started."""
+    python, env, processes = ros
+    if shutil.which("roslaunch") is None:
+        pytest.skip("roslaunch is not installed (Debian: python3-roslaunch; `bash setup.sh`)")
+    env = dict(env, ROS_PACKAGE_PATH=str(ROOT / "ros"), RETALISC_ROS_PYTHON=python)
+    launch = processes.start("roslaunch", [shutil.which("roslaunch"), "retalis", "two_iecs.launch"], env)
+    try:
+        r = _client(python, env, "chain", "iec1", "iec2")
+    finally:
+        launch.send_signal(signal.SIGINT)
+        try:
+            launch.wait(20)
+        except subprocess.TimeoutExpired:
+            processes.stop(launch)
+    out = processes.out("roslaunch")
+    pids = [int(pid) for pid in re.findall(r"process\[iec\d-\d\]: started with pid \[(\d+)\]", out)]
+    alive = [pid for pid in pids if _alive(pid)]
+    for pid in alive:                       # (only if roslaunch left them: fail, but clean up)
+        os.kill(pid, signal.SIGKILL)
+    assert r["positions"] == [1.0, 2.0, 3.0, 4.0, 5.0], out
+    assert len(pids) == 2 and not alive, out
+    assert "ros: node /iec1" in processes.err("roslaunch") and "ros: node /iec2" in processes.err("roslaunch")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
