@@ -9,20 +9,24 @@ lists where each is specified):
   generates it from the message definition;
 - the data are the message in CDR (XCDR1, with its encapsulation header), exactly what
   rosbags' `serialize_cdr` writes and ROS 2 bags store;
-- QoS: ROS 2's default profile, reliable, volatile, keep last 10 (readers keep all, which
-  matches the same writers and loses nothing while the node catches up); `/tf_static` is
-  transient-local with keep last 1, as tf2's static broadcaster, so a late joiner gets it.
+- QoS: ROS 2's default profile, reliable and volatile, but keeping all samples instead of
+  the last 10 (history is not part of DDS's request/offered matching, so this matches the
+  same peers; a burst is then slowed down by the reliable protocol instead of overwritten);
+  `/tf_static` is transient-local with keep last 1, as tf2's static broadcaster, so a late
+  joiner gets it.
 
 The IDL classes are made at runtime from the rosbags type store (cyclonedds `IdlStruct`
-dataclasses named by the convention), and the bytes are converted with them: what arrives is
-re-serialized and read by rosbags, what goes out is written by rosbags and read into the
-IDL class. Unless CYCLONEDDS_URI says otherwise, DDS stays on the loopback interface with
+dataclasses named by the convention) and registered with DDS (type names, type information);
+the samples themselves go through cyclonedds' C layer as CDR bytes, read and written by
+rosbags (the IDL classes' own Python (de)serialization, which gives the same bytes, is used
+when that layer is missing). Unless CYCLONEDDS_URI says otherwise, DDS stays on the loopback interface with
 multicast off and unicast discovery of 127.0.0.1 (LOOPBACK_CONFIG).
 """
 from __future__ import annotations
 
 import dataclasses
 import os
+import threading
 import types as pytypes
 from typing import Dict, Optional, Tuple
 
@@ -95,6 +99,32 @@ class IdlTypes:
         return self.t.sequence[self._member(inner), size] if size else self.t.sequence[self._member(inner)]
 
 
+try:        # cyclonedds' C layer: samples as CDR bytes; the public API (de)serializes in Python
+    from cyclonedds._clayer import ddspy_take as _take, ddspy_write as _write
+except ImportError:          # pragma: no cover - another cyclonedds: the public API
+    _take = _write = None
+
+
+_TIMEOUT = -10      # DDS_RETCODE_TIMEOUT: a keep-all writer waited max_blocking_time for its readers
+
+
+def _raw_take():
+    """reader -> the CDR bytes of up to 256 valid samples taken, or None without the C layer."""
+    if _take is None:
+        return None
+    from cyclonedds.core import InstanceState, SampleState, ViewState
+
+    mask = SampleState.Any | ViewState.Any | InstanceState.Any
+
+    def take(reader):
+        taken = _take(reader._ref, mask, 256)
+        if isinstance(taken, int):
+            raise RuntimeError(f"DDS take failed ({taken})")
+        return [bytes(data) for data, info in taken if info.valid_data]
+
+    return take
+
+
 class DdsTransport(Transport):
     wire = "cdr"
     name = "ros2"
@@ -105,15 +135,22 @@ class DdsTransport(Transport):
             os.environ["CYCLONEDDS_URI"] = LOOPBACK_CONFIG
         self.domain = int(os.environ.get("ROS_DOMAIN_ID", "0")) if domain is None else domain
         self._topics: Dict[str, object] = {}
-        self._readers: Dict[str, object] = {}
+        self._readers: Dict[str, tuple] = {}
+        self._lock = threading.Lock()
+        self._stopping = False
         self._writers: Dict[str, Tuple[str, object, type]] = {}
 
     def start(self, node: LiveNode) -> None:
         from cyclonedds.domain import DomainParticipant
 
+        from cyclonedds.core import WaitSet
+
         self.node = node
         self.types = IdlTypes(node.store)
         self.participant = DomainParticipant(self.domain)
+        self._waitset = WaitSet(self.participant)
+        self._thread = threading.Thread(target=self._take_loop, name="retalis-dds-reader", daemon=True)
+        self._thread.start()
 
     def _qos(self, topic: str, reader: bool):
         from cyclonedds.core import Policy, Qos
@@ -123,7 +160,7 @@ class DdsTransport(Transport):
             return Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.Durability.TransientLocal,
                        Policy.History.KeepLast(100 if reader else 1))
         return Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.Durability.Volatile,
-                   Policy.History.KeepAll if reader else Policy.History.KeepLast(10))
+                   Policy.History.KeepAll)
 
     def _topic(self, topic: str, msgtype: str):
         from cyclonedds.topic import Topic
@@ -135,28 +172,45 @@ class DdsTransport(Transport):
         return entry
 
     def subscribe(self, topic: str, msgtype: str) -> None:
-        from cyclonedds.core import Listener
+        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
         from cyclonedds.sub import DataReader
 
         dds, cls = self._topic(topic, msgtype)
-        node = self.node
+        reader = DataReader(self.participant, dds, qos=self._qos(topic, True))
+        condition = ReadCondition(reader, SampleState.Any | ViewState.Any | InstanceState.Any)
+        with self._lock:
+            self._readers[topic] = (reader, condition, cls)
+            self._waitset.attach(condition)
 
-        def on_data_available(reader) -> None:
-            while True:
-                samples = reader.take(N=256)
-                if not samples:
-                    return
-                for sample in samples:
-                    if isinstance(sample, cls):
-                        node.arrived(topic, sample.serialize())
+    def _take_loop(self) -> None:
+        """The reader thread: waits on the readers' conditions (the wait runs without Python's
+        lock) and takes what came. Taking here, not in a DDS listener, keeps Python off
+        cyclonedds' receive threads, which would otherwise wait for Python's lock while the
+        socket buffers overflow under load."""
+        from cyclonedds.util import duration
 
-        self._readers[topic] = DataReader(self.participant, dds, qos=self._qos(topic, True),
-                                          listener=Listener(on_data_available=on_data_available))
+        raw = _raw_take()
+        while not self._stopping:
+            self._waitset.wait(duration(milliseconds=100))
+            with self._lock:
+                readers = list(self._readers.items())
+            for topic, (reader, _, cls) in readers:
+                while True:
+                    if raw is not None:
+                        taken = raw(reader)
+                    else:
+                        taken = [s.serialize() for s in reader.take(N=256) if isinstance(s, cls)]
+                    if not taken:
+                        break
+                    for data in taken:
+                        self.node.arrived(topic, data)
 
     def unsubscribe(self, topic: str) -> bool:
-        reader = self._readers.pop(topic, None)
-        if reader is None:
-            return False
+        with self._lock:
+            entry = self._readers.pop(topic, None)
+            if entry is None:
+                return False
+            self._waitset.detach(entry[1])
         return True            # the reader goes with its last reference
 
     def advertise(self, topic: str, msgtype: str):
@@ -171,9 +225,20 @@ class DdsTransport(Transport):
 
     def publish(self, topic: str, msgtype: str, data: bytes) -> None:
         _, writer, cls = self.advertise(topic, msgtype)
-        writer.write(cls.deserialize(data))
+        if _write is not None:                # the CDR bytes as rosbags wrote them
+            padded = data.ljust((len(data) + 3) & ~3, b"\0")
+            code = _write(writer._ref, padded)
+            while code == _TIMEOUT:           # a reader is behind: wait for it, lose nothing
+                code = _write(writer._ref, padded)
+            if code < 0:
+                raise RuntimeError(f"DDS write on {dds_topic(topic)} failed ({code})")
+        else:
+            writer.write(cls.deserialize(data))
 
     def close(self) -> None:
+        self._stopping = True
+        if getattr(self, "_thread", None) is not None:
+            self._thread.join(2)
         self._readers.clear()
         self._writers.clear()
         self._topics.clear()
