@@ -262,7 +262,10 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh")) -> Dict[str, dict]:
+LINGERS = (0.0, 0.01)
+
+
+def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh"), lingers=LINGERS) -> Dict[str, dict]:
     """(d): each transport that is installed, in its own processes, stopped by pid."""
     import shutil
     import signal
@@ -275,12 +278,13 @@ def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh")) -> Dict[str,
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     ros_python = ROOT / ".venv-ros" / "bin" / "python"
     results: Dict[str, dict] = {}
-    for kind in kinds:
+    for kind, linger in [(kind, linger) for kind in kinds for linger in lingers]:
+        label = kind if not linger else f"{kind} --linger {linger * 1e3:.0f}ms"
         python, extra, argv = sys.executable, {}, []
         try:
             if kind == "ros1":
                 if not ros_python.exists() or shutil.which("rosmaster") is None:
-                    results[kind] = {"skipped": "ROS 1 is not set up (bash setup.sh makes .venv-ros)"}
+                    results[label] = {"skipped": "ROS 1 is not set up (bash setup.sh makes .venv-ros)"}
                     continue
                 python = str(ros_python)
                 port = _free_port()
@@ -296,8 +300,9 @@ def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh")) -> Dict[str,
                 endpoint = f"tcp/127.0.0.1:{_free_port()}"
                 argv = ["zenoh", str(program), "--config", str(config), "--listen", endpoint]
         except ImportError as error:
-            results[kind] = {"skipped": f"{error.name} is not installed (the 'live' extra)"}
+            results[label] = {"skipped": f"{error.name} is not installed (the 'live' extra)"}
             continue
+        argv += ["--linger", repr(linger)]
         run_env = dict(env, **extra)
         started = []
         try:
@@ -318,9 +323,9 @@ def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh")) -> Dict[str,
                                      str(rate), str(seconds), str(count)] + ([endpoint] if kind == "zenoh" else []),
                                     env=run_env, capture_output=True, text=True, timeout=300)
             if driver.returncode != 0:
-                results[kind] = {"skipped": f"the driver failed: {driver.stderr.strip()[-300:]}"}
+                results[label] = {"skipped": f"the driver failed: {driver.stderr.strip()[-300:]}"}
             else:
-                results[kind] = json.loads(driver.stdout.strip().splitlines()[-1])
+                results[label] = json.loads(driver.stdout.strip().splitlines()[-1])
         finally:
             for process in reversed(started):
                 if process.poll() is None:
@@ -446,18 +451,18 @@ def report(res: dict) -> List[tuple]:
                         f"wall {nao['realtime']:.1f}x)", nao["realtime_cpu"] >= 1.0))
     if res.get("live"):
         print(f"\n(d) live on loopback: TFMessage of {TRANSFORMS} transforms in, a derived geometry_msgs/Vector3 out\n")
-        print(f"{'transport':10} {'p50':>8} {'p99':>8} {'lost':>5} {'CPU at 1,900 tf/s':>18} "
+        print(f"{'transport':24} {'p50':>8} {'p99':>8} {'lost':>5} {'CPU at 1,900 tf/s':>18} "
               f"{'sustained msgs/s':>17} {'transforms/s':>13} {'lost':>5}")
         for kind, r in res["live"].items():
             if "skipped" in r:
-                print(f"{kind:10} skipped: {r['skipped']}")
+                print(f"{kind:24} skipped: {r['skipped']}")
                 targets.append((f"(d) {kind}: live latency, CPU and throughput: skipped ({r['skipped']})", None))
                 continue
             lat, thr = r["latency"], r["throughput"]
             lost = lat["messages"] - lat["received"]
             p50 = lat["p50"] if lat["p50"] is not None else float("nan")
             p99 = lat["p99"] if lat["p99"] is not None else float("nan")
-            print(f"{kind:10} {p50 * 1e3:6.2f}ms {p99 * 1e3:6.2f}ms {lost:>5} {lat['cpu_share']:>18.1%} "
+            print(f"{kind:24} {p50 * 1e3:6.2f}ms {p99 * 1e3:6.2f}ms {lost:>5} {lat['cpu_share']:>18.1%} "
                   f"{thr['messages_per_s']:>17,.0f} {thr['transforms_per_s']:>13,.0f} {thr['lost']:>5}")
             targets.append((f"(d) {kind}: latency p99 at {THESIS_RATE:,} transforms/s below {LATENCY_P99 * 1e3:.0f} ms: "
                             f"p50 {p50 * 1e3:.2f} ms, p99 {p99 * 1e3:.2f} ms, {lost} lost",

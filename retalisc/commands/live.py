@@ -31,6 +31,9 @@ def _common(command):
         click.option("--max-delay", type=Seconds(), default=None, help="As for `retalisc run`."),
         click.option("--duration", type=Seconds(allow_inf=False), default=None, metavar="SECONDS",
                      help="Stop after SECONDS (default: run until SIGINT or SIGTERM)."),
+        click.option("--linger", type=Seconds(allow_inf=False), default=0.0, metavar="SECONDS",
+                     help="Feed messages arriving within SECONDS of each other in one batch (fewer Prolog "
+                          "calls, less CPU, that much more latency; default 0: feed what is waiting at once)."),
     ]
     for option in reversed(options):
         command = option(command)
@@ -38,7 +41,7 @@ def _common(command):
 
 
 def serve(program: str, config_path: Optional[str], make_transport: Callable, out: Optional[str],
-          wrap_topic: bool, plain_strings: bool, max_delay, duration, describe: Callable) -> int:
+          wrap_topic: bool, plain_strings: bool, max_delay, duration, describe: Callable, linger: float = 0.0) -> int:
     from ..driver.engine import Engine
     from ..live.config import ConfigError, PubSubConfig, load_config
     from ..live.node import LiveNode
@@ -61,7 +64,7 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
         engine.set_flag("max_delay", repr(max_delay))
     sink = None if out is None else (sys.stdout if out == "-" else open(out, "w", encoding="utf-8"))
     node = LiveNode(engine, transport, config, Convention(plain_strings=plain_strings, wrap_topic=wrap_topic),
-                    out=sink)
+                    out=sink, linger=linger)
     stop = threading.Event()
     previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
     status = 0
@@ -101,7 +104,7 @@ Example (after `bash setup.sh`, with a ROS master running):
 @_common
 @click.option("--name", "node_name", default="retalis", show_default=True,
               help="The node's name; its services are /NAME/add_output_subscription, ... (docs/ros.md).")
-def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, node_name) -> None:
+def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, node_name) -> None:
     """Run PROGRAM as a live ROS 1 node: subscribe to the topics of PUB_SUB.xml, publish
     subscription deliveries, and offer the services of the 2015 release (thesis A.1):
     add/delete_output_subscription, add/delete_memory, add/delete_input_subscription,
@@ -124,7 +127,7 @@ def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay,
                 f"services /{node_name}/{{add,delete}}_{{output_subscription,memory,input_subscription}}, "
                 f"/{node_name}/query_one, /{node_name}/query_all")
 
-    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe))
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
 
 
 @click.command("ros2", epilog="""\b
@@ -134,7 +137,7 @@ Example: two components on one machine, the second consuming what the first deli
 @_common
 @click.option("--domain", type=click.IntRange(0, 232), default=None,
               help="The DDS domain (default: $ROS_DOMAIN_ID, else 0).")
-def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, domain) -> None:
+def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, domain) -> None:
     """Run PROGRAM as a live component on ROS 2 topics, over DDS (cyclonedds) without a ROS 2
     installation: ROS 2's topic and type names, CDR and default QoS (docs/ros.md). DDS stays
     on the loopback interface unless CYCLONEDDS_URI configures it."""
@@ -146,7 +149,7 @@ def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay
     def describe(node):
         return f"ros2: DDS domain {node.transport.domain}: subscribed to {_inputs(node)}"
 
-    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe))
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
 
 
 @click.command("zenoh", epilog="""\b
@@ -158,7 +161,7 @@ Example: two components, the second consuming what the first delivers:
               help="Listen for other components here (tcp/127.0.0.1:PORT); repeatable.")
 @click.option("--connect", multiple=True, metavar="ENDPOINT",
               help="Connect to a component listening here; repeatable; retried until it is up.")
-def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, listen,
+def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, listen,
                   connect) -> None:
     """Run PROGRAM as a live component over Zenoh, without a ROS master: a Zenoh peer with
     multicast scouting off and explicit endpoints; topic /name is key `name`, messages are
@@ -174,7 +177,7 @@ def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_dela
         return (f"zenoh: peer listening on {', '.join(listen) or 'nothing'}, connecting to "
                 f"{', '.join(connect) or 'nothing'}: subscribed to {_inputs(node)}")
 
-    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe))
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
 
 
 def _master() -> str:

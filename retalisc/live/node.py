@@ -5,7 +5,9 @@ call `arrived(...)` from their own threads, as many as they use; each arrival go
 queue, in the order the calls are made, and one consumer thread takes them out, turns the
 messages into events (robot_io/messages.py, the convention of `retalisc run --bag`) and
 feeds them to the Engine in batches (all that is waiting, up to `BATCH` events, in one
-Prolog call). The queue has no bound: a burst is absorbed, never dropped.
+Prolog call; with `linger`, what arrives within that many seconds of the first message of a
+batch joins it, which saves Prolog calls at the cost of that latency). The queue has no
+bound: a burst is absorbed, never dropped.
 
 Service requests (thesis A.1) go through the same queue (`call`): they run in the consumer
 thread between two batches, so a subscription added after a message arrived does not see
@@ -106,7 +108,8 @@ _BATCH_INDEX = re.compile(r"^event (\d+) of the batch")
 class LiveNode:
     def __init__(self, engine, transport: Transport, config: Optional[PubSubConfig] = None,
                  convention: Convention = Convention(), out: Optional[IO[str]] = None,
-                 log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True)):
+                 log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True),
+                 linger: float = 0.0):
         from ..robot_io.bags import typestore
 
         self.engine = engine
@@ -123,6 +126,8 @@ class LiveNode:
         self._thread = threading.Thread(target=self._consume, name="retalis-consumer", daemon=True)
         self._deliveries: List[Callable] = []      # extra observers of outputs (tests, benchmark)
         self.fed = 0
+        self.linger = linger       # seconds to wait for more messages before feeding a batch
+        engine.on_output(self._output)
 
     # ---- life cycle ------------------------------------------------------------------------
 
@@ -178,6 +183,7 @@ class LiveNode:
         pending: List[Tuple[str, float]] = []
         while True:
             item = self._queue.get()
+            deadline = time.monotonic() + self.linger if self.linger else None
             stop = False
             while True:
                 if item is _STOP:
@@ -197,7 +203,8 @@ class LiveNode:
                 if stop:
                     break
                 try:
-                    item = self._queue.get_nowait()
+                    left = None if deadline is None else deadline - time.monotonic()
+                    item = self._queue.get_nowait() if left is None or left <= 0 else self._queue.get(timeout=left)
                 except queue.Empty:
                     break
             self._feed(pending)
@@ -247,30 +254,28 @@ class LiveNode:
     def _feed(self, events: List[Tuple[str, float]]) -> None:
         from ..driver.bridge import PrologError
 
-        while events:
+        while events:       # the output comes through _output (Engine.on_output), in order
             try:
-                produced = self.engine.feed_batch(events)
+                self.engine.feed_batch(events)
                 self.fed += len(events)
                 events = []
-            except PrologError as error:
+            except PrologError as error:        # what the events before it produced is out
                 match = _BATCH_INDEX.match(str(error))
                 index = int(match.group(1)) if match else len(events) - 1
                 self.stats.errors += 1
                 self.log(f"error: {error}")
                 self.fed += index + 1
-                produced, events = [], events[index + 1:]
-            self._output(produced)
-
-    def _output(self, produced) -> None:
-        for event in produced:
-            if self.out is not None:
-                self.out.write(event.line + "\n")
-            if event.consumer is not None and event.op == "add":
-                self._publish(resolve_topic(event.consumer), event)
-            for observer in self._deliveries:
-                observer(event)
-        if self.out is not None and produced:
+                events = events[index + 1:]
+        if self.out is not None:
             self.out.flush()
+
+    def _output(self, event) -> None:
+        if self.out is not None:
+            self.out.write(event.line + "\n")
+        if event.consumer is not None and event.op == "add":
+            self._publish(resolve_topic(event.consumer), event)
+        for observer in self._deliveries:
+            observer(event)
 
     def _publish(self, topic: str, event) -> None:
         msgtype = self.output_types.get(topic) or self.config.publish_type(topic)
