@@ -211,3 +211,14 @@ def test_linger_feeds_what_arrives_meanwhile_in_one_call():
         node.arrived("/v", vector(float(x)))
     node.close()
     assert calls == [5] and node.fed == 5
+
+
+def test_ros_without_rospy_says_how_to_set_it_up(tmp_path):
+    if subprocess.run([sys.executable, "-c", "import rospy"], capture_output=True).returncode == 0:
+        pytest.skip("rospy is importable here")
+    program = tmp_path / "p.rtl"
+    program.write_text(PROGRAM)
+    run = subprocess.run([sys.executable, "-m", "retalisc", "ros", str(program)], capture_output=True, text=True,
+                         env=retalisc_env())
+    assert run.returncode == 2 and "python3-rospy" in run.stderr and ".venv-ros/bin/retalisc" in run.stderr
+    assert "Traceback" not in run.stderr
