@@ -1,25 +1,54 @@
 #!/usr/bin/env bash
 # Install what retalisc needs on a fresh Debian machine: SWI-Prolog (apt), a virtualenv in
-# .venv, and the package with its test and benchmark extras (pip). Safe to run again.
+# .venv, and the package with its test, benchmark and live extras (pip). Then ROS 1 for the
+# live node (`retalisc ros`, docs/ros.md): Debian's rospy and master (apt) and .venv-ros, a
+# virtualenv of the system Python that sees them (--system-site-packages) with retalisc in
+# it. RETALISC_ROS=0 skips the ROS 1 step. Safe to run again.
 set -euo pipefail
 cd "$(dirname "$0")"
 
+SUDO=""
+[ "$(id -u)" -ne 0 ] && SUDO="sudo"
+APT_UPDATED=""
+apt_install() {
+    if [ -z "$APT_UPDATED" ]; then
+        $SUDO apt-get update -qq
+        APT_UPDATED=1
+    fi
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "$@" >/dev/null
+}
+
 if ! command -v swipl >/dev/null 2>&1; then
     echo "setup: installing SWI-Prolog (apt-get install swi-prolog-nox)" >&2
-    SUDO=""
-    [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-    $SUDO apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq swi-prolog-nox >/dev/null
+    apt_install swi-prolog-nox
 fi
 
 if [ ! -x .venv/bin/python ]; then
     echo "setup: creating .venv" >&2
     python3 -m venv .venv
 fi
-.venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,bench]'
+.venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,bench,live]'
 if command -v "${CC:-gcc}" >/dev/null 2>&1; then
     bash prolog_runtime/c/build.sh
 else
     echo "setup: no C compiler: the runtime reads event lines in Prolog (slower)" >&2
 fi
-echo "setup: ready ($(swipl --version), $(.venv/bin/python --version))" >&2
+
+if [ "${RETALISC_ROS:-1}" != "0" ]; then
+    ROS_PACKAGES="python3-rospy python3-rosmaster python3-roslaunch python3-rostopic python3-rosservice
+                  python3-tf2-msgs python3-geometry-msgs python3-std-msgs python3-venv"
+    if ! /usr/bin/python3 -c "import rospy, rosmaster, roslaunch, tf2_msgs.msg" >/dev/null 2>&1 \
+            || ! command -v rosmaster >/dev/null 2>&1; then
+        echo "setup: installing ROS 1 from Debian (apt-get install python3-rospy python3-rosmaster ...)" >&2
+        # shellcheck disable=SC2086
+        apt_install $ROS_PACKAGES || echo "setup: warning: ROS 1 is not installable here; retalisc ros and its tests are skipped" >&2
+    fi
+    if /usr/bin/python3 -c "import rospy" >/dev/null 2>&1; then
+        if [ ! -x .venv-ros/bin/python ]; then
+            echo "setup: creating .venv-ros (the system Python with ROS 1, for retalisc ros)" >&2
+            /usr/bin/python3 -m venv --system-site-packages .venv-ros
+        fi
+        .venv-ros/bin/python -m pip install -q --disable-pip-version-check -e '.[ros1]'
+    fi
+fi
+echo "setup: ready ($(swipl --version), $(.venv/bin/python --version)$([ -x .venv-ros/bin/python ] && echo ", ROS 1 in .venv-ros"))" >&2

@@ -23,7 +23,19 @@
     times are printed too). Targets: the input alone replays at least 10x faster than real
     time, and the NAO program keeps up with real time, in every format.
 
-Usage: python benchmarks/robot_io.py [--quick] [--out-dir DIR]
+(d) live, end to end on loopback (docs/ros.md): a component (`retalisc ros`, `ros2`, `zenoh`)
+    running the tf program of (b) with a subscription delivering, for each TFMessage of 3
+    transforms, the translation of its first transform as a geometry_msgs/Vector3 (derived
+    from the split, Listing A.1); a driver process (benchmarks/live_driver.py) publishes the
+    messages and receives the deliveries. Latency (message published -> derived message
+    received) p50/p99 and the component's CPU share at the thesis's load (633.3 messages/s =
+    1,900 transforms/s), then sustained throughput (messages published as fast as the driver
+    can; time until the last delivery). Targets: p99 below 50 ms, CPU below the thesis's 40%,
+    nothing lost, and a sustained throughput of at least the thesis's load. ROS 1 runs when
+    .venv-ros and rosmaster are there (setup.sh), DDS and Zenoh when cyclonedds and
+    eclipse-zenoh are installed; otherwise the line says so.
+
+Usage: python benchmarks/robot_io.py [--quick] [--live | --no-live] [--out-dir DIR]
 Writes DIR/robot_io.json and DIR/robot_io.png (robot_io_quick.* with --quick); DIR defaults
 to benchmarks/results (not in git).
 """
@@ -229,7 +241,104 @@ def replay_throughput(bag: Path, program: str, repeat: int) -> dict:
     return best
 
 
-def run(quick: bool, out_dir: Path) -> int:
+# ---- (d) live ---------------------------------------------------------------------------------------
+
+LIVE_PROGRAM = TF_PROGRAM + """
+subscribe(tf('"odom"', '"base_link"', [X, Y, Z], _), [], geometry_msgs__0__Vector3(X, Y, Z), out, s1).
+"""
+LIVE_CONFIG = """<publish_subscribe>
+  <subscribe_to name="/tf" msg_type="tf2_msgs/TFMessage"/>
+  <publish_to name="out" msg_type="geometry_msgs/Vector3"/>
+</publish_subscribe>
+"""
+LATENCY_P99 = 0.050
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+LINGERS = (0.0, 0.01)
+
+
+def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh"), lingers=LINGERS) -> Dict[str, dict]:
+    """(d): each transport that is installed, in its own processes, stopped by pid."""
+    import shutil
+    import signal
+    import subprocess
+
+    program, config = folder / "live.rtl", folder / "live.xml"
+    program.write_text(LIVE_PROGRAM)
+    config.write_text(LIVE_CONFIG)
+    rate, seconds, count = THESIS_RATE / TRANSFORMS, (1.0 if quick else 10.0), (300 if quick else 5000)
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    ros_python = ROOT / ".venv-ros" / "bin" / "python"
+    results: Dict[str, dict] = {}
+    for kind, linger in [(kind, linger) for kind in kinds for linger in lingers]:
+        label = kind if not linger else f"{kind} --linger {linger * 1e3:.0f}ms"
+        python, extra, argv = sys.executable, {}, []
+        try:
+            if kind == "ros1":
+                if not ros_python.exists() or shutil.which("rosmaster") is None:
+                    results[label] = {"skipped": "ROS 1 is not set up (bash setup.sh makes .venv-ros)"}
+                    continue
+                python = str(ros_python)
+                port = _free_port()
+                extra = {"ROS_MASTER_URI": f"http://127.0.0.1:{port}", "ROS_IP": "127.0.0.1",
+                         "ROS_HOME": str(folder / "roshome")}
+                argv = ["ros", str(program), "--config", str(config)]
+            elif kind == "dds":
+                import cyclonedds  # noqa: F401
+                extra = {"ROS_DOMAIN_ID": str(random.randrange(100, 230))}
+                argv = ["ros2", str(program), "--config", str(config)]
+            else:
+                import zenoh  # noqa: F401
+                endpoint = f"tcp/127.0.0.1:{_free_port()}"
+                argv = ["zenoh", str(program), "--config", str(config), "--listen", endpoint]
+        except ImportError as error:
+            results[label] = {"skipped": f"{error.name} is not installed (the 'live' extra)"}
+            continue
+        argv += ["--linger", repr(linger)]
+        run_env = dict(env, **extra)
+        started = []
+        try:
+            if kind == "ros1":
+                started.append(subprocess.Popen([shutil.which("rosmaster"), "--core", "-p", str(port)], env=run_env,
+                                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+                time.sleep(1.0)
+            err = open(folder / f"{kind}.err", "w")
+            node = subprocess.Popen([python, "-m", "retalisc", *argv], env=run_env, stdout=subprocess.DEVNULL,
+                                    stderr=err)
+            started.append(node)
+            deadline = time.monotonic() + 60
+            while f"{argv[0]}:" not in (folder / f"{kind}.err").read_text() and time.monotonic() < deadline:
+                if node.poll() is not None:
+                    break
+                time.sleep(0.05)
+            driver = subprocess.run([python, str(ROOT / "benchmarks" / "live_driver.py"), kind, str(node.pid),
+                                     str(rate), str(seconds), str(count)] + ([endpoint] if kind == "zenoh" else []),
+                                    env=run_env, capture_output=True, text=True, timeout=300)
+            if driver.returncode != 0:
+                results[label] = {"skipped": f"the driver failed: {driver.stderr.strip()[-300:]}"}
+            else:
+                results[label] = json.loads(driver.stdout.strip().splitlines()[-1])
+        finally:
+            for process in reversed(started):
+                if process.poll() is None:
+                    process.send_signal(signal.SIGTERM)
+                    try:
+                        process.wait(15)
+                    except subprocess.TimeoutExpired:
+                        process.kill()
+                        process.wait()
+    return results
+
+
+def run(quick: bool, out_dir: Path, with_live: bool = True) -> int:
     prefix = "robot_io_quick" if quick else "robot_io"
     results: dict = {"quick": quick}
     devnull = open(os.devnull, "w")
@@ -258,6 +367,9 @@ def run(quick: bool, out_dir: Path) -> int:
                                           for program in ("empty", "nao")}
             finally:
                 sys.stderr = saved_err
+        if with_live:
+            print("(d) live: ROS 1, DDS, Zenoh ...", file=saved_err)
+            results["live"] = live(quick, folder)
         shared = shared_bags_dir(ROOT)
         results["shared"] = {}
         if shared is not None and not quick:
@@ -337,6 +449,29 @@ def report(res: dict) -> List[tuple]:
         targets.append((f"(c) {fmt}: the NAO program keeps up with {THESIS_RATE:,} transforms/s (>= 1x real time): "
                         f"{nao['realtime_cpu']:.1f}x per CPU second ({nao['events_per_cpu_s']:,.0f} events/s; "
                         f"wall {nao['realtime']:.1f}x)", nao["realtime_cpu"] >= 1.0))
+    if res.get("live"):
+        print(f"\n(d) live on loopback: TFMessage of {TRANSFORMS} transforms in, a derived geometry_msgs/Vector3 out\n")
+        print(f"{'transport':24} {'p50':>8} {'p99':>8} {'lost':>5} {'CPU at 1,900 tf/s':>18} "
+              f"{'sustained msgs/s':>17} {'transforms/s':>13} {'lost':>5}")
+        for kind, r in res["live"].items():
+            if "skipped" in r:
+                print(f"{kind:24} skipped: {r['skipped']}")
+                targets.append((f"(d) {kind}: live latency, CPU and throughput: skipped ({r['skipped']})", None))
+                continue
+            lat, thr = r["latency"], r["throughput"]
+            lost = lat["messages"] - lat["received"]
+            p50 = lat["p50"] if lat["p50"] is not None else float("nan")
+            p99 = lat["p99"] if lat["p99"] is not None else float("nan")
+            print(f"{kind:24} {p50 * 1e3:6.2f}ms {p99 * 1e3:6.2f}ms {lost:>5} {lat['cpu_share']:>18.1%} "
+                  f"{thr['messages_per_s']:>17,.0f} {thr['transforms_per_s']:>13,.0f} {thr['lost']:>5}")
+            targets.append((f"(d) {kind}: latency p99 at {THESIS_RATE:,} transforms/s below {LATENCY_P99 * 1e3:.0f} ms: "
+                            f"p50 {p50 * 1e3:.2f} ms, p99 {p99 * 1e3:.2f} ms, {lost} lost",
+                            p99 < LATENCY_P99 and lost == 0))
+            targets.append((f"(d) {kind}: component CPU share at {THESIS_RATE:,} transforms/s below the thesis's "
+                            f"{THESIS_SHARE:.0%}: {lat['cpu_share']:.1%}", lat["cpu_share"] < THESIS_SHARE))
+            targets.append((f"(d) {kind}: sustained throughput >= {THESIS_RATE:,} transforms/s, nothing lost: "
+                            f"{thr['transforms_per_s']:,.0f} transforms/s ({thr['messages_per_s']:,.0f} msgs/s), "
+                            f"{thr['lost']} lost", thr["transforms_per_s"] >= THESIS_RATE and thr["lost"] == 0))
     if res["shared"]:
         print(f"\n    shared sample bags, empty program:")
         for name, r in res["shared"].items():
@@ -389,8 +524,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="small sizes (the smoke test)")
     parser.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
+    parser.add_argument("--live", action=argparse.BooleanOptionalAction, default=True,
+                        help="(d) live over ROS 1, DDS and Zenoh (default on)")
     args = parser.parse_args()
-    return run(args.quick, args.out_dir)
+    return run(args.quick, args.out_dir, args.live)
 
 
 if __name__ == "__main__":

@@ -24,7 +24,7 @@ def test_robot_io_benchmark_quick(tmp_path, capsys):
     spec = importlib.util.spec_from_file_location("robot_io_benchmark", ROOT / "benchmarks" / "robot_io.py")
     benchmark = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(benchmark)         # in this process: no second interpreter and Prolog to start
-    assert benchmark.run(quick=True, out_dir=tmp_path) == 0
+    assert benchmark.run(quick=True, out_dir=tmp_path, with_live=False) == 0
     lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("target ")]
     for pattern in TARGETS:
         assert any(re.match(r"target (met|MISSED|figure) +" + pattern, line) for line in lines), \

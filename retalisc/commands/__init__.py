@@ -5,7 +5,8 @@ import importlib
 
 # Modules that define click commands in a module-level list `COMMANDS`.
 _COMMAND_MODULES = ["retalisc.commands.compile", "retalisc.commands.aq", "retalisc.commands.rules",
-                    "retalisc.commands.query", "retalisc.commands.plot", "retalisc.commands.explain"]
+                    "retalisc.commands.query", "retalisc.commands.plot", "retalisc.commands.explain",
+                    "retalisc.commands.live"]
 
 
 def registered_commands():

@@ -1,0 +1,188 @@
+"""`retalisc ros`, `retalisc ros2`, `retalisc zenoh`: a program as a live component
+(docs/ros.md). Each subscribes to the topics of its pub_sub.xml, feeds their messages to the
+program, publishes the subscription deliveries and runs until SIGINT or SIGTERM (or
+--duration), then prints a summary on standard error."""
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+import time
+from typing import Callable, Optional
+
+import click
+
+from .compile import compile_or_exit
+from .options import Seconds, output_file
+
+
+def _common(command):
+    options = [
+        click.argument("program", type=click.Path(exists=True, dir_okay=False)),
+        click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False), default=None,
+                     metavar="PUB_SUB.xml",
+                     help="The topics to subscribe to and the types of the topics to publish on (thesis "
+                          "Listing 2.2)."),
+        click.option("--out", default=None, metavar="FILE|-",
+                     help="Write every output line (derived events, deliveries) as JSON Lines here."),
+        click.option("--wrap-topic", is_flag=True, help="Wrap each message in its topic name, topic(Msg)."),
+        click.option("--plain-strings", is_flag=True,
+                     help="Strings are atoms holding the text ('/odom'), not the release's '\"/odom\"'."),
+        click.option("--max-delay", type=Seconds(), default=None, help="As for `retalisc run`."),
+        click.option("--duration", type=Seconds(allow_inf=False), default=None, metavar="SECONDS",
+                     help="Stop after SECONDS (default: run until SIGINT or SIGTERM)."),
+        click.option("--linger", type=Seconds(allow_inf=False), default=0.0, metavar="SECONDS",
+                     help="Feed messages arriving within SECONDS of each other in one batch (fewer Prolog "
+                          "calls, less CPU, that much more latency; default 0: feed what is waiting at once)."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def serve(program: str, config_path: Optional[str], make_transport: Callable, out: Optional[str],
+          wrap_topic: bool, plain_strings: bool, max_delay, duration, describe: Callable, linger: float = 0.0) -> int:
+    from ..driver.engine import Engine
+    from ..live.config import ConfigError, PubSubConfig, load_config
+    from ..live.node import LiveNode
+    from ..robot_io import MissingDependency
+    from ..robot_io.messages import Convention
+
+    output_file(out, "--out")
+    try:
+        config = load_config(config_path) if config_path else PubSubConfig()
+    except ConfigError as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+    try:
+        transport = make_transport()
+    except MissingDependency as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+    engine = Engine.from_compiled(compile_or_exit(program))
+    if max_delay is not None:
+        engine.set_flag("max_delay", repr(max_delay))
+    sink = None if out is None else (sys.stdout if out == "-" else open(out, "w", encoding="utf-8"))
+    node = LiveNode(engine, transport, config, Convention(plain_strings=plain_strings, wrap_topic=wrap_topic),
+                    out=sink, linger=linger)
+    stop = threading.Event()
+    previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
+    status = 0
+    try:
+        try:
+            node.start()
+        except Exception as error:
+            click.echo(f"error: {error}", err=True)
+            status = 2
+        else:
+            click.echo(describe(node), err=True)
+            deadline = None if duration is None else time.monotonic() + duration
+            while not stop.is_set():
+                left = 0.5 if deadline is None else min(0.5, deadline - time.monotonic())
+                if left <= 0:
+                    break
+                stop.wait(left)
+    finally:
+        node.close()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        if sink is not None and sink is not sys.stdout:
+            sink.close()
+    click.echo(node.stats.summary(transport.name), err=True)
+    click.echo(engine.summary(), err=True)
+    return status
+
+
+def _inputs(node) -> str:
+    topics = ", ".join(f"{topic} ({msgtype})" for topic, msgtype in sorted(node.inputs.items()))
+    return topics or "nothing yet"
+
+
+@click.command("ros", epilog="""\b
+Example (after `bash setup.sh`, with a ROS master running):
+  .venv-ros/bin/retalisc ros examples/nao_markers/nao_markers.rtl --config examples/nao_markers/pub_sub.xml""")
+@_common
+@click.option("--name", "node_name", default="retalis", show_default=True,
+              help="The node's name; its services are /NAME/add_output_subscription, ... (docs/ros.md).")
+def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, node_name) -> None:
+    """Run PROGRAM as a live ROS 1 node: subscribe to the topics of PUB_SUB.xml, publish
+    subscription deliveries, and offer the services of the 2015 release (thesis A.1):
+    add/delete_output_subscription, add/delete_memory, add/delete_input_subscription,
+    query_one, query_all. Needs Debian's rospy: run it with .venv-ros/bin/retalisc."""
+
+    def make():
+        from ..robot_io import MissingDependency
+        try:
+            from ..live.ros1 import Ros1Transport
+            return Ros1Transport(node_name)
+        except ModuleNotFoundError as error:
+            if error.name in ("rospy", "genpy", "genmsg", "rosgraph"):
+                raise MissingDependency(
+                    f"retalisc ros needs ROS 1's rospy (Debian: python3-rospy): run `bash setup.sh`, "
+                    f"then .venv-ros/bin/retalisc ros ...") from None
+            raise
+
+    def describe(node):
+        return (f"ros: node /{node_name} on {_master()}: subscribed to {_inputs(node)}; "
+                f"services /{node_name}/{{add,delete}}_{{output_subscription,memory,input_subscription}}, "
+                f"/{node_name}/query_one, /{node_name}/query_all")
+
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
+
+
+@click.command("ros2", epilog="""\b
+Example: two components on one machine, the second consuming what the first delivers:
+  retalisc ros2 first.rtl --config first.xml &
+  retalisc ros2 second.rtl --config second.xml""")
+@_common
+@click.option("--domain", type=click.IntRange(0, 232), default=None,
+              help="The DDS domain (default: $ROS_DOMAIN_ID, else 0).")
+def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, domain) -> None:
+    """Run PROGRAM as a live component on ROS 2 topics, over DDS (cyclonedds) without a ROS 2
+    installation: ROS 2's topic and type names, CDR and default QoS (docs/ros.md). DDS stays
+    on the loopback interface unless CYCLONEDDS_URI configures it."""
+
+    def make():
+        from ..live.dds import DdsTransport
+        return DdsTransport(domain)
+
+    def describe(node):
+        return f"ros2: DDS domain {node.transport.domain}: subscribed to {_inputs(node)}"
+
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
+
+
+@click.command("zenoh", epilog="""\b
+Example: two components, the second consuming what the first delivers:
+  retalisc zenoh first.rtl --config first.xml --listen tcp/127.0.0.1:7447 --connect tcp/127.0.0.1:7448 &
+  retalisc zenoh second.rtl --config second.xml --listen tcp/127.0.0.1:7448 --connect tcp/127.0.0.1:7447""")
+@_common
+@click.option("--listen", multiple=True, metavar="ENDPOINT",
+              help="Listen for other components here (tcp/127.0.0.1:PORT); repeatable.")
+@click.option("--connect", multiple=True, metavar="ENDPOINT",
+              help="Connect to a component listening here; repeatable; retried until it is up.")
+def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, listen,
+                  connect) -> None:
+    """Run PROGRAM as a live component over Zenoh, without a ROS master: a Zenoh peer with
+    multicast scouting off and explicit endpoints; topic /name is key `name`, messages are
+    ROS 2 CDR (docs/ros.md)."""
+    if not listen and not connect:
+        raise click.UsageError("give at least one --listen or --connect endpoint (tcp/127.0.0.1:PORT)")
+
+    def make():
+        from ..live.zenoh_transport import ZenohTransport
+        return ZenohTransport(listen, connect)
+
+    def describe(node):
+        return (f"zenoh: peer listening on {', '.join(listen) or 'nothing'}, connecting to "
+                f"{', '.join(connect) or 'nothing'}: subscribed to {_inputs(node)}")
+
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
+
+
+def _master() -> str:
+    import os
+    return os.environ.get("ROS_MASTER_URI", "http://localhost:11311")
+
+
+COMMANDS = [ros_command, ros2_command, zenoh_command]

@@ -1,0 +1,107 @@
+"""The `pub_sub.xml` configuration of a live component (thesis 2.2, Listing 2.2; A.2.2).
+
+    <?xml version="1.0"?>
+    <publish_subscribe>
+      <subscribe_to name="/ar_pose_marker" msg_type="ar_pose/ARMarkers"/>
+      <publish_to   name="robot_marker_pos" msg_type="geometry_msgs/Transform"/>
+    </publish_subscribe>
+
+`subscribe_to` subscribes the component to a topic: its messages become events.
+`publish_to` gives the message type of a topic the component may publish subscription
+deliveries on (consumer `robot_marker_pos` of a subscription -> topic `/robot_marker_pos`).
+The file of Listing 2.2 is accepted as printed: its declaration `<?XML version="1.0"?>`
+(upper case, which XML parsers refuse) is read as the ordinary one, and spaces around the
+`/` of a type name are ignored. A document type declaration or entity is refused (the file
+is read as data).
+"""
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import List, Optional
+
+
+class ConfigError(Exception):
+    """A configuration that cannot be read; the message starts with `FILE:` (and the line)."""
+
+
+@dataclass(frozen=True)
+class TopicSpec:
+    name: str       # resolved: a leading "/" added to relative names
+    msgtype: str    # ROS 1 spelling: pkg/Type
+
+
+@dataclass
+class PubSubConfig:
+    subscribe: List[TopicSpec] = field(default_factory=list)
+    publish: List[TopicSpec] = field(default_factory=list)
+
+    def publish_type(self, topic: str) -> Optional[str]:
+        for spec in self.publish:
+            if spec.name == topic:
+                return spec.msgtype
+        return None
+
+
+_DECLARATION = re.compile(r"\A(\ufeff)?\s*<\?xml\b[^>]*\?>", re.IGNORECASE)
+_TYPE = re.compile(r"\A[A-Za-z][A-Za-z0-9_]*(/msg)?/[A-Za-z][A-Za-z0-9_]*\Z")
+
+
+def resolve_topic(name: str) -> str:
+    """A topic name as published: relative names are resolved in the root namespace."""
+    name = name.strip()
+    return name if name.startswith("/") else "/" + name
+
+
+def ros1_type(msgtype: str) -> str:
+    """`pkg/Type` (ROS 1 spelling) of `pkg/Type`, `pkg/msg/Type` or ` pkg / Type `; ValueError
+    for anything else."""
+    text = re.sub(r"\s+", "", msgtype)
+    if not _TYPE.match(text):
+        raise ValueError(f"{msgtype!r} is not a message type (pkg/Type)")
+    parts = text.split("/")
+    return f"{parts[0]}/{parts[-1]}"
+
+
+def store_type(msgtype: str) -> str:
+    """The rosbags spelling `pkg/msg/Type`."""
+    package, name = ros1_type(msgtype).split("/")
+    return f"{package}/msg/{name}"
+
+
+def parse_config(text: str, name: str = "pub_sub.xml") -> PubSubConfig:
+    match = _DECLARATION.match(text)
+    if match:       # keep the positions of what follows (errors give line and column)
+        text = re.sub(r"[^\n]", " ", match.group(0)) + text[match.end():]
+    if re.search(r"<!(DOCTYPE|ENTITY)", text, re.IGNORECASE):
+        raise ConfigError(f"{name}: a document type declaration is not allowed in a configuration")
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as error:
+        line, column = error.position
+        raise ConfigError(f"{name}:{line}:{column + 1}: not well-formed XML") from None
+    if root.tag != "publish_subscribe":
+        raise ConfigError(f"{name}: the root element is <{root.tag}>, expected <publish_subscribe>")
+    config = PubSubConfig()
+    for element in root:
+        if element.tag not in ("subscribe_to", "publish_to"):
+            raise ConfigError(f"{name}: unknown element <{element.tag}> (expected <subscribe_to> or <publish_to>)")
+        topic, msgtype = element.get("name"), element.get("msg_type")
+        if not topic or not topic.strip() or msgtype is None:
+            raise ConfigError(f"{name}: <{element.tag}> needs the attributes name and msg_type")
+        try:
+            spec = TopicSpec(resolve_topic(topic), ros1_type(msgtype))
+        except ValueError as error:
+            raise ConfigError(f"{name}: <{element.tag} name={topic!r}>: {error}") from None
+        (config.subscribe if element.tag == "subscribe_to" else config.publish).append(spec)
+    return config
+
+
+def load_config(path) -> PubSubConfig:
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise ConfigError(f"{path}: cannot read: {error}") from None
+    return parse_config(text, str(path))

@@ -1,0 +1,427 @@
+"""A Retalis program as a live component: messages in, deliveries out, services answered.
+
+`LiveNode` is the part every transport (ROS 1, ROS 2 over DDS, Zenoh) shares. Transports
+call `arrived(...)` from their own threads, as many as they use; each arrival goes into one
+queue, in the order the calls are made, and one consumer thread takes them out, turns the
+messages into events (robot_io/messages.py, the convention of `retalisc run --bag`) and
+feeds them to the Engine in batches (all that is waiting, up to `BATCH` events, in one
+Prolog call; with `linger`, what arrives within that many seconds of the first message of a
+batch joins it, which saves Prolog calls at the cost of that latency). The queue has no
+bound: a burst is absorbed, never dropped.
+
+Service requests (thesis A.1) go through the same queue (`call`): they run in the consumer
+thread between two batches, so a subscription added after a message arrived does not see
+it, and the caller waits for the reply. Every text a request carries is untrusted data: it
+reaches Prolog only through the Engine's API (read with read_term, goals checked by the
+sandbox); a refusal is an error reply (`Reply.ok` False), the node goes on.
+
+Subscription deliveries (outputs with a consumer) are published: consumer `marker1` on topic
+`/marker1`, as the message type the topic was given (pub_sub.xml `publish_to`, or the
+add_output_subscription request), else the type named by the event's functor.
+
+Time: an event is stamped with its message's `header.stamp`, or with the wall-clock time of
+its arrival when it has no header (or a zero stamp). A subscription or unsubscription at
+`now` (or with no time) means the wall clock's now.
+"""
+from __future__ import annotations
+
+import json
+import queue
+import re
+import sys
+import threading
+import time
+from collections import Counter
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from typing import IO, Any, Callable, Dict, List, Optional, Tuple
+
+from ..robot_io.data_terms import read_data_term, write_data_term
+from ..robot_io.messages import ConversionError, Convention, MessageConverter
+from .config import PubSubConfig, resolve_topic, ros1_type, store_type
+
+BATCH = 2000
+REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
+CALL_TIMEOUT = 60.0
+
+
+@dataclass
+class Reply:
+    """The reply to a service request: `ok` False with `error` saying why, or the value."""
+
+    ok: bool
+    error: str = ""
+    value: Any = None
+
+
+@dataclass
+class NodeStats:
+    received: Counter = field(default_factory=Counter)
+    rejected: Counter = field(default_factory=Counter)
+    published: Counter = field(default_factory=Counter)
+    unpublished: int = 0
+    errors: int = 0
+    calls: int = 0
+
+    def summary(self, transport: str) -> str:
+        topics = ", ".join(f"{t} {n:,}" for t, n in sorted(self.received.items()))
+        out = ", ".join(f"{t} {n:,}" for t, n in sorted(self.published.items()))
+        rejected = sum(self.rejected.values())
+        return (f"{transport}: {sum(self.received.values()):,} messages in"
+                f"{': ' + topics if topics else ''}; {rejected:,} rejected, {self.errors:,} errors; "
+                f"{sum(self.published.values()):,} published{': ' + out if out else ''}"
+                f"{f', {self.unpublished:,} not publishable' if self.unpublished else ''}; "
+                f"{self.calls:,} service calls")
+
+
+class Transport:
+    """What a LiveNode needs from a middleware. `wire` is "ros1" (ROS 1 serialization) or "cdr"
+    (ROS 2's CDR). All methods are called from the node's consumer thread."""
+
+    wire = "cdr"
+    name = "transport"
+
+    def start(self, node: "LiveNode") -> None:
+        raise NotImplementedError
+
+    def subscribe(self, topic: str, msgtype: str) -> None:
+        raise NotImplementedError
+
+    def unsubscribe(self, topic: str) -> bool:
+        raise NotImplementedError
+
+    def advertise(self, topic: str, msgtype: str) -> None:
+        """Announce a publisher of `topic` before its first message (so subscribers are
+        connected when it comes)."""
+
+    def publish(self, topic: str, msgtype: str, data: bytes) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+
+_STOP = object()
+_BATCH_INDEX = re.compile(r"^event (\d+) of the batch")
+
+
+class LiveNode:
+    def __init__(self, engine, transport: Transport, config: Optional[PubSubConfig] = None,
+                 convention: Convention = Convention(), out: Optional[IO[str]] = None,
+                 log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True),
+                 linger: float = 0.0):
+        from ..robot_io.bags import typestore
+
+        self.engine = engine
+        self.transport = transport
+        self.config = config or PubSubConfig()
+        self.store = typestore("ros1_noetic" if transport.wire == "ros1" else "ros2_humble")
+        self.converter = MessageConverter(self.store, convention)
+        self.out = out
+        self.log = log
+        self.stats = NodeStats()
+        self.inputs: Dict[str, str] = {}           # topic -> ROS 1 type name
+        self.output_types: Dict[str, str] = {}     # topic -> type given at runtime
+        self._queue: "queue.SimpleQueue" = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._consume, name="retalis-consumer", daemon=True)
+        self._deliveries: List[Callable] = []      # extra observers of outputs (tests, benchmark)
+        self.fed = 0
+        self.linger = linger       # seconds to wait for more messages before feeding a batch
+        engine.on_output(self._output)
+
+    # ---- life cycle ------------------------------------------------------------------------
+
+    def start(self) -> None:
+        self.transport.start(self)
+        self._thread.start()
+        for spec in self.config.subscribe:
+            reply = self.call(self._add_input, spec.name, spec.msgtype)
+            if not reply.ok:
+                raise ValueError(reply.error)
+        for spec in self.config.publish:
+            self.call(self._advertise, spec.name, spec.msgtype)
+
+    def _advertise(self, topic: str, msgtype: str) -> Reply:
+        if store_type(msgtype) not in self.store.fielddefs:
+            return Reply(False, f"unknown message type {msgtype}")
+        self.transport.advertise(topic, ros1_type(msgtype))
+        return Reply(True)
+
+    def close(self, timeout: float = 10.0) -> None:
+        """Stop taking messages, process what is queued, close the transport."""
+        if self._thread.is_alive():
+            self._queue.put(_STOP)
+            self._thread.join(timeout)
+        self.transport.close()
+        if self.out is not None:
+            self.out.flush()
+
+    # ---- arrivals (any thread) ---------------------------------------------------------------
+
+    def arrived(self, topic: str, data: bytes, msgtype: Optional[str] = None,
+                definition: Optional[str] = None) -> None:
+        """A message of `topic` arrived: its serialized bytes, the type its publisher gave
+        (ROS 1 connection header; None: the subscribed type) and that type's full definition
+        (ROS 1), for types the node does not know."""
+        self._queue.put((topic, data, msgtype, definition, time.time_ns()))
+
+    def call(self, function: Callable[..., Reply], *args, timeout: float = CALL_TIMEOUT) -> Reply:
+        """Run `function(*args)` in the consumer thread, after what arrived before; its Reply.
+        Called from the consumer thread itself, it runs at once."""
+        if threading.current_thread() is self._thread:
+            return self._run_call(function, args)
+        future: Future = Future()
+        self._queue.put((function, args, future))
+        try:
+            return future.result(timeout)
+        except Exception as error:          # a timeout: the node is overloaded or stopped
+            return Reply(False, f"no reply: {type(error).__name__} {error}".strip())
+
+    # ---- the consumer thread ------------------------------------------------------------------
+
+    def _consume(self) -> None:
+        pending: List[Tuple[str, float]] = []
+        while True:
+            item = self._queue.get()
+            deadline = time.monotonic() + self.linger if self.linger else None
+            stop = False
+            while True:
+                if item is _STOP:
+                    stop = True
+                elif len(item) == 3:
+                    self._feed(pending)
+                    pending = []
+                    function, args, future = item
+                    future.set_result(self._run_call(function, args))
+                else:
+                    event = self._event(*item)
+                    if event is not None:
+                        pending.append(event)
+                        if len(pending) >= BATCH:
+                            self._feed(pending)
+                            pending = []
+                if stop:
+                    break
+                try:
+                    left = None if deadline is None else deadline - time.monotonic()
+                    item = self._queue.get_nowait() if left is None or left <= 0 else self._queue.get(timeout=left)
+                except queue.Empty:
+                    break
+            self._feed(pending)
+            pending = []
+            if stop:
+                return
+
+    def _run_call(self, function, args) -> Reply:
+        self.stats.calls += 1
+        try:
+            return function(*args)
+        except Exception as error:       # a request is data: whatever goes wrong is its reply
+            return Reply(False, str(error) or type(error).__name__)
+
+    def _event(self, topic: str, data: bytes, msgtype: Optional[str], definition: Optional[str],
+               arrival_ns: int) -> Optional[Tuple[str, float]]:
+        subscribed = self.inputs.get(topic)
+        if subscribed is None:           # unsubscribed meanwhile
+            return None
+        self.stats.received[topic] += 1
+        try:
+            if msgtype is not None and msgtype != "*" and ros1_type(msgtype) != subscribed:
+                raise ConversionError(f"published as {msgtype}, subscribed as {subscribed}")
+            name = store_type(subscribed)
+            if name not in self.store.fielddefs:
+                self._learn_type(name, definition)
+            if self.transport.wire == "ros1":
+                msg = self.store.deserialize_ros1(data, name)
+            else:
+                msg = self.store.deserialize_cdr(data, name)
+            return self.converter.event(msg, name, topic, arrival_ns)
+        except Exception as error:       # bytes from the network are data: report, skip
+            self.stats.rejected[topic] += 1
+            if self.stats.rejected[topic] <= REPORTS_PER_TOPIC:
+                self.log(f"{topic}#{self.stats.received[topic]}: rejected: {error}")
+            return None
+
+    def _learn_type(self, name: str, definition: Optional[str]) -> None:
+        if not definition:
+            raise ConversionError(f"unknown message type {ros1_type(name)} (its definition did not come with it)")
+        from rosbags.typesys import get_types_from_msg
+
+        types = {key: value for key, value in get_types_from_msg(definition, name).items()
+                 if key not in self.store.fielddefs}
+        self.store.register(types)
+
+    def _feed(self, events: List[Tuple[str, float]]) -> None:
+        from ..driver.bridge import PrologError
+
+        while events:       # the output comes through _output (Engine.on_output), in order
+            try:
+                self.engine.feed_batch(events)
+                self.fed += len(events)
+                events = []
+            except PrologError as error:        # what the events before it produced is out
+                match = _BATCH_INDEX.match(str(error))
+                index = int(match.group(1)) if match else len(events) - 1
+                self.stats.errors += 1
+                self.log(f"error: {error}")
+                self.fed += index + 1
+                events = events[index + 1:]
+        if self.out is not None:
+            self.out.flush()
+
+    def _output(self, event) -> None:
+        if self.out is not None:
+            self.out.write(event.line + "\n")
+        if event.consumer is not None and event.op == "add":
+            self._publish(resolve_topic(event.consumer), event)
+        for observer in self._deliveries:
+            observer(event)
+
+    def _publish(self, topic: str, event) -> None:
+        msgtype = self.output_types.get(topic) or self.config.publish_type(topic)
+        try:
+            term = read_data_term(event.event)
+            if msgtype is None:
+                found = self.converter.message_type(term)
+                if found is None:
+                    raise ConversionError(f"{event.event[:80]} is not a message of a known type")
+                name = found
+            else:
+                name = store_type(msgtype)
+            name, msg = self.converter.message(term, name)
+            if self.transport.wire == "ros1":
+                data = self.store.serialize_ros1(msg, name)
+            else:
+                data = self.store.serialize_cdr(msg, name)
+            self.transport.publish(topic, ros1_type(name), bytes(data))
+            self.stats.published[topic] += 1
+        except Exception as error:
+            self.stats.unpublished += 1
+            if self.stats.unpublished <= REPORTS_PER_TOPIC:
+                self.log(f"{topic}: cannot publish {event.event[:120]}: {error}")
+
+    def message_definition(self, msgtype: str) -> Tuple[str, str]:
+        """(full definition text, md5) of a type in ROS 1 form (for ROS 1 publishers)."""
+        return self.store.generate_msgdef(store_type(msgtype), ros_version=1)
+
+    # ---- the services of thesis A.1 (run in the consumer thread) ---------------------------------
+
+    def add_output_subscription(self, topic: str, msg_type: str, event: str, conditions: str = "",
+                                template: str = "", start: str = "", end: str = "") -> Reply:
+        return self.call(self._add_output, topic, msg_type, event, conditions, template, start, end)
+
+    def delete_output_subscription(self, subscription_id: str, end: str = "") -> Reply:
+        return self.call(self._delete_output, subscription_id, end)
+
+    def add_memory(self, request: str) -> Reply:
+        return self.call(self._add_memory, request)
+
+    def delete_memory(self, memory_id: str) -> Reply:
+        return self.call(self._delete_memory, memory_id)
+
+    def add_input_subscription(self, topic: str, msg_type: str) -> Reply:
+        return self.call(self._add_input, topic, msg_type)
+
+    def delete_input_subscription(self, topic: str) -> Reply:
+        return self.call(self._delete_input, topic)
+
+    def query(self, goal: str, at: str = "", all_answers: bool = False) -> Reply:
+        return self.call(self._query, goal, at, all_answers)
+
+    def _add_output(self, topic, msg_type, event, conditions, template, start, end) -> Reply:
+        if not topic.strip():
+            return Reply(False, "a subscription needs a topic")
+        resolved = resolve_topic(topic)
+        msgtype = ros1_type(msg_type) if msg_type.strip() else None
+        if msgtype is not None:
+            store_name = store_type(msgtype)
+            if store_name not in self.store.fielddefs:
+                return Reply(False, f"unknown message type {msgtype}")
+        subscription_id = self.engine.subscribe(
+            topic.strip(), event,
+            template if template.strip() else None, conditions if conditions.strip() else "[]",
+            _bound(start, "-inf"), _bound(end, "inf"))
+        if msgtype is not None:
+            self.output_types[resolved] = msgtype
+        known = msgtype or self.config.publish_type(resolved)
+        if known is not None:
+            self._advertise(resolved, known)
+        return Reply(True, value=subscription_id)
+
+    def _delete_output(self, subscription_id: str, end: str) -> Reply:
+        self.engine.unsubscribe(subscription_id, _bound(end, "now"))
+        return Reply(True)
+
+    def _add_memory(self, request: str) -> Reply:
+        if not re.match(r"\s*(c_mem|memorize)\s*\(", request):
+            return Reply(False, "add_memory takes c_mem(Id, Event-Conds, N, L) or memorize(Event, Conds, Template, Id, N)")
+        self.engine.memory(request)
+        return Reply(True)
+
+    def _delete_memory(self, memory_id: str) -> Reply:
+        try:
+            term = read_data_term(memory_id.strip())
+        except ValueError as error:
+            return Reply(False, f"a memory id is a ground term: {error}")
+        self.engine.memory(f"d_mem({write_data_term(term)})")    # re-written from the parsed term
+        return Reply(True)
+
+    def _add_input(self, topic: str, msg_type: str) -> Reply:
+        if not topic.strip():
+            return Reply(False, "an input subscription needs a topic")
+        resolved = resolve_topic(topic)
+        msgtype = ros1_type(msg_type)
+        if self.inputs.get(resolved) == msgtype:
+            return Reply(True)
+        if resolved in self.inputs:
+            return Reply(False, f"already subscribed to {resolved} as {self.inputs[resolved]}")
+        self.inputs[resolved] = msgtype
+        try:
+            self.transport.subscribe(resolved, msgtype)
+        except Exception:
+            del self.inputs[resolved]
+            raise
+        return Reply(True)
+
+    def _delete_input(self, topic: str) -> Reply:
+        resolved = resolve_topic(topic)
+        if self.inputs.pop(resolved, None) is None:
+            return Reply(False, f"not subscribed to {resolved}")
+        self.transport.unsubscribe(resolved)
+        return Reply(True)
+
+    def _query(self, goal: str, at: str, all_answers: bool) -> Reply:
+        at_value = _time_value(at)
+        if all_answers:
+            return Reply(True, value=self.engine.query_all(goal, at_value))
+        answer = self.engine.query(goal, at_value)
+        return Reply(True, value=answer)
+
+
+def _time_value(text: str) -> Optional[float]:
+    text = text.strip()
+    if text in ("", "inf"):
+        return None
+    if text == "now":
+        return time.time()
+    return float(text)
+
+
+def _bound(text: str, default: str):
+    """A time bound of a request: seconds, `now` (the wall clock), `inf`, `-inf`, or the default."""
+    text = (text or "").strip() or default
+    if text == "now":
+        return time.time()
+    if text in ("inf", "-inf"):
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"a time is a number of seconds, now, inf or -inf, not {text!r}") from None
+    if value != value:
+        raise ValueError("a time is not NaN")
+    return value
+
+
+def reply_json(reply: Reply) -> str:
+    return json.dumps({"ok": reply.ok, "error": reply.error, "value": reply.value})

@@ -1,0 +1,218 @@
+"""The other side of the ROS 1 end-to-end tests (tests/test_live_ros1.py): a ROS 1 client run
+with the ROS Python (.venv-ros), which publishes messages, calls the node's services and
+prints what it saw as one JSON object.
+
+    python ros1_client.py services NODE_NAME FILE_THAT_MUST_NOT_APPEAR
+    python ros1_client.py nao SECONDS
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+
+import rospy
+from geometry_msgs.msg import TransformStamped, Vector3
+from tf2_msgs.msg import TFMessage
+
+from retalisc.live.ros1 import raw_message_class
+from retalisc.live.ros1_services import service_class
+from retalisc.robot_io.messages import MessageConverter
+
+
+def wait_for(condition, timeout: float = 10.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.02)
+    return condition()
+
+
+def tf_message(stamp: float, x: float, count: int = 1) -> TFMessage:
+    transforms = []
+    for i in range(count):
+        t = TransformStamped()
+        t.header.stamp = rospy.Time.from_sec(stamp)
+        t.header.frame_id = "odom"
+        t.child_frame_id = f"link{i}" if count > 1 else "base"
+        t.transform.translation.x = x
+        t.transform.rotation.w = 1.0
+        transforms.append(t)
+    return TFMessage(transforms)
+
+
+def services(node: str, forbidden: str) -> dict:
+    def proxy(name):
+        rospy.wait_for_service(f"/{node}/{name}", timeout=10)
+        return rospy.ServiceProxy(f"/{node}/{name}", service_class(name))
+
+    add_out, del_out = proxy("add_output_subscription"), proxy("delete_output_subscription")
+    add_mem, del_mem = proxy("add_memory"), proxy("delete_memory")
+    add_in, del_in = proxy("add_input_subscription"), proxy("delete_input_subscription")
+    query_one, query_all = proxy("query_one"), proxy("query_all")
+    result = {}
+    got, everything = [], []
+    tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=None)
+    tf2_pub = rospy.Publisher("/tf_other", TFMessage, queue_size=None)
+    positions = rospy.Subscriber("/robot_pos", Vector3, lambda m: got.append(m.x))
+    reply = add_out(topic="robot_pos", msg_type="", event="tf(P, C, V)", conditions="[P == '\"odom\"']",
+                    template="V", start="", end="")
+    result["subscribe"] = [reply.ok, reply.error, reply.id]
+    result["bad_subscribe"] = _pair(add_out(topic="robot_pos", msg_type="", event="tf(P, C, V)",
+                                            conditions="[shell(ls)]", template="", start="", end=""))
+    wait_for(lambda: positions.get_num_connections() > 0 and tf_pub.get_num_connections() > 0)
+    for i in range(5):
+        tf_pub.publish(tf_message(100 + i, float(i)))
+    wait_for(lambda: len(got) >= 5, 10)
+    result["delivered"] = list(got)
+    answers = query_all(query="mem(tfs, tf(P, C, V))", at="")
+    result["query_all"] = [answers.ok, [dict(zip(a.variables, a.values)) for a in answers.answers]]
+    one = query_one(query="mem(tfs, tf(P, C, V)^T)", at="102")
+    result["query_one"] = [one.ok, one.found, dict(zip(one.answer.variables, one.answer.values))]
+    none = query_one(query="mem(tfs, tf(nobody, C, V))", at="")
+    result["query_none"] = [none.ok, none.found]
+    result["unsafe"] = _pair(query_all(query=f"shell('touch {forbidden}')", at=""))
+    result["unsafe_one"] = _pair(query_one(query=f"open('{forbidden}', write, S)", at=""))
+    result["syntax"] = _pair(query_all(query="mem(tfs, ", at=""))
+    result["add_memory"] = _pair(add_mem(memory="c_mem(last2, tf(P, C, V)-[], 2, inf)"))
+    result["add_memory_unsafe"] = _pair(add_mem(memory="c_mem(bad, tf(P, C, V)-[shell(ls)], 2, inf)"))
+    result["add_memory_not_create"] = _pair(add_mem(memory="d_mem(tfs)"))
+    for i in range(5, 8):
+        tf_pub.publish(tf_message(100 + i, float(i)))
+    wait_for(lambda: len(got) >= 8, 10)
+    last2 = query_all(query="mem(last2, tf(_, _, geometry_msgs__0__Vector3(X, _, _)))", at="")
+    result["last2"] = sorted(float(a.values[0]) for a in last2.answers)
+    result["delete_memory"] = _pair(del_mem(id="last2"))
+    result["delete_memory_bad"] = _pair(del_mem(id="f(X"))
+    result["after_delete_memory"] = len(query_all(query="mem(last2, _)", at="").answers)
+    result["unsubscribe"] = _pair(del_out(id=reply.id, end=""))
+    for i in range(8, 10):        # stamped now: after the unsubscription (at the wall clock's now)
+        tf_pub.publish(tf_message(time.time(), float(i)))
+    wait_for(lambda: _count(query_all) >= 10, 10)
+    time.sleep(0.3)
+    result["delivered_after_unsubscribe"] = list(got)
+    result["delete_input"] = _pair(del_in(topic="/tf"))
+    result["delete_input_again"] = _pair(del_in(topic="/tf"))
+    tf_pub.publish(tf_message(200, 99.0))
+    time.sleep(0.3)
+    result["count_after_delete_input"] = _count(query_all)
+    result["add_input"] = _pair(add_in(topic="tf_other", msg_type="tf2_msgs/TFMessage"))
+    result["add_input_bad_type"] = _pair(add_in(topic="/x", msg_type="not a type"))
+    wait_for(lambda: tf2_pub.get_num_connections() > 0)
+    tf2_pub.publish(tf_message(time.time(), 42.0))
+    wait_for(lambda: _count(query_all) > 10, 10)
+    result["count_after_add_input"] = _count(query_all)
+    # 10x the thesis's load (1,900 transforms/s): 3,800 messages of 5 transforms in one second
+    load = rospy.Subscriber("/all_tf", Vector3, lambda m: everything.append(m.x), queue_size=None)
+    load_sub = add_out(topic="all_tf", msg_type="geometry_msgs/Vector3",
+                       event="tf2_msgs__0__TFMessage([geometry_msgs__0__TransformStamped(_, _, "
+                             "geometry_msgs__0__Transform(V, _))|_])", conditions="",
+                       template="V", start="", end="")
+    result["load_subscribe"] = _pair(load_sub)
+    wait_for(lambda: load.get_num_connections() > 0)
+    messages = 3800
+    began = time.monotonic()
+    for k in range(messages):
+        due = began + k / messages
+        while time.monotonic() < due:
+            time.sleep(0.0005)
+        tf2_pub.publish(tf_message(time.time(), float(k), count=5))
+    result["load_publish_seconds"] = time.monotonic() - began
+    wait_for(lambda: len(everything) >= messages, 60)
+    result["load_received"] = len(everything)
+    result["load_seconds"] = time.monotonic() - began
+    result["load_in_order"] = everything == [float(k) for k in range(messages)]
+    result["load_memorized"] = _count(query_all)
+    return result
+
+
+def _count(query_all) -> int:
+    return len(query_all(query="mem(tfs, _)", at="").answers)
+
+
+def _pair(reply) -> list:
+    return [reply.ok, reply.error]
+
+
+def nao(seconds: float) -> dict:
+    """Publish the sample NAO recording (tf and ar_pose markers) in record order and in real
+    time, as the robot would; collect what comes on /marker1 and /marker2 as event terms.
+    (Published as fast as possible on a loaded machine, one run gave a marker pose 1.3 cm
+    off the replay's: the two topics come on two connections, and their relative order is
+    then far from the recorded one; in-process reorderings of up to 1 s give the replay's
+    poses. Real time is what a robot does.)"""
+    from retalisc.robot_io.samples import nao_records, sample_store
+
+    store = sample_store(1)
+    converter = MessageConverter(store)
+    publishers = {}
+    received = []
+
+    def on_marker(msg, topic):
+        decoded = store.deserialize_ros1(msg._buff, "geometry_msgs/msg/PoseStamped")
+        received.append([topic, converter.term(decoded, "geometry_msgs/msg/PoseStamped")])
+
+    subscribers = [rospy.Subscriber(t, rospy.AnyMsg, on_marker, callback_args=t) for t in ("/marker1", "/marker2")]
+    records = [r for r in nao_records(store, seconds=seconds) if r[0] in ("/tf", "/ar_pose_marker")]
+    for topic, msgtype, _, _ in records:
+        if topic not in publishers:
+            text, md5 = store.generate_msgdef(msgtype, ros_version=1)
+            name = msgtype.replace("/msg/", "/")
+            publishers[topic] = rospy.Publisher(topic, raw_message_class(name, md5, text), queue_size=None)
+    wait_for(lambda: all(p.get_num_connections() > 0 for p in publishers.values())
+             and all(s.get_num_connections() > 0 for s in subscribers))
+    began, first_ns = time.monotonic(), records[0][2]
+    for topic, msgtype, record_ns, msg in records:       # in real time, as recorded
+        message = publishers[topic].data_class()
+        message._buff = bytes(store.serialize_ros1(msg, msgtype))
+        due = began + (record_ns - first_ns) / 1e9
+        if due > time.monotonic():
+            time.sleep(due - time.monotonic())
+        publishers[topic].publish(message)
+    expected = int(sys.argv[3]) if len(sys.argv) > 3 else 0
+    wait_for(lambda: len(received) >= expected, 15)
+    time.sleep(0.5)
+    return {"received": received, "published": len(records)}
+
+
+def chain(first: str, second: str) -> dict:
+    """Two components from one launch file: tf into the first, positions out of the second."""
+    rospy.wait_for_service(f"/{second}/query_all", timeout=30)
+    rospy.wait_for_service(f"/{first}/query_all", timeout=30)
+    query_all = rospy.ServiceProxy(f"/{second}/query_all", service_class("query_all"))
+    tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=None)
+    wait_for(lambda: tf_pub.get_num_connections() > 0)
+
+    def positions():
+        reply = query_all(query="mem(positions, pos(X, _, _))", at="")
+        return [float(answer.values[0]) for answer in reply.answers]
+
+    deadline = time.monotonic() + 20
+    while not positions() and time.monotonic() < deadline:     # until the chain is connected
+        tf_pub.publish(tf_message(time.time(), 0.0))
+        time.sleep(0.2)
+    for i in range(1, 6):
+        tf_pub.publish(tf_message(time.time(), float(i)))
+    wait_for(lambda: len([x for x in positions() if x > 0]) >= 5, 10)
+    return {"positions": [x for x in positions() if x > 0]}
+
+
+def main() -> None:
+    rospy.init_node("retalisc_test_client", anonymous=True, disable_signals=True)
+    scenario = sys.argv[1]
+    if scenario == "services":
+        result = services(sys.argv[2], sys.argv[3])
+    elif scenario == "chain":
+        result = chain(sys.argv[2], sys.argv[3])
+    elif scenario == "nao":
+        result = nao(float(sys.argv[2]))
+    else:
+        raise SystemExit(f"unknown scenario {scenario}")
+    print(json.dumps(result))
+    sys.stdout.flush()
+    rospy.signal_shutdown("done")
+
+
+if __name__ == "__main__":
+    main()

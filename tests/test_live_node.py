@@ -1,0 +1,224 @@
+"""LiveNode without a middleware (a transport in memory): the pub_sub.xml of Listing 2.2,
+feeding from many threads in arrival order, deliveries published as messages, the services
+of thesis A.1 with their refusals, and bytes that are not a message."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import threading
+
+import pytest
+
+pytest.importorskip("rosbags", reason="the live tests need rosbags")
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+from live_support import ROOT, retalisc_env  # noqa: E402
+from retalisc.driver.engine import Engine  # noqa: E402
+from retalisc.live.config import ConfigError, parse_config, ros1_type  # noqa: E402
+from retalisc.live.node import LiveNode, Transport  # noqa: E402
+from retalisc.robot_io.bags import typestore  # noqa: E402
+
+LISTING_2_2 = """<?XML version="1.0"?>
+  <publish_subscribe>
+     <subscribe_to       name="/ar_pose_marker"
+                         msg_type=" ar_pose / ARMarkers"
+     >
+     </subscribe_to>
+     <publish_to         name="robot_marker_pos"
+                          msg_type="geometry_msgs/Transform"
+     />
+     <publish_to         name="gazeControl"
+                         msg_type="headTurn/GazeControl"
+     />
+  </publish_subscribe>
+"""
+
+PROGRAM = """
+pos(X) <- geometry_msgs__0__Vector3(X, _, _).
+memorize(geometry_msgs__0__Vector3(X, Y, Z), [], p(X, Y, Z), points, 1000).
+"""
+
+
+class MemoryTransport(Transport):
+    wire = "cdr"
+    name = "memory"
+
+    def __init__(self):
+        self.subscribed, self.published, self.advertised = {}, [], []
+
+    def start(self, node):
+        self.node = node
+
+    def subscribe(self, topic, msgtype):
+        self.subscribed[topic] = msgtype
+
+    def unsubscribe(self, topic):
+        return self.subscribed.pop(topic, None) is not None
+
+    def advertise(self, topic, msgtype):
+        self.advertised.append((topic, msgtype))
+
+    def publish(self, topic, msgtype, data):
+        self.published.append((topic, msgtype, data))
+
+
+STORE = typestore("ros2_humble")
+
+
+def vector(x: float) -> bytes:
+    msg = STORE.types["geometry_msgs/msg/Vector3"](x=x, y=0.0, z=0.0)
+    return bytes(STORE.serialize_cdr(msg, "geometry_msgs/msg/Vector3"))
+
+
+def make_node(program: str = PROGRAM, config: str = None):
+    engine = Engine.from_source(program, "live.rtl")
+    transport = MemoryTransport()
+    node = LiveNode(engine, transport, parse_config(config) if config else None, log=lambda text: None)
+    node.start()
+    return node, transport
+
+
+def test_listing_2_2_as_printed():
+    config = parse_config(LISTING_2_2)
+    assert [(s.name, s.msgtype) for s in config.subscribe] == [("/ar_pose_marker", "ar_pose/ARMarkers")]
+    assert [(s.name, s.msgtype) for s in config.publish] == [("/robot_marker_pos", "geometry_msgs/Transform"),
+                                                            ("/gazeControl", "headTurn/GazeControl")]
+    assert ros1_type("tf2_msgs/msg/TFMessage") == "tf2_msgs/TFMessage"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("<publish_subscribe><subscribe_to name='/a'/></publish_subscribe>", "needs the attributes"),
+    ("<publish_subscribe><subscribe_to name='/a' msg_type='no type'/></publish_subscribe>", "not a message type"),
+    ("<topics/>", "expected <publish_subscribe>"),
+    ("<publish_subscribe><listen name='/a' msg_type='a/B'/></publish_subscribe>", "unknown element <listen>"),
+    ("<publish_subscribe>\n<subscribe_to name='/a'", "pub_sub.xml:2:"),
+    ('<!DOCTYPE x [<!ENTITY a "aaaa">]><publish_subscribe/>', "document type declaration"),
+])
+def test_bad_configurations(text, message):
+    with pytest.raises(ConfigError, match=message.replace("(", r"\(")):
+        parse_config(text)
+
+
+def test_a_bad_configuration_is_a_usage_error(tmp_path):
+    config = tmp_path / "bad.xml"
+    config.write_text("<publish_subscribe><subscribe_to name='/a'/></publish_subscribe>")
+    program = tmp_path / "p.rtl"
+    program.write_text(PROGRAM)
+    run = subprocess.run([sys.executable, "-m", "retalisc", "zenoh", str(program), "--config", str(config),
+                          "--listen", "tcp/127.0.0.1:1"], capture_output=True, text=True, env=retalisc_env())
+    assert run.returncode == 2 and "needs the attributes name and msg_type" in run.stderr
+    assert "Traceback" not in run.stderr
+
+
+@settings(max_examples=5, deadline=None)
+@given(st.lists(st.lists(st.integers(-1000, 1000), min_size=1, max_size=30), min_size=2, max_size=4))
+def test_arrival_order_from_many_threads(chunks):
+    """Callbacks on several threads: the engine sees the messages in the order they arrived
+    (the order of the `arrived` calls), nothing lost."""
+    node, transport = make_node(config="<publish_subscribe><subscribe_to name='/v' "
+                                       "msg_type='geometry_msgs/Vector3'/></publish_subscribe>")
+    order, lock = [], threading.Lock()
+    seen = []
+    node._deliveries.append(lambda event: seen.append(event.event))
+
+    def produce(values):
+        for value in values:
+            with lock:                     # the arrival order is the order of these calls
+                order.append(value)
+                node.arrived("/v", vector(float(value)))
+
+    threads = [threading.Thread(target=produce, args=(chunk,)) for chunk in chunks]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    node.close()
+    assert [e for e in seen if e.startswith("pos(")] == [f"pos({float(v)!r})" for v in order]
+
+
+def test_services_and_refusals():
+    node, transport = make_node(config="<publish_subscribe><subscribe_to name='/v' msg_type='geometry_msgs/Vector3'/>"
+                                       "<publish_to name='out' msg_type='geometry_msgs/Point'/></publish_subscribe>")
+    assert transport.subscribed == {"/v": "geometry_msgs/Vector3"}
+    assert ("/out", "geometry_msgs/Point") in transport.advertised
+    reply = node.add_output_subscription("out", "", "pos(X)", "[X > 1]", "geometry_msgs__0__Point(X, 0.0, 0.0)")
+    assert reply.ok and reply.value
+    for x in (0.5, 2.0, 3.0):
+        node.arrived("/v", vector(x))
+    everything = node.query("mem(points, p(X, _, _))", "", all_answers=True)
+    assert [a["X"] for a in everything.value] == ["0.5", "2.0", "3.0"]
+    one = node.query("mem(points, p(X, _, _)^T)", "", all_answers=False)
+    assert one.ok and one.value["X"] == "0.5"
+    unsafe = node.query("shell(ls)", "")
+    assert not unsafe.ok and unsafe.error.startswith("unsafe:")
+    assert not node.query("p(", "").ok
+    assert not node.add_output_subscription("out", "", "pos(X)", "[shell(ls)]").ok
+    assert not node.add_output_subscription("", "", "pos(X)").ok
+    assert not node.add_output_subscription("o2", "nope/Nothing", "pos(X)").ok
+    assert not node.add_output_subscription("o2", "", "pos(X)", start="yesterday").ok
+    assert not node.add_memory("d_mem(points)").ok
+    assert not node.add_memory("c_mem(m, p(X)-[shell(ls)], 1, inf)").ok
+    assert node.add_memory("c_mem(m2, geometry_msgs__0__Vector3(X, _, _)-[X > 2], 5, inf)").ok
+    node.arrived("/v", vector(4.0))
+    assert [a["X"] for a in node.query("mem(m2, geometry_msgs__0__Vector3(X, _, _))", "", True).value] == ["4.0"]
+    assert node.delete_memory("m2").ok and not node.delete_memory("m2), halt, (x").ok
+    assert node.delete_output_subscription(reply.value).ok
+    assert not node.add_input_subscription("/v", "geometry_msgs/Point").ok      # already, as another type
+    assert node.delete_input_subscription("/v").ok and not node.delete_input_subscription("/v").ok
+    assert node.add_input_subscription("w", "geometry_msgs/Vector3").ok and "/w" in transport.subscribed
+    node.arrived("/w", b"\x00\x01\x00\x00garbage")       # not a Vector3: rejected, the node goes on
+    node.arrived("/w", vector(5.0))
+    node.close()
+    published = [(topic, msgtype) for topic, msgtype, _ in transport.published]
+    assert published == [("/out", "geometry_msgs/Point")] * 3
+    points = [STORE.deserialize_cdr(data, "geometry_msgs/msg/Point").x for _, _, data in transport.published]
+    assert points == [2.0, 3.0, 4.0]
+    assert node.stats.rejected["/w"] == 1 and node.stats.received["/w"] == 2
+    assert node.stats.errors == 0
+
+
+def test_an_event_that_raises_does_not_stop_the_batch():
+    program = "bad(X) <- geometry_msgs__0__Vector3(X, _, _) where X > 1, atom_length(f(X), _).\n" \
+              "pos(X) <- geometry_msgs__0__Vector3(X, _, _).\n"
+    node, _ = make_node(program, "<publish_subscribe><subscribe_to name='/v' msg_type='geometry_msgs/Vector3'/>"
+                                 "</publish_subscribe>")
+    seen = []
+    node._deliveries.append(lambda event: seen.append(event.event))
+    for x in (0.0, 2.0, 3.0):
+        node.arrived("/v", vector(x))
+    node.close()
+    # pos(0.0) came out; each event that raised is reported and the ones after it are fed
+    assert seen == ["pos(0.0)"] and node.stats.errors == 2 and node.fed == 3
+
+
+def test_linger_feeds_what_arrives_meanwhile_in_one_call():
+    engine = Engine.from_source(PROGRAM, "live.rtl")
+    calls = []
+    original = engine.feed_batch
+
+    def counting(events):
+        calls.append(len(events))
+        return original(events)
+
+    engine.feed_batch = counting
+    node = LiveNode(engine, MemoryTransport(), parse_config(
+        "<publish_subscribe><subscribe_to name='/v' msg_type='geometry_msgs/Vector3'/></publish_subscribe>"),
+        log=lambda text: None, linger=0.5)
+    node.start()
+    for x in range(5):
+        node.arrived("/v", vector(float(x)))
+    node.close()
+    assert calls == [5] and node.fed == 5
+
+
+def test_ros_without_rospy_says_how_to_set_it_up(tmp_path):
+    if subprocess.run([sys.executable, "-c", "import rospy"], capture_output=True).returncode == 0:
+        pytest.skip("rospy is importable here")
+    program = tmp_path / "p.rtl"
+    program.write_text(PROGRAM)
+    run = subprocess.run([sys.executable, "-m", "retalisc", "ros", str(program)], capture_output=True, text=True,
+                         env=retalisc_env())
+    assert run.returncode == 2 and "python3-rospy" in run.stderr and ".venv-ros/bin/retalisc" in run.stderr
+    assert "Traceback" not in run.stderr

@@ -1,0 +1,184 @@
+"""End to end: `retalisc ros` as a ROS 1 node on a real ROS master (Debian's rosmaster on
+127.0.0.1 and a free port), a client (tests/ros1_client.py) publishing tf and marker
+messages and calling the services of thesis A.1. ROS 1 runs under the Python of .venv-ros,
+which `bash setup.sh` makes (docs/ros.md); every process is stopped by its pid at the end."""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from live_support import LIVE, ROOT, Processes, free_port, retalisc_argv, retalisc_env, wait_port
+
+
+def _ros_python() -> str:
+    python = os.environ.get("RETALISC_ROS_PYTHON") or str(ROOT / ".venv-ros" / "bin" / "python")
+    if not Path(python).exists():
+        pytest.skip(f"ROS 1 is not set up ({python} is missing): `bash setup.sh` installs Debian's "
+                    f"python3-rospy and makes .venv-ros")
+    check = subprocess.run([python, "-c", "import rospy, genpy, rosbags"], capture_output=True, text=True,
+                           env=retalisc_env())
+    if check.returncode != 0:
+        pytest.skip(f"ROS 1 is not importable with {python}: {check.stderr.strip().splitlines()[-1:]}")
+    if shutil.which("rosmaster") is None:
+        pytest.skip("rosmaster is not installed (Debian: python3-rosmaster; `bash setup.sh`)")
+    return python
+
+
+@pytest.fixture(scope="module")
+def ros(tmp_path_factory):
+    """A ROS master of this module's own, and the environment that points at it."""
+    python = _ros_python()
+    directory = tmp_path_factory.mktemp("ros1")
+    processes = Processes(directory)
+    port = free_port()
+    env = retalisc_env({"ROS_MASTER_URI": f"http://127.0.0.1:{port}", "ROS_IP": "127.0.0.1",
+                        "ROS_HOSTNAME": "127.0.0.1", "ROS_HOME": str(directory / "home"),
+                        "ROS_LOG_DIR": str(directory / "log")})
+    try:
+        processes.start("rosmaster", [shutil.which("rosmaster"), "--core", "-p", str(port)], env)
+        assert wait_port(port), "rosmaster did not start:\n" + processes.err("rosmaster")
+        yield python, env, processes
+    finally:
+        processes.stop_all()
+
+
+def _client(python, env, *args, timeout=120) -> dict:
+    run = subprocess.run([python, str(ROOT / "tests" / "ros1_client.py"), *args], env=env, capture_output=True,
+                         text=True, timeout=timeout)
+    assert run.returncode == 0, run.stderr
+    return json.loads(run.stdout.strip().splitlines()[-1])
+
+
+def test_ros1_node_topics_services_and_load(ros, tmp_path):
+    python, env, processes = ros
+    out = tmp_path / "out.jsonl"
+    node = processes.start("node", retalisc_argv(python, "ros", str(LIVE / "tf_services.rtl"), "--config",
+                                                 str(LIVE / "pub_sub.xml"), "--name", "iec1", "--out",
+                                                 str(out)), env)
+    try:
+        processes.wait_for_line(node, "ros: node /iec1")
+        forbidden = tmp_path / "must_not_exist"
+        r = _client(python, env, "services", "iec1", str(forbidden))
+        assert node.poll() is None, processes.err("node")     # still alive after the refusals
+    finally:
+        status = processes.stop(node)
+    err = processes.err("node")
+    # the output subscription: V of each tf from odom, published as geometry_msgs/Vector3
+    assert r["subscribe"][:2] == [True, ""] and r["subscribe"][2]
+    assert r["bad_subscribe"][0] is False and "unsafe" in r["bad_subscribe"][1]
+    assert r["delivered"][:5] == [0.0, 1.0, 2.0, 3.0, 4.0]
+    # queries: all answers, one answer at a time, none; refusals are error replies
+    ok, answers = r["query_all"]
+    assert ok and [a["V"] for a in answers] == [f"geometry_msgs__0__Vector3({i}.0,0.0,0.0)" for i in range(5)]
+    assert answers[0]["P"] == "'\"odom\"'" and answers[0]["C"] == "'\"base\"'"
+    assert r["query_one"][:2] == [True, True] and r["query_one"][2]["T"] == "100"
+    assert r["query_none"] == [True, False]
+    assert r["unsafe"][0] is False and r["unsafe"][1].startswith("unsafe:") and "shell/1" in r["unsafe"][1]
+    assert r["unsafe_one"][0] is False and "unsafe" in r["unsafe_one"][1]
+    assert not forbidden.exists()
+    assert r["syntax"][0] is False and r["syntax"][1].startswith("syntax:")
+    # memories: created, bounded to 2 records, refused when unsafe or not a creation, deleted
+    assert r["add_memory"] == [True, ""]
+    assert r["add_memory_unsafe"][0] is False and "unsafe" in r["add_memory_unsafe"][1]
+    assert r["add_memory_not_create"][0] is False
+    assert r["last2"] == [6.0, 7.0]
+    assert r["delete_memory"] == [True, ""] and r["delete_memory_bad"][0] is False
+    assert r["after_delete_memory"] == 0
+    # unsubscribed: no delivery after; input subscriptions deleted and added
+    assert r["unsubscribe"] == [True, ""]
+    assert r["delivered_after_unsubscribe"] == [float(i) for i in range(8)]
+    assert r["delete_input"] == [True, ""] and r["delete_input_again"][0] is False
+    assert r["count_after_delete_input"] == 10
+    assert r["add_input"] == [True, ""] and r["add_input_bad_type"][0] is False
+    assert r["count_after_add_input"] == 11
+    # 10x the thesis's load: every transform in, every delivery out, in arrival order
+    assert r["load_subscribe"] == [True, ""]
+    assert r["load_received"] == 3800, err
+    assert r["load_in_order"]
+    assert r["load_memorized"] == 100
+    # the node's own account, and its output file
+    assert status == 0, err
+    assert "rejected" in err and ", 0 errors;" in err
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    assert sum(1 for line in lines if line.get("consumer") == "robot_pos") == 8
+    assert sum(1 for line in lines if line.get("consumer") == "all_tf") == 3800
+    assert "/tf_other 3,801" in err and "/tf 10" in err   # the summary: every message counted
+
+
+def test_ros1_nao_markers_live_as_replayed(ros, tmp_path):
+    """The NAO application live: tf and ar_pose markers (a type the node learns from the
+    publisher's connection header) in, the world pose of each marker out on /marker1 and
+    /marker2; the same deliveries as feeding the same messages to the program directly."""
+    from retalisc.driver.engine import Engine
+    from retalisc.robot_io.messages import MessageConverter
+    from retalisc.robot_io.samples import nao_records, sample_store
+
+    python, env, processes = ros
+    program = ROOT / "examples" / "nao_markers" / "nao_markers.rtl"
+    store = sample_store(1)
+    converter = MessageConverter(store)
+    engine = Engine.load(program)
+    expected = []
+    for topic, msgtype, record_ns, msg in nao_records(store, seconds=2.0):
+        if topic in ("/tf", "/ar_pose_marker"):
+            text, seconds = converter.event(msg, msgtype, topic, record_ns)
+            expected += [(e.consumer, e.event) for e in engine.feed(text, seconds) if e.consumer]
+    assert len(expected) >= 5
+    out = tmp_path / "out.jsonl"
+    node = processes.start("nao", retalisc_argv(python, "ros", str(program), "--config",
+                                                str(program.parent / "pub_sub.xml"), "--out", str(out)), env)
+    try:
+        processes.wait_for_line(node, "ros: node /retalis")
+        r = _client(python, env, "nao", "2.0", str(len(expected)))
+    finally:
+        processes.stop(node)
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    assert sorted((line["consumer"], line["event"]) for line in lines if "consumer" in line) == sorted(expected)
+    published = sorted(r["received"])
+    want = []
+    for consumer, event in expected:
+        name, message = converter.message(event)
+        want.append(["/" + consumer, converter.term(message, name)])
+    assert published == sorted(want)
+
+
+def test_ros1_two_iecs_from_one_launch_file(ros, tmp_path):
+    """ros/retalis/launch/two_iecs.launch: roslaunch starts two components; the second
+    consumes what the first derives. roslaunch is stopped by its pid (SIGINT, as on a
+    terminal), which stops the nodes it started."""
+    python, env, processes = ros
+    if shutil.which("roslaunch") is None:
+        pytest.skip("roslaunch is not installed (Debian: python3-roslaunch; `bash setup.sh`)")
+    env = dict(env, ROS_PACKAGE_PATH=str(ROOT / "ros"), RETALISC_ROS_PYTHON=python)
+    launch = processes.start("roslaunch", [shutil.which("roslaunch"), "retalis", "two_iecs.launch"], env)
+    try:
+        r = _client(python, env, "chain", "iec1", "iec2")
+    finally:
+        launch.send_signal(signal.SIGINT)
+        try:
+            launch.wait(20)
+        except subprocess.TimeoutExpired:
+            processes.stop(launch)
+    out = processes.out("roslaunch")
+    pids = [int(pid) for pid in re.findall(r"process\[iec\d-\d\]: started with pid \[(\d+)\]", out)]
+    alive = [pid for pid in pids if _alive(pid)]
+    for pid in alive:                       # (only if roslaunch left them: fail, but clean up)
+        os.kill(pid, signal.SIGKILL)
+    assert r["positions"] == [1.0, 2.0, 3.0, 4.0, 5.0], out
+    assert len(pids) == 2 and not alive, out
+    assert "ros: node /iec1" in processes.err("roslaunch") and "ros: node /iec2" in processes.err("roslaunch")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
