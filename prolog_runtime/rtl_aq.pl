@@ -826,7 +826,25 @@ add_fact(Fact) :-
 %!  aq_assert_all(+Facts) is det.
 aq_assert_all(Facts) :-
     must_be(list, Facts),
-    maplist(aq_assert, Facts).
+    maplist(check_fact, Facts),
+    (   aq_conf(negation, true)
+    ->  maplist(aq_assert, Facts)
+    ;   add_facts(Facts),
+        drain
+    ).
+
+%   The facts of a batch, propagated one after the other (depth-first, as
+%   far as schedule/3 goes) and the agenda drained once at the end: the
+%   order in which additions propagate does not change what they derive.
+add_facts([]).
+add_facts([F|Fs]) :-
+    (   implied_fact(F)
+    ->  true
+    ;   ( ground(F) -> true ; not_all_ground(F) ),
+        assertz(user:F),
+        forall(user:'$aq_wrec'(F, S), go(S, F, 0))
+    ),
+    add_facts(Fs).
 
 %!  aq_retract(+Fact) is det.
 %
@@ -841,14 +859,25 @@ aq_retract(Fact) :-
 aq_retract_all(Facts0) :-
     must_be(list, Facts0),
     maplist(check_fact, Facts0),
-    include(has_fact, Facts0, Facts1),
-    sort(Facts1, Facts),
-    (   Facts == []
-    ->  true
-    ;   partition(awaited, Facts, Awaited, Quiet),
-        neg_update(( maplist(erase_fact, Quiet),
-                     ( Awaited == [] -> true ; dred(Awaited) ) ))
-    ).
+    neg_update(retract_facts(Facts0)).
+
+%   Facts that are stored and that some state waits on go through one DRed
+%   pass; the others are erased at once.
+retract_facts(Facts0) :-
+    quiet_retract(Facts0, Awaited0),
+    sort(Awaited0, Awaited),
+    (   Awaited == [] -> true ; dred(Awaited) ).
+
+quiet_retract([], []).
+quiet_retract([F|Fs], Awaited) :-
+    (   \+ has_fact(F)
+    ->  Awaited = Awaited1
+    ;   awaited(F)
+    ->  Awaited = [F|Awaited1]
+    ;   erase_fact(F),
+        Awaited = Awaited1
+    ),
+    quiet_retract(Fs, Awaited1).
 
 %   A fact no state waits on derived nothing: it goes without DRed (most
 %   retractions of a belief base that a few queries watch are such facts).
