@@ -216,7 +216,8 @@ def main(argv=None):
              "loc(1, [2, 3])", victim6, preds6, ["table", "incremental", "monotonic"], rows, progress)
     print_table(rows)
     print()
-    print_targets(rows, n, big, nodes, n_edges, users)
+    checks = print_targets(rows, n, big, nodes, n_edges, users)
+    plot_targets(checks, str(Path(args.png).with_name("active_queries_targets.png")))
     print()
     print_dred(rows)
     apl_rows = []
@@ -258,15 +259,46 @@ def print_targets(rows, n, big, nodes, n_edges, users):
     for scen in ("program6", f"program6-{users}q"):
         checks.append((f"{scen} retract <= 0.1x incremental", ratio(scen, "SWI incremental", "delete"), 0.1))
         checks.append((f"{scen} add <= 0.05x incremental", ratio(scen, "SWI incremental", "add"), 0.05))
+        checks.append((f"{scen} delete <= 0.5x recompute (table)", ratio(scen, "SWI table", "delete"), 0.5))
+        checks.append((f"{scen} delete <= 0.25x monotonic", ratio(scen, "SWI monotonic", "delete"), 0.25))
+    # issue 16 part 4: initial evaluation and peak memory within 1.5x `table` everywhere
+    for scen in (chain_r, chain_l, rand, "program6", f"program6-{users}q"):
         checks.append((f"{scen} initial <= 1.5x table", ratio(scen, "SWI table", "initial"), 1.5))
         checks.append((f"{scen} peak memory <= 1.5x table", ratio(scen, "SWI table", "peak_mb"), 1.5))
     checks.append((f"{chain_r} initial <= 1x table", ratio(chain_r, "SWI table", "initial"), 1.0))
     checks.append((f"{chain_r} point query path(0,{n}) <= 1x table", ratio(chain_r, "SWI table", "point"), 1.0))
+    checks.append((f"{chain_l} point query path(0,{big}) <= 1x table", ratio(chain_l, "SWI table", "point"), 1.0))
     print("targets (ratio ours / SWI in this run):")
     for text, value, limit in checks:
         verdict = "no figure" if value is None else ("met" if value <= limit else "MISSED")
         shown = "-" if value is None else f"{value:.3g}"
         print(f"  {text:<52} {shown:>8}  {verdict}")
+    return checks
+
+
+def plot_targets(checks, png):
+    """Every target's ratio against its limit (log scale): green met, red MISSED."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return
+    shown = [(text, value, limit) for text, value, limit in checks if value is not None]
+    if not shown:
+        return
+    fig, ax = plt.subplots(figsize=(10, 0.3 * len(shown) + 1))
+    ys = range(len(shown))
+    ax.barh(ys, [max(v / limit, 1e-4) for _, v, limit in shown],
+            color=["tab:green" if v <= limit else "tab:red" for _, v, limit in shown])
+    ax.axvline(1.0, color="black", linewidth=1)
+    ax.set_yticks(list(ys))
+    ax.set_yticklabels([t for t, _, _ in shown], fontsize=6)
+    ax.set_xscale("log")
+    ax.set_title("ratio / target (< 1: met), ours vs SWI-Prolog in the same run")
+    fig.tight_layout()
+    Path(png).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(png, dpi=120)
 
 
 def print_dred(rows):

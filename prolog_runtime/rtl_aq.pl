@@ -46,6 +46,8 @@
             aq_retract/1,           % +Fact
             aq_assert_all/1,        % +Facts
             aq_retract_all/1,       % +Facts
+            aq_add_rule/1,          % +Rule
+            aq_remove_rule/1,       % +Rule
             aq_answers/2,           % +Id, -Answers
             aq_query/2,             % :Goal, -Answers
             aq_events/1,            % -Events
@@ -57,12 +59,15 @@
             aq_script_main/1,       % +File
             aq_wait_fact/2,         % +Literal, +State         (called by generated code)
             aq_wait_call/2,         % +Literal, +State         (called by generated code)
-            aq_answer/3             % +Table, +Answer, +Rank   (called by generated code)
+            aq_wait_neg/4,          % +Kind, +Literal, +State, +Stratum (called by generated code)
+            aq_answer/3,            % +Table, +Answer, +Rank   (called by generated code)
+            aq_adornment/2          % +Vars, -Mask             (called by generated code)
           ]).
 :- use_module(library(lists)).
 :- use_module(library(apply)).
 :- use_module(library(readutil)).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
+:- use_module(rtl_aq_rules).
 
 :- meta_predicate aq_set_notify(2).
 
@@ -76,11 +81,15 @@
     aq_ev/3,           % aq_ev(Id, Op, Answer)         pending notifications
     aq_conf/2,
     aq_hook/1,
-    aq_ground_facts/3.  % aq_ground_facts(Name, Arity, Bool)  every stored fact is ground
+    aq_ground_facts/3,  % aq_ground_facts(Name, Arity, Bool)  every stored fact is ground
+    aq_negq/5,         % aq_negq(Stratum, Kind, Goal, State, T)  a negation still to be checked
+    aq_buf/3,          % aq_buf(Id, Op, Answer)        notifications of an update, held back
+    aq_rule/3.         % aq_rule(N, Rule, ClauseRefs)  rules added at run time
 
 aq_conf(mode, tabled).
 aq_conf(subsumption, false).
 aq_conf(dred, primary).
+aq_conf(negation, false).
 
 :- initialization(init_globals).
 
@@ -89,6 +98,8 @@ init_globals :-
     nb_setval(aq_registering, '$none'),
     trie_new(Sub), nb_setval(aq_subgoals, Sub),
     trie_new(St), nb_setval(aq_cstates, St),
+    trie_new(NS), nb_setval(aq_nstates, NS),
+    nb_setval(aq_buffer, off),
     nb_setval(aq_dred, '$none').
 
 %!  aq_configure(+Options) is det.
@@ -112,6 +123,9 @@ configure(subsumption(B)) :- !,
 configure(dred(D)) :- !,
     must_be(oneof([primary, basic]), D),
     retractall(aq_conf(dred, _)), assertz(aq_conf(dred, D)).
+configure(negation(B)) :- !,
+    must_be(boolean, B),
+    retractall(aq_conf(negation, _)), assertz(aq_conf(negation, B)).
 configure(Opt) :-
     domain_error(aq_option, Opt).
 
@@ -135,7 +149,9 @@ aq_events(Events) :-
     retractall(aq_ev(_, _, _)).
 
 emit(Id, Op, A) :-
-    (   aq_hook(Hook)
+    (   nb_getval(aq_buffer, on)
+    ->  assertz(aq_buf(Id, Op, A))
+    ;   aq_hook(Hook)
     ->  Ev =.. [Op, A], ignore(call(Hook, Id, Ev))
     ;   assertz(aq_ev(Id, Op, A))
     ).
@@ -188,9 +204,17 @@ register_root(fact, Id, G) :-
 %   the 1.7M records of Program 6 with 500 queries).
 warm_fact_indexes :-
     forall(user:'$aq_fact_pred'(F),
-           ( ignore(( once(user:F), \+ \+ once(user:'$aq_wrec'(F, _)) )),
-             ignore(( user:'$aq_whead'(F, S, H), once(user:H), fact_record(F, S, _) ))
+           (   functor(F, N, A), aq_warm(N, A)
+           ->  true
+           ;   ignore(( once(user:F), \+ \+ once(user:'$aq_wrec'(F, _)) )),
+               ignore(( user:'$aq_whead'(F, S, H), once(user:H), fact_record(F, S, _),
+                        functor(F, N, A), assertz(aq_warm(N, A)) ))
            )).
+
+%   Once a predicate's goal records had their indexes built, SWI-Prolog keeps
+%   them up to date: later registrations do not look them up again (that cost
+%   a fifth of the registration of Program 6 with a query per user).
+:- dynamic aq_warm/2.
 
 trie_lookup_state(S, T) :-
     nb_getval(aq_cstates, St),
@@ -289,6 +313,9 @@ free_tables(Dead) :-
     forall(( user:'$aq_wref'(_, S, Ref), state_owner(S, O), aq_dead(O) ), erase(Ref)),
     forall(( clause(aq_c(_, _, S), true, Ref), state_owner(S, O), aq_dead(O) ),
            ( erase(Ref), ignore(trie_delete(St, S, _)) )),
+    nb_getval(aq_nstates, NS),
+    forall(( trie_gen(NS, ns(S, G), _), state_owner(S, O), aq_dead(O) ),
+           ignore(trie_delete(NS, ns(S, G), _))),
     retractall(aq_dead(_)).
 
 :- dynamic aq_dead/1.
@@ -309,19 +336,24 @@ aq_reset :-
            ( user:'$aq_whead'(F, _, H), retractall(user:H) )),
     retractall(aq_c(_, _, _)), retractall(aq_dep(_, _)), retractall(aq_ev(_, _, _)),
     retractall(aq_agenda(_, _, _)),
+    retractall(aq_negq(_, _, _, _, _)),
+    retractall(aq_warm(_, _)),
     retractall(aq_ground_facts(_, _, _)),       % recomputed when needed
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
     nb_getval(aq_cstates, St), trie_destroy(St),
+    nb_getval(aq_nstates, NS), trie_destroy(NS),
     init_globals.
 
 %!  aq_stats(-Stats) is det.
 %
 %   Stats is a list Key=Value: queries, tables, answers, consumers,
 %   fact_records, cstates, subgoals, deps, multi (answers derived more than
-%   once).  All but the facts return to 0 once every query is unregistered.
+%   once), negations (states at a negated literal).  All but the facts
+%   return to 0 once every query is unregistered.
 
 aq_stats([queries=NQ, tables=NT, answers=NA, consumers=NC, fact_records=NF,
-          cstates=NS, subgoals=NG, deps=ND, multi=NM]) :-
+          cstates=NS, subgoals=NG, deps=ND, multi=NM, negations=NN]) :-
+    nb_getval(aq_nstates, NSt), trie_count(NSt, NN),
     aggregate_all(count, aq_q(_, _, _, _), NQ),
     aggregate_all(count, aq_tab(_, _, _, _, _), NT),
     aggregate_all(sum(C), (aq_tab(_, _, Tr, _, _), trie_count(Tr, C)), NA),
@@ -446,6 +478,123 @@ wait_call(delete, Lit, S) :-
 wait_call(restore, Lit, S) :-
     wait_call(insert, Lit, S).
 
+%!  aq_wait_neg(+Kind, +Literal, +State, +Stratum) is det.
+%
+%   State waits at the negated literal `\+ Literal` of a rule whose head is
+%   in stratum Stratum; Kind is how Literal is evaluated (call: through a
+%   table, fact: stored facts).  Stratified negation:
+%
+%     - the check is deferred until nothing of a lower stratum is left to
+%       do (drain/0 checks the pending negations of the lowest stratum first,
+%       once the agenda is empty), so Literal's table is complete then;
+%     - the nstates trie keeps every state at a negated literal, keyed
+%       ns(State, Literal), with n(Kind, Table, Status, Derivations): Status
+%       passed (Literal had no answer; the state resumed with
+%       '$aq_not'(Literal)) or blocked;
+%     - an update is incremental as long as no negation changes its truth:
+%       after it, every state's Status is checked against its table; when one
+%       changed (an added fact made a negated literal true, a deleted one made
+%       it false), the queries are evaluated again and the difference is
+%       notified (neg_update/1).  Programs without negation never pay for it.
+
+aq_wait_neg(Kind, Lit, S, Str) :-
+    nb_getval(aq_phase, P),
+    wait_neg(P, Kind, Lit, S, Str).
+
+wait_neg(insert, Kind, Lit, S, Str) :-
+    neg_table(Kind, Lit, S, T),
+    assertz(aq_negq(Str, Kind, Lit, S, T)).
+wait_neg(restore, Kind, Lit, S, Str) :-
+    wait_neg(insert, Kind, Lit, S, Str).
+wait_neg(delete, _, Lit, S, Str) :-
+    nb_getval(aq_nstates, NS),
+    (   trie_delete(NS, ns(S, Lit), n(Kind, _, Status, M))
+    ->  (   M > 1 -> ignore(mark(s(neg(Kind, Str), '$aq_not'(Lit), S))) ; true ),
+        (   Status == passed -> go(S, '$aq_not'(Lit), 0) ; true )
+    ;   true
+    ).
+
+%   The table a negated literal is checked against (none for stored facts),
+%   created and activated now so that it is complete when the check runs.
+neg_table(fact, _, _, none).
+neg_table(call, Lit, S, T) :-
+    table_for(Lit, S, T, New),
+    state_from(S, From),
+    (   aq_dep(From, T) -> true ; assertz(aq_dep(From, T)) ),
+    (   New == true -> activate(T) ; true ).
+
+neg_holds(fact, Lit, _) :-
+    \+ user:Lit.
+neg_holds(call, Lit, T) :-
+    \+ trie_gen(T, Lit, _).
+
+%   The pending negations of the lowest stratum are checked first: what they
+%   depend on is in lower strata, whose work is done (the agenda is empty).
+check_next_neg :-
+    aggregate_all(min(Str), aq_negq(Str, _, _, _, _), Min),
+    retract(aq_negq(Min, Kind, Lit, S, T)), !,
+    nb_getval(aq_nstates, NS),
+    (   trie_lookup(NS, ns(S, Lit), n(K, T0, Status, _))
+    ->  trie_update(NS, ns(S, Lit), n(K, T0, Status, 2))
+    ;   (   neg_holds(Kind, Lit, T) -> Status = passed ; Status = blocked ),
+        trie_insert(NS, ns(S, Lit), n(Kind, T, Status, 1)),
+        (   Status == passed -> go(S, '$aq_not'(Lit), 0) ; true )
+    ).
+
+%   Every negation still has the truth value its states were resumed with.
+negations_unchanged :-
+    nb_getval(aq_nstates, NS),
+    \+ ( trie_gen(NS, ns(_, Lit), n(Kind, T, Status, _)),
+          \+ neg_status(Kind, Lit, T, Status) ).
+
+neg_status(Kind, Lit, T, passed) :- neg_holds(Kind, Lit, T).
+neg_status(Kind, Lit, T, blocked) :- \+ neg_holds(Kind, Lit, T).
+
+%   Run an update (aq_assert/1, aq_retract_all/1).  With negation in the
+%   program its notifications are held back until the negations are known to
+%   be unchanged; otherwise the queries are evaluated again from the facts.
+neg_update(Goal) :-
+    (   aq_conf(negation, true)
+    ->  retractall(aq_buf(_, _, _)),
+        nb_setval(aq_buffer, on),
+        catch(Goal, E, true),
+        nb_setval(aq_buffer, off),
+        (   nonvar(E)
+        ->  release_buffer, throw(E)
+        ;   negations_unchanged
+        ->  release_buffer
+        ;   reevaluate_queries
+        )
+    ;   call(Goal)
+    ).
+
+release_buffer :-
+    forall(retract(aq_buf(Id, Op, A)), emit(Id, Op, A)).
+
+%   The answers before the update are the answers now without what it added
+%   and with what it deleted (as notified, held back in the buffer).
+reevaluate_queries :-
+    findall(Id-G, aq_q(Id, G, _, _), Queries),
+    findall(Id-Old,
+            ( member(Id-_, Queries),
+              aq_answers(Id, Now),
+              findall(A, aq_buf(Id, add, A), Added0), sort(Added0, Added),
+              findall(A, aq_buf(Id, delete, A), Deleted0), sort(Deleted0, Deleted),
+              ord_subtract(Now, Added, Kept),
+              ord_union(Kept, Deleted, Old)
+            ),
+            Olds),
+    retractall(aq_buf(_, _, _)),
+    aq_reset,
+    forall(member(Id-G, Queries), aq_register(Id, G, _)),
+    forall(member(Id-Old, Olds),
+           ( aq_answers(Id, New),
+             ord_subtract(Old, New, Lost),
+             ord_subtract(New, Old, Won),
+             forall(member(A, Lost), emit(Id, delete, A)),
+             forall(member(A, Won), emit(Id, add, A))
+           )).
+
 %   The table of a consumer state, whose value in the cstates trie is T, or
 %   m(T) once the state was derived more than once.
 table_of(m(T), T) :- !.
@@ -473,6 +622,20 @@ go(S, Lit, R) :-
 activate(T) :-
     aq_tab(T, G, _, _, _),
     forall(user:'$aq_act'(G, T), true).
+
+%!  aq_adornment(+Vars, -Mask) is det.
+%
+%   Bit I of Mask is set when the I-th of Vars (head variables of a rule)
+%   is ground: the activation of a table picks the body order compiled for
+%   what its call binds (retalisc/passes/aq_join_order.py).
+aq_adornment(Vars, Mask) :-
+    adornment(Vars, 1, 0, Mask).
+
+adornment([], _, M, M).
+adornment([V|Vs], Bit, M0, M) :-
+    (   ground(V) -> M1 is M0 \/ Bit ; M1 = M0 ),
+    Bit1 is Bit << 1,
+    adornment(Vs, Bit1, M1, M).
 
 %!  aq_answer(+Table, +Answer, +Rank) is det.
 %
@@ -548,6 +711,9 @@ drain :-
     (   retract(aq_agenda(T, A, RA))
     ->  propagate(T, A, RA),
         drain
+    ;   aq_negq(_, _, _, _, _),
+        check_next_neg
+    ->  drain
     ;   true
     ).
 
@@ -648,16 +814,37 @@ aq_assert(Fact) :-
     check_fact(Fact),
     (   implied_fact(Fact)
     ->  true
-    ;   ( ground(Fact) -> true ; not_all_ground(Fact) ),
-        assertz(user:Fact),
-        forall(user:'$aq_wrec'(Fact, S), go(S, Fact, 0)),
-        drain
+    ;   neg_update(add_fact(Fact))
     ).
+
+add_fact(Fact) :-
+    ( ground(Fact) -> true ; not_all_ground(Fact) ),
+    assertz(user:Fact),
+    forall(user:'$aq_wrec'(Fact, S), go(S, Fact, 0)),
+    drain.
 
 %!  aq_assert_all(+Facts) is det.
 aq_assert_all(Facts) :-
     must_be(list, Facts),
-    maplist(aq_assert, Facts).
+    maplist(check_fact, Facts),
+    (   aq_conf(negation, true)
+    ->  maplist(aq_assert, Facts)
+    ;   add_facts(Facts),
+        drain
+    ).
+
+%   The facts of a batch, propagated one after the other (depth-first, as
+%   far as schedule/3 goes) and the agenda drained once at the end: the
+%   order in which additions propagate does not change what they derive.
+add_facts([]).
+add_facts([F|Fs]) :-
+    (   implied_fact(F)
+    ->  true
+    ;   ( ground(F) -> true ; not_all_ground(F) ),
+        assertz(user:F),
+        forall(user:'$aq_wrec'(F, S), go(S, F, 0))
+    ),
+    add_facts(Fs).
 
 %!  aq_retract(+Fact) is det.
 %
@@ -672,9 +859,30 @@ aq_retract(Fact) :-
 aq_retract_all(Facts0) :-
     must_be(list, Facts0),
     maplist(check_fact, Facts0),
-    include(has_fact, Facts0, Facts1),
-    sort(Facts1, Facts),
-    (   Facts == [] -> true ; dred(Facts) ).
+    neg_update(retract_facts(Facts0)).
+
+%   Facts that are stored and that some state waits on go through one DRed
+%   pass; the others are erased at once.
+retract_facts(Facts0) :-
+    quiet_retract(Facts0, Awaited0),
+    sort(Awaited0, Awaited),
+    (   Awaited == [] -> true ; dred(Awaited) ).
+
+quiet_retract([], []).
+quiet_retract([F|Fs], Awaited) :-
+    (   \+ has_fact(F)
+    ->  Awaited = Awaited1
+    ;   awaited(F)
+    ->  Awaited = [F|Awaited1]
+    ;   erase_fact(F),
+        Awaited = Awaited1
+    ),
+    quiet_retract(Fs, Awaited1).
+
+%   A fact no state waits on derived nothing: it goes without DRed (most
+%   retractions of a belief base that a few queries watch are such facts).
+awaited(F) :-
+    \+ \+ user:'$aq_wrec'(F, _).
 
 check_fact(F) :-
     (   callable(F), user:'$aq_fact_pred'(F)
@@ -741,10 +949,19 @@ mark(Key) :-
     trie_insert(D, Key).
 
 dred(Facts) :-
+    dred_run(over_delete_facts(Facts), maplist(erase_fact, Facts)).
+
+%   DRed from the derivations Seed over-deletes (in phase delete), Cleanup
+%   then removing what was deleted (the facts, or a rule's clauses).
+dred_run(Seed, Cleanup) :-
     trie_new(D),
     nb_setval(aq_dred, D),
-    catch(dred(Facts, D), E, (dred_end(D), throw(E))),
+    catch(dred_run(Seed, Cleanup, D), E, (dred_end(D), throw(E))),
     dred_end(D).
+
+over_delete_facts(Facts) :-
+    forall(member(F, Facts),
+           forall(user:'$aq_wrec'(F, S), go(S, F, 0))).
 
 dred_end(D) :-
     retractall(aq_agenda(_, _, _)),
@@ -761,13 +978,12 @@ dred_end(D) :-
 %   the over-deleted answers that had more than one derivation (a(T, A)),
 %   the over-deleted states that had more than one derivation (s(Kind,
 %   Literal, State)) and the answers lost by registered queries (n(Id, A)).
-dred(Facts, D) :-
+dred_run(Seed, Cleanup, D) :-
     % 1. over-delete
     nb_setval(aq_phase, delete),
-    forall(member(F, Facts),
-           forall(user:'$aq_wrec'(F, S), go(S, F, 0))),
+    call(Seed),
     drain,
-    maplist(erase_fact, Facts),
+    call(Cleanup),
     % 2. re-derive the answers and states that may have another derivation,
     %    propagate them forward: that also restores the states and
     %    single-derivation answers that depend on them
@@ -815,9 +1031,13 @@ state_exists(fact, Lit, S) :-
 state_exists(call, _, S) :-
     nb_getval(aq_cstates, St),
     trie_lookup(St, S, _).
+state_exists(neg(_, _), '$aq_not'(Lit), S) :-
+    nb_getval(aq_nstates, NS),
+    trie_lookup(NS, ns(S, Lit), _).
 
 restore_state(fact, Lit, S) :- wait_fact(restore, Lit, S).
 restore_state(call, Lit, S) :- wait_call(restore, Lit, S).
+restore_state(neg(Kind, Str), '$aq_not'(Lit), S) :- wait_neg(restore, Kind, Lit, S, Str).
 
 %   A one-step derivation of state S from what is there: the generated
 %   clause that creates S (the last goal of its body is aq_wait_*(_, S)),
@@ -839,7 +1059,9 @@ state_step(S, P, Kind, Lit, Check) :-
     user:clause('$aq_go'(P, Lit, _), Body),
     body_last(Body, Check, Last),
     creates(Last, S),
-    (   Kind = call
+    (   nonvar(Lit), Lit = '$aq_not'(_)
+    ->  Kind = neg
+    ;   Kind = call
     ;   user:'$aq_fact_pred'(Lit),
         Kind = fact
     ).
@@ -857,12 +1079,17 @@ body_last(G, true, G).
 creates(_:G, S) :- !, creates(G, S).
 creates(aq_wait_fact(_, S), S).
 creates(aq_wait_call(_, S), S).
+creates(aq_wait_neg(_, _, S, _), S).
 
 premise(act(T), none, _, 0) :- !,
     aq_tab(T, _, _, _, _).
 premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on their
     user:Lit,                       % bound arguments, goal records often are not
     user:'$aq_wrec'(Lit, P).
+premise(P, neg, '$aq_not'(Lit), 0) :- !,
+    nb_getval(aq_nstates, NS),
+    trie_gen(NS, ns(P, Lit), n(Kind, T, passed, _)),
+    neg_holds(Kind, Lit, T).
 premise(P, call, Lit, R) :-
     nb_getval(aq_cstates, St),
     trie_gen(St, P, V),
@@ -876,6 +1103,68 @@ query_has(Id, A) :-
         trie_lookup(Tr, A, _)
     ;   has_fact(A)
     ), !.
+
+		 /*******************************
+		 *      RULES AT RUN TIME       *
+		 *******************************/
+
+%!  aq_add_rule(+Rule) is det.
+%
+%   Add the rule `H :- B` (checked by rtl_aq_rules: untrusted) and propagate
+%   what it derives to every active query: the rule is activated for every
+%   table whose goal unifies with H.  Adding a rule that is there already
+%   (a variant) does nothing.  Throws aq_rule_error(Message) for a rule that
+%   may not be added.
+aq_add_rule(Rule0) :-
+    copy_term(Rule0, Rule),
+    aq_rule_check(Rule, Lits0),
+    (   aq_rule(_, R, _), R =@= Rule
+    ->  true
+    ;   (   aq_conf(mode, naive) -> maplist(as_call, Lits0, Lits) ; Lits = Lits0 ),
+        flag(aq_rule_id, N0, N0 + 1),
+        N is N0 + 1,
+        aq_rule_clauses(Rule, Lits, N, Clauses),
+        Rule = (H :- _),
+        functor(H, Name, Arity), functor(P, Name, Arity),
+        (   user:'$aq_kind'(P, _) -> true ; assertz(user:'$aq_kind'(P, call)) ),
+        maplist(assert_clause, Clauses, Refs),
+        assertz(aq_rule(N, Rule, Refs)),
+        Clauses = [Act|_],
+        neg_update(activate_rule(insert, Act))
+    ).
+
+as_call(fact(G), call(G)) :- !.
+as_call(L, L).
+
+assert_clause(C, Ref) :- assertz(user:C, Ref).
+
+%   Run the activation clause of a rule for every table it applies to.
+activate_rule(Phase, Act) :-
+    nb_setval(aq_phase, Phase),
+    (   Act = ('$aq_act'(H, T) :- Body) -> true ; Act = '$aq_act'(H, T), Body = true ),
+    forall(aq_tab(Tab, G, _, _, _),
+           ( copy_term(H-T-Body, H1-T1-Body1),
+             (   copy_term(G, G1), G1 = H1
+             ->  T1 = Tab, ignore(user:Body1)
+             ;   true
+             ) )),
+    (   Phase == insert -> drain ; true ).
+
+%!  aq_remove_rule(+Rule) is det.
+%
+%   Remove a rule added by aq_add_rule/1 (a variant of it) and update every
+%   active query by DRed: what the rule derived is over-deleted, the rule's
+%   clauses go, and what has another derivation is derived again.  Throws
+%   aq_rule_error(Message) when no such rule was added.
+aq_remove_rule(Rule) :-
+    (   aq_rule(N, R, Refs), R =@= Rule
+    ->  clause(aq_rule(N, _, _), true, RuleRef),
+        Refs = [ActRef|_],
+        clause(user:AH, AB, ActRef),
+        neg_update(dred_run(activate_rule(delete, (AH :- AB)),
+                            ( maplist(erase, Refs), erase(RuleRef) )))
+    ;   throw(aq_rule_error('no such rule was added (only rules added at run time can be removed)'))
+    ).
 
 		 /*******************************
 		 *        UPDATE SCRIPTS        *
@@ -898,17 +1187,44 @@ aq_run_script(File) :-
     read_file_to_string(File, Text, []),
     split_string(Text, "\n", "\r", Lines),
     aq_set_notify(none),
-    foldl(run_line, Lines, 1, _).
+    run_lines(Lines, 1).
 
-run_line(Line0, N, N1) :-
-    N1 is N + 1,
-    normalize_space(string(Line), Line0),
+%   A command whose quoted atom or string is not closed on its line goes on
+%   on the next lines (a quoted item may contain newlines, as in programs);
+%   errors name the line the command starts on.
+run_lines([], _).
+run_lines([Line0|Lines0], N) :-
+    strip(Line0, Line),
     (   ( Line == "" ; sub_string(Line, 0, 1, _, "%") )
-    ->  true
+    ->  N1 is N + 1,
+        run_lines(Lines0, N1)
     ;   sub_string(Line, 0, 1, _, C),
         sub_string(Line, 1, _, 0, Rest0),
-        normalize_space(string(Rest), Rest0),
-        catch(parse_command(C, Rest, T), E, parse_error(N, E)),
+        strip(Rest0, Rest1),
+        command_text(Rest1, Lines0, N, C, T, Lines, N1),
+        run_command_line(C, T, N, Line),
+        run_lines(Lines, N1)
+    ).
+
+strip(Text, Stripped) :-
+    split_string(Text, "", " \t", [Stripped]).
+
+%   Parse the command's text, taking further lines while a quoted item is
+%   open at the end of the text.
+command_text(Rest, Lines0, N, C, T, Lines, N1) :-
+    catch(parse_command(C, Rest, T0), E, true),
+    (   var(E)
+    ->  T = T0, Lines = Lines0, N1 is N + 1
+    ;   E = error(syntax_error(end_of_file_in_quoted(_)), _),
+        Lines0 = [Next|More]
+    ->  string_concat(Rest, "\n", Rest2),
+        string_concat(Rest2, Next, Rest3),
+        command_text(Rest3, More, N, C, T, Lines, N2),
+        N1 is N2 + 1
+    ;   parse_error(N, E)
+    ).
+
+run_command_line(C, T, N, Line) :-
         catch(check_command(C, T, N), E2, line_error(N, E2)),
         (   catch(run_command(C, T), E3, throw(aq_runtime_error(N, E3)))
         ->  true
@@ -916,8 +1232,7 @@ run_line(Line0, N, N1) :-
         ),
         aq_events(Evs0),
         msort(Evs0, Evs),
-        forall(member(ev(Id, Op, A), Evs), print_event(Id, Op, A))
-    ).
+        forall(member(ev(Id, Op, A), Evs), print_event(Id, Op, A)).
 
 %   `?Id Goal.`: the id is the text up to the first space.
 parse_command("?", Rest, Id-Goal) :- !,
@@ -941,9 +1256,8 @@ parse_error(N, E) :-
     throw(aq_script_error(N, Msg)).
 
 %   Every error of check_command/3 is a bad script line.
-line_error(_, E) :-
-    E = aq_script_error(_, _), !,
-    throw(E).
+line_error(N, aq_script_error(_, Msg)) :- !,
+    throw(aq_script_error(N, Msg)).
 line_error(N, E) :-
     message_to_codes(E, Msg),
     throw(aq_script_error(N, Msg)).
@@ -968,6 +1282,13 @@ message_to_chars(E, Msg) :-
 check_command("?", Id-Goal, _) :- !,
     (   aq_q(Id, _, _, _) -> permission_error(register, active_query, Id) ; true ),
     goal_kind(Goal, _).
+check_command("+", (H :- B), _) :- !,
+    catch(aq_rule_check((H :- B), _), aq_rule_error(Msg), throw(aq_script_error(0, Msg))).
+check_command("-", (H :- B), _) :- !,
+    (   aq_rule(_, R, _), R =@= (H :- B)
+    ->  true
+    ;   throw(aq_script_error(0, 'no such rule was added (only rules added by the script can be removed)'))
+    ).
 check_command("+", F, _) :- !, check_fact(F).
 check_command("-", F, _) :- !, check_fact(F).
 check_command("!", Id, _) :- !,
@@ -977,6 +1298,8 @@ check_command(C, _, N) :-
     throw(aq_script_error(N, Msg)).
 
 run_command("?", Id-Goal) :- aq_register(Id, Goal).
+run_command("+", (H :- B)) :- !, aq_add_rule((H :- B)).
+run_command("-", (H :- B)) :- !, aq_remove_rule((H :- B)).
 run_command("+", F) :- aq_assert(F).
 run_command("-", F) :- aq_retract(F).
 run_command("!", Id) :- aq_unregister(Id).

@@ -5,6 +5,8 @@
             aq_api_id_text/2,           % +Id, -Text
             aq_api_assert/2,            % +FactTexts, -Out
             aq_api_retract/2,           % +FactTexts, -Out
+            aq_api_add_rule/2,          % +RuleText, -Out
+            aq_api_remove_rule/2,       % +RuleText, -Out
             aq_api_events/1,            % -EventLines
             aq_api_stats/1,             % -StatLines
             aq_api_unload/2             % +File, -Out
@@ -73,6 +75,21 @@ facts(Texts, Facts) :-
 
 fact(Text, Fact) :-
     rtl_read_text(Text, Fact, _, [module(user)]).
+
+%!  aq_api_add_rule(+RuleText:text, -Out) is det.
+%!  aq_api_remove_rule(+RuleText:text, -Out) is det.
+%
+%   Add (remove) the rule `H :- B` given as a text; rtl_aq_rules checks it
+%   first (untrusted: program predicates and the definite builtins only).
+%   A refused rule raises aq_rule_error(Message).
+
+aq_api_add_rule(Text, "") :-
+    rtl_read_text(Text, Rule, _, [module(user)]),
+    aq_add_rule(Rule).
+
+aq_api_remove_rule(Text, "") :-
+    rtl_read_text(Text, Rule, _, [module(user)]),
+    aq_remove_rule(Rule).
 
 %!  aq_api_events(-Lines:string) is det.
 %

@@ -71,6 +71,7 @@ def _compile(text: str, file: str, output_name: str, dump_after: Optional[str], 
     if active_queries is not None:
         passes = active_query_passes(active_queries.mode)
         unit = AqUnit(read_definite_program(text, file), active_queries.mode, active_queries.subsumption)
+        unit.warnings.extend(unit.program.notes)
         unit = run_pipeline(unit, passes, _dumper(dump_after, dump))
         return CompileResult(render_active_queries(unit), unit, list(unit.warnings))
     unit = Unit(parse_program(text, file), module or module_name(file), target=target_predicates())

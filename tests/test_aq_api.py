@@ -105,3 +105,20 @@ def test_plunit_runtime(tmp_path):
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120,
                           env={**os.environ, "AQ_TEST_PROGRAM": str(program)})
     assert proc.returncode == 0, proc.stdout
+
+
+def test_rules_added_and_removed_at_run_time():
+    from retalisc.driver.bridge import PrologError
+    aq = ActiveQueries.from_source(":- dynamic e/2.\ne(1, 2). e(2, 3).\nr(X, Y) :- e(X, Y).\n", "rules.pl")
+    added, deleted = [], []
+    aq.on_add(lambda q, a: added.append(a))
+    aq.on_delete(lambda q, a: deleted.append(a))
+    assert aq.register("q", "r(1, Y)") == ["r(1,2)"]
+    aq.add_rule("r(X, Y) :- e(X, Z), r(Z, Y)")
+    assert added == ["r(1,3)"]
+    with pytest.raises(PrologError):
+        aq.add_rule("r(X, Y) :- e(X, Y), shell('ls')")     # untrusted: refused, nothing runs
+    aq.remove_rule("r(X, Y) :- e(X, Z), r(Z, Y)")
+    assert deleted == ["r(1,3)"] and aq.answers("q") == ["r(1,2)"]
+    with pytest.raises(PrologError):
+        aq.remove_rule("r(X, Y) :- e(X, Z), r(Z, Y)")

@@ -133,7 +133,7 @@ def check(source, goals, steps, mode, subsumption=False, dred="primary"):
     for key in orc:
         assert inc[key] == orc[key], f"step {key}: incremental {inc[key]} != SWI tabling {orc[key]}\n{source}"
         assert scr[key] == orc[key], f"step {key}: scratch {scr[key]} != SWI tabling {orc[key]}\n{source}"
-    for key in ("tables", "consumers", "fact_records", "cstates"):
+    for key in ("tables", "consumers", "fact_records", "cstates", "negations"):
         assert f"{key}=0" in stats, stats
 
 

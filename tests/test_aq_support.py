@@ -18,7 +18,16 @@ SWIPL = shutil.which("swipl") or "swipl"
 Step = Tuple[str, str]  # ("+", fact) | ("-", fact) | ("?", "")
 
 
+_CONTROL = {(",", 2), (";", 2), ("->", 2), ("*->", 2), ("\\+", 1)}
+
+
 def _rename(term: Term, preds) -> Term:
+    """Rename the program's predicates to o_p, also inside control constructs; `not/1` and
+    `tnot/1` become `\\+` (SWI-Prolog's tnot/1 wants a tabled goal)."""
+    if isinstance(term, Compound) and term.name in ("not", "tnot") and term.arity == 1:
+        term = Compound("\\+", term.args)
+    if isinstance(term, Compound) and (term.name, term.arity) in _CONTROL:
+        return Compound(term.name, tuple(_rename(a, preds) for a in term.args))
     if isinstance(term, Compound) and (term.name, term.arity) in preds:
         return Compound("o_" + term.name, term.args)
     if isinstance(term, Atom) and (term.name, 0) in preds:
@@ -26,14 +35,18 @@ def _rename(term: Term, preds) -> Term:
     return term
 
 
-def oracle_rules(source: str) -> str:
+def oracle_rules(source: str, extra=()) -> str:
     """The program's rules for SWI-Prolog tabling: every predicate with rules renamed o_p and
-    tabled; a predicate with rules and facts reads its stored facts through one more clause."""
+    tabled; a predicate with rules and facts reads its stored facts through one more clause.
+    `extra`: predicates that get rules later (update steps that add rules); with them, every
+    o_p is dynamic too."""
     program = load_program(source, "oracle.pl")
-    preds = set(program.rule_predicates)
+    preds = set(program.rule_predicates) | set(extra)
     lines = [":- style_check(-singleton)."]
     for name, arity in sorted(preds):
         lines.append(f":- table o_{name}/{arity}.")
+        if extra:
+            lines.append(f":- dynamic o_{name}/{arity}.")
     for rule in program.rules:
         body = [to_prolog(_rename(lit.term, preds)) for lit in rule.body] or ["true"]
         lines.append(f"{to_prolog(_rename(rule.head, preds))} :- {', '.join(body)}.")
@@ -44,10 +57,35 @@ def oracle_rules(source: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def oracle_goal(goal: str, source: str) -> str:
+def oracle_goal(goal: str, source: str, extra=()) -> str:
     from retalisc.frontend.parser import read_term
     program = load_program(source, "oracle.pl")
-    return to_prolog(_rename(read_term(goal), set(program.rule_predicates)))
+    return to_prolog(_rename(read_term(goal), set(program.rule_predicates) | set(extra)))
+
+
+def rule_step(text: str):
+    """The rule of an update step `(H :- B)`, or None for a fact."""
+    from retalisc.frontend.parser import read_term
+    term = read_term(text)
+    if isinstance(term, Compound) and term.name == ":-" and term.arity == 2:
+        return term
+    return None
+
+
+def _rule_heads(steps) -> set:
+    heads = set()
+    for op, text in steps:
+        rule = rule_step(text) if op in "+-" else None
+        if rule is not None:
+            head = rule.args[0]
+            heads.add((head.name, head.arity) if isinstance(head, Compound) else (head.name, 0))
+    return heads
+
+
+def _oracle_rule(rule: Term, preds) -> str:
+    head, body = rule.args
+    from retalisc.frontend.terms import conjuncts, conjunction
+    return to_prolog(Compound(":-", (_rename(head, preds), conjunction([_rename(g, preds) for g in conjuncts(body)]))))
 
 
 def _run(text: str) -> List[str]:
@@ -86,15 +124,22 @@ def run_all(source: str, goals: List[str], steps: List[Step], mode: str, subsump
     dred: the DRed variant (primary or basic, see docs/active_queries.md)."""
     generated = compile_source(source, "program.pl", active_queries=AqOptions(mode, subsumption)).prolog
     generated += f":- aq_configure([dred({dred})]).\n"
-    oracle = oracle_rules(source)
+    extra = _rule_heads(steps)
+    oracle = oracle_rules(source, extra)
+    preds = set(load_program(source, "oracle.pl").rule_predicates) | extra
     qlist = "[" + ", ".join(goals) + "]"
-    olist = "[" + ", ".join(f"({oracle_goal(g, source)})-({g})" for g in goals) + "]"
+    olist = "[" + ", ".join(f"({oracle_goal(g, source, extra)})-({g})" for g in goals) + "]"
     ops = {"+": "aq_assert", "-": "aq_retract"}
+    rule_ops = {"+": ("aq_add_rule", "assertz"), "-": ("aq_remove_rule", "retract")}
     body = [f"    Qs = {qlist}, Os = {olist},",
             "    forall(nth1(I, Qs, G), aq_register(I, G, _)),",
             "    print_state(0, Qs), print_oracle(0, Os),"]
     for k, (op, fact) in enumerate(steps, start=1):
-        if op in ops:
+        rule = rule_step(fact) if op in ops else None
+        if rule is not None:
+            ours, theirs = rule_ops[op]
+            body.append(f"    {ours}({fact}), {theirs}(({_oracle_rule(rule, preds)})),")
+        elif op in ops:
             body.append(f"    {ops[op]}({fact}),")
         body.append(f"    print_state({k}, Qs), print_oracle({k}, Os),")
     body.append("    aq_events(_), forall(nth1(I, Qs, _), aq_unregister(I)), aq_stats(St), format('0 0 stats ~q~n', [St]).")
@@ -107,7 +152,7 @@ def run_all(source: str, goals: List[str], steps: List[Step], mode: str, subsump
         sbody = [f"    Qs = {qlist},", "    scratch(0, Qs),"]
         for k, (op, fact) in enumerate(steps, start=1):
             if op in ops:
-                sbody.append(f"    {ops[op]}({fact}),")
+                sbody.append(f"    {rule_ops[op][0] if rule_step(fact) is not None else ops[op]}({fact}),")
             sbody.append(f"    scratch({k}, Qs),")
         sbody.append("    true.")
         stext = (generated + _PRINT + "scratch(K, Qs) :- forall(nth1(I, Qs, G), aq_register(I, G, _)), "

@@ -34,10 +34,13 @@ def compile_program_or_exit(program: str, mode: str, subsumption: bool) -> str:
         click.echo(f"{program}: error: not a UTF-8 text file ({error.reason})", err=True)
         sys.exit(2)
     try:
-        return compile_source(text, program, active_queries=AqOptions(mode, subsumption)).prolog
+        result = compile_source(text, program, active_queries=AqOptions(mode, subsumption))
     except RetalisError as error:
         click.echo(error.render(text), err=True)
         sys.exit(2)
+    for note in result.warnings:
+        click.echo(note, err=True)
+    return result.prolog
 
 
 def _prolog_atom(text: str) -> str:

@@ -6,6 +6,7 @@
     answers = aq.register("q1", "accessible(O, S)")   # current answers (writeq text, sorted)
     aq.assert_fact("offers(s1, o7, 3)")                # callbacks fire for the changes
     aq.retract_facts(["offers(s1, o7, 3)", "seller(s1, t1)"])   # one DRed pass
+    aq.add_rule("cheap(O) :- offers(_, O, P), P < 5")    # checked, then propagated; remove_rule
     aq.unregister("q1")                                # frees its tables, goals and records
 
 Goals, facts and query ids cross the boundary as values (`Bridge.apply` into
@@ -140,6 +141,18 @@ class ActiveQueries:
     def retract_facts(self, facts: Iterable[str]) -> None:
         """Retract several facts in one DRed pass."""
         self.bridge.apply(_API, "aq_api_retract", [_text(f, "a fact") for f in facts])
+        self._dispatch()
+
+    def add_rule(self, rule: str) -> None:
+        """Add the rule `H :- B` (text) at run time; callbacks fire for what it derives. The rule
+        is untrusted: its body may use the program's predicates and the comparison builtins only
+        (PrologError otherwise)."""
+        self.bridge.apply(_API, "aq_api_add_rule", _text(rule, "a rule"))
+        self._dispatch()
+
+    def remove_rule(self, rule: str) -> None:
+        """Remove a rule added by `add_rule` (DRed); PrologError when no such rule was added."""
+        self.bridge.apply(_API, "aq_api_remove_rule", _text(rule, "a rule"))
         self._dispatch()
 
     def stats(self) -> Dict[str, int]:

@@ -16,8 +16,9 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Set, Tuple
 
 from .errors import RetalisSemanticError
+from .operators import STANDARD_OPERATORS
 from .parser import read_program
-from .terms import Atom, Compound, Number, Span, Term, Var, indicator, list_items, span_of, variables
+from .terms import Atom, Compound, Number, Span, Term, Var, indicator, list_items, span_of, to_prolog, variables
 
 Indicator = Tuple[str, int]
 
@@ -54,6 +55,7 @@ class Literal:
 
     term: Term
     kind: str = ""
+    negated: bool = False  # `\+ term` over a user predicate (stratified negation)
 
     @property
     def indicator(self) -> Indicator:
@@ -70,6 +72,9 @@ class Rule:
     span: Optional[Span] = None
     text: str = ""
     synthetic: bool = False  # `p(X..) :- <stored fact p(X..)>` added by a pass
+    stratum: int = 0         # of the head predicate (set by aq_program: stratified negation)
+    # (head variables, adornment masks) this body order is for (aq_join_order); None: every call
+    guard: Optional[tuple] = None
 
     @property
     def indicator(self) -> Indicator:
@@ -90,6 +95,7 @@ class Program:
     rules: List[Rule] = field(default_factory=list)
     facts: List[Fact] = field(default_factory=list)
     dynamic: List[Indicator] = field(default_factory=list)  # order of first mention
+    notes: List[str] = field(default_factory=list)  # `file:line:col: note: ...` (ignored XSB directives)
     # set by the transformation pass (aq_naive, aq_optimized or aq_tabled)
     mode: str = ""
     subsumption: bool = False
@@ -127,6 +133,22 @@ def program_error(message: str, term: Term, fallback: Optional[Span]) -> Retalis
     return RetalisSemanticError(message, span_of(term) or fallback)
 
 
+#: XSB's module directives, read so that `:- import member/2 from basics.` parses (and is ignored).
+XSB_OPERATORS = STANDARD_OPERATORS.copy()
+for _name in ("import", "export", "local"):
+    XSB_OPERATORS.add(1150, "fx", _name)
+XSB_OPERATORS.add(1100, "xfx", "from")
+
+
+def _as_modifier(term: Term) -> Optional[Term]:
+    """The `as ...` part of an XSB/SWI declaration `p/2 as incremental`, anywhere in the spec."""
+    if isinstance(term, Compound) and term.name == "as" and term.arity == 2:
+        return term.args[1]
+    if isinstance(term, Compound) and term.name in (",", "[|]", ".") and term.arity == 2:
+        return _as_modifier(term.args[0]) or _as_modifier(term.args[1])
+    return None
+
+
 def _pred_spec(term: Term, span: Optional[Span]) -> List[Indicator]:
     """`p/1, q/2` or `[p/1, q/2]` in a dynamic declaration (an `as ...` suffix is ignored)."""
     if isinstance(term, Compound) and term.name == "as" and term.arity == 2:
@@ -150,16 +172,33 @@ def read_definite_program(text: str, file: str) -> Program:
     facts and dynamic predicates. Raises RetalisSyntaxError / RetalisSemanticError."""
     program = Program(file=file)
     dynamic: Dict[Indicator, None] = {}
-    for clause in read_program(text, file):
+    for clause in read_program(text, file, XSB_OPERATORS):
         term, span = clause.term, clause.span
         if isinstance(term, Compound) and term.name == ":-" and term.arity == 1:
             directive = term.args[0]
             if isinstance(directive, Compound) and directive.name == "dynamic" and directive.arity == 1:
                 for ind in _pred_spec(directive.args[0], span):
                     dynamic.setdefault(ind)
+                modifier = _as_modifier(directive.args[0])
+                if modifier is not None:
+                    program.notes.append(
+                        f"{span}: note: `as {to_prolog(modifier)}` ignored: every dynamic predicate of an "
+                        f"active-query program propagates its changes incrementally")
                 continue
             if isinstance(directive, Compound) and directive.name in ("table", "discontiguous") and directive.arity == 1:
-                continue  # meaningless here: every predicate is tabled by the transformation
+                # meaningless here: every predicate with rules is tabled by the transformation
+                modifier = _as_modifier(directive.args[0]) if directive.name == "table" else None
+                if modifier is not None:
+                    program.notes.append(
+                        f"{span}: note: `:- table ... as {to_prolog(modifier)}` ignored: every predicate with "
+                        f"rules is tabled and maintained incrementally by the active-query transformation")
+                continue
+            if isinstance(directive, Compound) and directive.name in ("import", "export", "local") \
+                    and directive.arity == 1:
+                program.notes.append(
+                    f"{span}: note: XSB `:- {directive.name}` ignored: an active-query program is one module "
+                    f"and its builtins need no import")
+                continue
             raise program_error("only `:- dynamic` declarations are allowed in an active-query program",
                                 directive, span)
         if isinstance(term, Compound) and term.name == ":-" and term.arity == 2:

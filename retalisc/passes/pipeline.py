@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from typing import Callable, List, Optional, TypeVar
 
-from . import (added_rules, apply_rule_windows, aq_naive, aq_optimized, aq_program, aq_tabled, binarize,
-               collect_settings, edbc, lint, loadable, push_conditions, slr_goal_sets, slr_stream_histories,
-               slr_time_terms, validate)
+from . import (added_rules, apply_rule_windows, aq_join_order, aq_naive, aq_normalise, aq_optimized, aq_program,
+               aq_tabled, binarize, collect_settings, edbc, lint, loadable, push_conditions, slr_goal_sets,
+               slr_stream_histories, slr_time_terms, validate)
 
 #: Event programs (`.rtl`, read by `frontend/program.py`), rendered by `backends/prolog/render.py`.
 EVENT_PIPELINE = [slr_time_terms, slr_stream_histories, slr_goal_sets, validate, collect_settings, apply_rule_windows, push_conditions, binarize, edbc,
@@ -25,7 +25,7 @@ ADDED_RULES_PIPELINE = [added_rules] + [p for p in EVENT_PIPELINE if p is not li
 #: Definite programs for active queries (read by `frontend/definite.py`), rendered by
 #: `backends/prolog/aq_backend.py`. A pass with a `mode` attribute is one transformation
 #: (thesis 6.4-6.6) and runs only when that mode is asked for; see `active_query_passes`.
-ACTIVE_QUERY_PIPELINE = [aq_program, aq_naive, aq_optimized, aq_tabled]
+ACTIVE_QUERY_PIPELINE = [aq_normalise, aq_program, aq_join_order, aq_naive, aq_optimized, aq_tabled]
 
 PIPELINE = EVENT_PIPELINE  # the name used before there were several lists
 

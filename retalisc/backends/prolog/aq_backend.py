@@ -12,6 +12,10 @@ R is the rank of the answer L_wi (0 for a fact); the answer H gets rank R+1 (see
 prolog_runtime/rtl_aq.pl: DRed uses it).
     '$aq_final'(H, T, LastState, Kind, Literal, Check)  how an answer is derived (DRed
                                                          re-derivation of an answer)
+
+A negated literal `\\+ L` (stratified negation) is a wait point `aq_wait_neg(Kind, L, State,
+Stratum)` (Stratum: of the rule's head); its state resumes with `'$aq_not'(L)` once the runtime
+has found L false (Kind `neg` in `'$aq_final'`).
 """
 from __future__ import annotations
 
@@ -95,25 +99,40 @@ def rule_clauses(rule: Rule) -> List[str]:
         return [to_prolog_goal(body[j].term) for j in range(lo, hi)]
 
     def enter(i: int) -> str:
+        if body[i].negated:
+            return f"aq_wait_neg({body[i].kind}, {to_prolog(body[i].term)}, {state(i)}, {rule.stratum})"
         pred = "aq_wait_call" if body[i].kind == "call" else "aq_wait_fact"
         return f"{pred}({to_prolog(body[i].term)}, {state(i)})"
+
+    def literal(i: int) -> str:
+        """The literal a state resumes with: an answer or fact, or '$aq_not'(G) once `\\+ G` holds."""
+        text = to_prolog(body[i].term)
+        return f"'$aq_not'({text})" if body[i].negated else text
+
+    def kind(i: int) -> str:
+        return "neg" if body[i].negated else body[i].kind
 
     def answer(rank: str) -> str:
         return f"aq_answer({t}, {head}, {rank})"
 
+    guard = []
+    if rule.guard:
+        names, masks = rule.guard
+        m = _fresh_var(rule, "M", taken=[t, r])
+        guard = [f"aq_adornment([{', '.join(names)}], {m})", f"memberchk({m}, [{', '.join(map(str, masks))}])"]
     clauses = []
     first_hi = waits[0] if waits else len(body)
     clauses.append(_clause(f"'$aq_act'({head}, {t})",
-                           builtins(0, first_hi) + [enter(waits[0]) if waits else answer("0")]))
+                           guard + builtins(0, first_hi) + [enter(waits[0]) if waits else answer("0")]))
     for n, i in enumerate(waits):
         hi = waits[n + 1] if n + 1 < len(waits) else len(body)
         last = n + 1 == len(waits)
         nxt = answer(r) if last else enter(waits[n + 1])
-        clauses.append(_clause(f"'$aq_go'({state(i)}, {to_prolog(body[i].term)}, {r if last else '_'})",
+        clauses.append(_clause(f"'$aq_go'({state(i)}, {literal(i)}, {r if last else '_'})",
                                builtins(i + 1, hi) + [nxt]))
     if waits:
         j = waits[-1]
-        clauses.append(f"'$aq_final'({head}, {t}, {state(j)}, {body[j].kind}, {to_prolog(body[j].term)}, "
+        clauses.append(f"'$aq_final'({head}, {t}, {state(j)}, {kind(j)}, {literal(j)}, "
                        f"({_conj(builtins(j + 1, len(body)))})).")
     else:
         clauses.append(f"'$aq_final'({head}, {t}, act({t}), none, true, ({_conj(builtins(0, len(body)))})).")
@@ -156,4 +175,5 @@ def _render(program: Program) -> str:
     runtime = quote_atom(str(runtime_dir()))
     return _ENV.get_template("aq_program.j2").render(
         file=program.file, mode=program.mode, subsumption=program.subsumption, kinds=kinds,
+        negation=any(lit.negated for rule in program.rules for lit in rule.body),
         dynamic=dynamic, facts=facts, rules=rules, runtime_dir=runtime)

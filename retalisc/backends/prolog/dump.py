@@ -16,6 +16,9 @@ from ...passes.unit import AqUnit, BinaryRule, Operand, Unit
 from .render import render_rule
 
 
+_NOT = "\\+ "
+
+
 def dump_unit(unit: Union[Unit, AqUnit], after: str) -> str:
     header = f"% retalisc: the program after pass '{after}'"
     if isinstance(unit, AqUnit):
@@ -87,7 +90,8 @@ def dump_definite_program(program: definite.Program) -> str:
         where = f" ({rule.span})" if rule.span else ""
         lines.append("")
         lines.append(f"% rule {rule.index}{where}{' (added by the transformation)' if rule.synthetic else ''}")
-        goals = [f"    {write_term(lit.term, 999)}{',' if n < len(rule.body) else '.'}  % {lit.kind or '?'}"
+        goals = [f"    {_NOT if lit.negated else ''}{write_term(lit.term, 999)}{',' if n < len(rule.body) else '.'}"
+                 f"  % {('negated ' if lit.negated else '') + (lit.kind or '?')}"
                  for n, lit in enumerate(rule.body, start=1)]
         lines.append(write_term(rule.head, 1199) + (" :-" if goals else "."))
         lines.extend(goals)
