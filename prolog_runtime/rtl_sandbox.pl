@@ -172,7 +172,8 @@ rtl_check_goal(Policy, Module, Goal) :-
 %!  rtl_check_rule(+Module, +Id, +Stores, +Clauses) is det.
 %
 %   Throw rtl_unsafe/3 unless the clauses of the compiled rule Id (rtl_rules.pl) may be
-%   added to Module: every head is a trigger (`ele_trigger/3`, `ele_untrigger/3`) or one of
+%   added to Module: every head is a trigger (`ele_trigger/3`, `ele_untrigger/3`), a sweep
+%   (`ele_forget_blockers/1`, negations without a window) or one of
 %   the rule's own predicates (`e_<Id>_<N>...`), every store (`store(Name, Arity, Window)`
 %   in Stores) is one of the rule's own predicates, and every body is safe, changing only
 %   the rule's stores.
@@ -240,6 +241,7 @@ check_head(Head, _) :-
     throw(error(rtl_unsafe(Head, head, []), _)).
 check_head(ele_trigger(_, _, _), _) :- !.
 check_head(ele_untrigger(_, _, _), _) :- !.
+check_head(ele_forget_blockers(_), _) :- !.        % a negation's sweep: its body is checked like any
 check_head(Head, Id) :-
     functor(Head, Name, _),
     rtl_rules:rule_pred_name(Id, Name), !.

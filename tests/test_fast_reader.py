@@ -144,3 +144,25 @@ def lines(draw):
 def test_random_lines_get_the_same_answer(tmp_path, swipl, batch):
     batch = [line.replace("\n", " ") for line in batch]
     compare(tmp_path, swipl, batch)
+
+
+def test_without_the_c_reader_the_runtime_reads_every_line_in_prolog(tmp_path, swipl):
+    import shutil
+    from retalisc.compiler import compile_source
+
+    runtime = tmp_path / "runtime"
+    shutil.copytree(ROOT / "prolog_runtime", runtime, ignore=shutil.ignore_patterns("foreign", "tests"))
+    program = tmp_path / "p.pl"
+    program.write_text(compile_source("both(X, Y) <- a(X) seq b(Y).\n", "p.rtl", output_name="p.pl").prolog)
+    events = tmp_path / "e.jsonl"
+    events.write_text("".join(line + "\n" for line in
+                              ['{"event": "a(1)", "t": 1}', '{"event": "b(\'x y\')", "t": [2, 5]}', 'not json']))
+    runs = {}
+    for name, env in (("c", {}), ("prolog", {"RETALIS_RUNTIME": str(runtime)})):
+        import os
+        done = subprocess.run([swipl, str(program), str(events)], capture_output=True, text=True, timeout=60,
+                              env={**os.environ, **env})
+        assert done.returncode == 0, done.stderr
+        runs[name] = (done.stdout, done.stderr.splitlines()[0])
+    assert runs["c"] == runs["prolog"]
+    assert runs["c"][0].startswith('{"event": "both(1,\'x y\')"')
