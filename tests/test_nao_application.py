@@ -137,3 +137,20 @@ def test_make_bag_is_deterministic(tmp_path):
     b, _ = make_bag.write(tmp_path / "b.bag", seconds=2.0, seed=5)
     assert a.read_bytes() == b.read_bytes()
     assert (tmp_path / "a.truth.jsonl").read_text() == (tmp_path / "b.truth.jsonl").read_text()
+
+
+def test_the_two_file_form_runs_the_same(tmp_path):
+    """eventRules.txt + goalPredicates.txt (the release's form, goal lines without a final
+    period) give the same output as nao.rtl. retalisc reads one program file, so the goal
+    lines are given their periods and appended here (what the release's loader did)."""
+    bag, _ = load_make_bag().write(tmp_path / "short.bag", seconds=2.5, seed=4)
+    goals = (EXAMPLE / "goalPredicates.txt").read_text().splitlines()
+    assert goals and not any(line.rstrip().endswith(".") for line in goals)
+    combined = tmp_path / "nao_two_files.rtl"
+    combined.write_text((EXAMPLE / "eventRules.txt").read_text()
+                        + "".join(line + ".\n" for line in goals if line.strip()))
+    one = retalisc("run", str(EXAMPLE / "nao.rtl"), "--bag", str(bag))
+    two = retalisc("run", str(combined), "--bag", str(bag))
+    assert one.returncode == 0 and two.returncode == 0, one.stderr + two.stderr
+    assert one.stdout == two.stdout
+    assert one.stdout.count("PoseStamped") >= 20
