@@ -1,7 +1,7 @@
 """Write a ROS 1 bag at the load of the thesis's NAO application (chapter 5) with the true
 world pose of every marker detection, to check examples/nao/nao.rtl against.
 
-    python examples/nao/make_bag.py OUT.bag [--seconds 60] [--seed 1]
+    python examples/nao/make_bag.py OUT.bag [--seconds 60] [--seed 1] [--force]
 
 writes OUT.bag and OUT.truth.jsonl. The recording:
 
@@ -234,10 +234,11 @@ def main(argv: Sequence[str] = None) -> int:
     parser.add_argument("out", help="the .bag file to write (with OUT.truth.jsonl beside it)")
     parser.add_argument("--seconds", type=float, default=60.0, help="length of the recording (default 60)")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--force", action="store_true", help="overwrite OUT and its ground truth")
     args = parser.parse_args(argv)
     if not args.out.endswith(".bag"):
         parser.error("OUT must end in .bag")
-    if Path(args.out).exists():
+    if Path(args.out).exists() and not args.force:
         parser.error(f"{args.out} exists already")
     if args.seconds <= 1:
         parser.error("--seconds must be over 1")
