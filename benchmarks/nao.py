@@ -45,6 +45,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 APP = (ROOT / "examples" / "nao" / "nao.rtl").read_text(encoding="utf-8")
 GOAL = 0.05
+WARMUP_S = 5.0
 SPLIT_END = "% ---- A.2.4"
 MARKERS_START = "% ---- markers:"
 MARKERS_END = "% ---- A.3:"
@@ -128,9 +129,16 @@ def measure(spec: dict) -> dict:
     for now in samples:
         series.append([now[0] - wall0, (now[1] - previous[1]) / (now[0] - previous[0])])
         previous = now
+    # Steady state: after the warm-up (imports, the first messages of each type compiling
+    # their deserializers, the memories filling), from the first sample past WARMUP_S (or
+    # past a quarter of a short run) to the end.
+    steady = None
+    after = [x for x in samples if x[0] - wall0 >= min(WARMUP_S, wall / 4)]
+    if after and wall0 + wall - after[0][0] > 0.5:
+        steady = (cpu0 + cpu - after[0][1]) / (wall0 + wall - after[0][0])
     stats = engine.stats()
     return {"status": status, "wall": wall, "cpu": cpu, "events": stats.get("events", 0),
-            "derived": stats.get("derived", 0), "series": series}
+            "derived": stats.get("derived", 0), "series": series, "steady": steady}
 
 
 def run_case(spec: dict, stream_seconds: float) -> dict:
@@ -206,10 +214,20 @@ def report(res: dict, rate: float) -> None:
               f"({res['seconds'] / fast['wall']:.1f}x real time)")
         print(f"  Fig 5.2 input pipeline alone: {res['input']['share'] * 100:.2f} %, split rules: "
               f"{res['split']['share'] * 100:.2f} %")
+        steady = rt.get("steady")
+        if steady is not None:
+            print(f"  Fig 5.2 whole application, real time, steady state (after {WARMUP_S:g} s of warm-up): "
+                  f"{steady * 100:.2f} %")
         print(f"target {'met' if rt['share'] < GOAL else 'MISSED':6} whole application under 5% of one core "
               f"in real time: {rt['share'] * 100:.2f} % (thesis: ~18 % of a 2012 core)")
+        if steady is not None:
+            print(f"target {'met' if steady < GOAL else 'MISSED':6} whole application under 5% of one core "
+                  f"in real time, steady state: {steady * 100:.2f} %")
         print(f"target {'met' if fast['share'] < GOAL else 'MISSED':6} whole application under 5% of one core "
               f"as fast as possible: {fast['share'] * 100:.2f} %")
+        net = fast["share"] - res["input"]["share"]
+        print(f"target {'met' if net < GOAL else 'MISSED':6} the application net of the input pipeline (bag "
+              f"reading, message conversion, term parsing) under 5% of one core: {net * 100:.2f} %")
     if "irrelevant" in res:
         base = res["irrelevant"][0]["share"]
         for key, label in (("irrelevant", "Fig 5.4 a(X,Y,Z,W)"), ("all_tf", "Fig 5.6 tf(_,_,V,Q)"),
@@ -253,9 +271,9 @@ def plot(res: dict, rate: float, out_dir: Path, prefix: str) -> List[Path]:
         fig, ax = plt.subplots(figsize=(7, 3.5))
         series = res["app_realtime"]["series"]
         ax.plot([t for t, _ in series], [s * 100 for _, s in series], label="whole application, real time")
-        ax.axhline(res["app_realtime"]["share"] * 100, linestyle="--", color="C0", label="mean")
+        ax.axhline(res["app_realtime"]["share"] * 100, linestyle="--", color="C0", label="mean over the run")
         ax.axhline(GOAL * 100, color="red", linestyle=":", label="goal 5 %")
-        ax.axhline(res["input"]["share"] * 100, color="gray", linestyle="-.", label="input pipeline alone")
+        ax.axhline(res["input"]["share"] * 100, color="gray", linestyle="-.", label="input pipeline alone (as fast as possible)")
         ax.set_xlabel("seconds of the recording")
         ax.set_ylabel("CPU, % of one core")
         ax.set_title("NAO application (Fig 5.2)")
