@@ -9,8 +9,14 @@
             pose_inverse/2,             % +Pose, -Inverse
             pose_chain/2,               % +Poses, -Pose
             time_fraction/4,            % +T1, +T2, +T, -Fraction
-            pose_interpolate/6          % +T1, +Pose1, +T2, +Pose2, +T, -Pose
+            pose_interpolate/6,         % +T1, +Pose1, +T2, +Pose2, +T, -Pose
+            datime_interpolate/4,       % +T1, +T2, +T, -Fraction       (Retalis 2015)
+            convert_to_datime/2,        % +Stamp, -Time                 (Retalis 2015)
+            interpolate_quaternion/6,   % +V1, +Q1, +V2, +Q2, +[F], -[V, Q] (Retalis 2015)
+            transform_quaternion/2      % +Poses, -Pose                 (Retalis 2015)
           ]).
+
+:- use_module(rtl_time).
 
 /** <module> Vectors, quaternions and poses for state-based knowledge
 
@@ -241,6 +247,115 @@ pose_interpolate(T1, P1, T2, P2, T, P) :-
         lerp_list(V1, V2, F, V),
         quat_slerp_(Ctx, Q1, Q2, F, Q),
         P = [V, Q]
+    ).
+
+                 /*******************************
+                 *   THE RETALIS 2015 BUILTINS  *
+                 *******************************/
+
+%   The original release (Listings A.3-A.4 of the thesis) called these from its programs;
+%   they are here under the same names and argument orders so that those programs run
+%   unchanged. They are thin, checked wrappers of the predicates above.
+%
+%   Times. The original stamped events with datime(Y, M, D, H, Min, S, Counter) terms whose
+%   Counter held the ROS nanoseconds; retalisc stamps every event with a number of seconds
+%   (new_event(E, Sec, NSec) gives `Sec + NSec/10^9`), and so do the record times that
+%   prev/5, next/6 and next_inf/5 return. The time arguments below accept a number of
+%   seconds, a ROS stamp `[Sec, NSec]` or a `datime/7` term (read as rtl_time:
+%   rtl_time_seconds/2 reads it, the counter being ETALIS's tie breaker).
+
+%!  datime_interpolate(+T1, +T2, +T, -Fraction:float) is det.
+%
+%   `Fraction = (T - T1) / (T2 - T1)`, the position of T between T1 and T2 (0 at T1, 1 at
+%   T2, outside [0, 1] before T1 or after T2). When T1 and T2 are the same time Fraction
+%   is 0.0. Two ROS stamps are subtracted in integer nanoseconds, so no precision is lost
+%   to the size of epoch seconds.
+%
+%   @error type_error(time, X) for an argument that is not a time.
+
+datime_interpolate(T1, T2, T, F) :-
+    Ctx = datime_interpolate/4,
+    time_ns(Ctx, T1, N1),
+    time_ns(Ctx, T2, N2),
+    time_ns(Ctx, T, N),
+    (   N1 =:= N2
+    ->  F = 0.0
+    ;   F is float((N - N1) / (N2 - N1))
+    ).
+
+%!  convert_to_datime(+Stamp, -Time:number) is det.
+%
+%   The time of a ROS stamp `[Sec, NSec]` as the runtime writes event times: the number
+%   `Sec + NSec/10^9`, computed exactly as new_event/3 stamps an event, so a record raised
+%   with the same stamp is found at exactly this time by prev and next. A number is
+%   returned unchanged and a `datime/7` term is converted to its seconds. (In the 2015
+%   release the result was a datime/7 term; every time argument of retalisc accepts the
+%   number in its place.)
+
+convert_to_datime(Stamp, T) :-
+    (   var(Stamp)
+    ->  throw(error(instantiation_error, context(rtl_math:convert_to_datime/2, _)))
+    ;   rtl_time_seconds(Stamp, T0)
+    ->  T = T0
+    ;   throw(error(type_error(time, Stamp), context(rtl_math:convert_to_datime/2,
+                    'a time is seconds, [Secs, NSecs] or datime/7')))
+    ).
+
+%!  interpolate_quaternion(+V1:list, +Q1:list, +V2:list, +Q2:list, +Fraction,
+%!                         -Pose:list) is det.
+%
+%   Pose `[V, Q]` between the pose `[V1, Q1]` (at Fraction 0) and `[V2, Q2]` (at Fraction
+%   1): V is the linear interpolation of the translations (vec_lerp/4) and Q the spherical
+%   linear interpolation of the rotations along the shortest arc (quat_slerp/4: Q2 is
+%   negated first when the two quaternions are more than 90 degrees apart as 4-vectors, so
+%   antipodal inputs, which are the same rotation, give that rotation), normalised.
+%   Fraction is written `[F]` as in the original's calls, or as a plain number.
+%   Quaternions are `[QX, QY, QZ, QW]` (ROS order).
+
+interpolate_quaternion(V1, Q1, V2, Q2, Fraction, [V, Q]) :-
+    Ctx = interpolate_quaternion/6,
+    (   Fraction = [F]
+    ->  true
+    ;   F = Fraction
+    ),
+    check_number(Ctx, F),
+    check_vec3(Ctx, V1),
+    check_vec3(Ctx, V2),
+    check_quat(Ctx, Q1),
+    check_quat(Ctx, Q2),
+    lerp_list(V1, V2, F, V),
+    quat_slerp_(Ctx, Q1, Q2, F, Q).
+
+%!  transform_quaternion(+Poses:list, -Pose:list) is det.
+%
+%   Composes the poses `[[X, Y, Z], [QX, QY, QZ, QW]]` left to right (pose_chain/2): for
+%   the pose of frame F1 in F0, F2 in F1, ..., Fn in Fn-1, Pose is the pose of Fn in F0.
+%   In Listing A.4 the list ends with the marker's pose relative to the camera, so Pose
+%   is the marker's pose in the first frame (the world). Each pose's quaternion is
+%   normalised before it is used (quaternions from messages are only near unit length),
+%   and so is the result's.
+
+transform_quaternion(Poses, [V, QN]) :-
+    Ctx = transform_quaternion/2,
+    check_list(Ctx, Poses),
+    forall(member(P0, Poses), check_pose(Ctx, P0)),
+    identity_pose(I),
+    foldl(unit_chain_step(Ctx), Poses, I, [V, Q]),
+    quat_normalize_(Ctx, Q, QN).
+
+unit_chain_step(Ctx, [V, Q0], Acc, P) :-
+    quat_normalize_(Ctx, Q0, Q),
+    pose_compose_(Acc, [V, Q], P).
+
+time_ns(Ctx, T, N) :-
+    (   var(T)
+    ->  throw(error(instantiation_error, context(rtl_math:Ctx, _)))
+    ;   T = [S, NS], integer(S), integer(NS)
+    ->  N is S * 1000000000 + NS
+    ;   rtl_time_seconds(T, Secs)
+    ->  N is Secs * 1.0e9
+    ;   throw(error(type_error(time, T), context(rtl_math:Ctx,
+                    'a time is seconds, [Secs, NSecs] or datime/7')))
     ).
 
                  /*******************************

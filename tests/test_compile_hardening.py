@@ -327,6 +327,6 @@ def test_readme_use_section_shows_every_command():
         assert f"retalisc {command} " in use, command
     assert "swipl OUT.pl -" in use
     # the two set-up commands stay as they are
-    assert ("    bash setup.sh && .venv/bin/retalisc run examples/fire_alarm/fire_alarm.rtl "
-            "--events examples/fire_alarm/events.jsonl\n") in readme
+    assert ("    bash setup.sh && .venv/bin/python examples/nao/make_bag.py /tmp/nao.bag --seconds 10 --force "
+            "&& .venv/bin/retalisc run examples/nao/nao.rtl --bag /tmp/nao.bag\n") in readme
     assert "    bash setup.sh && .venv/bin/python -m pytest -q\n" in readme
