@@ -20,7 +20,10 @@
             rtl_api_stats/1,            % -Text
             rtl_api_summary/1,          % -Text
             rtl_api_store_size/1,       % -Size
-            rtl_api_clock/1             % -Clock
+            rtl_api_clock/1,            % -Clock
+            rtl_api_save_state/3,       % +Path, +Identity, -Out
+            rtl_api_restore_state/3,    % +Path, +Identity, -Out
+            rtl_api_state_digest/1      % -Hash
           ]).
 
 /** <module> The entry points of the Python Engine: values as data, never as program text
@@ -51,6 +54,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_text).
 :- use_module(rtl_seen).
 :- use_module(rtl_horizon, [rtl_take_warnings/1]).
+:- use_module(rtl_state).
 
 :- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1]).
 
@@ -373,6 +377,31 @@ rtl_api_store_size(Size) :-
 
 rtl_api_clock(Clock) :-
     rtl_clock(Clock).
+
+%!  rtl_api_save_state(+Path:text, +Identity:text, -Out) is det.
+%!  rtl_api_restore_state(+Path:text, +Identity:text, -Out) is det.
+%
+%   Write the whole state to the file Path, or replace it by the one written there
+%   (rtl_state.pl). Identity is a string naming the program and runtime version; a snapshot
+%   with another one is refused and nothing changes.
+
+rtl_api_save_state(Path, Identity, "") :-
+    must_be(text, Path),
+    must_be(string, Identity),
+    rtl_state_save(Path, Identity).
+
+rtl_api_restore_state(Path, Identity, "") :-
+    must_be(text, Path),
+    must_be(string, Identity),
+    rtl_state_restore(Path, Identity).
+
+%!  rtl_api_state_digest(-Hash:string) is det.
+%
+%   A hash of everything a snapshot holds (tests compare states with it).
+
+rtl_api_state_digest(Hash) :-
+    rtl_state_digest(H),
+    atom_string(H, Hash).
 
 % One line of text for an error, as print_message/2 would say it.
 message_line(Error, Text) :-

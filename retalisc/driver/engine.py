@@ -21,6 +21,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import os
 import tempfile
 import threading
 from concurrent.futures import Future
@@ -29,6 +30,7 @@ from pathlib import Path
 from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, module_name
+from . import recovery
 from .bridge import Bridge, PrologError
 
 Number = Union[int, float]
@@ -142,6 +144,8 @@ class Engine:
     def __init__(self, prolog_file: Union[str, Path], bridge: Optional[Bridge] = None, module: str = ""):
         self.bridge = bridge or Bridge()
         self.module = module
+        self.prolog_file = Path(prolog_file)
+        self._identity: Optional[str] = None
         self._callbacks: List[Callable[[OutputEvent], None]] = []
         self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
         self._synchronized: Dict[str, "Future"] = {}
@@ -475,3 +479,46 @@ class Engine:
     def clock(self) -> float:
         with self._lock:
             return float(self._call("rtl_api_clock"))
+
+    # ---- snapshots (docs/recovery.md) ----------------------------------------------------
+
+    def identity(self) -> str:
+        """The hash of the compiled program and the runtime a snapshot of this Engine carries."""
+        if self._identity is None:
+            self._identity = recovery.program_identity(self.prolog_file.read_text(encoding="utf-8"), self.module)
+        return self._identity
+
+    def save_state(self, path: Union[str, Path]) -> None:
+        """Write the whole state of the program (partial matches, memories, subscriptions,
+        rules added, postponed queries, active queries, flags, clock, counters) to the file
+        `path`, atomically: a temporary file, flushed to disk, renamed over `path`. Call it
+        between calls that feed events (never from a callback)."""
+        path = Path(path)
+        temporary = path.with_name(path.name + ".tmp")
+        with self._lock:
+            try:
+                self._call("rtl_api_save_state", str(temporary), self.identity())
+                recovery.fsync_file(temporary)
+                os.replace(temporary, path)
+            except BaseException:
+                try:
+                    temporary.unlink()
+                except OSError:
+                    pass
+                raise
+        recovery.fsync_directory(path.parent)
+
+    def restore_state(self, path: Union[str, Path]) -> None:
+        """Replace the state by the one `save_state` wrote to `path`. A file that is not a
+        complete snapshot of this program under this runtime version raises
+        `recovery.StateError` and changes nothing."""
+        with self._lock:
+            try:
+                self._call("rtl_api_restore_state", str(path), self.identity())
+            except PrologError as error:
+                raise recovery.StateError(f"{path}: {error}") from None
+
+    def state_digest(self) -> str:
+        """A hash of everything a snapshot holds (equal states, equal digests)."""
+        with self._lock:
+            return self._call("rtl_api_state_digest")
