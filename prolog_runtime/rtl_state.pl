@@ -90,7 +90,9 @@ write_state(Out, V, Identity, M) :-
     fast_write(Out, rtl_state(V, Identity, M)),
     empty_assoc(T0),
     captured_predicates(M, PIs),
-    foldl(pred_term, PIs, PredTerms, T0-0, S1),
+    catch(foldl(pred_term, PIs, PredTerms, T0-0, S1),
+          rtl_state_unwritable(PI, Blob),
+          state_error("~q holds ~p, which a snapshot cannot hold", [PI, Blob])),
     captured_globals(Globals0),
     unblob_globals(Globals0, Globals, S1, S2),
     trie_entries(S2, [], TrieEntries),
@@ -119,7 +121,8 @@ pred_term(M:Name/Arity, pred(M, Name, Arity, Clauses), S0, S) :-
     findall(H-B, clause(M:H, B), Clauses0),
     (   catch(fast_term_serialized(Clauses0, _), error(permission_error(fast_serialize, blob, _), _), fail)
     ->  Clauses = Clauses0, S = S0
-    ;   unblob(Clauses0, Clauses, S0, S)
+    ;   catch(unblob(Clauses0, Clauses, S0, S), rtl_state_unwritable(Blob),
+              throw(rtl_state_unwritable(M:Name/Arity, Blob)))
     ).
 
 unblob_globals([], [], S, S).

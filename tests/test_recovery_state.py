@@ -178,3 +178,15 @@ def test_tries_of_active_queries_are_captured(tmp_path):
         "findall(K, ( nb_current(K, V), blob(V, trie) ), Ks), format(string(Out), '~q', [Ks])")
     assert tries == after
     json.dumps(tries)
+
+
+def test_a_clause_holding_a_stream_makes_the_save_fail_cleanly(tmp_path):
+    from retalisc.driver.bridge import PrologError
+    engine = Engine.from_source(SEQ)
+    engine.bridge.once("stream_property(S, alias(user_input)), assertz(rtl_ele:type_output_hook(x, S))")
+    try:
+        with pytest.raises(PrologError, match="type_output_hook/2 holds <stream>"):
+            engine.save_state(tmp_path / "s.state")
+        assert list(tmp_path.iterdir()) == []           # no partial file left behind
+    finally:
+        engine.bridge.once("retractall(rtl_ele:type_output_hook(x, _))")
