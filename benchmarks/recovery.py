@@ -6,7 +6,9 @@
       run's process (the machine may be shared). Target: --state at the default interval at
       most 10 % slower than without.
   (b) snapshot size, save time and restore time against the state size: one memory of
-      N records (N = 10,000 .. 1,000,000), each record one `v(I)` event.
+      N records (N = 10,000 .. 1,000,000), each record one `v(I)` event; restored into a
+      second Engine of the process (another module name, so every clause is rewritten: the
+      slow path; the runtime modules also hold what the earlier programs of the process kept).
   (c) restart time for a state of 1,000,000 records: loading the program and restoring the
       snapshot in a new process (`retalisc run --state` does exactly this before reading on).
 
@@ -113,11 +115,23 @@ def snapshot_costs(tmp: Path, sizes) -> list:
     return rows
 
 
+BUILD_SCRIPT = """
+import sys
+from retalisc.compiler import compile_source
+from retalisc.driver.engine import Engine
+n = int(sys.argv[3])
+engine = Engine.from_compiled(compile_source(open(sys.argv[1]).read(), "memory.rtl", module="rtl_prog_memory"))
+for first in range(0, n, 50_000):
+    engine.feed_batch([(f"v({i})", i * 0.001) for i in range(first, min(n, first + 50_000))])
+engine.save_state(sys.argv[2])
+"""
+
 RESTART_SCRIPT = """
 import sys, time
 started = time.perf_counter()
+from retalisc.compiler import compile_source
 from retalisc.driver.engine import Engine
-engine = Engine.from_source(open(sys.argv[1]).read(), name="memory.rtl")
+engine = Engine.from_compiled(compile_source(open(sys.argv[1]).read(), "memory.rtl", module="rtl_prog_memory"))
 loaded = time.perf_counter()
 engine.restore_state(sys.argv[2])
 done = time.perf_counter()
@@ -126,19 +140,18 @@ print(loaded - started, done - loaded, engine.stats()["events"])
 
 
 def restart_time(tmp: Path, n: int) -> dict:
-    """A new process: import, compile and load the program, restore a snapshot of n records."""
-    from retalisc.driver.engine import Engine
-    source = MEMORY_PROGRAM.format(n=n)
-    engine = Engine.from_source(source, name="memory.rtl")
-    for first in range(0, n, 50_000):
-        engine.feed_batch([(f"v({i})", i * 0.001) for i in range(first, min(n, first + 50_000))])
-    path = tmp / "restart.state"
-    engine.save_state(path)
+    """As a restart of `retalisc run --state`: a new process imports retalisc, compiles and loads
+    the program (under the module name it had, as `retalisc run` does) and restores a snapshot
+    of n records made by another process that ran only this program."""
     program = tmp / "restart.rtl"
-    program.write_text(source, encoding="utf-8")
+    program.write_text(MEMORY_PROGRAM.format(n=n), encoding="utf-8")
+    path = tmp / "restart.state"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    subprocess.run([sys.executable, "-c", BUILD_SCRIPT, str(program), str(path), str(n)], check=True, env=env,
+                   capture_output=True)
     started = time.perf_counter()
     done = subprocess.run([sys.executable, "-c", RESTART_SCRIPT, str(program), str(path)], check=True,
-                          capture_output=True, text=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+                          capture_output=True, text=True, env=env)
     total = time.perf_counter() - started
     load, restore, events = done.stdout.split()
     assert int(events) == n

@@ -201,3 +201,12 @@ def test_state_needs_files(setup, tmp_path, args, message):
         cmd[cmd.index(option) + 1] = value
     done = CliRunner().invoke(main, cmd[3:])
     assert done.exit_code == 2 and message in done.output
+
+
+def test_an_output_file_shorter_than_the_snapshot_says_is_refused(setup, tmp_path):
+    _, program, events, _ = setup
+    state, out = tmp_path / "state", tmp_path / "out.jsonl"
+    run_here(program, events, out, state, 2500)
+    out.write_bytes(b"")
+    with pytest.raises(recovery.RecoveryError, match="fewer than the .* it had at snapshot"):
+        run_here(program, events, out, state, 2500)

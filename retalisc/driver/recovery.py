@@ -271,6 +271,10 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
         sink = open(out, "wb")
         offset, line = 0, 1
     else:
+        size = os.path.getsize(out) if os.path.exists(out) else -1
+        if size < restored["out_bytes"]:
+            raise RecoveryError(f"{out} has {max(size, 0)} bytes, fewer than the {restored['out_bytes']} it had at "
+                                f"snapshot {restored['number']}: it was changed; cannot go on from this snapshot")
         sink = open(out, "r+b")
         sink.truncate(restored["out_bytes"])
         sink.seek(restored["out_bytes"])
