@@ -139,6 +139,8 @@ unblob_globals([K-V0|Gs0], Gs, S0, S) :-
 % by '$rtl_trie'(Id).
 unblob(T, T, S, S) :-
     var(T), !.
+unblob(T, T, S, S) :-
+    plain_atomic(T), !.
 unblob(T, C, S0-N0, S) :-
     blob(T, Type), Type \== text, !,
     (   Type == trie
@@ -342,11 +344,19 @@ rtl_state_capture(state(Preds, Globals, Flags)) :-
     captured_flags(Flags).
 
 unwritable_blob(V) :-
-    blob(V, Type), Type \== text, Type \== trie.
+    \+ plain_atomic(V),
+    blob(V, Type), Type \== trie.
+
+% Atoms, [] (a reserved symbol), numbers and strings: what fast_write/2 writes as it is.
+plain_atomic(T) :-
+    (   atom(T) -> true
+    ;   T == [] -> true
+    ;   atomic(T), \+ blob(T, _)
+    ).
 
 canonical(_, T, T) :- var(T), !.
 canonical(M, T, C) :-
-    blob(T, trie), !,
+    \+ plain_atomic(T), blob(T, trie), !,
     findall(K-V, trie_gen(T, K, V), Es0),
     maplist(canonical(M), Es0, Es1),
     msort(Es1, Es),
