@@ -22,7 +22,10 @@
             rtl_api_store_size/1,       % -Size
             rtl_api_clock/1,            % -Clock
             rtl_api_advance_clock/2,    % +Time, -Output
-            rtl_api_term_data/2         % +Text, -Json
+            rtl_api_term_data/2,        % +Text, -Json
+            rtl_api_save_state/3,       % +Path, +Identity, -Out
+            rtl_api_restore_state/3,    % +Path, +Identity, -Out
+            rtl_api_state_digest/1      % -Hash
           ]).
 
 /** <module> The entry points of the Python Engine: values as data, never as program text
@@ -55,6 +58,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_time, [rtl_input_interval/6]).
 :- use_module(rtl_horizon, [rtl_take_warnings/1]).
+:- use_module(rtl_state).
 
 :- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
 
@@ -391,6 +395,31 @@ rtl_api_clock(Clock) :-
 rtl_api_advance_clock(Time, Output) :-
     must_be(number, Time),
     rtl_heartbeat(Time, Output).
+
+%!  rtl_api_save_state(+Path:text, +Identity:text, -Out) is det.
+%!  rtl_api_restore_state(+Path:text, +Identity:text, -Out) is det.
+%
+%   Write the whole state to the file Path, or replace it by the one written there
+%   (rtl_state.pl). Identity is a string naming the program and runtime version; a snapshot
+%   with another one is refused and nothing changes.
+
+rtl_api_save_state(Path, Identity, "") :-
+    must_be(text, Path),
+    must_be(string, Identity),
+    rtl_state_save(Path, Identity).
+
+rtl_api_restore_state(Path, Identity, "") :-
+    must_be(text, Path),
+    must_be(string, Identity),
+    rtl_state_restore(Path, Identity).
+
+%!  rtl_api_state_digest(-Hash:string) is det.
+%
+%   A hash of everything a snapshot holds (tests compare states with it).
+
+rtl_api_state_digest(Hash) :-
+    rtl_state_digest(H),
+    atom_string(H, Hash).
 
 % One line of text for an error, as print_message/2 would say it.
 message_line(Error, Text) :-

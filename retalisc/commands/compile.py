@@ -182,11 +182,20 @@ Examples:
 @click.option("--late", "late_file", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Write every input event that arrives more than --max-delay behind the latest one to FILE "
                    "(JSON Lines: its lateness and the rules whose partners it may have missed).")
+@click.option("--state", "state", type=click.Path(file_okay=False), default=None, metavar="DIR",
+              help="Survive a crash: keep snapshots of the state in DIR; started again with the same DIR, "
+                   "the run goes on from the newest complete snapshot and the --out file ends byte-identical "
+                   "to that of a run that never stopped (docs/recovery.md). Needs --events FILE and --out FILE.")
+@click.option("--snapshot-every", "snapshot_every", type=click.IntRange(1), default=None, metavar="N",
+              help="With --state: a snapshot every N input lines (default 200000).")
+@click.option("--snapshot-seconds", "snapshot_seconds", type=Seconds(allow_inf=True), default=None, metavar="S",
+              help="With --state: a snapshot every S seconds of processing at the latest (default 60; inf: "
+                   "only by --snapshot-every).")
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
                 flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, action_output, progress,
-                traces, late_file,
+                traces, late_file, state, snapshot_every, snapshot_seconds,
                 **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
 
@@ -205,6 +214,16 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
         raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
                                "--stamp, --typestore, --out-bag and --foxglove go with --bag")
+    if state is None and (snapshot_every is not None or snapshot_seconds is not None):
+        raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
+    if state is not None:
+        if bag["bag"] is not None or events == "-":
+            raise click.UsageError("--state needs --events FILE (a file that can be read again, not '-' or --bag)")
+        if out in (None, "-"):
+            raise click.UsageError("--state needs --out FILE (standard output cannot be cut back after a crash)")
+        if consumer_dir is not None:
+            raise click.UsageError("--state does not go with --consumer-dir (the deliveries go to --out)")
+        output_directory(state, "--state")
     steps = _max_steps(max_steps)
     result = compile_or_exit(program, module=_unique_module(program))    # a second run in one process loads anew
     output_file(out, "--out")
@@ -237,6 +256,19 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         from ..robot_io.replay import replay_from_cli
         sys.exit(replay_from_cli(engine, out, bag, batch_size=batch_size, consumer_dir=consumer_dir,
                                  drop_pending=drop_pending, first_output=posted))
+    if state is not None:
+        from ..driver import recovery
+        try:
+            status = recovery.run_recoverable(
+                engine, events, out, state, batch_size=batch_size,
+                snapshot_events=snapshot_every or recovery.DEFAULT_SNAPSHOT_EVENTS,
+                snapshot_seconds=recovery.DEFAULT_SNAPSHOT_SECONDS if snapshot_seconds is None else snapshot_seconds,
+                drop_pending=drop_pending, first_output=posted, allow_control=allow_control, strict=strict,
+                progress=progress)
+        except recovery.RecoveryError as error:
+            click.echo(f"error: --state {state}: {error}", err=True)
+            sys.exit(2)
+        sys.exit(status)
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
                             drop_pending=drop_pending, first_output=posted, allow_control=allow_control,
                             strict=strict, progress=progress, heartbeat=heartbeat, report=report)

@@ -22,6 +22,7 @@ import itertools
 import json
 import math
 import shutil
+import os
 import tempfile
 import threading
 from concurrent.futures import Future
@@ -32,6 +33,7 @@ from types import TracebackType
 from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, module_name
+from . import recovery
 from .bridge import Bridge, PrologError
 from .values import Term, Time, Value, Variable, parse_term, time_value
 
@@ -179,6 +181,8 @@ class Engine:
         self.module = module
         self._closed = False
         self._directory: Optional[Path] = None      # the temporary directory of a compiled program
+        self.prolog_file = Path(prolog_file)
+        self._identity: Optional[str] = None
         self._callbacks: List[Callable[[OutputEvent], None]] = []
         self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
         self._synchronized: Dict[str, "Future"] = {}
@@ -567,3 +571,45 @@ class Engine:
             raise ValueError(f"advance_clock needs a finite number of seconds, not {time!r}")
         with self._lock:
             return self._deliver(self._call("rtl_api_advance_clock", time))
+    # ---- snapshots (docs/recovery.md) ----------------------------------------------------
+
+    def identity(self) -> str:
+        """The hash of the compiled program and the runtime a snapshot of this Engine carries."""
+        if self._identity is None:
+            self._identity = recovery.program_identity(self.prolog_file.read_text(encoding="utf-8"), self.module)
+        return self._identity
+
+    def save_state(self, path: Union[str, Path]) -> None:
+        """Write the whole state of the program (partial matches, memories, subscriptions,
+        rules added, postponed queries, active queries, flags, clock, counters) to the file
+        `path`, atomically: a temporary file, flushed to disk, renamed over `path`. Call it
+        between calls that feed events (never from a callback)."""
+        path = Path(path)
+        temporary = path.with_name(path.name + ".tmp")
+        with self._lock:
+            try:
+                self._call("rtl_api_save_state", str(temporary), self.identity())
+                recovery.fsync_file(temporary)
+                os.replace(temporary, path)
+            except BaseException:
+                try:
+                    temporary.unlink()
+                except OSError:
+                    pass
+                raise
+        recovery.fsync_directory(path.parent)
+
+    def restore_state(self, path: Union[str, Path]) -> None:
+        """Replace the state by the one `save_state` wrote to `path`. A file that is not a
+        complete snapshot of this program under this runtime version raises
+        `recovery.StateError` and changes nothing."""
+        with self._lock:
+            try:
+                self._call("rtl_api_restore_state", str(path), self.identity())
+            except PrologError as error:
+                raise recovery.StateError(f"{path}: {error}") from None
+
+    def state_digest(self) -> str:
+        """A hash of everything a snapshot holds (equal states, equal digests)."""
+        with self._lock:
+            return self._call("rtl_api_state_digest")

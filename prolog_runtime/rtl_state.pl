@@ -1,0 +1,382 @@
+:- module(rtl_state,
+          [ rtl_state_save/2,           % +File, +Identity
+            rtl_state_restore/2,        % +File, +Identity
+            rtl_state_capture/1,        % -State
+            rtl_state_digest/1          % -Hash
+          ]).
+
+/** <module> Snapshots of the whole runtime state, for restarts that lose nothing
+
+A snapshot holds everything the runtime and the running program keep between two input
+events, found generically so that state added by new runtime modules is captured without
+a change here:
+
+  - every clause of every dynamic predicate of the program module and of every module
+    whose name starts with `rtl_` (the runtime modules, and the generation modules of
+    rtl_seen.pl, `rtl_seen_<N>`): partial matches, negation stores, memory instances and
+    their records, subscriptions, rules added at runtime, postponed synchronized matches,
+    learned delays, active queries and their tables, flags;
+  - every global variable (nb_setval/2) whose name starts with `rtl_`, `$rtl_` or `aq_`,
+    and the counters of rtl_ele.pl (`events`, `derived`, ...): the clock, the sweep
+    schedule, the bounds of memory instances;
+  - every flag/3 key starting with `rtl_` (handle and generation numbers).
+
+Tries (the answer tables of active queries) are written as their entries and made again
+on restore, shared where they were shared. Other blobs (streams) cannot be written: a
+global holding one is skipped, a clause holding one makes the save fail with an error. What
+must not be restored is listed by excluded_predicate/1 and excluded_global/1 (output sinks,
+streams, per-call state), which other modules may extend (multifile).
+
+The file is a sequence of fast_write/2 terms: `rtl_state(Version, Identity, Module)`,
+`tries(Entries)`, `pred(Module, Name, Arity, Clauses)` per predicate, `globals(Pairs)`,
+`flags(Pairs)` and `end(Count)`. Identity is given by the caller (a hash of the compiled
+program and of the runtime, retalisc/driver/recovery.py); a snapshot whose version or
+identity differs, or that does not end with `end/1`, is refused before anything is
+changed: restore reads the whole file first, then replaces the state. The program's
+module name may differ (an Engine loaded second in a process): its occurrences are renamed.
+
+The caller makes the write atomic (temporary file, fsync, rename) and checks a checksum
+before restoring (retalisc/driver/recovery.py).
+*/
+
+:- use_module(library(lists)).
+:- use_module(library(apply)).
+:- use_module(library(pairs)).
+:- use_module(rtl_ele).
+
+state_version(1).
+
+%!  excluded_predicate(?PI) is nondet.
+%!  excluded_global(?Key) is nondet.
+%
+%   Multifile: state that belongs to the process, not to the stream (output sinks, open
+%   streams, the values of one call), which restore leaves as it is.
+
+:- multifile excluded_predicate/1, excluded_global/1.
+
+excluded_predicate(rtl_ele:rtl_output_line/1).
+excluded_predicate(rtl_subscriptions:consumer_file/2).
+excluded_predicate(rtl_horizon:warning_text/1).
+
+excluded_global(rtl_program).
+excluded_global(rtl_action_stream).
+excluded_global(rtl_output_sink).
+excluded_global(rtl_run_started).
+excluded_global(rtl_loaded_at).
+excluded_global(rtl_stream_options).
+excluded_global(rtl_exiting).
+excluded_global(rtl_consumer_dir).
+excluded_global(rtl_halt_event).
+excluded_global(rtl_halt_load).
+excluded_global(rtl_end_stopped).
+excluded_global(rtl_input_ended).
+excluded_global(rtl_drop_pending).
+excluded_global(rtl_slr_log).
+excluded_global(rtl_slr_view).
+
+%!  rtl_state_save(+File, +Identity) is det.
+%
+%   Write the state to File (created or overwritten), tagged with Identity (any ground
+%   term).
+
+rtl_state_save(File, Identity) :-
+    rtl_program(M),
+    state_version(V),
+    setup_call_cleanup(open(File, write, Out, [type(binary)]),
+                       write_state(Out, V, Identity, M),
+                       close(Out)).
+
+write_state(Out, V, Identity, M) :-
+    fast_write(Out, rtl_state(V, Identity, M)),
+    empty_assoc(T0),
+    captured_predicates(M, PIs),
+    catch(foldl(pred_term, PIs, PredTerms, T0-0, S1),
+          rtl_state_unwritable(PI, Blob),
+          state_error("~q holds ~p, which a snapshot cannot hold", [PI, Blob])),
+    captured_globals(Globals0),
+    unblob_globals(Globals0, Globals, S1, S2),
+    trie_entries(S2, [], TrieEntries),
+    fast_write(Out, tries(TrieEntries)),
+    forall(member(P, PredTerms), fast_write(Out, P)),
+    fast_write(Out, globals(Globals)),
+    captured_flags(Flags),
+    fast_write(Out, flags(Flags)),
+    length(PredTerms, Count),
+    fast_write(Out, end(Count)).
+
+% The entries of every trie met, with the tries inside them replaced as well (an entry may
+% hold a trie, which is then written too).
+trie_entries(S0-N0, Done, Entries) :-
+    assoc_to_list(S0, All),
+    (   member(Trie-Id, All), \+ memberchk(Id, Done)
+    ->  findall(K-Val, trie_gen(Trie, K, Val), Es0),
+        unblob(Es0, Es, S0-N0, S1),
+        Entries = [Id-Es|Rest],
+        trie_entries(S1, [Id|Done], Rest)
+    ;   Entries = []
+    ).
+
+pred_term(M:Name/Arity, pred(M, Name, Arity, Clauses), S0, S) :-
+    functor(H, Name, Arity),
+    findall(H-B, clause(M:H, B), Clauses0),
+    (   catch(fast_term_serialized(Clauses0, _), error(permission_error(fast_serialize, blob, _), _), fail)
+    ->  Clauses = Clauses0, S = S0
+    ;   catch(unblob(Clauses0, Clauses, S0, S), rtl_state_unwritable(Blob),
+              throw(rtl_state_unwritable(M:Name/Arity, Blob)))
+    ).
+
+unblob_globals([], [], S, S).
+unblob_globals([K-V0|Gs0], Gs, S0, S) :-
+    (   catch(fast_term_serialized(V0, _), error(permission_error(fast_serialize, blob, _), _), fail)
+    ->  Gs = [K-V0|Gs1], S1 = S0
+    ;   catch(unblob(V0, V, S0, S1), rtl_state_unwritable(_), fail)
+    ->  Gs = [K-V|Gs1]
+    ;   Gs = Gs1, S1 = S0                       % a stream or another handle: not state
+    ),
+    unblob_globals(Gs0, Gs1, S1, S).
+
+% unblob(+Term, -Copy, +Tries0-Next0, -Tries-Next): Copy is Term with every trie replaced
+% by '$rtl_trie'(Id).
+unblob(T, T, S, S) :-
+    var(T), !.
+unblob(T, T, S, S) :-
+    plain_atomic(T), !.
+unblob(T, C, S0-N0, S) :-
+    blob(T, Type), Type \== text, !,
+    (   Type == trie
+    ->  (   get_assoc(T, S0, Id)
+        ->  S = S0-N0
+        ;   Id = N0, N is N0 + 1, put_assoc(T, S0, Id, S1), S = S1-N
+        ),
+        C = '$rtl_trie'(Id)
+    ;   throw(rtl_state_unwritable(T))
+    ).
+unblob(T, T, S, S) :-
+    atomic(T), !.
+unblob(T, C, S0, S) :-
+    compound_name_arguments(T, Name, Args),
+    foldl(unblob, Args, CArgs, S0, S),
+    compound_name_arguments(C, Name, CArgs).
+
+captured_module(M, Program) :-
+    (   M = Program
+    ;   current_module(M), M \== Program,
+        sub_atom(M, 0, _, _, rtl_),
+        \+ current_predicate(M:ele_trigger/3)     % another program loaded in the process
+    ).
+
+captured_predicates(Program, PIs) :-
+    findall(M:Name/Arity,
+            ( captured_module(M, Program),
+              current_predicate(M:Name/Arity),
+              functor(H, Name, Arity),
+              predicate_property(M:H, dynamic),
+              \+ predicate_property(M:H, imported_from(_)),
+              \+ excluded_predicate(M:Name/Arity)
+            ),
+            PIs0),
+    sort(PIs0, PIs).
+
+captured_global_key(K) :-
+    (   sub_atom(K, 0, _, _, rtl_)
+    ;   sub_atom(K, 0, _, _, '$rtl_')
+    ;   sub_atom(K, 0, _, _, aq_)
+    ;   rtl_stat(K, _)
+    ),
+    !,
+    \+ excluded_global(K).
+
+captured_globals(Pairs) :-
+    findall(K-V, ( nb_current(K, V), atom(K), captured_global_key(K) ), Pairs0),
+    keysort(Pairs0, Pairs).
+
+captured_flags(Pairs) :-
+    findall(K-V, ( current_flag(K), atom(K), sub_atom(K, 0, _, _, rtl_), flag(K, V, V) ), Pairs0),
+    keysort(Pairs0, Pairs).
+
+%!  rtl_state_restore(+File, +Identity) is det.
+%
+%   Replace the state by the one saved in File. Raises
+%   `error(rtl_state_error(Message), _)` (Message a string) and changes nothing when the
+%   file is not a complete snapshot of this version and Identity.
+
+rtl_state_restore(File, Identity) :-
+    rtl_program(M),
+    read_snapshot(File, Terms),
+    check_snapshot(Terms, Identity, OldM, Tries, Preds, Globals, Flags),
+    apply_state(M, OldM, Tries, Preds, Globals, Flags).
+
+read_snapshot(File, Terms) :-
+    catch(setup_call_cleanup(open(File, read, In, [type(binary)]),
+                             read_terms(In, Terms),
+                             close(In)),
+          E,
+          (   E = error(rtl_state_error(_), _)
+          ->  throw(E)
+          ;   message_to_codes(E, Text),
+              state_error("~w is not a readable snapshot: ~s", [File, Text])
+          )).
+
+message_to_codes(E, Text) :-
+    (   catch(message_to_codes_(E, Text), _, fail) -> true ; format(codes(Text), "~q", [E]) ).
+message_to_codes_(E, Text) :-
+    '$messages':translate_message(E, Lines, []),
+    with_output_to(codes(Text), print_message_lines(current_output, '', Lines)).
+
+read_terms(In, Terms) :-
+    (   at_end_of_stream(In)
+    ->  Terms = []
+    ;   fast_read(In, T),
+        (   T = end(_) -> Terms = [T] ; Terms = [T|Rest], read_terms(In, Rest) )
+    ).
+
+check_snapshot(Terms, Identity, OldM, Tries, Preds, Globals, Flags) :-
+    state_version(V),
+    (   Terms = [rtl_state(V0, Identity0, OldM)|Body]
+    ->  true
+    ;   state_error("not a retalisc snapshot", [])
+    ),
+    (   V0 == V -> true
+    ;   state_error("the snapshot has format version ~w, this runtime reads version ~w", [V0, V])
+    ),
+    (   Identity0 == Identity -> true
+    ;   state_error("the snapshot was made by another program or runtime version (~w, not ~w)",
+                    [Identity0, Identity])
+    ),
+    (   append(Middle, [end(Count)], Body),
+        Middle = [tries(Tries)|Rest],
+        append(Preds, [globals(Globals), flags(Flags)], Rest),
+        length(Preds, Count),
+        \+ ( member(P, Preds), P \= pred(_, _, _, _) )
+    ->  true
+    ;   state_error("the snapshot is incomplete", [])
+    ).
+
+state_error(Format, Args) :-
+    format(string(Message), Format, Args),
+    throw(error(rtl_state_error(Message), _)).
+
+apply_state(M, OldM, TrieEntries, Preds, Globals, Flags) :-
+    length(TrieEntries, NT),
+    length(Tries, NT),
+    maplist(new_trie, Tries),
+    pairs_keys_values(TrieEntries, Ids, _),
+    pairs_keys_values(IdTries, Ids, Tries),
+    list_to_assoc(IdTries, ById),
+    Map = map(OldM, M, ById),
+    maplist(fill_trie(Map), TrieEntries),
+    captured_predicates(M, Current),
+    forall(member(CM:Name/Arity, Current),
+           ( functor(H, Name, Arity), retractall(CM:H) )),
+    maplist(restore_pred(Map), Preds),
+    captured_globals(CurrentGlobals),
+    forall(( member(K-_, CurrentGlobals), \+ memberchk(K-_, Globals) ), nb_delete(K)),
+    forall(member(K-V0, Globals), ( reblob(Map, V0, V), nb_setval(K, V) )),
+    forall(member(K-V, Flags), flag(K, _, V)).
+
+new_trie(T) :- trie_new(T).
+
+fill_trie(Map, Id-Entries) :-
+    Map = map(_, _, ById),
+    get_assoc(Id, ById, Trie),
+    forall(member(K0-V0, Entries),
+           ( reblob(Map, K0, K), reblob(Map, V0, V), trie_insert(Trie, K, V) )).
+
+restore_pred(Map, pred(M0, Name, Arity, Clauses)) :-
+    Map = map(OldM, NewM, _),
+    (   M0 == OldM -> M = NewM ; M = M0 ),
+    dynamic(M:Name/Arity),
+    (   needs_reblob(Map, Clauses)
+    ->  forall(member(C0, Clauses), ( reblob(Map, C0, H-B), assert_clause(M, H, B) ))
+    ;   forall(member(H-B, Clauses), assert_clause(M, H, B))
+    ).
+
+% clause/2 gives the body qualified by its module when that is not the predicate's.
+assert_clause(M, H, B) :-
+    (   B = Ctx:B0, atom(Ctx)
+    ->  Ctx:assertz((M:H :- B0))
+    ;   assertz(M:(H :- B))
+    ).
+
+% Clauses need rewriting when tries are restored or the program module was renamed.
+needs_reblob(map(OldM, NewM, ById), _) :-
+    (   OldM \== NewM -> true ; \+ empty_assoc(ById) ).
+
+reblob(map(OldM, NewM, ById), T0, T) :-
+    reblob_(T0, T, OldM, NewM, ById).
+
+reblob_(T, T, _, _, _) :-
+    var(T), !.
+reblob_(T, C, OldM, NewM, _) :-
+    atomic(T), !,
+    (   T == OldM -> C = NewM ; C = T ).
+reblob_('$rtl_trie'(Id), Trie, _, _, ById) :-
+    integer(Id), !,
+    get_assoc(Id, ById, Trie).
+reblob_(T, C, OldM, NewM, ById) :-
+    compound_name_arguments(T, Name, Args),
+    reblob_list(Args, CArgs, OldM, NewM, ById),
+    compound_name_arguments(C, Name, CArgs).
+
+reblob_list([], [], _, _, _).
+reblob_list([A|As], [C|Cs], OldM, NewM, ById) :-
+    reblob_(A, C, OldM, NewM, ById),
+    reblob_list(As, Cs, OldM, NewM, ById).
+
+%!  rtl_state_capture(-State) is det.
+%
+%   The state a snapshot holds, as one term without blobs (tries as their sorted entries,
+%   the program module as `'$program'`, predicates without clauses left out), to compare
+%   two states (tests).
+
+rtl_state_capture(state(Preds, Globals, Flags)) :-
+    rtl_program(M),
+    captured_predicates(M, PIs),
+    findall(pred(CM, Name, Arity, Clauses),
+            ( member(CM0:Name/Arity, PIs),
+              functor(H, Name, Arity),
+              findall(C, ( clause(CM0:H, B), canonical(M, H-B, C), numbervars(C, 0, _) ), Clauses),
+              Clauses \== [],                  % a predicate without clauses is no state
+              ( CM0 == M -> CM = '$program' ; CM = CM0 ) ),
+            Preds),
+    captured_globals(Globals0),
+    findall(K-V, ( member(K-V0, Globals0), \+ unwritable_blob(V0), canonical(M, V0, V) ), Globals),
+    captured_flags(Flags).
+
+unwritable_blob(V) :-
+    \+ plain_atomic(V),
+    blob(V, Type), Type \== trie.
+
+% Atoms, [] (a reserved symbol), numbers and strings: what fast_write/2 writes as it is.
+plain_atomic(T) :-
+    (   atom(T) -> true
+    ;   T == [] -> true
+    ;   atomic(T), \+ blob(T, _)
+    ).
+
+canonical(_, T, T) :- var(T), !.
+canonical(M, T, C) :-
+    \+ plain_atomic(T), blob(T, trie), !,
+    findall(K-V, trie_gen(T, K, V), Es0),
+    maplist(canonical(M), Es0, Es1),
+    msort(Es1, Es),
+    C = '$trie'(Es).
+canonical(M, T, C) :-
+    atomic(T), !,
+    (   T == M -> C = '$program' ; C = T ).
+canonical(M, T, C) :-
+    compound_name_arguments(T, Name, Args),
+    maplist(canonical(M), Args, CArgs),
+    compound_name_arguments(C, Name, CArgs).
+
+%!  rtl_state_digest(-Hash:atom) is det.
+%
+%   A hash of rtl_state_capture/1.
+
+rtl_state_digest(Hash) :-
+    rtl_state_capture(State),
+    variant_sha1(State, Hash).
+
+:- multifile prolog:error_message//1.
+prolog:error_message(rtl_state_error(Message)) -->
+    [ '~s'-[Message] ].

@@ -1,0 +1,350 @@
+"""Snapshots of a running program's state on disk, and the state directory of a run that
+survives a crash (docs/recovery.md).
+
+A snapshot file is written by the runtime (prolog_runtime/rtl_state.pl, fast_write terms)
+to a temporary file next to its place, flushed to disk (fsync) and renamed over it, so a
+reader sees the old file or the new one, never half of one. It is tagged with the
+*identity* of the program and runtime: a hash of the compiled program (its module name left
+out) and of every runtime source file; the runtime refuses a snapshot with another identity.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+from functools import lru_cache
+from pathlib import Path
+from typing import Union
+
+from ..runtime_location import runtime_dir
+
+STATE_FORMAT = "retalisc-state-1"
+
+
+class StateError(Exception):
+    """A snapshot or state directory that cannot be used (corrupt, from another program or
+    version, unwritable)."""
+
+
+@lru_cache(maxsize=None)
+def runtime_version() -> str:
+    """A hash of the runtime's Prolog sources: a snapshot is only read by the runtime that wrote it."""
+    digest = hashlib.sha256(STATE_FORMAT.encode())
+    for path in sorted(Path(runtime_dir()).glob("*.pl")):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def program_identity(prolog_text: str, module: str) -> str:
+    """The identity of a compiled program under this runtime: the same program compiled under
+    another module name has the same identity."""
+    digest = hashlib.sha256(runtime_version().encode())
+    digest.update((prolog_text.replace(module, "\0M\0") if module else prolog_text).encode("utf-8"))
+    return digest.hexdigest()[:32]
+
+
+def fsync_directory(directory: Union[str, Path]) -> None:
+    """Make a rename in `directory` durable (where the platform allows it)."""
+    try:
+        fd = os.open(str(directory), os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def fsync_file(path: Union[str, Path]) -> None:
+    fd = os.open(str(path), os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def file_sha256(path: Union[str, Path]) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+# ---- the state directory of `retalisc run --state DIR` -------------------------------------
+
+DEFAULT_SNAPSHOT_EVENTS = 200_000   # input lines between two snapshots
+DEFAULT_SNAPSHOT_SECONDS = 60.0     # or seconds of processing, whichever comes first
+_NEWLINE = re.compile(r"\r\n|\r|\n")
+KEEP_SNAPSHOTS = 2                  # the newest complete ones; older ones are deleted
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    temporary = path.with_name(path.name + ".tmp")
+    try:
+        with open(temporary, "w", encoding="utf-8") as stream:
+            stream.write(text)
+            stream.flush()
+            os.fsync(stream.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        try:
+            temporary.unlink()
+        except OSError:
+            pass
+        raise
+    fsync_directory(path.parent)
+
+
+class StateDir:
+    """The files of a recoverable run in one directory:
+
+    - `snapshot-NNNNNNNN.state`: the runtime state (Engine.save_state);
+    - `snapshot-NNNNNNNN.json`: its manifest, written (atomically) after the state file: the
+      identity of the program, the SHA-256 of the state file, the input position (lines and
+      bytes consumed) and the output position (bytes of the output file). A snapshot without a
+      manifest, or whose state file does not match the manifest, is incomplete and never read;
+    - `journal.jsonl`: one line per batch consumed since the newest snapshot (input and output
+      positions reached), emptied at each snapshot. For a file the journal of what was consumed
+      is this position: a restart replays the input file from the snapshot's position, so the
+      journal is for inspection (how far the run got), and a line cut by a crash is harmless.
+    """
+
+    def __init__(self, directory: Union[str, Path]):
+        self.directory = Path(directory)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.journal_path = self.directory / "journal.jsonl"
+
+    def _manifests(self):
+        return sorted(self.directory.glob("snapshot-*.json"), reverse=True)
+
+    def remove_incomplete(self) -> None:
+        """Delete temporary files and state files without a manifest (a crash while writing)."""
+        for path in self.directory.glob("*.tmp"):
+            path.unlink(missing_ok=True)
+        for path in self.directory.glob("snapshot-*.state"):
+            if not path.with_suffix(".json").exists():
+                path.unlink(missing_ok=True)
+
+    def snapshots(self):
+        """(manifest, state file) of the complete snapshots, newest first, and the messages
+        about those that are not (corrupt or unreadable)."""
+        found, problems = [], []
+        for manifest_path in self._manifests():
+            state_path = manifest_path.with_suffix(".state")
+            try:
+                manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
+                if manifest.get("format") != STATE_FORMAT:
+                    raise ValueError(f"format {manifest.get('format')!r}, not {STATE_FORMAT}")
+                if not state_path.exists():
+                    raise ValueError("its state file is missing")
+                if file_sha256(state_path) != manifest["sha256"]:
+                    raise ValueError("its state file does not match its checksum (corrupt)")
+            except (OSError, ValueError, KeyError, TypeError) as error:
+                problems.append(f"{manifest_path.name}: not used: {error}")
+                continue
+            found.append((manifest, state_path))
+        return found, problems
+
+    def next_number(self) -> int:
+        numbers = [int(p.stem.split("-")[1]) for p in self._manifests() if p.stem.split("-")[1].isdigit()]
+        return max(numbers, default=-1) + 1
+
+    def save(self, engine, manifest: dict) -> dict:
+        """Write a snapshot of `engine` with `manifest` (input and output positions); returns the
+        manifest written. Older snapshots beyond the newest KEEP_SNAPSHOTS are deleted."""
+        number = self.next_number()
+        state_path = self.directory / f"snapshot-{number:08d}.state"
+        engine.save_state(state_path)
+        manifest = dict(manifest, format=STATE_FORMAT, number=number, identity=engine.identity(),
+                        sha256=file_sha256(state_path), state_bytes=state_path.stat().st_size)
+        try:
+            _atomic_write_text(state_path.with_suffix(".json"), json.dumps(manifest, sort_keys=True) + "\n")
+        except BaseException:
+            state_path.unlink(missing_ok=True)
+            raise
+        open(self.journal_path, "w").close()     # the journal holds what came after the newest snapshot
+        for old in self._manifests()[KEEP_SNAPSHOTS:]:
+            old.unlink(missing_ok=True)
+            old.with_suffix(".state").unlink(missing_ok=True)
+        return manifest
+
+    def journal(self, record: dict) -> None:
+        with open(self.journal_path, "a", encoding="utf-8") as stream:
+            stream.write(json.dumps(record, sort_keys=True) + "\n")
+
+    def journal_records(self):
+        """The journal's complete lines (a line cut by a crash is skipped)."""
+        records = []
+        try:
+            text = self.journal_path.read_text(encoding="utf-8", errors="replace")
+        except OSError:
+            return records
+        for line in text.splitlines():
+            try:
+                records.append(json.loads(line))
+            except ValueError:
+                continue
+        return records
+
+
+def _binary_batches(stream, offset: int, first_line: int, batch_size: int):
+    """(first line number, lines, bytes of the batch, byte offset after it) from `offset` of a
+    file opened in binary; decoded as `retalisc run` reads (UTF-8, a leading BOM dropped,
+    undecodable bytes replaced)."""
+    stream.seek(offset)
+    position, number = offset, first_line
+    batch, start, size = [], first_line, 0
+    for raw in stream:
+        position += len(raw)
+        size += len(raw)
+        text = raw.decode("utf-8", errors="replace")
+        if position == len(raw) and text.startswith("\ufeff"):
+            text = text[1:]
+        pieces = _NEWLINE.split(text)            # universal newlines, as the text mode of `run`
+        if text.endswith(("\n", "\r")):
+            pieces.pop()
+        for piece in pieces:
+            batch.append(piece)
+            number += 1
+        if len(batch) >= batch_size:
+            yield start, batch, size, position
+            batch, start, size = [], number, 0
+    if batch:
+        yield start, batch, size, position
+
+
+class RecoveryError(Exception):
+    """The state directory cannot be used for this run (another program, another input)."""
+
+
+def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batch_size: int = 2000,
+                    snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
+                    snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,
+                    first_output=(), allow_control: bool = False, strict: bool = False,
+                    progress=None, log=None) -> int:
+    """`retalisc run --state DIR`: as run.run_event_file for an event file and an output file,
+    and the run survives a crash. A snapshot (the engine's state with the input and output
+    positions) is written when the run starts and then every `snapshot_events` input lines or
+    `snapshot_seconds` seconds, at a batch boundary. Started again with the same DIR, the run
+    restores the newest complete snapshot, cuts the output file back to the snapshot's output
+    position and reads the input from the snapshot's input position: the output file ends
+    byte-identical to that of a run that never stopped. A snapshot that cannot be written (a
+    full disk) is reported and the run goes on. Returns the exit status."""
+    import sys
+    import time
+
+    from .bridge import PrologError
+    from .run import Progress, RunStopped, summary_line
+
+    log = log or sys.stderr
+    started = time.perf_counter()
+    directory = StateDir(state)
+    directory.remove_incomplete()
+    events_path = os.path.abspath(events)
+    identity = engine.identity()
+    restored = None
+    found, problems = directory.snapshots()
+    for problem in problems:
+        print(f"retalisc: {directory.directory}/{problem}", file=log)
+    for manifest, state_path in found:
+        if manifest.get("identity") != identity:
+            raise RecoveryError(f"{state_path}: the snapshot was made by another program or runtime "
+                                f"version; use another --state directory or delete this one")
+        if manifest.get("events") != events_path:
+            raise RecoveryError(f"{state_path}: the snapshot belongs to a run over {manifest.get('events')}, "
+                                f"not {events_path}")
+        try:
+            engine.restore_state(state_path)
+        except StateError as error:
+            print(f"retalisc: {error}; trying an older snapshot", file=log)
+            continue
+        restored = manifest
+        break
+    if found and restored is None:
+        raise RecoveryError(f"{directory.directory}: no snapshot could be restored")
+
+    if restored is None:
+        sink = open(out, "wb")
+        offset, line = 0, 1
+    else:
+        size = os.path.getsize(out) if os.path.exists(out) else -1
+        if size < restored["out_bytes"]:
+            raise RecoveryError(f"{out} has {max(size, 0)} bytes, fewer than the {restored['out_bytes']} it had at "
+                                f"snapshot {restored['number']}: it was changed; cannot go on from this snapshot")
+        sink = open(out, "r+b")
+        sink.truncate(restored["out_bytes"])
+        sink.seek(restored["out_bytes"])
+        offset, line = restored["input_bytes"], restored["input_line"]
+        print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
+              f"(input line {line}, {restored['out_bytes']} output bytes)", file=log)
+    source = open(events_path, "rb")
+    total = os.path.getsize(events_path)
+    display = Progress(stream=sys.stderr, total=total, enabled=progress)
+    status = 0
+    name = events
+
+    def write(produced):
+        for event in produced:
+            sink.write(event.line.encode("utf-8") + b"\n")
+
+    def snapshot(offset, line):
+        sink.flush()
+        os.fsync(sink.fileno())
+        try:
+            return directory.save(engine, {"events": events_path, "input_bytes": offset, "input_line": line,
+                                           "out_bytes": sink.tell()})
+        except (OSError, PrologError) as error:
+            print(f"retalisc: warning: the snapshot could not be written ({error}); the run goes on, "
+                  f"the previous snapshot stays the one a restart uses", file=log)
+            return None
+
+    try:
+        if restored is None:
+            halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
+            if halted:
+                print(halted, file=sys.stderr)
+                raise RunStopped()
+            for produced in first_output:
+                write(produced)
+            snapshot(offset, line)
+        since_events, since_time = 0, time.monotonic()
+        for first, lines, size, position in _binary_batches(source, offset, line, batch_size):
+            produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
+                                                   strict=strict)
+            write(produced)
+            messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")
+                        for r in rejected]
+            messages += [(w.line, f"warning: {w.text}") for w in engine.take_warnings()]
+            if messages:
+                display.clear()
+            for number, message in sorted(messages, key=lambda m: m[0]):
+                print(f"{name}:{number}: {message}", file=sys.stderr)
+            display.update(size, len(lines), len(produced))
+            if rejected and (strict or rejected[-1].kind == "halt"):
+                raise RunStopped()
+            offset, line = position, first + len(lines)
+            since_events += len(lines)
+            directory.journal({"input_bytes": offset, "input_line": line, "out_bytes": sink.tell()})
+            if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
+                snapshot(offset, line)
+                since_events, since_time = 0, time.monotonic()
+        failed = engine.stats().get("failed", 0)
+        write(engine.end_of_input(drop_pending))
+        if engine.bridge.call_text("( nb_current(rtl_end_stopped, true) -> R = \"yes\" ; R = \"\" )", "R"):
+            raise RunStopped()
+        if strict and engine.stats().get("failed", 0) > failed:
+            raise RunStopped()
+    except RunStopped:
+        status = 1
+    finally:
+        display.close()
+        sink.flush()
+        sink.close()
+        source.close()
+        engine.bridge.once("retalis:rtl_close_action_output")
+    print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
+    return status

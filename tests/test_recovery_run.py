@@ -1,0 +1,212 @@
+"""`retalisc run --state DIR`: a run killed (SIGKILL) at random points and started again with
+the same DIR ends with an output file byte-identical to a run that never stopped; crashes
+while a snapshot is written, a journal line cut short, a corrupt snapshot and a full disk do
+not change that."""
+import errno
+import io
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from retalisc.cli import main
+from retalisc.driver import recovery
+from retalisc.driver.engine import Engine
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# a windowed seq, a negation, an SLR memory read with prev/next in conditions, a synchronized rule
+PROGRAM = """\
+c(X) <- (a(X) seq b(X)).2.
+d(X) <- (not(n(X)).[a(X), b(X)]).3.
+c_mem(v, v(_)-[], 5, inf).
+e(X, V) <- b(X) where prev(v, v(V)^T, inf).
+f(X, V) <- a(X) where (prev(v, v(V)^T1, inf), \\+ next(v, v(_)^T2, T1, inf)).
+memorize(tf(odom, base, V), [], tf(V), odom_base, 100).
+memorize(tf(base, cam, V), [], tf(V), base_cam, 100).
+at(Id, T, V) :- prev(Id, tf(V1)^T1, T), ( next(Id, tf(V2)^T2, T, inf) -> time_fraction(T1, T2, T, F), V is V1 + F * (V2 - V1) ; V = V1 ).
+place(Rel, T, X) :- at(odom_base, T, A), at(base_cam, T, B), X is A + B + Rel.
+syncronized(pose(Name, X), place(Rel, T, X), [[odom_base, T], [base_cam, T]]) <- marker(Name, Rel)^T.
+"""
+
+
+def write_events(path, n, seed):
+    rng = random.Random(seed)
+    t = 0.0
+    with open(path, "w", encoding="utf-8") as stream:
+        for i in range(n):
+            t = round(t + rng.choice([0.1, 0.2, 0.5, 1.0]), 1)
+            kind = rng.choice(["a", "b", "n", "v", "ob", "bc", "m"])
+            if kind == "ob":
+                event = f"tf(odom, base, {rng.randint(0, 9)})"
+            elif kind == "bc":
+                event = f"tf(base, cam, {rng.randint(0, 9)})"
+            elif kind == "m":
+                event = f"marker(m{i}, {rng.randint(0, 9)})"
+            else:
+                event = f"{kind}({rng.randint(0, 3)})"
+            stream.write(json.dumps({"event": event, "t": t}) + "\n")
+
+
+def run_cmd(program, events, out, state=None, every=300):
+    cmd = [sys.executable, "-m", "retalisc", "run", str(program), "--events", str(events), "--out", str(out),
+           "--batch-size", "100"]
+    if state is not None:
+        cmd += ["--state", str(state), "--snapshot-every", str(every)]
+    return cmd
+
+
+def _env():
+    return dict(os.environ, PYTHONPATH=str(ROOT))
+
+
+@pytest.fixture(scope="module")
+def setup(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("recovery")
+    program = tmp / "program.rtl"
+    program.write_text(PROGRAM, encoding="utf-8")
+    events = tmp / "events.jsonl"
+    write_events(events, 5_000, 19)
+    expected = tmp / "expected.jsonl"
+    subprocess.run(run_cmd(program, events, expected), check=True, env=_env(), capture_output=True)
+    assert expected.stat().st_size > 20_000
+    return tmp, program, events, expected.read_bytes()
+
+
+def test_kill_9_at_random_points_then_restart_gives_the_uninterrupted_output(setup):
+    tmp, program, events, expected = setup
+    out, state = tmp / "killed.jsonl", tmp / "killed-state"
+    rng = random.Random(2026)
+    targets = sorted(rng.sample(range(len(expected) // 10, len(expected) * 9 // 10), 5))
+    kills = 0
+    for target in targets + [None]:
+        process = subprocess.Popen(run_cmd(program, events, out, state), env=_env(),
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        while target is not None and process.poll() is None:
+            if out.exists() and out.stat().st_size >= target:
+                os.kill(process.pid, signal.SIGKILL)
+                kills += 1
+                break
+            time.sleep(0.005)
+        _, stderr = process.communicate(timeout=120)
+        if target is None:
+            assert process.returncode == 0, stderr.decode()
+    assert kills >= 3            # most kill points were reached before the run ended
+    assert out.read_bytes() == expected
+
+
+def run_here(program, events, out, state, every, log=None):
+    """One run of `retalisc run --state` in this process (a process that stops after it)."""
+    log = log or io.StringIO()
+    status = recovery.run_recoverable(Engine.load(program), str(events), str(out), state, batch_size=100,
+                                      snapshot_events=every, log=log)
+    return status, log.getvalue()
+
+
+def _snapshot_numbers(state):
+    return sorted(int(p.stem.split("-")[1]) for p in Path(state).glob("snapshot-*.json"))
+
+
+def test_crash_while_writing_a_snapshot_and_a_cut_journal_line(setup):
+    tmp, program, events, expected = setup
+    out, state = tmp / "torn.jsonl", tmp / "torn-state"
+    run_here(program, events, out, state, 1500)
+    newest = _snapshot_numbers(state)[-1]
+    # as after a SIGKILL in the middle of the next snapshot: its state file without manifest,
+    # a temporary file, and a journal line cut short
+    (state / f"snapshot-{newest + 1:08d}.state").write_bytes(b"\x00half a snapshot")
+    (state / f"snapshot-{newest + 1:08d}.json.tmp").write_text('{"format": "retal', encoding="utf-8")
+    with open(state / "journal.jsonl", "a", encoding="utf-8") as journal:
+        journal.write('{"input_bytes": 12')
+    with open(out, "ab") as stream:
+        stream.write(b'{"event": "c(1)", "sta')        # output written after the snapshot
+    status, log = run_here(program, events, out, state, 1500)
+    assert status == 0, log
+    assert out.read_bytes() == expected
+    assert not list(state.glob("*.tmp"))
+    journal = recovery.StateDir(state).journal_records()       # since the newest snapshot, cut line gone
+    assert journal and journal[-1]["input_line"] == 5001
+    assert all(set(record) == {"input_bytes", "input_line", "out_bytes"} for record in journal)
+
+
+def test_corrupt_snapshot_is_refused_and_the_previous_one_used(setup):
+    tmp, program, events, expected = setup
+    out, state = tmp / "corrupt.jsonl", tmp / "corrupt-state"
+    run_here(program, events, out, state, 1200)
+    numbers = _snapshot_numbers(state)
+    assert len(numbers) == 2
+    newest = state / f"snapshot-{numbers[-1]:08d}.state"
+    data = bytearray(newest.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    newest.write_bytes(bytes(data))
+    status, stderr = run_here(program, events, out, state, 1200)
+    assert status == 0
+    assert f"snapshot-{numbers[-1]:08d}.json: not used" in stderr and "corrupt" in stderr
+    assert f"restored snapshot {numbers[0]}" in stderr
+    assert out.read_bytes() == expected
+
+
+def test_snapshot_of_another_program_is_refused(setup, tmp_path):
+    tmp, program, events, _ = setup
+    state = tmp_path / "state"
+    run_here(program, events, tmp_path / "a.jsonl", state, 2500)
+    other = tmp_path / "other.rtl"
+    other.write_text("c(X) <- (a(X) seq b(X)).3.\n", encoding="utf-8")
+    done = CliRunner().invoke(main, run_cmd(other, events, tmp_path / "b.jsonl", state)[3:])
+    assert done.exit_code == 2
+    assert "another program or runtime version" in done.output
+    assert "Traceback" not in done.output
+
+
+def test_full_disk_while_snapshotting_keeps_the_run_and_the_previous_snapshot(setup, tmp_path, monkeypatch):
+    _, program, events, expected = setup
+    engine = Engine.load(program)
+    calls = []
+    real_save = engine.save_state
+
+    def failing_save(path):
+        calls.append(path)
+        if len(calls) == 3:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        real_save(path)
+
+    monkeypatch.setattr(engine, "save_state", failing_save)
+    log = io.StringIO()
+    state, out = tmp_path / "state", tmp_path / "out.jsonl"
+    status = recovery.run_recoverable(engine, str(events), str(out), state, batch_size=100, snapshot_events=1500,
+                                      log=log)
+    assert status == 0
+    assert "No space left on device" in log.getvalue() and "the run goes on" in log.getvalue()
+    assert out.read_bytes() == expected
+    assert len(calls) == 4                  # at the start, then every 1500 lines
+    assert _snapshot_numbers(state) == [1, 2]
+    assert not list(state.glob("*.tmp")) and len(list(state.glob("*.state"))) == 2
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--events", "-"], "--state needs --events FILE"),
+    (["--out", "-"], "--state needs --out FILE"),
+])
+def test_state_needs_files(setup, tmp_path, args, message):
+    _, program, events, _ = setup
+    cmd = run_cmd(program, events, tmp_path / "o.jsonl", tmp_path / "s")
+    for option, value in zip(args[::2], args[1::2]):
+        cmd[cmd.index(option) + 1] = value
+    done = CliRunner().invoke(main, cmd[3:])
+    assert done.exit_code == 2 and message in done.output
+
+
+def test_an_output_file_shorter_than_the_snapshot_says_is_refused(setup, tmp_path):
+    _, program, events, _ = setup
+    state, out = tmp_path / "state", tmp_path / "out.jsonl"
+    run_here(program, events, out, state, 2500)
+    out.write_bytes(b"")
+    with pytest.raises(recovery.RecoveryError, match="fewer than the .* it had at snapshot"):
+        run_here(program, events, out, state, 2500)
