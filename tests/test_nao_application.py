@@ -140,17 +140,15 @@ def test_make_bag_is_deterministic(tmp_path):
 
 
 def test_the_two_file_form_runs_the_same(tmp_path):
-    """eventRules.txt + goalPredicates.txt (the release's form, goal lines without a final
-    period) give the same output as nao.rtl. retalisc reads one program file, so the goal
-    lines are given their periods and appended here (what the release's loader did)."""
+    """eventRules.txt + goalPredicates.txt (the release's form: goal lines without a final
+    period, one per paragraph, the first loading the event rules) give the same output as
+    nao.rtl."""
     bag, _ = load_make_bag().write(tmp_path / "short.bag", seconds=2.5, seed=4)
-    goals = (EXAMPLE / "goalPredicates.txt").read_text().splitlines()
-    assert goals and not any(line.rstrip().endswith(".") for line in goals)
-    combined = tmp_path / "nao_two_files.rtl"
-    combined.write_text((EXAMPLE / "eventRules.txt").read_text()
-                        + "".join(line + ".\n" for line in goals if line.strip()))
+    goals = [line for line in (EXAMPLE / "goalPredicates.txt").read_text().splitlines() if line.strip()]
+    assert goals[0] == "compile_event_file('eventRules.txt')"
+    assert not any(line.rstrip().endswith(".") for line in goals)
     one = retalisc("run", str(EXAMPLE / "nao.rtl"), "--bag", str(bag))
-    two = retalisc("run", str(combined), "--bag", str(bag))
+    two = retalisc("run", str(EXAMPLE / "goalPredicates.txt"), "--bag", str(bag))
     assert one.returncode == 0 and two.returncode == 0, one.stderr + two.stderr
     assert one.stdout == two.stdout
     assert one.stdout.count("PoseStamped") >= 20
