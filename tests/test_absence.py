@@ -20,12 +20,10 @@ from retalisc.frontend.program import parse_program
 from retalisc.frontend.writer import write_term
 
 from ele_oracle import matches, net_output, substitute_ground
+from timer_support import fresh, outputs
 
 ROOM = "empty(Room) <- not(seen(_, Room)).[door_closed(Room), 30].\n"
 
-
-def outputs(engine, batch):
-    return [(o.event, o.start, o.end, o.op) for o in engine.feed_batch(batch)]
 
 
 @pytest.fixture(scope="module")
@@ -34,14 +32,6 @@ def room():
     yield engine
     fresh(engine)           # flags are shared by the engines of a process
 
-
-def fresh(engine, max_delay="1", flush="false", horizon="auto"):
-    engine.activate()           # one program per process: another test may have loaded its own
-    engine.clear()
-    engine.set_flag("max_delay", max_delay)
-    engine.set_flag("flush_timers", flush)
-    engine.set_flag("retraction_horizon", horizon)
-    return engine
 
 
 # ---- golden cases -----------------------------------------------------------------------

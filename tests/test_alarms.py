@@ -14,6 +14,7 @@ from retalisc.frontend.program import parse_program
 from retalisc.frontend.writer import write_term
 
 from ele_oracle import matches, net_output, substitute_ground
+from timer_support import fresh, outputs
 
 DOOR = """
 alarm(check(R), 30) <- door_closed(R).
@@ -22,17 +23,6 @@ exceptionAlarm(recheck(R), 1) <- check(R).
 """
 
 
-def outputs(engine, batch):
-    return [(o.event, o.start, o.end, o.op) for o in engine.feed_batch(batch)]
-
-
-def fresh(engine, max_delay="1", flush="false", horizon="auto"):
-    engine.activate()           # one program per process: another test may have loaded its own
-    engine.clear()
-    engine.set_flag("max_delay", max_delay)
-    engine.set_flag("flush_timers", flush)
-    engine.set_flag("retraction_horizon", horizon)
-    return engine
 
 
 @pytest.fixture(scope="module")

@@ -13,6 +13,7 @@ from retalisc.driver.engine import Engine
 from retalisc.frontend.errors import RetalisError
 
 from ele_oracle import net_output
+from timer_support import fresh, outputs
 
 PROGRAM = """
 occupancy(Room, N) <- sliding(count, seen(_, Room), Room, 6, N).
@@ -24,17 +25,6 @@ busy(Room) <- sliding(count, seen(_, Room), Room, 6, N) where N >= 3.
 SPECS = {"occupancy": ("count", 6), "load": ("sum", 4), "lightest": ("min", 5), "mean": ("avg", 3)}
 
 
-def outputs(engine, batch):
-    return [(o.event, o.start, o.end, o.op) for o in engine.feed_batch(batch)]
-
-
-def fresh(engine, max_delay="1", flush="false", horizon="auto"):
-    engine.activate()           # one program per process: another test may have loaded its own
-    engine.clear()
-    engine.set_flag("max_delay", max_delay)
-    engine.set_flag("flush_timers", flush)
-    engine.set_flag("retraction_horizon", horizon)
-    return engine
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,6 @@ import itertools
 import json
 import math
 import shutil
-import os
 import tempfile
 import threading
 from concurrent.futures import Future
@@ -585,19 +584,9 @@ class Engine:
         `path`, atomically: a temporary file, flushed to disk, renamed over `path`. Call it
         between calls that feed events (never from a callback)."""
         path = Path(path)
-        temporary = path.with_name(path.name + ".tmp")
         with self._lock:
-            try:
-                self._call("rtl_api_save_state", str(temporary), self.identity())
-                recovery.fsync_file(temporary)
-                os.replace(temporary, path)
-            except BaseException:
-                try:
-                    temporary.unlink()
-                except OSError:
-                    pass
-                raise
-        recovery.fsync_directory(path.parent)
+            recovery.replace_atomically(
+                path, lambda temporary: self._call("rtl_api_save_state", str(temporary), self.identity()))
 
     def restore_state(self, path: Union[str, Path]) -> None:
         """Replace the state by the one `save_state` wrote to `path`. A file that is not a

@@ -82,13 +82,15 @@ _NEWLINE = re.compile(r"\r\n|\r|\n")
 KEEP_SNAPSHOTS = 2                  # the newest complete ones; older ones are deleted
 
 
-def _atomic_write_text(path: Path, text: str) -> None:
+def replace_atomically(path: Union[str, Path], write) -> None:
+    """Make `path` what `write(temporary)` writes, or leave it as it was: the temporary file
+    is flushed to disk, renamed over `path`, and the rename flushed (the directory); on any
+    error the temporary file is removed."""
+    path = Path(path)
     temporary = path.with_name(path.name + ".tmp")
     try:
-        with open(temporary, "w", encoding="utf-8") as stream:
-            stream.write(text)
-            stream.flush()
-            os.fsync(stream.fileno())
+        write(temporary)
+        fsync_file(temporary)
         os.replace(temporary, path)
     except BaseException:
         try:
@@ -97,6 +99,10 @@ def _atomic_write_text(path: Path, text: str) -> None:
             pass
         raise
     fsync_directory(path.parent)
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    replace_atomically(path, lambda temporary: temporary.write_text(text, encoding="utf-8"))
 
 
 class StateDir:
@@ -238,7 +244,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     import time
 
     from .bridge import PrologError
-    from .run import Progress, RunStopped, summary_line
+    from .run import Progress, RunStopped, end_the_input, summary_line
 
     log = log or sys.stderr
     started = time.perf_counter()
@@ -332,12 +338,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
                 snapshot(offset, line)
                 since_events, since_time = 0, time.monotonic()
-        failed = engine.stats().get("failed", 0)
-        write(engine.end_of_input(drop_pending))
-        if engine.bridge.call_text("( nb_current(rtl_end_stopped, true) -> R = \"yes\" ; R = \"\" )", "R"):
-            raise RunStopped()
-        if strict and engine.stats().get("failed", 0) > failed:
-            raise RunStopped()
+        end_the_input(engine, write, drop_pending, strict)
     except RunStopped:
         status = 1
     finally:

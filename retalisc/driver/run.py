@@ -150,6 +150,18 @@ class RunStopped(Exception):
     """The run ended early: `--strict` met a bad line, or program code called halt."""
 
 
+def end_the_input(engine: Engine, write, drop_pending: bool, strict: bool) -> None:
+    """Run (or, with `drop_pending`, drop) the matches postponed to the end of the input and
+    `write` what they produce. RunStopped when program code called halt in one of them, or,
+    with `strict`, when one of them failed."""
+    failed = engine.stats().get("failed", 0)
+    write(engine.end_of_input(drop_pending))
+    if engine.bridge.call_text("( nb_current(rtl_end_stopped, true) -> R = \"yes\" ; R = \"\" )", "R"):
+        raise RunStopped()
+    if strict and engine.stats().get("failed", 0) > failed:
+        raise RunStopped()
+
+
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
                    consumer_dir: Optional[str] = None, drop_pending: bool = False,
                    first_output: Sequence = (), allow_control: bool = False, strict: bool = False,
@@ -232,12 +244,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                 sink.flush()
             if rejected and (strict or rejected[-1].kind == "halt"):
                 raise RunStopped()
-        failed = engine.stats().get("failed", 0)
-        write(engine.end_of_input(drop_pending))
-        if engine.bridge.call_text("( nb_current(rtl_end_stopped, true) -> R = \"yes\" ; R = \"\" )", "R"):
-            raise RunStopped()              # program code called halt in a postponed match
-        if strict and engine.stats().get("failed", 0) > failed:
-            raise RunStopped()
+        end_the_input(engine, write, drop_pending, strict)
     except RunStopped:
         status = 1
     finally:
