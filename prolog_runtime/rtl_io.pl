@@ -35,18 +35,13 @@ rejection. Without the C reader, every line takes the Prolog road, with the same
 load_fast_reader :-
     prolog_load_context(directory, Dir),
     atomic_list_concat([Dir, '/foreign/rtl_fastread'], Lib),
-    (   exists_file_with_extension(Lib),
+    (   absolute_file_name(Lib, _, [file_type(executable), access(read), file_errors(fail)]),
         catch(load_foreign_library(Lib), _, fail),     % (use_foreign_library/1 defers the load)
         current_predicate(rtl_fast_event_line/7)
     ->  retractall(fast_reader),
         assertz(fast_reader)
     ;   true
     ).
-
-exists_file_with_extension(Lib) :-
-    current_prolog_flag(shared_object_extension, Ext),
-    file_name_extension(Lib, Ext, File),
-    exists_file(File).
 
 :- load_fast_reader.
 
