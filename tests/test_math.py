@@ -9,7 +9,6 @@ with a relative tolerance of 1e-9 (relative to the magnitude of the inputs, at l
 The plunit suite prolog_runtime/tests/test_math.pl is run from here too."""
 from __future__ import annotations
 
-import ast
 import math
 import subprocess
 from pathlib import Path
@@ -18,72 +17,16 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from math_driver import answers, pl, run, write_driver
+
 ROOT = Path(__file__).resolve().parent.parent
-MODULE = ROOT / "prolog_runtime" / "rtl_math.pl"
 TOL = 1e-9
 
 BATCH = settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
-# Reads `Goal-Out.` terms from standard input and prints one line per term:
-# "ok <writeq of Out>", "error <writeq of the exception>" or "fail".
-DRIVER = r"""
-run_cases :-
-    repeat,
-    read_term(user_input, T, []),
-    (   T == end_of_file
-    ->  !
-    ;   T = Goal-Out,
-        (   catch(Goal, E, true)
-        ->  (   var(E)
-            ->  format("ok ~q~n", [Out])
-            ;   format("error ~q~n", [E])
-            )
-        ;   format("fail~n")
-        ),
-        fail
-    ).
-"""
-
-
 @pytest.fixture(scope="module")
 def driver(tmp_path_factory, swipl):
-    path = tmp_path_factory.mktemp("rtl_math") / "driver.pl"
-    path.write_text(f":- use_module({str(MODULE)!r}).\n" + DRIVER)
-    return swipl, path
-
-
-def pl(x) -> str:
-    """Prolog text of a (nested) list of numbers."""
-    if isinstance(x, (list, tuple)):
-        return "[" + ",".join(pl(e) for e in x) + "]"
-    if isinstance(x, float):
-        assert math.isfinite(x)
-        return repr(x)
-    return str(x)
-
-
-def run(driver, goals: list[str]) -> list[tuple[str, object]]:
-    """Evaluates each goal text (whose answer is the variable R) in one swipl process."""
-    swipl, path = driver
-    text = "".join(f"({g})-R.\n" for g in goals)
-    proc = subprocess.run([swipl, "--no-tty", "-q", "-g", "run_cases", "-t", "halt", str(path)],
-                          input=text, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          text=True, timeout=60)
-    assert proc.returncode == 0, proc.stderr
-    lines = proc.stdout.splitlines()
-    assert len(lines) == len(goals), (proc.stdout, proc.stderr)
-    out = []
-    for line in lines:
-        kind, _, rest = line.partition(" ")
-        out.append((kind, ast.literal_eval(rest) if kind == "ok" else rest))
-    return out
-
-
-def answers(driver, goals: list[str]) -> list:
-    results = run(driver, goals)
-    for goal, (kind, value) in zip(goals, results):
-        assert kind == "ok", f"{goal}: {kind} {value}"
-    return [value for _, value in results]
+    return swipl, write_driver(tmp_path_factory.mktemp("rtl_math"))
 
 
 # --------------------------------------------------------------------------- oracle
@@ -234,7 +177,7 @@ def test_plunit(swipl):
     lambda n: st.tuples(st.lists(coord, min_size=n, max_size=n),
                         st.lists(coord, min_size=n, max_size=n), fraction))))
 def test_vec_lerp(driver, cases):
-    got = answers(driver, [f"vec_lerp({pl(a)},{pl(b)},{pl(f)},R)" for a, b, f in cases])
+    got = answers(driver, [f"vec_lerp({pl(a)},{pl(b)},{pl(f)},Out)" for a, b, f in cases])
     for (a, b, f), v in zip(cases, got):
         expected = [x + f * (y - x) for x, y in zip(a, b)]
         assert close(v, expected, 2 * magnitude(a, b)), (a, b, f, v)
@@ -247,7 +190,7 @@ def test_vec_lerp(driver, cases):
 @BATCH
 @given(batch(quat()))
 def test_quat_normalize(driver, cases):
-    got = answers(driver, [f"quat_normalize({pl(q)},R)" for q in cases])
+    got = answers(driver, [f"quat_normalize({pl(q)},Out)" for q in cases])
     for q, qn in zip(cases, got):
         m = max(abs(c) for c in q)
         n = norm([c / m for c in q])
@@ -258,7 +201,7 @@ def test_quat_normalize(driver, cases):
 @given(batch(st.tuples(st.lists(coord, min_size=4, max_size=4),
                        st.lists(coord, min_size=4, max_size=4))))
 def test_quat_multiply_general(driver, cases):
-    got = answers(driver, [f"quat_multiply({pl(a)},{pl(b)},R)" for a, b in cases])
+    got = answers(driver, [f"quat_multiply({pl(a)},{pl(b)},Out)" for a, b in cases])
     for (a, b), q in zip(cases, got):
         assert close(q, matvec(left_matrix(a), b), norm(a) * norm(b)), (a, b, q)
 
@@ -266,7 +209,7 @@ def test_quat_multiply_general(driver, cases):
 @BATCH
 @given(batch(st.tuples(unit_quat(), unit_quat())))
 def test_quat_multiply_is_matrix_product(driver, cases):
-    got = answers(driver, [f"quat_multiply({pl(a)},{pl(b)},R)" for a, b in cases])
+    got = answers(driver, [f"quat_multiply({pl(a)},{pl(b)},Out)" for a, b in cases])
     for (a, b), q in zip(cases, got):
         assert close(matrix(q), matmul(matrix(a), matrix(b))), (a, b, q)
 
@@ -274,7 +217,7 @@ def test_quat_multiply_is_matrix_product(driver, cases):
 @BATCH
 @given(batch(unit_quat()))
 def test_quat_conjugate(driver, cases):
-    got = answers(driver, [f"quat_conjugate({pl(q)},R)" for q in cases])
+    got = answers(driver, [f"quat_conjugate({pl(q)},Out)" for q in cases])
     for q, c in zip(cases, got):
         assert c == [-q[0], -q[1], -q[2], q[3]]
         assert close(matrix(c), transpose(matrix(q)))
@@ -283,7 +226,7 @@ def test_quat_conjugate(driver, cases):
 @BATCH
 @given(batch(st.tuples(unit_quat(), vec3)))
 def test_quat_rotate(driver, cases):
-    got = answers(driver, [f"quat_rotate({pl(q)},{pl(v)},R)" for q, v in cases])
+    got = answers(driver, [f"quat_rotate({pl(q)},{pl(v)},Out)" for q, v in cases])
     for (q, v), r in zip(cases, got):
         assert close(r, matvec(matrix(q), v), magnitude(v)), (q, v, r)
 
@@ -295,7 +238,7 @@ def test_quat_slerp(driver, cases):
              if abs(sum(a * b for a, b in zip(q1, q2))) > 1e-6]   # shortest arc is unique
     if not cases:
         return
-    got = answers(driver, [f"quat_slerp({pl(q1)},{pl(q2)},{pl(f)},R)" for q1, q2, f in cases])
+    got = answers(driver, [f"quat_slerp({pl(q1)},{pl(q2)},{pl(f)},Out)" for q1, q2, f in cases])
     for (q1, q2, f), q in zip(cases, got):
         assert close(norm(q), 1.0), q
         assert close(matrix(q), slerp_matrix(q1, q2, f)), (q1, q2, f, q)
@@ -309,7 +252,7 @@ def test_quat_slerp(driver, cases):
 @BATCH
 @given(batch(st.tuples(pose, pose)))
 def test_pose_compose(driver, cases):
-    got = answers(driver, [f"pose_compose({pl(a)},{pl(b)},R)" for a, b in cases])
+    got = answers(driver, [f"pose_compose({pl(a)},{pl(b)},Out)" for a, b in cases])
     for (a, b), p in zip(cases, got):
         v, r = split_homogeneous(matmul(homogeneous(a), homogeneous(b)))
         assert close(p[0], v, magnitude(a[0], b[0])), (a, b, p)
@@ -320,7 +263,7 @@ def test_pose_compose(driver, cases):
 @BATCH
 @given(batch(pose))
 def test_pose_inverse(driver, cases):
-    got = answers(driver, [f"pose_inverse({pl(p)},R)" for p in cases])
+    got = answers(driver, [f"pose_inverse({pl(p)},Out)" for p in cases])
     for p, inv in zip(cases, got):
         rt = transpose(matrix(p[1]))
         assert close(matrix(inv[1]), rt), (p, inv)
@@ -333,7 +276,7 @@ def test_pose_inverse(driver, cases):
 @BATCH
 @given(batch(st.lists(pose, max_size=5), max_size=15))
 def test_pose_chain(driver, cases):
-    got = answers(driver, [f"pose_chain({pl(ps)},R)" for ps in cases])
+    got = answers(driver, [f"pose_chain({pl(ps)},Out)" for ps in cases])
     for ps, p in zip(cases, got):
         h = homogeneous([[0, 0, 0], [0, 0, 0, 1]])
         for q in ps:
@@ -359,7 +302,7 @@ def interpolation_times(t):
 @given(batch(times))
 def test_time_fraction(driver, cases):
     cases = [interpolation_times(t) for t in cases]
-    got = answers(driver, [f"time_fraction({pl(t1)},{pl(t2)},{pl(t)},R)" for t1, t2, t in cases])
+    got = answers(driver, [f"time_fraction({pl(t1)},{pl(t2)},{pl(t)},Out)" for t1, t2, t in cases])
     for (t1, t2, t), f in zip(cases, got):
         assert isinstance(f, float)
         expected = 0.0 if t1 == t2 else (t - t1) / (t2 - t1)
@@ -373,7 +316,7 @@ def test_pose_interpolate(driver, cases):
     cases = [c for c in cases if abs(sum(a * b for a, b in zip(c[3][1], c[4][1]))) > 1e-6]
     if not cases:
         return
-    got = answers(driver, [f"pose_interpolate({pl(t1)},{pl(p1)},{pl(t2)},{pl(p2)},{pl(t)},R)"
+    got = answers(driver, [f"pose_interpolate({pl(t1)},{pl(p1)},{pl(t2)},{pl(p2)},{pl(t)},Out)"
                            for t1, t2, t, p1, p2 in cases])
     for (t1, t2, t, p1, p2), p in zip(cases, got):
         if t == t1 or t1 == t2:
@@ -402,17 +345,17 @@ bad_quat = st.one_of(st.lists(coord, max_size=6).filter(lambda v: len(v) != 4),
 
 @BATCH
 @given(batch(st.one_of(
-    st.tuples(unit_quat(), bad_vec).map(lambda t: f"quat_rotate({pl(t[0])},{pl(t[1])},R)"),
-    bad_quat.map(lambda q: f"quat_slerp([0,0,0,1],{pl(q)},0.5,R)"),
-    bad_quat.map(lambda q: f"quat_normalize({pl(q)},R)" if any(q) else "quat_normalize([0,0,0,0],R)"),
-    st.tuples(bad_vec, unit_quat()).map(lambda t: f"pose_inverse([{pl(t[0])},{pl(t[1])}],R)"),
+    st.tuples(unit_quat(), bad_vec).map(lambda t: f"quat_rotate({pl(t[0])},{pl(t[1])},Out)"),
+    bad_quat.map(lambda q: f"quat_slerp([0,0,0,1],{pl(q)},0.5,Out)"),
+    bad_quat.map(lambda q: f"quat_normalize({pl(q)},Out)" if any(q) else "quat_normalize([0,0,0,0],Out)"),
+    st.tuples(bad_vec, unit_quat()).map(lambda t: f"pose_inverse([{pl(t[0])},{pl(t[1])}],Out)"),
     bad_quat.filter(lambda q: q != [0, 0, 0, 0])
-            .map(lambda q: f"pose_chain([[[0,0,0],[0,0,0,1]],[[1,2,3],{pl(q)}]],R)"),
+            .map(lambda q: f"pose_chain([[[0,0,0],[0,0,0,1]],[[1,2,3],{pl(q)}]],Out)"),
     st.tuples(st.lists(coord, max_size=4), st.lists(coord, max_size=4))
       .filter(lambda t: len(t[0]) != len(t[1]))
-      .map(lambda t: f"vec_lerp({pl(t[0])},{pl(t[1])},0.5,R)"),
-    st.sampled_from(["vec_lerp([1],[2],x,R)", "time_fraction(0,1,_,R)",
-                     "pose_interpolate(0,[[0,0,0],[0,0,0,1]],1,[[0,0,0],[0,0,0,1]],t,R)"]),
+      .map(lambda t: f"vec_lerp({pl(t[0])},{pl(t[1])},0.5,Out)"),
+    st.sampled_from(["vec_lerp([1],[2],x,Out)", "time_fraction(0,1,_,Out)",
+                     "pose_interpolate(0,[[0,0,0],[0,0,0,1]],1,[[0,0,0],[0,0,0,1]],t,Out)"]),
 )))
 def test_bad_arguments_raise(driver, goals):
     for goal, (kind, value) in zip(goals, run(driver, goals)):

@@ -8,8 +8,6 @@ One swipl subprocess evaluates a whole batch of cases."""
 from __future__ import annotations
 
 import math
-import subprocess
-from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -17,61 +15,13 @@ from hypothesis import strategies as st
 
 np = pytest.importorskip("numpy")
 
-ROOT = Path(__file__).resolve().parent.parent
-MODULE = ROOT / "prolog_runtime" / "rtl_math.pl"
+from math_driver import answers as values, pl, run, write_driver  # noqa: E402
+
 BATCH = settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-
-DRIVER = r"""
-run_cases :-
-    repeat,
-    read_term(user_input, T, []),
-    (   T == end_of_file
-    ->  !
-    ;   T = Goal-Out,
-        (   catch(Goal, E, true)
-        ->  (   var(E) -> format("ok ~q~n", [Out]) ; format("error ~q~n", [E]) )
-        ;   format("fail~n")
-        ),
-        fail
-    ).
-"""
-
 
 @pytest.fixture(scope="module")
 def driver(tmp_path_factory, swipl):
-    path = tmp_path_factory.mktemp("rtl2015") / "driver.pl"
-    path.write_text(f":- use_module({str(MODULE)!r}).\n" + DRIVER)
-    return swipl, path
-
-
-def pl(x) -> str:
-    if isinstance(x, (list, tuple, np.ndarray)):
-        return "[" + ",".join(pl(e) for e in x) + "]"
-    if isinstance(x, (float, np.floating)):
-        return repr(float(x))
-    return str(x)
-
-
-def run(driver, goals):
-    swipl, path = driver
-    text = "".join(f"({g})-Out.\n" for g in goals)
-    proc = subprocess.run([swipl, "-q", "-g", "run_cases", "-t", "halt", str(path)], input=text,
-                          capture_output=True, text=True, timeout=60)
-    assert proc.returncode == 0, proc.stderr
-    lines = proc.stdout.splitlines()
-    assert len(lines) == len(goals), proc.stdout + proc.stderr
-    out = []
-    for line in lines:
-        kind, _, rest = line.partition(" ")
-        out.append((kind, eval(rest, {}) if kind == "ok" else rest))  # lists of numbers only
-    return out
-
-
-def values(driver, goals):
-    results = run(driver, goals)
-    for goal, (kind, value) in zip(goals, results):
-        assert kind == "ok", f"{goal}: {kind} {value}"
-    return [value for _, value in results]
+    return swipl, write_driver(tmp_path_factory.mktemp("rtl2015"))
 
 
 # ---- the oracle ------------------------------------------------------------------------------
