@@ -272,6 +272,8 @@ pose_interpolate(T1, P1, T2, P2, T, P) :-
 %   to the size of epoch seconds.
 %
 %   @error type_error(time, X) for an argument that is not a time.
+%   @error evaluation_error(float_overflow) when T1 and T2 are so close (numbers below
+%   a nanosecond apart) that Fraction is beyond the largest float.
 
 datime_interpolate(T1, T2, T, F) :-
     Ctx = datime_interpolate/4,
