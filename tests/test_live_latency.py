@@ -112,3 +112,59 @@ def test_bridge_runs_in_the_calling_thread_only_before_the_first_call():
                               "call from that thread"]
     # once a call ran in the bridge's own thread, that thread keeps the state: no change
     assert outputs[True] == ["claimed False False", "fed ['pong(1)']", "other thread: pong(2)"]
+
+
+def test_standard_input_is_read_in_the_runtime_loop_only_when_python_has_nothing_to_do(monkeypatch):
+    class Stderr:
+        def __init__(self, terminal):
+            self.terminal = terminal
+
+        def isatty(self):
+            return self.terminal
+
+    monkeypatch.setattr(sys, "stderr", Stderr(False))
+    assert run.in_prolog_loop("-", "-", None, None, None)
+    assert run.in_prolog_loop("-", "-", None, False, None)
+    for events, out, consumers, progress, heartbeat in [("e.jsonl", "-", None, None, None), ("-", "o.jsonl", None, None, None),
+                                                        ("-", "-", "dir", None, None), ("-", "-", None, True, None),
+                                                        ("-", "-", None, None, 0.1)]:
+        assert not run.in_prolog_loop(events, out, consumers, progress, heartbeat)
+    monkeypatch.setattr(sys, "stderr", Stderr(True))     # a progress line may be due: Python reads
+    assert not run.in_prolog_loop("-", "-", None, None, None)
+    assert run.in_prolog_loop("-", "-", None, False, None)
+
+
+EVENTS = """\
+{"event": "ping(1)", "t": 1}
+not json
+{"op": "add_rule", "rule": "x <- y."}
+{"event": "ping(X)", "t": 2}
+{"event": "ping(3)", "t": 3}
+{"event": "ping(3)", "t": 3, "op": "retract"}
+{"event": "ping(4)", "t": 1}
+"""
+
+
+def test_the_runtime_loop_on_standard_input_gives_what_the_python_loop_gives(tmp_path, capfd):
+    """`retalisc run --events -` (the retalisc program: the runtime's loop) against the
+    same lines from a file in this process (the Python loop), with --strict and without."""
+    program = tmp_path / "loops.rtl"
+    program.write_text("pong(N) <- ping(N).\nnull <- ping(N) where N > 3.\n")
+    events = tmp_path / "events.jsonl"
+    events.write_text(EVENTS)
+    for options in (["--strict"], ["--allow-control", "--echo-input"]):
+        piped = subprocess.run([sys.executable, "-m", "retalisc", "run", str(program), "--events", "-", *options],
+                               input=EVENTS, capture_output=True, text=True, timeout=120, cwd=tmp_path,
+                               env=dict(os.environ, PYTHONPATH=str(ROOT)))
+        capfd.readouterr()
+        result = CliRunner().invoke(cli.main, ["run", str(program), "--events", str(events), *options])
+        written = capfd.readouterr()
+        assert piped.stdout == result.stdout + written.out
+        in_process = (written.err + result.stderr).replace(str(events), "<stdin>")
+        assert piped.returncode == result.exit_code == (1 if options == ["--strict"] else 0)
+        assert _without_times(piped.stderr) == _without_times(in_process)
+        assert "<stdin>:2: rejected:" in piped.stderr
+
+
+def _without_times(text: str) -> str:
+    return "\n".join(line.rsplit(", ", 1)[0] if line.endswith(" s") else line for line in text.splitlines())

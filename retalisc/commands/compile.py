@@ -226,8 +226,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     result = compile_or_exit(program, module=_unique_module(program))    # a second run in one process loads anew
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
-    if bag["bag"] is None:
-        _calls_in_this_thread()
+    in_this_thread = bag["bag"] is None and _calls_in_this_thread()
     engine = Engine.from_compiled(result)
     if echo_input:
         engine.set_flag("echo_input", "true")
@@ -271,11 +270,12 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         sys.exit(status)
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
                             drop_pending=drop_pending, first_output=posted, allow_control=allow_control,
-                            strict=strict, progress=progress, heartbeat=heartbeat, report=report)
+                            strict=strict, progress=progress, heartbeat=heartbeat, report=report,
+                            stdin_in_prolog=in_this_thread)
     sys.exit(status)
 
 
-def _calls_in_this_thread() -> None:
+def _calls_in_this_thread() -> bool:
     """In the `retalisc` program, run Prolog in this (the only calling) thread: each call then
     runs at once instead of being handed to the bridge's own thread, which takes two thread
     wake-ups per call (what spreads a live stream's latency on a busy machine). Not when the
@@ -283,8 +283,7 @@ def _calls_in_this_thread() -> None:
     from .. import cli
     from ..driver.bridge import Bridge
 
-    if cli.COMMAND_LINE_PROCESS:
-        Bridge().run_in_calling_thread()
+    return cli.COMMAND_LINE_PROCESS and Bridge().run_in_calling_thread()
 
 
 def _start_tracing(engine, unit, traces, late_file):

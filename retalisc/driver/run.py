@@ -164,7 +164,8 @@ def end_the_input(engine: Engine, write, drop_pending: bool, strict: bool) -> No
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
                    consumer_dir: Optional[str] = None, drop_pending: bool = False,
                    first_output: Sequence = (), allow_control: bool = False, strict: bool = False,
-                   progress: Optional[bool] = None, heartbeat: Optional[float] = None, report=None) -> int:
+                   progress: Optional[bool] = None, heartbeat: Optional[float] = None, report=None,
+                   stdin_in_prolog: bool = False) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout, None to drop it). Lines not processed go to stderr as
     `FILE:LINE: rejected: REASON` (malformed) or `FILE:LINE: error: REASON` (a refused control
@@ -181,7 +182,10 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     nothing arrives the clock advances with the wall clock every `heartbeat` seconds
     (`WallClock`), so absences and alarms fire on time.
     `report()`, if given, returns text printed on stderr before the summary (the counts of
-    `--trace`). Returns the exit status."""
+    `--trace`). `stdin_in_prolog`: Prolog runs in this thread and may read standard input
+    itself (the `retalisc` program, `Bridge.run_in_calling_thread`); then standard input
+    going to standard output is read, processed and written by the runtime's own loop
+    (`in_prolog_loop`), with no call from Python per line. Returns the exit status."""
     started = time.perf_counter()
     name = "<stdin>" if events == "-" else events
     if events == "-":
@@ -222,7 +226,13 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             sink.flush()
             emit = _unbuffered(sink)            # each batch's output leaves in one write
             frozen = _quiet_collector()         # no collection pause of the objects made so far
-        if heartbeat is not None:
+        if stdin_in_prolog and in_prolog_loop(events, out, consumer_dir, progress, heartbeat):
+            batches = iter(())
+            sink.flush()
+            if engine.bridge.apply("retalis", "rtl_run_standard_input", "true" if allow_control else "false",
+                                   "true" if strict else "false") == "stopped":
+                raise RunStopped()
+        elif heartbeat is not None:
             batches = _heartbeat_batches(source, batch_size, heartbeat)
         elif live:
             batches = _live_batches(fd, batch_size)
@@ -275,6 +285,18 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             print(text, file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)
     return status
+
+
+def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],
+                   heartbeat: Optional[float]) -> bool:
+    """Whether a run reads standard input in the runtime's loop (that of `swipl PROGRAM.pl -`,
+    prolog_runtime/retalis.pl, rtl_run_standard_input/3): standard input to standard output,
+    without --consumer-dir, --heartbeat or a progress line (forced with --progress, or
+    possible on a terminal), whose work Python does per batch."""
+    if events != "-" or out != "-" or consumer_dir is not None or heartbeat is not None or progress:
+        return False
+    isatty = getattr(sys.stderr, "isatty", None)
+    return progress is False or not (isatty and isatty())
 
 
 def _unbuffered(sink: IO[str]):
