@@ -2,6 +2,7 @@
           [ rtl_program_loaded/1,       % +Module
             rtl_main/0,
             rtl_run_jsonl_file/1,       % +File
+            rtl_run_standard_input/3,   % +AllowControl, +Strict, -Outcome
             rtl_feed_lines/3,           % +Text, +FirstLineNo, -Output
             rtl_feed_lines/4,           % +Text, +FirstLineNo, +Options, -Output
             rtl_process_line/3,         % +Line, +Options, -Outcome
@@ -217,6 +218,30 @@ rtl_run_jsonl_file(File) :-
     setup_call_cleanup(open(File, read, In, [encoding(utf8)]),
                        run_stream(In, File),
                        close(In)).
+
+%!  rtl_run_standard_input(+AllowControl:text, +Strict:text, -Outcome:string) is det.
+%
+%   The loop of rtl_run_jsonl_file/1 over standard input, for `retalisc run --events -`
+%   in the retalisc program itself (retalisc/driver/run.py): each line is read, processed
+%   and its output written to standard output here, flushed as soon as no more input is
+%   waiting, with no call from Python per line; lines not processed and warnings go to
+%   standard error as `<stdin>:N: ...`. AllowControl and Strict are `true` or `false`.
+%   Outcome is `stopped` when the run must end (`--strict`, `halt` in program code), else
+%   `done`. Afterwards the output goes to the buffer again, as an Engine wants it.
+
+rtl_run_standard_input(AllowControl0, Strict0, Outcome) :-
+    atom_string(AllowControl, AllowControl0),
+    atom_string(Strict, Strict0),
+    must_be(boolean, AllowControl),
+    must_be(boolean, Strict),
+    set_stream(user_output, encoding(utf8)),
+    setup_call_cleanup(
+        ( nb_setval(rtl_stream_options, [allow_control(AllowControl), strict(Strict)]),
+          rtl_output_to(print) ),
+        catch(( rtl_run_jsonl_file(-), Outcome = "done" ), rtl_stop(_), Outcome = "stopped"),
+        ( flush_output(user_output),
+          rtl_output_to(buffer),
+          nb_setval(rtl_stream_options, []) )).
 
 run_stream(In, Name) :-
     stream_options(Options),

@@ -19,6 +19,7 @@
             rtl_api_memory/2,           % +RequestText, -Output
             rtl_api_stats/1,            % -Text
             rtl_api_summary/1,          % -Text
+            rtl_api_detections/1,       % -Text
             rtl_api_store_size/1,       % -Size
             rtl_api_clock/1,            % -Clock
             rtl_api_advance_clock/2,    % +Time, -Output
@@ -370,6 +371,15 @@ rtl_api_memory(Text, Output) :-
 
 rtl_api_stats(Text) :-
     findall(Line, ( rtl_stat(Name, Value), format(string(Line), "~w\t~w", [Name, Value]) ), Lines),
+    atomic_list_concat(Lines, "\n", Text).
+
+%!  rtl_api_detections(-Text:string) is det.
+%
+%   rtl_detections/1 as lines `Rule<TAB>Count` (rules with no detection are not listed).
+
+rtl_api_detections(Text) :-
+    rtl_detections(Pairs),
+    findall(Line, ( member(Rule-N, Pairs), format(string(Line), "~w\t~w", [Rule, N]) ), Lines),
     atomic_list_concat(Lines, "\n", Text).
 
 %!  rtl_api_summary(-Text:string) is det.

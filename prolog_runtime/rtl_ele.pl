@@ -23,6 +23,8 @@
             rtl_emit_line/1,            % +Line
             rtl_stat/2,                 % ?Name, ?Value
             rtl_count/1,                % +Name
+            rtl_detected/1,             % +Rule
+            rtl_detections/1,           % -Pairs
             rtl_store_size/1,           % -Clauses
             rtl_collect_garbage/0,
             rtl_add_output_hook/1,      % :Hook
@@ -100,6 +102,7 @@ rtl_reset :-
     nb_setval(rtl_longest_event, 0),
     nb_setval(rtl_next_sweep, inf),
     forall(counter(S), nb_setval(S, 0)),
+    forget_detections,
     rtl_horizon_reset,
     retractall(rtl_output_line(_)),
     rtl_take_warnings(_),
@@ -444,6 +447,35 @@ rtl_count(Name) :-
     nb_getval(Name, N0),
     N is N0 + 1,
     nb_setval(Name, N).
+
+%!  rtl_detected(+Rule:atom) is det.
+%
+%   Called by the compiled rules for each complete match of rule Rule (its label, `r1` or
+%   its own) that passed its conditions: counts it (rtl_detections/1). One global variable
+%   per rule, `rtl_detected Rule`, reset with the other counters.
+
+rtl_detected(Rule) :-
+    atom_concat('rtl_detected ', Rule, Key),
+    (   nb_current(Key, N0) -> N is N0 + 1 ; N = 1 ),
+    nb_setval(Key, N).
+
+%!  rtl_detections(-Pairs:list(pair)) is det.
+%
+%   Rule-Count for every rule that detected something since the counters were reset,
+%   in the standard order of the rules' labels.
+
+rtl_detections(Pairs) :-
+    findall(Rule-N, ( detection_key(Key, Rule), nb_current(Key, N) ), Pairs0),
+    msort(Pairs0, Pairs).
+
+detection_key(Key, Rule) :-
+    nb_current(Key, _),
+    atom(Key),
+    atom_concat('rtl_detected ', Rule, Key).
+
+forget_detections :-
+    findall(Key, detection_key(Key, _), Keys),
+    maplist(nb_delete, Keys).
 
 %!  rtl_store_size(-Clauses:integer) is det.
 %

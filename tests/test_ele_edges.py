@@ -163,8 +163,9 @@ def test_the_warning_names_the_file_and_line(tmp_path, cli, swipl, retalisc_cmd)
     run = subprocess.run(command, capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
     assert run.stdout.splitlines() == ['{"event": "s(1)", "start": 1, "end": 2}']
-    warning, summary = run.stderr.splitlines()
+    warning, *detections, summary = run.stderr.splitlines()
     assert warning == f"{events}:10: warning: retraction too late: 1 derived events not retracted"
+    assert detections == ([] if cli == "swipl" else ["retalis: detections per rule: r1 1"])
     assert summary.startswith("retalis: 9 events in, 1 derived, 0 rejected, 1 too late to retract, ")
     assert " retracted" not in summary
     # lengthened on the command line, the same deletion is exact

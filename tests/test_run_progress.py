@@ -63,7 +63,8 @@ def test_progress_option_forces_the_display(tmp_path, capfd):
     events = jsonl(*[(f"a({i})", i) for i in range(1, 50)])
     result = run_path("run", tmp_path, PROGRAM, events, "--progress", capfd=capfd)
     assert result.returncode == 0
-    progress, summary = result.stderr.splitlines()[-2:]
+    progress, detections, summary = result.stderr.splitlines()[-3:]
     assert "[####################] 100%" in progress and "49 events" in progress and "49 derived" in progress
+    assert detections == "retalis: detections per rule: r1 49"
     assert SUMMARY.match(summary)
     assert len(result.lines) == 49

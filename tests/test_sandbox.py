@@ -185,7 +185,7 @@ def test_the_program_file_itself_is_trusted(tmp_path):
     ("{module}:retractall(ele_trigger(_, _, _))", "retractall/1 changes .*ele_trigger/3"),
     ("system:retractall({module}:located(_, _))", "retractall/1 changes .*located/2"),
     ("bump", "retract/1 changes .*counter/1"),
-    ("ele_trigger(smoke(s1), 1, 1)", "unsafe goal: (assertz/1|rtl_derived/3)"),
+    ("ele_trigger(smoke(s1), 1, 1)", "unsafe goal: (assertz/1|rtl_derived/3|rtl_detected/1)"),
     ("rtl_clear", "unsafe goal: rtl_clear/0"),
     ("new_event(x)", "unsafe goal: new_event/1"),
     ("set_prolog_flag(occurs_check, error)", "unsafe goal: set_prolog_flag/2"),

@@ -209,8 +209,6 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
 
     if (events is None) == (bag["bag"] is None):
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
-    if bag["bag"] is not None and (traces or late_file):
-        raise click.UsageError("--trace and --late go with --events")
     if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
         raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
                                "--stamp, --typestore, --out-bag and --foxglove go with --bag")
@@ -228,6 +226,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     result = compile_or_exit(program, module=_unique_module(program))    # a second run in one process loads anew
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
+    in_this_thread = bag["bag"] is None and _calls_in_this_thread()
     engine = Engine.from_compiled(result)
     if echo_input:
         engine.set_flag("echo_input", "true")
@@ -255,7 +254,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     if bag["bag"] is not None:
         from ..robot_io.replay import replay_from_cli
         sys.exit(replay_from_cli(engine, out, bag, batch_size=batch_size, consumer_dir=consumer_dir,
-                                 drop_pending=drop_pending, first_output=posted))
+                                 drop_pending=drop_pending, first_output=posted, trace_report=report))
     if state is not None:
         from ..driver import recovery
         try:
@@ -271,8 +270,20 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         sys.exit(status)
     status = run_event_file(engine, events, out, batch_size=batch_size, consumer_dir=consumer_dir,
                             drop_pending=drop_pending, first_output=posted, allow_control=allow_control,
-                            strict=strict, progress=progress, heartbeat=heartbeat, report=report)
+                            strict=strict, progress=progress, heartbeat=heartbeat, report=report,
+                            stdin_in_prolog=in_this_thread)
     sys.exit(status)
+
+
+def _calls_in_this_thread() -> bool:
+    """In the `retalisc` program, run Prolog in this (the only calling) thread: each call then
+    runs at once instead of being handed to the bridge's own thread, which takes two thread
+    wake-ups per call (what spreads a live stream's latency on a busy machine). Not when the
+    command runs inside another program (click's test runner), whose other threads may call."""
+    from .. import cli
+    from ..driver.bridge import Bridge
+
+    return cli.COMMAND_LINE_PROCESS and Bridge().run_in_calling_thread()
 
 
 def _start_tracing(engine, unit, traces, late_file):

@@ -124,6 +124,10 @@ post(Request, Status, Out, ErrTerm) :-
     thread_self(Me),
     (   Me == Owner
     ->  handle(Request, reply(Status, Out, ErrTerm))
+    ;   caller_owned
+    ->  Status = 2,
+        Out = "this process runs Prolog in one thread only (a command-line run): call from that thread",
+        ErrTerm = ""
     ;   flag(retalisc_bridge_request, Id, Id + 1),
         thread_send_message(Owner, request(Me, Id, Request)),
         thread_get_message(answer(Id, Reply)),
@@ -139,7 +143,25 @@ post(Request, Status, Out, ErrTerm) :-
 %   global variables and thread_local predicates are the same for all
 %   callers. (A Prolog engine cannot serve several OS threads: SWI-Prolog
 %   9.0 checks the C stack of the thread that created it.)
-:- dynamic owner_thread/1.
+:- dynamic owner_thread/1, caller_owned/0.
+
+%   claim_caller(-Claimed)
+%   Make the calling thread the owner, so that its requests run at once,
+%   without the two thread switches of a handoff (a command-line run: one
+%   Python thread calls, and a handoff's wake-ups are what makes its
+%   latency spread on a busy machine). Only before the first request:
+%   Claimed is true when the calling thread owns the state now.
+claim_caller(Claimed) :-
+    with_mutex(retalisc_bridge, claim_caller_(Claimed)).
+
+claim_caller_(Claimed) :-
+    thread_self(Me),
+    (   owner_thread(Owner)
+    ->  ( Owner == Me -> Claimed = true ; Claimed = false )
+    ;   assertz(owner_thread(Me)),
+        assertz(caller_owned),
+        Claimed = true
+    ).
 
 owner(Owner) :-
     (   owner_thread(Owner)
@@ -439,6 +461,23 @@ class _PyswipEngine:
         self._boot(lib)
         self._pred = predicate(b"bridge", 6, b"retalisc_bridge")
         self._apply_pred = predicate(b"bridge_apply", 6, b"retalisc_bridge")
+        self._claim_pred = predicate(b"claim_caller", 1, b"retalisc_bridge")
+
+    def claim_caller(self) -> bool:
+        """Run every later request in the calling thread (retalisc_bridge:claim_caller/1,
+        called here directly: a request would start the owner thread)."""
+        self._ensure_thread()
+        self._mark_strings(ctypes.byref(self._mark))
+        mark = self._mark.value
+        fid = self._open_frame()
+        try:
+            t = self._new_refs(1)
+            if not self._call_pred(None, self._flags, self._claim_pred, t):
+                raise self._pending_error("bridge helper failed")
+            return self._text(t) == "true"
+        finally:
+            self._discard_frame(fid)
+            self._release_strings(mark)
 
     @staticmethod
     def _init_prolog(lib: ctypes.CDLL, core: ModuleType) -> None:
@@ -725,6 +764,20 @@ class Bridge:
     @classmethod
     def instance(cls) -> "Bridge":
         return cls()
+
+    def run_in_calling_thread(self) -> bool:
+        """Make the calling thread the one Prolog thread of this process, when no call has
+        run yet: requests then run at once in that thread, without a handoff (two thread
+        switches, whose wake-ups make a call's time spread on a busy machine). For a process
+        in which one thread makes every call, such as a command-line run; a call from any
+        other thread then raises PrologError. Returns whether the calling thread is the
+        owner (False when calls already ran in the bridge's own thread, which stays the
+        owner; the janus backend has no such mode)."""
+        claim = getattr(self._engine, "claim_caller", None)
+        if claim is None:
+            return False
+        with self._lock:
+            return claim()
 
     def _call(self, mode: int, goal: str, aux: str) -> tuple[int, Any]:
         with self._lock:

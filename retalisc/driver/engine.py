@@ -189,6 +189,7 @@ class Engine:
         self.bridge.active_program = None                # this Engine takes over (see activate)
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")     # constant text, no values
         self._warnings: List[EngineWarning] = []
+        self.rules: List[str] = []           # the labels of the event rules, in program order
         if self.bridge.once("current_predicate(rtl_api:rtl_api_default_flags/1)"):   # constant text
             self._call("rtl_api_default_flags")          # flags another Engine set do not carry over
         self.bridge.consult(str(prolog_file))
@@ -203,7 +204,9 @@ class Engine:
     def from_compiled(cls, result: CompileResult, bridge: Optional[Bridge] = None) -> "Engine":
         """Load an already compiled program. Programs loaded into one process need distinct
         module names: `load` and `from_source` make them unique."""
-        return cls._load_text(result.prolog, result.unit.module, bridge)
+        engine = cls._load_text(result.prolog, result.unit.module, bridge)
+        engine.rules = [rule.rule_id for rule in result.unit.rules]
+        return engine
 
     @classmethod
     def load(cls, program_path: Union[str, Path], bridge: Optional[Bridge] = None) -> "Engine":
@@ -444,6 +447,7 @@ class Engine:
             prefix = self._call("rtl_api_fresh_rule_prefix", self.module)
             compiled = compile_rules(_text(text, "rule text"), self.module, prefix)
             self._call("rtl_api_install_rules", self.module, compiled.text)
+            self.rules += [label for label in compiled.rule_ids if label not in self.rules]
         return compiled.rule_ids
 
     def remove_rule(self, label: str) -> None:
@@ -549,6 +553,22 @@ class Engine:
             name, _, value = line.partition("\t")
             result[name] = int(value)
         return result
+
+    def detections(self) -> Dict[str, int]:
+        """Detections per event rule since the start (or `clear`): how many complete matches
+        of each rule passed its `where` conditions, by rule label (`r1`, `r2`, ... for rules
+        without one). Every rule of the program is there, 0 for one that detected nothing,
+        in program order, then the rules added with `add_rules`. A detection is counted when
+        the match completes: an `alarm` rule's event comes later, a synchronized rule's only
+        if its query holds, a `null` rule derives none, so the counts need not add up to the
+        `derived` of `stats()`."""
+        with self._lock:
+            text = self._call("rtl_api_detections")
+        counts = dict.fromkeys(self.rules, 0)
+        for line in text.splitlines():
+            rule, _, count = line.partition("\t")
+            counts[rule] = int(count)
+        return counts
 
     def summary(self) -> str:
         with self._lock:

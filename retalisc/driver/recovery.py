@@ -244,7 +244,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     import time
 
     from .bridge import PrologError
-    from .run import Progress, RunStopped, end_the_input, summary_line
+    from .run import Progress, RunStopped, end_the_input, print_summary
 
     log = log or sys.stderr
     started = time.perf_counter()
@@ -347,5 +347,5 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
         sink.close()
         source.close()
         engine.bridge.once("retalis:rtl_close_action_output")
-    print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
+    print_summary(engine, time.perf_counter() - started)
     return status

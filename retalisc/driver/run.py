@@ -2,6 +2,7 @@
 output and the same rejection messages as `swipl PROGRAM.pl FILE`."""
 from __future__ import annotations
 
+import gc
 import io
 import math
 import os
@@ -45,44 +46,42 @@ def _is_live(events: str, source: IO[str]) -> bool:
 
 def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[str], int]]:
     """(first line number, lines, bytes read) per batch of a live input: the complete lines
-    that have arrived, as soon as they are there. Waits only when no complete line is waiting,
-    so a batch holds more than one line only while input is already waiting (at most
-    `batch_size` lines)."""
+    that have arrived, as soon as they are there. A blocking read returns everything that
+    is waiting, so a batch holds more than one line only while input was already waiting (at
+    most `batch_size` lines). No `select` per line: only lines left over from a batch that
+    was full wait for a look at what has arrived since."""
+    chunk_size = 1 << 16
     pending = b""
+    lines: List[bytes] = []
     first = 1
-    started = False
+    started = at_end = unterminated = False
     while True:
-        lines: List[bytes] = []
-        size = 0
-        at_end = False
-        while True:
-            while b"\n" in pending and len(lines) < batch_size:
-                line, pending = pending.split(b"\n", 1)
-                lines.append(line)
-                size += len(line) + 1
-            if len(lines) >= batch_size:
+        while not at_end and len(lines) < batch_size:
+            if lines and not select.select([fd], [], [], 0)[0]:
                 break
-            waiting = select.select([fd], [], [], 0)[0] if lines else select.select([fd], [], [])[0]
-            if not waiting:
-                break
-            chunk = os.read(fd, 1 << 16)
+            chunk = os.read(fd, chunk_size)
             if not chunk:
                 at_end = True
-                if pending:
+                if pending:                 # a last line without a newline
                     lines.append(pending)
-                    size += len(pending)
-                    pending = b""
-                break
-            pending += chunk
-        if lines:
-            texts = [line.decode("utf-8", errors="replace") for line in lines]
-            if not started:
-                texts[0] = texts[0].lstrip("\ufeff")
-                started = True
-            yield first, texts, size
-            first += len(lines)
-        if at_end:
+                    pending, unterminated = b"", True
+            elif b"\n" in chunk:
+                *complete, pending = (pending + chunk).split(b"\n")
+                lines += complete
+                if len(chunk) < chunk_size:
+                    break                   # the read took all that was waiting
+            else:
+                pending += chunk
+        if not lines:
             return
+        part, lines = lines[:batch_size], lines[batch_size:]
+        texts = [line.decode("utf-8", errors="replace") for line in part]
+        if not started:
+            texts[0] = texts[0].lstrip("\ufeff")
+            started = True
+        size = sum(len(line) for line in part) + len(part) - (1 if unterminated and not lines else 0)
+        yield first, texts, size
+        first += len(part)
 
 
 def _heartbeat_batches(stream: IO[str], batch_size: int, heartbeat: float
@@ -165,7 +164,8 @@ def end_the_input(engine: Engine, write, drop_pending: bool, strict: bool) -> No
 def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_size: int = 2000,
                    consumer_dir: Optional[str] = None, drop_pending: bool = False,
                    first_output: Sequence = (), allow_control: bool = False, strict: bool = False,
-                   progress: Optional[bool] = None, heartbeat: Optional[float] = None, report=None) -> int:
+                   progress: Optional[bool] = None, heartbeat: Optional[float] = None, report=None,
+                   stdin_in_prolog: bool = False) -> int:
     """Feed every line of `events` ('-' for stdin) to `engine`; write the output JSON Lines to
     `out` ('-' for stdout, None to drop it). Lines not processed go to stderr as
     `FILE:LINE: rejected: REASON` (malformed) or `FILE:LINE: error: REASON` (a refused control
@@ -182,7 +182,10 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     nothing arrives the clock advances with the wall clock every `heartbeat` seconds
     (`WallClock`), so absences and alarms fire on time.
     `report()`, if given, returns text printed on stderr before the summary (the counts of
-    `--trace`). Returns the exit status."""
+    `--trace`). `stdin_in_prolog`: Prolog runs in this thread and may read standard input
+    itself (the `retalisc` program, `Bridge.run_in_calling_thread`); then standard input
+    going to standard output is read, processed and written by the runtime's own loop
+    (`in_prolog_loop`), with no call from Python per line. Returns the exit status."""
     started = time.perf_counter()
     name = "<stdin>" if events == "-" else events
     if events == "-":
@@ -194,13 +197,20 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
     display = Progress(stream=sys.stderr, total=total, enabled=progress)
     status = 0
+    frozen = None
+
+    emit = sink.write
 
     def write(produced):
+        lines = []
         for event in produced:
             if consumers is not None and event.consumer is not None:
                 consumers.write(event)
             else:
-                sink.write(event.line + "\n")
+                lines.append(event.line)
+        if lines:
+            lines.append("")
+            emit("\n".join(lines))
 
     try:
         halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
@@ -212,7 +222,17 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         wall = WallClock()
         fd = _fileno(source)
         live = heartbeat is not None or (fd is not None and _is_live(events, source))
-        if heartbeat is not None:
+        if live:
+            sink.flush()
+            emit = _unbuffered(sink)            # each batch's output leaves in one write
+            frozen = _quiet_collector()         # no collection pause of the objects made so far
+        if stdin_in_prolog and in_prolog_loop(events, out, consumer_dir, progress, heartbeat):
+            batches = iter(())
+            sink.flush()
+            if engine.bridge.apply("retalis", "rtl_run_standard_input", "true" if allow_control else "false",
+                                   "true" if strict else "false") == "stopped":
+                raise RunStopped()
+        elif heartbeat is not None:
             batches = _heartbeat_batches(source, batch_size, heartbeat)
         elif live:
             batches = _live_batches(fd, batch_size)
@@ -227,9 +247,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                 continue
             produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
                                                    strict=strict)
-            write(produced)
-            if live:
-                sink.flush()                    # each event's output leaves as it is processed
+            write(produced)                     # live: written at once, as it is processed
             messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")
                         for r in rejected]
             messages += [(w.line, f"warning: {w.text}") for w in engine.take_warnings()]
@@ -248,6 +266,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     except RunStopped:
         status = 1
     finally:
+        if frozen is not None:
+            frozen()
         display.close()
         sink.flush()
         if events == "-":
@@ -263,8 +283,48 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         text = report()
         if text:
             print(text, file=sys.stderr)
-    print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
+    print_summary(engine, time.perf_counter() - started)
     return status
+
+
+def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],
+                   heartbeat: Optional[float]) -> bool:
+    """Whether a run reads standard input in the runtime's loop (that of `swipl PROGRAM.pl -`,
+    prolog_runtime/retalis.pl, rtl_run_standard_input/3): standard input to standard output,
+    without --consumer-dir, --heartbeat or a progress line (forced with --progress, or
+    possible on a terminal), whose work Python does per batch."""
+    if events != "-" or out != "-" or consumer_dir is not None or heartbeat is not None or progress:
+        return False
+    isatty = getattr(sys.stderr, "isatty", None)
+    return progress is False or not (isatty and isatty())
+
+
+def _unbuffered(sink: IO[str]):
+    """A function writing text to `sink` at once: straight to its file descriptor (one system
+    call, no buffer to flush) when it has one, else written and flushed."""
+    fd = _fileno(sink)
+    if fd is None:
+        def write_and_flush(text: str) -> None:
+            sink.write(text)
+            sink.flush()
+        return write_and_flush
+
+    def write_fd(text: str) -> None:
+        data = text.encode("utf-8")
+        while data:
+            data = data[os.write(fd, data):]
+    return write_fd
+
+
+def _quiet_collector():
+    """Keep Python's cyclic garbage collector from pausing a live run to walk the objects that
+    exist when it starts (the compiler's, click's, the loaded program's: gc.freeze moves them
+    out of its reach), so that a full collection during the run takes microseconds, not tens
+    of milliseconds. Each event's own objects are freed by reference counting. Returns what
+    undoes this."""
+    gc.collect()
+    gc.freeze()
+    return gc.unfreeze
 
 
 def _fileno(source) -> Optional[int]:
@@ -280,6 +340,23 @@ def set_action_output(engine: Engine, path: str) -> None:
     """Send what program code prints (actions, conditions) to the file `path`; raises
     OSError-like PrologError when it cannot be opened."""
     engine.bridge.apply("rtl_api", "rtl_api_set_action_output", path)
+
+
+def print_summary(engine: Engine, seconds: float, summary: Optional[str] = None) -> None:
+    """The end of a run on standard error: the detections per rule (`detections_line`), then
+    the one-line summary (`summary`, or `summary_line` of the engine's counters)."""
+    line = detections_line(engine.detections())
+    if line:
+        print(line, file=sys.stderr)
+    print(summary if summary is not None else summary_line(engine.stats(), seconds), file=sys.stderr)
+
+
+def detections_line(counts: Dict[str, int]) -> Optional[str]:
+    """`retalis: detections per rule: r1 3, fire_alarm 0` (Engine.detections, program order),
+    None for a program without event rules."""
+    if not counts:
+        return None
+    return "retalis: detections per rule: " + ", ".join(f"{rule} {count:,}" for rule, count in counts.items())
 
 
 def summary_line(stats: dict, seconds: float) -> str:

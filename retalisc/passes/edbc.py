@@ -809,7 +809,8 @@ class _RuleGenerator:
                     result = self.alarm(step, rule.head, s, e, retract)
                 else:
                     result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
-                then = conj([action, result]) if (action or result) else Atom("true")
+                detected = None if retract else C("rtl_detected", Atom(self.rule.rule_id))
+                then = conj([detected, action, result]) if (detected or action or result) else Atom("true")
             else:
                 consumer = self.consumers[step.name] + ("_retract" if retract else "")
                 then = C(consumer, *step.output.args, s, e)

@@ -123,7 +123,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                batch_size: int = 2000, consumer_dir: Optional[str] = None, drop_pending: bool = False,
                first_output: Sequence = (), progress: Optional[bool] = None, out_bag: Optional[str] = None,
                foxglove: Optional[int] = None, foxglove_wait: Optional[float] = None,
-               clock: Optional["ReplayClock"] = None) -> int:
+               clock: Optional["ReplayClock"] = None, trace_report=None) -> int:
     """Replay the recording at `path` into `engine`; write the output JSON Lines to `out`
     ('-' for stdout, None to drop it), as `run_event_file` does. A progress bar shows on a
     terminal (`progress` forces it on or off). `out_bag` writes the input messages and what
@@ -133,9 +133,10 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     exit status: 0; 1 when the engine fails outside a message; 2 when the recording cannot be
     read. A message whose processing raises an error is reported with its topic and number,
     counted as failed, and the replay goes on. `clock` paces a replay with a rate (default:
-    the wall clock)."""
+    the wall clock). `trace_report()`, if given, returns text printed on standard error before
+    the detections per rule and the summary (the counts of `--trace`)."""
     from ..driver.bridge import PrologError
-    from ..driver.run import ConsumerFiles
+    from ..driver.run import ConsumerFiles, detections_line
 
     options = options or BagOptions()
     name = str(path)
@@ -259,6 +260,12 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     click.echo(stats.summary(name), err=True)
     for target in sinks:
         click.echo(f"{target.describe()}: {target.count:,} messages", err=True)
+    text = trace_report() if trace_report is not None else ""
+    if text:
+        click.echo(text, err=True)
+    detections = detections_line(engine.detections())
+    if detections:
+        click.echo(detections, err=True)
     click.echo(engine.summary(), err=True)
     return status
 
