@@ -6,7 +6,7 @@ ROS 1 recording go as their bytes, which the runtime reads in C (ros1_terms.py),
 input is also published (--out-bag, --foxglove); a message it refuses is converted here. With a rate, the
 replay follows the recording's clock (times the rate), feeding each message when it is due.
 The output is written as by `retalisc run --events`; with a rate, messages are fed in slices
-of at most 10 ms of the recording's time (RATE_TICK), so a message is at most that late. rejected messages (that cannot be
+of at most 10 ms of the recording's time (--tick), so a message is at most that late. rejected messages (that cannot be
 decoded or converted) are reported on standard error as `BAG:TOPIC#N: rejected: REASON` (N
 counts the replayed messages from 1) and skipped; a summary closes the run.
 """
@@ -32,6 +32,7 @@ class BagOptions:
 
     topics: Optional[List[str]] = None
     rate: Optional[float] = None          # None: as fast as possible
+    tick: float = 0.01                    # with a rate: the shortest sleep (RATE_TICK)
     start: float = 0.0                    # seconds skipped from the start of the recording
     duration: Optional[float] = None      # seconds replayed from `start`
     convention: Convention = field(default_factory=Convention)
@@ -41,6 +42,7 @@ class BagOptions:
     @classmethod
     def from_cli(cls, values: dict) -> "BagOptions":
         return cls(topics=topic_list(values.get("topics")), rate=values.get("rate"),
+                   tick=values.get("bag_tick") or RATE_TICK,
                    start=values.get("bag_start") or 0.0, duration=values.get("bag_duration"),
                    convention=Convention(plain_strings=bool(values.get("plain_strings")),
                                          wrap_topic=bool(values.get("wrap_topic"))),
@@ -82,8 +84,11 @@ class ReplayClock:
 
 
 RATE_TICK = 0.01
-"""With --rate, the replay sleeps at least this many seconds at a time: a message is fed at
-most this late, together with the others that fell due meanwhile (one Prolog call)."""
+"""With --rate, the replay sleeps at least this many seconds at a time (the default of
+--tick): a message is fed at most this late, together with the others that fell due
+meanwhile (one Prolog call). Each call after a sleep costs more than the same work done in
+one run (a thread handoff, caches gone cold on a busy machine): a longer tick saves CPU at
+the cost of that latency."""
 
 
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
@@ -269,7 +274,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                             batch = []
                             sink.flush()
                         # sleep at least one tick: what fell due meanwhile goes in one batch
-                        clock.sleep(max(wait, RATE_TICK))
+                        clock.sleep(max(wait, options.tick))
                 if publisher is not None:
                     message = publisher.input(record.topic, record.msgtype, record_ns, record.msg)
                     for target in sinks:
