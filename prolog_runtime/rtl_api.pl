@@ -4,6 +4,7 @@
             rtl_api_output_to_buffer/1, % -Out
             rtl_api_set_flag/3,         % +Name, +ValueText, -Out
             rtl_api_feed_events/2,      % +Items, -Output
+            rtl_api_ros1_schema/2,      % +SchemaText, -Handle
             rtl_api_feed_lines/5,       % +Text, +FirstLineNo, +AllowControl, +Strict, -Output
             rtl_api_set_action_output/2, % +Path, -Out
             rtl_api_fresh_rule_prefix/2,% +Module, -Prefix
@@ -60,6 +61,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_time, [rtl_input_interval/6]).
 :- use_module(rtl_horizon, [rtl_take_warnings/1]).
 :- use_module(rtl_state).
+:- use_module(rtl_ros1).
 
 :- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
 
@@ -105,7 +107,10 @@ rtl_api_set_flag(NameText, ValueText, "") :-
 %
 %   Items are `[Op, EventText, Start, End]` lists: Op `"add"` or `"retract"`; Start and End
 %   times as an event file gives them (a number of seconds or `[Secs, NSecs]`), End `""` when
-%   the event has one time (a file's `"t"`). Times are checked by rtl_input_interval/6, the
+%   the event has one time (a file's `"t"`). EventText may also be `[Handle, Bytes]`: a ROS 1
+%   message's bytes, read by rtl_ros1_event/3 with the schema Handle names; when they are not
+%   one message of that type, processing stops before that event with the last line
+%   `!undecodable<TAB>Index` (the driver converts the message itself). Times are checked by rtl_input_interval/6, the
 %   check of the file reader, so a time is refused here exactly when a file line with it is,
 %   for the same reason (`error(invalid_time(Reason), _)`). The whole batch is read first: a
 %   bad item raises an error naming it and nothing is processed.
@@ -136,7 +141,7 @@ item_event([OpText, Text, Start0, End0], Op, Event, Start, End) :- !,
     must_be(text, OpText),
     atom_string(Op, OpText),
     must_be(oneof([add, retract]), Op),
-    rtl_read_event(Text, Event),
+    item_term(Text, Event),
     (   End0 == ""
     ->  rtl_input_interval(Start0, _, _, Start, End, Problem)
     ;   rtl_input_interval(_, Start0, End0, Start, End, Problem)
@@ -148,6 +153,30 @@ item_event([OpText, Text, Start0, End0], Op, Event, Start, End) :- !,
 item_event(Item, _, _, _, _) :-
     type_error(event_item, Item).
 
+item_term([Handle, Bytes], Event) :-
+    integer(Handle),
+    string(Bytes),
+    !,
+    (   rtl_ros1_event(Handle, Bytes, Event0)
+    ->  Event = Event0
+    ;   true                                % unbound: no text gives that (events are ground)
+    ).
+item_term(Text, Event) :-
+    rtl_read_event(Text, Event).
+
+%!  rtl_api_ros1_schema(+SchemaText, -Handle:string) is det.
+%
+%   Register a ROS 1 message schema (rtl_ros1.pl) given as text; Handle is its number as
+%   text, or `""` when the C helper is not built.
+
+rtl_api_ros1_schema(Text, Handle) :-
+    (   rtl_ros1_available
+    ->  rtl_read_ground(Text, Schema),
+        rtl_ros1_schema(Schema, N),
+        number_string(N, Handle)
+    ;   Handle = ""
+    ).
+
 finite_time(T) :-
     must_be(number, T),
     (   float(T), \+ ( T =:= T, abs(T) =\= inf )
@@ -156,6 +185,10 @@ finite_time(T) :-
     ).
 
 process_events([], _, _).
+process_events([event(_, Event, _, _)|_], I, Failure) :-
+    var(Event),
+    !,
+    format(string(Failure), "!undecodable\t~w", [I]).
 process_events([event(Op, Event, Start, End)|Events], I, Failure) :-
     catch(( seen(Op, Event, Start, End), rtl_input(Op, Event, Start, End) -> true ; true ), Error, true),
     (   var(Error)

@@ -4,6 +4,7 @@ prints what it saw as one JSON object.
 
     python ros1_client.py services NODE_NAME FILE_THAT_MUST_NOT_APPEAR
     python ros1_client.py nao SECONDS
+    python ros1_client.py bag BAG RATE TOPICS EXPECTED OUT_TOPICS
 """
 from __future__ import annotations
 
@@ -176,6 +177,76 @@ def nao(seconds: float) -> dict:
     return {"received": received, "published": len(records)}
 
 
+def bag(path: str, rate: float, topics: str, expected: int, out_topics: str) -> dict:
+    """Publish the messages of TOPICS (comma-separated) of a ROS 1 recording, in record order,
+    at RATE times its clock, as a robot would send them now: every header stamp is moved by
+    the same whole number of seconds (`shift`), so that the first message is stamped with
+    the wall clock (a live component's clock; a header-less message, such as a TFMessage, is
+    stamped with its arrival). Each goes out as the type (name, MD5 sum, full definition)
+    the recording holds. Collects the geometry_msgs/PoseStamped messages that come on
+    OUT_TOPICS until EXPECTED have come (then half a second more, to see duplicates), each
+    as [topic, seq, sec, nsec, frame_id, [x, y, z], [qx, qy, qz, qw]] with its stamp moved
+    back by `shift`."""
+    from retalisc.robot_io.bags import Recording, typestore
+
+    out_store = typestore("ros1_noetic")
+    received = []
+
+    def on_pose(msg, topic):
+        pose = out_store.deserialize_ros1(msg._buff, "geometry_msgs/msg/PoseStamped")
+        p, q = pose.pose.position, pose.pose.orientation
+        received.append([topic, pose.header.seq, pose.header.stamp.sec - shift, pose.header.stamp.nanosec,
+                         pose.header.frame_id, [p.x, p.y, p.z], [q.x, q.y, q.z, q.w]])
+
+    subscribers = [rospy.Subscriber(t, rospy.AnyMsg, on_pose, callback_args=t, queue_size=None)
+                   for t in out_topics.split(",")]
+    wanted = topics.split(",")
+    publishers = {}
+    with Recording(path) as recording:
+        store = recording.typestore
+        for c in recording._reader.connections:
+            if c.topic in wanted and c.topic not in publishers:
+                publishers[c.topic] = rospy.Publisher(
+                    c.topic, raw_message_class(c.msgtype.replace("/msg/", "/"), c.digest, c.msgdef.data),
+                    queue_size=None)
+        records = list(recording.records(wanted))
+    shift = int(time.time()) + 1 - records[0].time_ns // 1_000_000_000
+    messages = []
+    for record in records:
+        _move_stamps(record.msg, shift)
+        messages.append((record.topic, record.time_ns, bytes(store.serialize_ros1(record.msg, record.msgtype))))
+    wait_for(lambda: all(p.get_num_connections() > 0 for p in publishers.values())
+             and all(s.get_num_connections() > 0 for s in subscribers))
+    began, first_ns = time.monotonic(), messages[0][1]
+    for topic, time_ns, raw in messages:
+        due = began + (time_ns - first_ns) / 1e9 / rate
+        if due > time.monotonic():
+            time.sleep(due - time.monotonic())
+        message = publishers[topic].data_class()
+        message._buff = raw
+        publishers[topic].publish(message)
+    published = time.monotonic() - began
+    wait_for(lambda: len(received) >= expected, 20)
+    time.sleep(0.5)
+    return {"received": received, "published": len(messages), "publish_seconds": published, "shift": shift}
+
+
+def _move_stamps(msg, seconds: int) -> None:
+    """Add `seconds` to every header stamp in a rosbags message (nested messages and lists)."""
+    fields = getattr(msg, "__dataclass_fields__", None)
+    if fields is None:
+        return
+    for name in fields:
+        value = getattr(msg, name)
+        if name == "stamp" and hasattr(value, "sec") and type(msg).__name__.endswith("Header"):
+            value.sec += seconds
+        elif isinstance(value, list):
+            for item in value:
+                _move_stamps(item, seconds)
+        else:
+            _move_stamps(value, seconds)
+
+
 def chain(first: str, second: str) -> dict:
     """Two components from one launch file: tf into the first, positions out of the second."""
     rospy.wait_for_service(f"/{second}/query_all", timeout=30)
@@ -207,6 +278,8 @@ def main() -> None:
         result = chain(sys.argv[2], sys.argv[3])
     elif scenario == "nao":
         result = nao(float(sys.argv[2]))
+    elif scenario == "bag":
+        result = bag(sys.argv[2], float(sys.argv[3]), sys.argv[4], int(sys.argv[5]), sys.argv[6])
     else:
         raise SystemExit(f"unknown scenario {scenario}")
     print(json.dumps(result))

@@ -149,6 +149,56 @@ def test_ros1_nao_markers_live_as_replayed(ros, tmp_path):
     assert published == sorted(want)
 
 
+def test_ros1_nao_application_live_against_the_ground_truth(ros, tmp_path):
+    """The reference application (examples/nao/nao.rtl) as a live ROS 1 node: a 4-second
+    recording of examples/nao/make_bag.py played into the master in real time (tf and the
+    ar_pose markers, stamped as a robot would stamp them now, each message of the type definition
+    the bag holds); the world
+    pose of every detection comes on /markerK exactly once, within 1 mm and 0.1 degree of the
+    ground truth, as `retalisc run --bag` gives it (tests/test_nao_application.py)."""
+    import importlib.util
+    import math
+
+    spec = importlib.util.spec_from_file_location("nao_make_bag", ROOT / "examples" / "nao" / "make_bag.py")
+    make_bag = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(make_bag)
+    python, env, processes = ros
+    bag, truth_path = make_bag.write(tmp_path / "nao.bag", seconds=4.0, seed=7)
+    truth = [json.loads(line) for line in truth_path.read_text().splitlines()]
+    assert len(truth) >= 20
+    example = ROOT / "examples" / "nao"
+    out = tmp_path / "out.jsonl"
+    node = processes.start("nao_live", retalisc_argv(python, "ros", str(example / "nao.rtl"), "--config",
+                                                     str(example / "pub_sub.xml"), "--out", str(out)), env)
+    try:
+        processes.wait_for_line(node, "ros: node /retalis")
+        r = _client(python, env, "bag", str(bag), "1.0", "/tf,/ar_pose_marker", str(len(truth)),
+                    ",".join(f"/marker{k}" for k in range(1, 9)))
+    finally:
+        status = processes.stop(node)
+    err = processes.err("nao_live")
+    assert status == 0, err
+    assert "ros: node /retalis" in err and " 0 rejected, 0 errors;" in err, err
+    keys = [(frame, seq, sec, nsec) for _, seq, sec, nsec, frame, _, _ in r["received"]]
+    assert len(keys) == len(set(keys)), "a detection was published twice"
+    want = {(row["marker"], row["seq"], row["stamp"][0], row["stamp"][1]): row for row in truth}
+    assert set(keys) == set(want), (sorted(set(want) - set(keys)), sorted(set(keys) - set(want)))
+    worst_position = worst_angle = 0.0
+    for topic, seq, sec, nsec, frame, position, orientation in r["received"]:
+        assert topic == "/marker" + frame.split("_")[1]          # A.6: marker 4x4_K on /markerK
+        row = want[(frame, seq, sec, nsec)]
+        worst_position = max(worst_position, math.dist(position, row["position"]))
+        dot = abs(sum(a * b for a, b in zip(orientation, row["orientation"])))
+        worst_angle = max(worst_angle, 2 * math.acos(min(1.0, dot / math.sqrt(sum(a * a for a in orientation)))))
+    print(f"live: {len(keys)} detections, max position error {worst_position * 1000:.4f} mm, "
+          f"max angle error {math.degrees(worst_angle):.5f} deg")
+    assert worst_position < 0.001 and worst_angle < math.radians(0.1)
+    # the node's own output file holds the same poses, each once
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    derived = [line for line in lines if "consumer" not in line and line["event"].startswith("geometry_msgs__0__PoseStamped(")]
+    assert len(derived) == len(truth)
+
+
 def test_ros1_two_iecs_from_one_launch_file(ros, tmp_path):
     """ros/retalis/launch/two_iecs.launch: roslaunch starts two components; the second
     consumes what the first derives. roslaunch is stopped by its pid (SIGINT, as on a

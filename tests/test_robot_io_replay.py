@@ -176,6 +176,23 @@ def test_rate_paces_the_replay_by_the_recording_clock(nao_bags, capsys):
     assert all(s >= RATE_TICK for s in clock.sleeps)
 
 
+def test_a_longer_tick_feeds_fewer_larger_slices(nao_bags):
+    """--tick 0.05: the replay sleeps at least 50 ms at a time (what fell due meanwhile goes
+    in one call), and gives the same output as the default tick."""
+    runs = {}
+    for tick in (RATE_TICK, 0.05):
+        engine = Engine.from_source("", f"tick{int(tick * 1000)}.rtl")
+        engine.set_flag("echo_input", "true")
+        clock, lines = VirtualClock(), []
+        engine.on_output(lambda event: lines.append(event.line))
+        assert replay_bag(engine, str(nao_bags["ros2"]), None, BagOptions(topics=["/tf"], rate=4.0, duration=1.0,
+                                                                          tick=tick), progress=False, clock=clock) == 0
+        assert all(s >= tick for s in clock.sleeps)
+        runs[tick] = (clock.sleeps, lines)
+    assert len(runs[0.05][0]) <= 6 < len(runs[RATE_TICK][0])
+    assert runs[0.05][1] == runs[RATE_TICK][1] and runs[RATE_TICK][1]
+
+
 def test_a_message_whose_processing_fails_is_reported_and_the_replay_goes_on(nao_bags, tmp_path, capsys):
     # the condition raises (foo is no number) for every tf message; the poses still go through
     program = ("tf_seen <- tf2_msgs__0__TFMessage(_) where _ is foo + 1.\n"

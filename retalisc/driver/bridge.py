@@ -343,6 +343,7 @@ _CVT_ATOM = 0x0001
 _CVT_STRING = 0x0002
 _CVT_LIST = 0x0004
 _REP_UTF8 = 0x00100000
+_REP_ISO_LATIN_1 = 0x0
 _BUF_DISCARDABLE = 0x0000
 _TEXT_FLAGS = _CVT_ATOM | _CVT_STRING | _CVT_LIST | _REP_UTF8 | _BUF_DISCARDABLE
 _PL_Q_NODEBUG = 0x0004
@@ -555,6 +556,8 @@ class _PyswipEngine:
         if isinstance(value, str):
             data = value.encode("utf-8")
             ok = self._put_chars(t, self._string_type | _REP_UTF8, len(data), data)
+        elif isinstance(value, bytes):       # a string of codes 0..255 (ISO Latin-1: byte by byte)
+            ok = self._put_chars(t, self._string_type | _REP_ISO_LATIN_1, len(value), value)
         elif isinstance(value, bool) or value is None:
             raise TypeError(f"cannot pass {value!r} to Prolog")
         elif isinstance(value, int):

@@ -161,6 +161,31 @@ def _bound(value, default: str) -> Union[Number, str]:
     return _time(value, "a time bound")
 
 
+class Ros1Bytes:
+    """An input event given as a ROS 1 message's serialized bytes and the handle of its
+    type's schema (Engine.ros1_schema; retalisc/robot_io/ros1_terms.py builds both): the
+    runtime builds the event term from the bytes in C (prolog_runtime/rtl_ros1.pl), which
+    is the term the text conversion of robot_io/messages.py gives."""
+
+    __slots__ = ("handle", "data")
+
+    def __init__(self, handle: int, data: bytes):
+        self.handle = handle
+        self.data = data
+
+    def __repr__(self) -> str:
+        return f"Ros1Bytes({self.handle}, {len(self.data)} bytes)"
+
+
+_ROS1_SCHEMAS: Dict[str, Optional[int]] = {}      # schema text -> handle (the C registry is per process)
+
+
+def _event_value(value):
+    if isinstance(value, Ros1Bytes):
+        return [value.handle, value.data]
+    return _text(value, "an event")
+
+
 def _text(value, what: str) -> str:
     if not isinstance(value, str):
         raise TypeError(f"{what} must be a str, not {type(value).__name__}")
@@ -308,7 +333,11 @@ class Engine:
     def feed_batch(self, events: Iterable[Sequence]) -> List[OutputEvent]:
         """Process `(event_text, start[, end[, op]])` tuples in order, in one Prolog call.
 
-        Each event text must be one ground term. A time is a number of seconds, a ROS stamp
+        Each event text must be one ground term; an event may also be a `Ros1Bytes` (a ROS
+        1 message the runtime reads itself). When its bytes are not one message of its type
+        (or hold a non-finite float), PrologError is raised with `undecodable` True at its
+        index, after what the events before it produced: the caller converts that message
+        itself and feeds the rest. A time is a number of seconds, a ROS stamp
         `[secs, nsecs]`, a `datetime.datetime` (UTC when naive) or a ROS time message; the
         runtime checks it with the check of the event-file reader, so a time is refused
         exactly when a file line with it is, with the same reason (ValueError: `"start" is
@@ -326,7 +355,7 @@ class Engine:
                 raise ValueError(f"op must be 'add' or 'retract', not {op!r}")
             start_value = time_value(start, "a start time")
             end_value = "" if end is None else time_value(end, "an end time")
-            items.append([op, _text(event, "an event"), start_value, end_value])
+            items.append([op, _event_value(event), start_value, end_value])
         if not items:
             return []
         with self._lock:
@@ -337,8 +366,16 @@ class Engine:
                     raise ValueError(str(error)) from None
                 raise
             lines = output.splitlines()
-            failure = lines.pop() if lines and lines[-1].startswith("!error\t") else None
+            failure = lines.pop() if lines and lines[-1].startswith(("!error\t", "!undecodable\t")) else None
             delivered = self._deliver_lines(lines)
+        if failure is not None and failure.startswith("!undecodable\t"):
+            index = int(failure.split("\t")[1])
+            error = PrologError(f"event {index} of the batch ({items[index][1][:1]!r}): not one ROS 1 message of "
+                                f"its type, or a float that is not finite")
+            error.batch_index = index
+            error.delivered = delivered
+            error.undecodable = True
+            raise error
         if failure is not None:
             _, index, message = failure.split("\t", 2)
             error = PrologError(f"event {index} of the batch ({items[int(index)][1]!r}): {message}")
@@ -346,6 +383,21 @@ class Engine:
             error.delivered = delivered
             raise error
         return delivered
+
+    def ros1_schema(self, schema: str) -> Optional[int]:
+        """The handle of a ROS 1 message schema (text of the ground term c/rtl_ros1.c
+        describes) for `Ros1Bytes` events; None when the runtime cannot read ROS 1 bytes
+        (its C helper is not built, or the bridge cannot pass bytes). Registered once per
+        process."""
+        if schema in _ROS1_SCHEMAS:
+            return _ROS1_SCHEMAS[schema]
+        handle = None
+        if getattr(self.bridge, "backend", "") == "pyswip":
+            with self._lock:
+                out = self._call("rtl_api_ros1_schema", schema)
+            handle = int(out) if out else None
+        _ROS1_SCHEMAS[schema] = handle
+        return handle
 
     def feed_lines(self, text: str, first_line: int = 1, *, allow_control: bool = False,
                    strict: bool = False) -> Tuple[List[OutputEvent], List[Rejection]]:

@@ -3,7 +3,8 @@
 `LiveNode` is the part every transport (ROS 1, ROS 2 over DDS, Zenoh) shares. Transports
 call `arrived(...)` from their own threads, as many as they use; each arrival goes into one
 queue, in the order the calls are made, and one consumer thread takes them out, turns the
-messages into events (robot_io/messages.py, the convention of `retalisc run --bag`) and
+messages into events (robot_io/messages.py, the convention of `retalisc run --bag`; ROS 1
+messages go to the runtime as their bytes, which it reads in C: robot_io/ros1_terms.py) and
 feeds them to the Engine in batches (all that is waiting, up to `BATCH` events, in one
 Prolog call; with `linger`, what arrives within that many seconds of the first message of a
 batch joins it, which saves Prolog calls at the cost of that latency). The queue has no
@@ -38,6 +39,7 @@ from typing import IO, Any, Callable, Dict, List, Optional, Tuple
 
 from ..robot_io.data_terms import read_data_term, write_data_term
 from ..robot_io.messages import ConversionError, Convention, MessageConverter
+from ..robot_io.ros1_terms import Ros1Terms
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 
 BATCH = 2000
@@ -117,6 +119,8 @@ class LiveNode:
         self.config = config or PubSubConfig()
         self.store = typestore("ros1_noetic" if transport.wire == "ros1" else "ros2_humble")
         self.converter = MessageConverter(self.store, convention)
+        # ROS 1 messages go to the runtime as bytes, which it reads in C (ros1_terms.py)
+        self.ros1_terms = Ros1Terms(engine, self.store, convention) if transport.wire == "ros1" else None
         self.out = out
         self.log = log
         self.stats = NodeStats()
@@ -180,7 +184,7 @@ class LiveNode:
     # ---- the consumer thread ------------------------------------------------------------------
 
     def _consume(self) -> None:
-        pending: List[Tuple[str, float]] = []
+        pending: List[tuple] = []           # (event, time, the arrival: for the text road)
         while True:
             item = self._queue.get()
             deadline = time.monotonic() + self.linger if self.linger else None
@@ -220,27 +224,40 @@ class LiveNode:
             return Reply(False, str(error) or type(error).__name__)
 
     def _event(self, topic: str, data: bytes, msgtype: Optional[str], definition: Optional[str],
-               arrival_ns: int) -> Optional[Tuple[str, float]]:
+               arrival_ns: int) -> Optional[tuple]:
+        """(event, time, arrival) of a message: the event is its text, or, for ROS 1, its
+        bytes (engine.Ros1Bytes) when its type has a schema; None when it is rejected."""
         subscribed = self.inputs.get(topic)
         if subscribed is None:           # unsubscribed meanwhile
             return None
         self.stats.received[topic] += 1
+        number = self.stats.received[topic]
         try:
             if msgtype is not None and msgtype != "*" and ros1_type(msgtype) != subscribed:
                 raise ConversionError(f"published as {msgtype}, subscribed as {subscribed}")
             name = store_type(subscribed)
             if name not in self.store.fielddefs:
                 self._learn_type(name, definition)
-            if self.transport.wire == "ros1":
-                msg = self.store.deserialize_ros1(data, name)
-            else:
-                msg = self.store.deserialize_cdr(data, name)
-            return self.converter.event(msg, name, topic, arrival_ns)
+            if self.ros1_terms is not None:
+                fast = self.ros1_terms.event(data, name, topic, arrival_ns)
+                if fast is not None:
+                    return fast[0], fast[1], (topic, number, data, name, arrival_ns)
+            return self._text_event(topic, data, name, arrival_ns) + ((topic, number, data, name, arrival_ns),)
         except Exception as error:       # bytes from the network are data: report, skip
-            self.stats.rejected[topic] += 1
-            if self.stats.rejected[topic] <= REPORTS_PER_TOPIC:
-                self.log(f"{topic}#{self.stats.received[topic]}: rejected: {error}")
+            self._reject(topic, number, error)
             return None
+
+    def _text_event(self, topic: str, data: bytes, name: str, arrival_ns: int) -> Tuple[str, float]:
+        if self.transport.wire == "ros1":
+            msg = self.store.deserialize_ros1(data, name)
+        else:
+            msg = self.store.deserialize_cdr(data, name)
+        return self.converter.event(msg, name, topic, arrival_ns)
+
+    def _reject(self, topic: str, number: int, error: Exception) -> None:
+        self.stats.rejected[topic] += 1
+        if self.stats.rejected[topic] <= REPORTS_PER_TOPIC:
+            self.log(f"{topic}#{number}: rejected: {error}")
 
     def _learn_type(self, name: str, definition: Optional[str]) -> None:
         if not definition:
@@ -251,17 +268,30 @@ class LiveNode:
                  if key not in self.store.fielddefs}
         self.store.register(types)
 
-    def _feed(self, events: List[Tuple[str, float]]) -> None:
+    def _feed(self, events: List[tuple]) -> None:
         from ..driver.bridge import PrologError
 
         while events:       # the output comes through _output (Engine.on_output), in order
             try:
-                self.engine.feed_batch(events)
+                self.engine.feed_batch([(event, seconds) for event, seconds, _ in events])
                 self.fed += len(events)
                 events = []
             except PrologError as error:        # what the events before it produced is out
                 match = _BATCH_INDEX.match(str(error))
-                index = int(match.group(1)) if match else len(events) - 1
+                index = getattr(error, "batch_index", None)
+                if index is None:
+                    index = int(match.group(1)) if match else len(events) - 1
+                if getattr(error, "undecodable", False):     # the runtime refused the bytes: the text road
+                    self.fed += index
+                    topic, number, data, name, arrival_ns = events[index][2]
+                    try:
+                        text, seconds = self._text_event(topic, data, name, arrival_ns)
+                    except Exception as reason:
+                        self._reject(topic, number, reason)
+                        events = events[index + 1:]
+                    else:
+                        events = [(text, seconds, events[index][2])] + events[index + 1:]
+                    continue
                 self.stats.errors += 1
                 self.log(f"error: {error}")
                 self.fed += index + 1

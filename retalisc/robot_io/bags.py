@@ -29,13 +29,15 @@ class BagError(Exception):
 
 
 class Record(NamedTuple):
-    """One message of a recording. `msg` is None when it could not be decoded (`error` says why)."""
+    """One message of a recording. `msg` is None when it could not be decoded (`error` says
+    why), or when the record was read undecoded (`raw_records`): `raw` is its bytes."""
 
     topic: str
     msgtype: str
     time_ns: int
     msg: object
     error: Optional[str] = None
+    raw: Optional[bytes] = None
 
 
 @dataclass(frozen=True)
@@ -170,6 +172,26 @@ class Recording:
                 yield Record(connection.topic, connection.msgtype, time_ns, None, f"cannot decode: {error}")
                 continue
             yield Record(connection.topic, connection.msgtype, time_ns, msg)
+
+    def raw_records(self, topics: Optional[Sequence[str]] = None, start_ns: Optional[int] = None,
+                    stop_ns: Optional[int] = None) -> Iterator[Record]:
+        """As `records`, but undecoded: each Record's `raw` holds the message's serialized
+        bytes (ROS 1 serialization in a ROS 1 bag, CDR otherwise) and `msg` is None."""
+        reader = self._reader
+        connections = [c for c in reader.connections if topics is None or c.topic in topics]
+        if not connections:
+            return
+        for connection, time_ns, raw in reader.messages(connections=connections, start=start_ns, stop=stop_ns):
+            yield Record(connection.topic, connection.msgtype, time_ns, None, None, raw)
+
+    def decode(self, record: Record) -> Record:
+        """The record of `raw_records` decoded (as `records` gives it)."""
+        deserialize = self._store.deserialize_ros1 if self.format == "ros1" else self._store.deserialize_cdr
+        try:
+            msg = deserialize(record.raw, record.msgtype)
+        except _read_errors() as error:
+            return record._replace(error=f"cannot decode: {error}")
+        return record._replace(msg=msg)
 
 
 _STORES: "OrderedDict[tuple, object]" = OrderedDict()

@@ -15,6 +15,10 @@ _OPTIONS = [
                  help="With --bag: replay only these topics (default: all)."),
     click.option("--rate", type=click.FloatRange(min=0, min_open=True), default=None, metavar="RATE",
                  help="With --bag: replay in real time times RATE (1 = as recorded; default: as fast as possible)."),
+    click.option("--tick", "bag_tick", type=click.FloatRange(min=0.001, max=10.0), default=0.01, metavar="SECONDS",
+                 show_default=True,
+                 help="With --bag and --rate: feed what fell due every SECONDS at least (a message is at most "
+                      "that late; longer ticks mean fewer, larger calls into the program: less CPU)."),
     click.option("--start", "bag_start", type=click.FloatRange(min=0), default=0.0, metavar="SECONDS",
                  help="With --bag: skip the first SECONDS of the recording (record time)."),
     click.option("--duration", "bag_duration", type=click.FloatRange(min=0), default=None, metavar="SECONDS",
@@ -40,14 +44,14 @@ _OPTIONS = [
 ]
 
 # The options that only mean something with --bag, and their defaults.
-BAG_DEFAULTS = {"topics": None, "rate": None, "bag_start": 0.0, "bag_duration": None, "wrap_topic": False,
+BAG_DEFAULTS = {"topics": None, "rate": None, "bag_tick": 0.01, "bag_start": 0.0, "bag_duration": None, "wrap_topic": False,
                 "plain_strings": False, "stamp": "header", "bag_typestore": "ros2_humble", "out_bag": None,
                 "foxglove": None}
 
 
 def bag_options(command):
     """Add the --bag options to a click command; they arrive as keyword arguments
-    (`bag`, `topics`, `rate`, `bag_start`, `bag_duration`, `wrap_topic`, `plain_strings`,
+    (`bag`, `topics`, `rate`, `bag_tick`, `bag_start`, `bag_duration`, `wrap_topic`, `plain_strings`,
     `stamp`, `bag_typestore`)."""
     for option in reversed(_OPTIONS):
         command = option(command)

@@ -1,10 +1,12 @@
 """`retalisc run PROGRAM --bag FILE`: a recording replayed into a running program.
 
 Each message of the selected topics becomes an event (messages.py), in record order, and
-goes to the Engine in batches (`feed_batch`, one Prolog call per batch). With a rate, the
+goes to the Engine in batches (`feed_batch`, one Prolog call per batch). The messages of a
+ROS 1 recording go as their bytes, which the runtime reads in C (ros1_terms.py), unless the
+input is also published (--out-bag, --foxglove); a message it refuses is converted here. With a rate, the
 replay follows the recording's clock (times the rate), feeding each message when it is due.
 The output is written as by `retalisc run --events`; with a rate, messages are fed in slices
-of at most 10 ms of the recording's time (RATE_TICK), so a message is at most that late. rejected messages (that cannot be
+of at most 10 ms of the recording's time (--tick), so a message is at most that late. rejected messages (that cannot be
 decoded or converted) are reported on standard error as `BAG:TOPIC#N: rejected: REASON` (N
 counts the replayed messages from 1) and skipped; a summary closes the run.
 """
@@ -21,6 +23,7 @@ import click
 
 from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
 from .messages import ConversionError, Convention, MessageConverter
+from .ros1_terms import Ros1Terms
 
 
 @dataclass
@@ -29,6 +32,7 @@ class BagOptions:
 
     topics: Optional[List[str]] = None
     rate: Optional[float] = None          # None: as fast as possible
+    tick: float = 0.01                    # with a rate: the shortest sleep (RATE_TICK)
     start: float = 0.0                    # seconds skipped from the start of the recording
     duration: Optional[float] = None      # seconds replayed from `start`
     convention: Convention = field(default_factory=Convention)
@@ -38,6 +42,7 @@ class BagOptions:
     @classmethod
     def from_cli(cls, values: dict) -> "BagOptions":
         return cls(topics=topic_list(values.get("topics")), rate=values.get("rate"),
+                   tick=values.get("bag_tick") or RATE_TICK,
                    start=values.get("bag_start") or 0.0, duration=values.get("bag_duration"),
                    convention=Convention(plain_strings=bool(values.get("plain_strings")),
                                          wrap_topic=bool(values.get("wrap_topic"))),
@@ -79,35 +84,64 @@ class ReplayClock:
 
 
 RATE_TICK = 0.01
-"""With --rate, the replay sleeps at least this many seconds at a time: a message is fed at
-most this late, together with the others that fell due meanwhile (one Prolog call)."""
+"""With --rate, the replay sleeps at least this many seconds at a time (the default of
+--tick): a message is fed at most this late, together with the others that fell due
+meanwhile (one Prolog call). Each call after a sleep costs more than the same work done in
+one run (a thread handoff, caches gone cold on a busy machine): a longer tick saves CPU at
+the cost of that latency."""
 
 
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
                report: Callable[[str, int, str], None],
-               converter: Optional[MessageConverter] = None) -> Iterator[Tuple[str, float, Record]]:
-    """(event text, time in seconds, record) for each message replayed, in record order. Messages that cannot be decoded or converted go to `report(topic, number, reason)`
-    and are counted in `stats.rejected`."""
+               converter: Optional[MessageConverter] = None,
+               ros1_terms: Optional[Ros1Terms] = None) -> Iterator[Tuple[object, float, Record]]:
+    """(event, time in seconds, record) for each message replayed, in record order: the
+    event is its text, or, with `ros1_terms` on a ROS 1 recording, a `Ros1Bytes` the runtime
+    reads itself (the record is then undecoded: `raw` holds its bytes; `message_event`
+    converts it when the runtime refuses the bytes). Messages that cannot be decoded or
+    converted go to `report(topic, number, reason)` and are counted in `stats.rejected`."""
     converter = converter or MessageConverter(bag.typestore, options.convention)
     start_ns, stop_ns = window(bag, options)
     record_stamp = options.stamp == "record"
     number = 0
-    for record in bag.records(options.topics, start_ns, stop_ns):
+    raw = ros1_terms is not None and bag.format == "ros1"
+    records = (bag.raw_records if raw else bag.records)(options.topics, start_ns, stop_ns)
+    for record in records:
         number += 1
         stats.per_topic[record.topic] += 1
-        if record.msg is None:
-            stats.rejected += 1
-            report(record.topic, number, record.error or "cannot decode")
-            continue
+        if raw:
+            fast = ros1_terms.event(record.raw, record.msgtype, record.topic, record.time_ns, record_stamp)
+            if fast is not None:
+                yield fast[0], fast[1], record
+                continue
         try:
-            text, seconds = converter.event(record.msg, record.msgtype, record.topic, record.time_ns)
-        except (ConversionError, AttributeError, TypeError, ValueError) as error:
+            text, seconds = message_event(bag, converter, record, record_stamp)
+        except _Rejected as rejected:
             stats.rejected += 1
-            report(record.topic, number, f"cannot convert {record.msgtype}: {error}")
+            report(record.topic, number, str(rejected))
             continue
-        if record_stamp:
-            seconds = record.time_ns / 1_000_000_000
         yield text, seconds, record
+
+
+class _Rejected(Exception):
+    """A message that cannot be decoded or converted; the text says why."""
+
+
+def message_event(bag: Recording, converter: MessageConverter, record: Record,
+                  record_stamp: bool = False) -> Tuple[str, float]:
+    """(event text, time in seconds) of a record (decoded first when it is raw); raises
+    _Rejected saying why it cannot be decoded or converted."""
+    if record.msg is None and record.raw is not None and record.error is None:
+        record = bag.decode(record)
+    if record.msg is None:
+        raise _Rejected(record.error or "cannot decode")
+    try:
+        text, seconds = converter.event(record.msg, record.msgtype, record.topic, record.time_ns)
+    except (ConversionError, AttributeError, TypeError, ValueError) as error:
+        raise _Rejected(f"cannot convert {record.msgtype}: {error}") from None
+    if record_stamp:
+        seconds = record.time_ns / 1_000_000_000
+    return text, seconds
 
 
 def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
@@ -193,8 +227,13 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                                 file=sys.stderr) if show else _NoBar()) as bar:
             for produced in first_output:
                 write(produced)
-            batch: List[Tuple[str, float, Tuple[str, int]]] = []     # event, time, (topic, number)
+            batch: List[Tuple[object, float, Tuple[str, int, Record]]] = []   # event, time, (topic, number, record)
             shown_ms = 0
+            converter = MessageConverter(bag.typestore, options.convention)
+            # ROS 1 messages go to the runtime as bytes (ros1_terms.py), unless the input
+            # messages are also published (--out-bag, --foxglove: they need them decoded)
+            ros1_terms = (Ros1Terms(engine, bag.typestore, options.convention)
+                          if publisher is None and hasattr(engine, "ros1_schema") else None)
 
             def feed(batch) -> None:
                 if publisher is not None:
@@ -207,14 +246,25 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                         if getattr(error, "batch_index", None) is None:
                             raise
                         write(error.delivered)
-                        _, _, (topic, number) = batch[error.batch_index]
+                        _, _, (topic, number, record) = batch[error.batch_index]
+                        if getattr(error, "undecodable", False):      # the runtime refused the bytes
+                            try:
+                                text, seconds = message_event(bag, converter, record, options.stamp == "record")
+                            except _Rejected as rejected:
+                                stats.rejected += 1
+                                sink.flush()
+                                report(topic, number, str(rejected))
+                                batch = batch[error.batch_index + 1:]
+                            else:
+                                batch = [(text, seconds, (topic, number, record))] + batch[error.batch_index + 1:]
+                            continue
                         reason = str(error).split(": ", 1)[-1]
                         sink.flush()
                         click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
                         stats.failed += 1
                         batch = batch[error.batch_index + 1:]
 
-            for text, seconds, record in bag_events(bag, options, stats, report):
+            for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms):
                 record_ns = record.time_ns
                 if options.rate is not None:
                     due = began + (record_ns - first_ns) / 1e9 / options.rate
@@ -225,12 +275,12 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                             batch = []
                             sink.flush()
                         # sleep at least one tick: what fell due meanwhile goes in one batch
-                        clock.sleep(max(wait, RATE_TICK))
+                        clock.sleep(max(wait, options.tick))
                 if publisher is not None:
                     message = publisher.input(record.topic, record.msgtype, record_ns, record.msg)
                     for target in sinks:
                         target.write(message)
-                batch.append((text, seconds, (record.topic, stats.messages)))
+                batch.append((text, seconds, (record.topic, stats.messages, record)))
                 if len(batch) >= batch_size:
                     feed(batch)
                     batch = []
