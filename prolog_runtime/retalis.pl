@@ -29,6 +29,7 @@
 :- reexport(rtl_seen).
 :- reexport(rtl_halt).
 :- reexport(rtl_horizon).
+:- reexport(rtl_policy).
 :- reexport(rtl_timers).
 :- reexport(rtl_sliding).
 

@@ -99,6 +99,7 @@ rtl_reset :-
     nb_setval(rtl_clock, -inf),
     nb_setval(rtl_longest_event, 0),
     nb_setval(rtl_next_sweep, inf),
+    nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
     forall(counter(S), nb_setval(S, 0)),
     rtl_horizon_reset,
     retractall(rtl_output_line(_)),
