@@ -20,7 +20,9 @@ result back when a blocking event arrives late; deleting the blocker derives it 
 
 Under the `recent` and `chronological` consumption policies (ETALIS), an arriving event
 joins with the newest (or oldest) waiting partner only, and both are consumed; the match is
-recorded (`e_matched`), so that deleting either event takes its result back.
+recorded (`e_matched`), and every instance carries its position (the input event that brought
+it), so that deleting an event rewinds the step and replays its later arrivals
+(prolog_runtime/rtl_policy.pl): the output is that of a run without the deleted event.
 
 Deletions and late events (prolog_runtime/rtl_horizon.pl): the runtime moves the partial
 matches a windowed step no longer needs for events within the delay bound to the store's kept
