@@ -306,7 +306,8 @@ with_action_output(Goal) :-
 
 %!  rtl_process_line(+Line:string, +Options:list, -Outcome) is det.
 %
-%   Process one input line: an event, its deletion, or a rule change. Outcome is `ok`,
+%   Process one input line: an event, its deletion, a clock line (the clock moves to its
+%   time without an event, and the timers it passes fire), or a rule change. Outcome is `ok`,
 %   `rejected(Reason)` (a malformed line, counted as rejected), `refused(Reason)` (a
 %   control line without `allow_control(true)` in Options, counted as rejected),
 %   `failed(Reason)` (the program raised an error or ran out of steps while processing
@@ -326,6 +327,10 @@ parsed_outcome(rule(Change, Text), Options, Outcome) :-
         ( var(Reason) -> Outcome = ok ; Outcome = rejected(Reason) )
     ;   Outcome = refused("control lines are disabled (pass --allow-control)")
     ).
+parsed_outcome(clock(Time), _, Outcome) :-       % a heartbeat in the input (rtl_advance_clock/1)
+    catch(( rtl_guarded(rtl_advance_clock(Time)), Outcome = ok ),
+          Error,
+          event_failure(Error, "the clock line", Outcome)).
 parsed_outcome(event(Op, Event, Start, End), _, Outcome) :-
     (   Op == add
     ->  rtl_seen_add(Event, Start, End),
