@@ -43,3 +43,28 @@ def test_clock_lines_in_the_standalone_program(tmp_path, swipl):
         {"event": "empty(r1)", "start": 0, "end": 10}, {"event": "check(r1)", "start": 0, "end": 30}]
     assert "<stdin>:5: rejected: a clock line" in done.stderr
     assert "1 events in, 2 derived, 2 rejected" in done.stderr
+
+
+def test_pending_timers_are_capped_and_the_refusals_counted(tmp_path, swipl):
+    engine = fresh(Engine.from_source("alarm(check(R), 30) <- door_closed(R).\n", "cap.rtl"))
+    engine.set_flag("max_timers", "2")
+    try:
+        out, rejected = engine.feed_lines(text([{"event": f"door_closed(r{i})", "t": i} for i in range(4)]
+                                               + [{"op": "clock", "t": 40}]))
+        assert [o.event for o in out] == ["check(r0)", "check(r1)"]     # r2 and r3 found no room
+        assert engine.stats()["timers_refused"] == 2
+        assert [(w.line, w.text) for w in engine.take_warnings()] == [(3, "2 timers pending (max_timers): a timer due at 32 was not set"),
+                                          (4, "2 timers pending (max_timers): a timer due at 33 was not set")]
+    finally:
+        engine.set_flag("max_timers", "100000")
+    program = tmp_path / "cap.pl"
+    program.write_text(compile_source("alarm(check(R), 30) <- door_closed(R).\n", "cap.rtl",
+                                      output_name="cap.pl").prolog)
+    lines = text([{"event": f"door_closed(r{i})", "t": i} for i in range(3)])
+    done = subprocess.run([swipl, str(program), "--max-timers=2", "-"], input=lines, capture_output=True,
+                          text=True, timeout=60)
+    assert "<stdin>:3: warning: 2 timers pending (max_timers): a timer due at 32 was not set" in done.stderr
+    assert "1 timers not set (max_timers)" in done.stderr
+    bad = subprocess.run([swipl, str(program), "--max-timers=0", "-"], input="", capture_output=True, text=True,
+                         timeout=60)
+    assert bad.returncode == 2 and "--max-timers=0: expected a positive integer or inf" in bad.stderr
