@@ -479,9 +479,12 @@ class _RuleGenerator:
         """Process an instance at its position (`body`, also the clause of `at`): now, or,
         when it comes from a replay (its position is in the past), rewinding the step first
         (rtl_policy_insert/4)."""
-        mode = V(self.fresh("Mode"))
+        # (rtl_position/2 inline: this runs for every instance)
+        replay = V(self.fresh("Replay"))
         insert = C("rtl_policy_insert", Atom(step.name), V("_") if key is None else list_term(key), position, at)
-        return conj([C("rtl_position", position, mode), C(";", C("->", C("==", mode, Atom("replay")), insert), body)])
+        return conj([C("nb_getval", Atom("rtl_replay_position"), replay),
+                     C(";", C("->", C("==", replay, Atom("none")), conj([C("nb_getval", Atom("events"), position), body])),
+                       conj([C("=", position, replay), insert]))])
 
     def policy_facts(self, step: Step, key: List[Var], lefts: Term, rights: Term, matched: Optional[Term],
                      s: Term, e: Term, negs: Optional[Term] = None) -> None:
@@ -553,9 +556,8 @@ class _RuleGenerator:
             dropped = self.dropped_record(step, twin)
             dropped = Compound(dropped.name, (twin, own.args[-3]))
             stores = [twin] + (self.kept_of(twin) if step.window is not None else [])
-            # (forall/2 only when there is one: it meta-calls its goals)
-            drop_all = conj([C(";", C("->", C("retract", t), conj([self.record_add(dropped), C(
-                "forall", C("retract", t), self.record_add(dropped))])), Atom("true")) for t in stores])
+            # (one at most: every instance that waits replaces its twins)
+            drop_all = conj([C(";", C("->", C("retract", t), self.record_add(dropped)), Atom("true")) for t in stores])
             drop = C(";", C("->", C("ground", own), drop_all), C("rtl_drop_twins", own))
             wait = C(",", drop, wait)
         consume = conj([self.take(step, partner), self.record_add(matched), output])
