@@ -16,7 +16,8 @@ same join key may change (the freed partner can pair with a later instance, whic
 another one waiting, ...).
 
 Every instance a policy step stores or records carries its *position*: the number of the input
-event whose processing brought it (the `events` counter; rtl_position/2). Instances of one key
+event whose processing brought it (the `events` counter; rtl_position/2, which compiled code
+reads inline). Instances of one key
 arrive in position order, so the step's stores and records are its log:
 
   - the instances still waiting (the live store and, for a windowed step, its kept
