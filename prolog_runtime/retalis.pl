@@ -30,6 +30,7 @@
 :- reexport(rtl_seen).
 :- reexport(rtl_halt).
 :- reexport(rtl_horizon).
+:- reexport(rtl_policy).
 :- reexport(rtl_timers).
 :- reexport(rtl_sliding).
 
@@ -93,6 +94,7 @@ run_declaration(Program, Goal) :-
 %   of the input; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
 %   refused by default); `--strict` ends the run (status 1) at the first line that is
 %   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
+%   `--max-timers=N` (pending timers at most, `inf` for no limit);
 %   `--action-output=FILE` sends what program code prints to FILE instead of standard
 %   error. Exit status: 0 when the input was processed (rejected and failed lines
 %   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
@@ -178,6 +180,12 @@ main_args([Arg|Args], Files) :-
         ;   domain_error(max_steps, N)
         ),
         rtl_set_flag(max_steps, Steps), Files = Rest
+    ;   atom_concat('--max-timers=', N, Arg)
+    ->  (   N == inf -> Timers = inf
+        ;   atom_number(N, Timers), integer(Timers), Timers > 0 -> true
+        ;   domain_error(max_timers, N)
+        ),
+        rtl_set_flag(max_timers, Timers), Files = Rest
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
@@ -199,10 +207,12 @@ usage_error(Formal) :-
     ->  format(user_error, "error: unknown option ~w~n", [Opt])
     ;   Formal = domain_error(max_steps, N)
     ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = domain_error(max_timers, N)
+    ->  format(user_error, "error: --max-timers=~w: expected a positive integer or inf~n", [N])
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -330,7 +340,8 @@ with_action_output(Goal) :-
 
 %!  rtl_process_line(+Line:string, +Options:list, -Outcome) is det.
 %
-%   Process one input line: an event, its deletion, or a rule change. Outcome is `ok`,
+%   Process one input line: an event, its deletion, a clock line (the clock moves to its
+%   time without an event, and the timers it passes fire), or a rule change. Outcome is `ok`,
 %   `rejected(Reason)` (a malformed line, counted as rejected), `refused(Reason)` (a
 %   control line without `allow_control(true)` in Options, counted as rejected),
 %   `failed(Reason)` (the program raised an error or ran out of steps while processing
@@ -350,6 +361,10 @@ parsed_outcome(rule(Change, Text), Options, Outcome) :-
         ( var(Reason) -> Outcome = ok ; Outcome = rejected(Reason) )
     ;   Outcome = refused("control lines are disabled (pass --allow-control)")
     ).
+parsed_outcome(clock(Time), _, Outcome) :-       % a heartbeat in the input (rtl_advance_clock/1)
+    catch(( rtl_guarded(rtl_advance_clock(Time)), Outcome = ok ),
+          Error,
+          event_failure(Error, "the clock line", Outcome)).
 parsed_outcome(event(Op, Event, Start, End), _, Outcome) :-
     (   Op == add
     ->  rtl_seen_add(Event, Start, End),
@@ -629,7 +644,8 @@ rtl_summary(Seconds, Text) :-
     rtl_stat(rejected, Rejected),
     findall(Part,
             ( member(Name-Label, [failed-failed, retracted-retracted,
-                                  too_late-'too late to retract', late-late]),
+                                  too_late-'too late to retract', late-late,
+                                  timers_refused-'timers not set (max_timers)']),
               rtl_stat(Name, N), N > 0,
               format(string(Part), ", ~D ~w", [N, Label]) ),
             Parts),

@@ -77,6 +77,7 @@ flag_default(max_steps, 1000000).           % inferences per input event (inf: n
 flag_default(max_term_depth, 1000).         % nesting of input event terms
 flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_horizon.pl)
 flag_default(flush_timers, false).          % fire pending timers at the end of the input (rtl_timers.pl)
+flag_default(max_timers, 100000).           % pending timers at most (rtl_timers.pl; inf: no limit)
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -101,6 +102,7 @@ rtl_reset :-
     nb_setval(rtl_clock, -inf),
     nb_setval(rtl_longest_event, 0),
     nb_setval(rtl_next_sweep, inf),
+    nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
     forall(counter(S), nb_setval(S, 0)),
     forget_detections,
     rtl_horizon_reset,
@@ -135,7 +137,8 @@ rtl_clear :-
 %   chronological), `query_time_limit` (seconds, a positive number), `max_steps` (the
 %   inferences one input event may take, everything it derives included; `inf` for no
 %   limit; default 1,000,000) and `max_term_depth` (how deep an input event term may be
-%   nested; default 1,000) and `retraction_horizon` (`auto`, seconds or `inf`: how long
+%   nested; default 1,000), `max_timers` (how many timers may be pending, absences and
+%   alarms; `inf` for no limit; default 100,000) and `retraction_horizon` (`auto`, seconds or `inf`: how long
 %   deletions stay exact, at least max_delay plus the largest window; rtl_horizon.pl). A bad value raises a type or domain error and changes nothing.
 
 rtl_set_flag(Flag, Value) :-
@@ -168,6 +171,8 @@ valid_flag_value(query_time_limit, V) :-
 valid_flag_value(retraction_horizon, V) :-
     (   V == auto -> true ; V == inf -> true ; number(V), V >= 0, V =\= inf ).
 valid_flag_value(max_steps, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
+valid_flag_value(max_timers, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 valid_flag_value(max_term_depth, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
@@ -426,7 +431,8 @@ rtl_take_output(Lines) :-
 %
 %   Counters: events, retracted, derived, underived, late, rejected (input lines refused),
 %   failed (input events whose processing raised an error), too_late (deletions outside the
-%   retraction horizon, not counted as retracted).
+%   retraction horizon, not counted as retracted), timers_refused (timers not set because
+%   `max_timers` were pending, rtl_timers.pl).
 
 rtl_stat(Name, Value) :-
     counter(Name),
@@ -440,6 +446,7 @@ counter(late).
 counter(rejected).
 counter(failed).
 counter(too_late).
+counter(timers_refused).
 
 %!  rtl_count(+Name) is det.
 

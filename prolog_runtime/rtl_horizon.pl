@@ -328,19 +328,20 @@ rtl_take_warnings(Texts) :-
 %!  rtl_drop_twins(:Stored) is det.
 %
 %   Under `recent`, a partial match about to wait replaces its waiting twins: the stored
-%   matches (live or kept) of the same events at other times. Called by compiled rules when
+%   matches (live or kept) of the same events at other times (the last three arguments of a
+%   stored match are its position, start and end). Called by compiled rules when
 %   Stored is not ground (a partial match from one branch of an `or`, whose other branch's
 %   variables are unbound): a twin is then a variant of it, not anything that unifies.
 
 rtl_drop_twins(M:Stored) :-
     Stored =.. [Name|Args],
-    append(Key, [_, _], Args),
+    append(Key, [_, _, _], Args),               % position, start, end (rtl_policy.pl)
     (   program_fact(M, ele_kept_store(Name, kept(KeptA, KeptB), _))
     ->  Names = [Name, KeptA, KeptB]
     ;   Names = [Name]
     ),
     copy_term(Key, Pattern),
-    append(Pattern, [_, _], PatternArgs),
+    append(Pattern, [_, _, _], PatternArgs),
     forall(member(N, Names),
            (   Head =.. [N|PatternArgs],
                forall(( clause(M:Head, true, Ref), Pattern =@= Key ), erase(Ref))

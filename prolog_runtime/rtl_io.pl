@@ -64,7 +64,8 @@ rtl_use_fast_reader(false) :-
 %
 %   Parsed is `blank`, `event(Op, Event, Start, End)` with Op `add` or `retract`,
 %   `rule(add, RuleText)` or `rule(delete, Label)` for the control lines
-%   `{"op": "add_rule", "rule": TEXT}` and `{"op": "delete_rule", "rule": LABEL}`, or
+%   `{"op": "add_rule", "rule": TEXT}` and `{"op": "delete_rule", "rule": LABEL}`,
+%   `clock(Time)` for a clock line `{"op": "clock", "t": T}` (a heartbeat), or
 %   `error(Reason)` with Reason a string saying what is wrong with the line.
 %
 %   The line must be one JSON object and nothing else; the event a ground term and nothing
@@ -293,12 +294,19 @@ record_event(R, MaxDepth, Parsed) :-
                    [Op]),
             Parsed = error(Reason)
         )
+    ;   Op == "clock"                           % a clock line: the clock moves to "t"
+    ->  (   nonvar(Text)
+        ->  Parsed = error("a clock line (\"op\": \"clock\") has no \"event\"")
+        ;   nonvar(TimeProblem)
+        ->  Parsed = error(TimeProblem)
+        ;   Parsed = clock(End)
+        )
     ;   var(Text)
     ->  Parsed = error("missing \"event\"")
     ;   \+ string(Text)
     ->  Parsed = error("\"event\" must be a string holding a Prolog term")
     ;   nonvar(Op), Op \== "add", Op \== "retract"
-    ->  format(string(Reason), "unknown \"op\" ~q (expected \"add\", \"retract\", \"add_rule\" or \"delete_rule\")", [Op]),
+    ->  format(string(Reason), "unknown \"op\" ~q (expected \"add\", \"retract\", \"clock\", \"add_rule\" or \"delete_rule\")", [Op]),
         Parsed = error(Reason)
     ;   nonvar(TimeProblem)
     ->  Parsed = error(TimeProblem)

@@ -120,6 +120,9 @@ builtin(rule, rtl_horizon:rtl_next_seq(_), []).
 builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
 builtin(rule, rtl_horizon:rtl_aggregate_redo(_, _, _, _, _), []).
 builtin(rule, rtl_horizon:rtl_drop_twins(Stored), [retract(Stored)]).   % retracts from the rule's store
+builtin(rule, rtl_policy:rtl_position(_, _), []).                      % consumption policies
+builtin(rule, rtl_policy:rtl_policy_insert(_, _, _, Goal), [Goal]).
+builtin(rule, rtl_policy:rtl_policy_delete(_, _, _, Stored), [retract(Stored)]).
 builtin(rule, rtl_ele:rtl_underived(_, _, _), []).
 builtin(rule, rtl_timers:rtl_timer_add(_, _, Goal), [Goal]).   % absences and alarms
 builtin(rule, rtl_timers:rtl_absence_wait(_, Goal), [Goal]).

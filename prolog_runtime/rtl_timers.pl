@@ -25,7 +25,8 @@ past it is processed. Two kinds:
 
 Pending timers are state like partial matches: one per match that set it, removed when it
 fires or when the match is deleted (rtl_timer_cancel/1, called by the compiled delete
-rules), forgotten by rtl_clear/0. The next due time is cached, so an event that moves the
+rules), forgotten by rtl_clear/0. At most `max_timers` (a flag, default 100,000) are pending:
+one more is not set, but counted and reported (rtl_timer_add/3). The next due time is cached, so an event that moves the
 clock past no timer pays one comparison.
 
 At the end of the input, pending timers do not fire (the clock did not reach them) unless
@@ -41,8 +42,19 @@ moment fires in time order, as if the clock had passed the last of them.
 %!  rtl_timer_add(+Due:number, +Kind, :Goal) is det.
 %
 %   Run Goal when the clock reaches Due (Kind `at`) or passes it (Kind `after`). A timer
-%   already due runs at the end of the current input event (rtl_timers_run/1).
+%   already due runs at the end of the current input event (rtl_timers_run/1). When the
+%   flag `max_timers` timers are pending already, the timer is not set: it is counted
+%   (`timers_refused`) and reported as a warning of the input line being processed.
 
+rtl_timer_add(Due, _Kind, _Goal) :-
+    rtl_ele:rtl_flag(max_timers, Max),
+    Max \== inf,
+    rtl_timers_pending(Pending),
+    Pending >= Max,
+    !,
+    rtl_ele:rtl_count(timers_refused),
+    format(string(Text), "~D timers pending (max_timers): a timer due at ~w was not set", [Pending, Due]),
+    rtl_horizon:rtl_warning(Text).
 rtl_timer_add(Due, Kind, Goal) :-
     flag(rtl_timer_seq, Seq, Seq + 1),
     assertz(timer(Due, Seq, Kind, Goal)),

@@ -47,6 +47,7 @@ Conditions run in the program module.
 :- use_module(library(lists)).
 :- use_module(rtl_ele).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
+:- use_module(rtl_policy, [rtl_policy_positioned/2]).
 :- use_module(retalis, [rtl_feed_lines/3]).
 
 :- dynamic logged/6.            % logged(Seq, Line, Kind, Event, Start, End); Kind input or derived
@@ -429,7 +430,10 @@ store_changed(M, Name, Action, Ref) :-
     ;   bump(Rule, What),
         rtl_clock(Clock),
         Head =.. [_|Args],
-        append(Values, [Start, End], Args),
+        (   rtl_policy_positioned(M, Name)          % a policy store: position, start, end
+        ->  append(Values, [_, Start, End], Args)
+        ;   append(Values, [Start, End], Args)
+        ),
         format(user_error, "trace ~w at ~w: ~w ~w ~q over [~w, ~w]~n",
                [Rule, Clock, What, Desc, Values, Start, End])
     ).

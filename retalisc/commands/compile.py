@@ -170,6 +170,9 @@ Examples:
 @click.option("--max-steps", type=str, default=None, metavar="N",
               help="Inferences one input event may take, everything it derives included, before it is "
                    "stopped with an error (default 1000000; 'inf' for no limit).")
+@click.option("--max-timers", type=str, default=None, metavar="N",
+              help="Timers (absences, alarms) that may be pending at once; one more is not set, but counted "
+                   "and reported as a warning (default 100000; 'inf' for no limit).")
 @click.option("--action-output", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Write the text that actions and conditions print to FILE (default: standard error; "
                    "standard output carries only JSON Lines).")
@@ -194,7 +197,7 @@ Examples:
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
-                flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, action_output, progress,
+                flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, max_timers, action_output, progress,
                 traces, late_file, state, snapshot_every, snapshot_seconds,
                 **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
@@ -223,6 +226,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
             raise click.UsageError("--state does not go with --consumer-dir (the deliveries go to --out)")
         output_directory(state, "--state")
     steps = _max_steps(max_steps)
+    timers = _max_steps(max_timers, DEFAULT_MAX_TIMERS, "--max-timers")
     result = compile_or_exit(program, module=_unique_module(program))    # a second run in one process loads anew
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
@@ -233,6 +237,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     if max_delay is not None:
         engine.set_flag("max_delay", repr(max_delay))
     engine.set_flag("max_steps", str(steps))
+    engine.set_flag("max_timers", str(timers))
     if action_output is not None:
         try:
             set_action_output(engine, action_output)
@@ -315,12 +320,13 @@ def _start_tracing(engine, unit, traces, late_file):
 
 
 DEFAULT_MAX_STEPS = 1_000_000
+DEFAULT_MAX_TIMERS = 100_000
 
 
-def _max_steps(text):
-    """`--max-steps N`: a positive integer or 'inf' (usage error otherwise)."""
+def _max_steps(text, default=DEFAULT_MAX_STEPS, option="--max-steps"):
+    """`--max-steps N` (or `--max-timers N`): a positive integer or 'inf' (usage error otherwise)."""
     if text is None:
-        return DEFAULT_MAX_STEPS
+        return default
     if text.strip() == "inf":
         return "inf"
     try:
@@ -328,7 +334,7 @@ def _max_steps(text):
     except ValueError:
         value = 0
     if value <= 0:
-        raise click.BadParameter(f"{text!r}: expected a positive integer or 'inf'", param_hint="--max-steps")
+        raise click.BadParameter(f"{text!r}: expected a positive integer or 'inf'", param_hint=option)
     return value
 
 

@@ -363,7 +363,7 @@ def summary_line(stats: dict, seconds: float) -> str:
     """`retalis: N events in, M derived, K rejected, T s` (as rtl_summary/2), with failed,
     retracted, too-late deletions and late events before the time when there are any."""
     labels = (("failed", "failed"), ("retracted", "retracted"), ("too_late", "too late to retract"),
-              ("late", "late"))
+              ("late", "late"), ("timers_refused", "timers not set (max_timers)"))
     extra = "".join(f", {stats[name]:,} {label}" for name, label in labels if stats.get(name))
     return (f"retalis: {stats.get('events', 0):,} events in, {stats.get('derived', 0):,} derived, "
             f"{stats.get('rejected', 0):,} rejected{extra}, {seconds:.2f} s")

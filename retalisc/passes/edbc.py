@@ -20,7 +20,9 @@ result back when a blocking event arrives late; deleting the blocker derives it 
 
 Under the `recent` and `chronological` consumption policies (ETALIS), an arriving event
 joins with the newest (or oldest) waiting partner only, and both are consumed; the match is
-recorded (`e_matched`), so that deleting either event takes its result back.
+recorded (`e_matched`), and every instance carries its position (the input event that brought
+it), so that deleting an event rewinds the step and replays its later arrivals
+(prolog_runtime/rtl_policy.pl): the output is that of a run without the deleted event.
 
 Deletions and late events (prolog_runtime/rtl_horizon.pl): the runtime moves the partial
 matches a windowed step no longer needs for events within the delay bound to the store's kept
@@ -34,7 +36,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Dict, List, Optional, Set, Tuple
 
-from ..frontend.terms import Atom, Compound, Number, Term, Var, distinct_variables, substitute, variables
+from ..frontend.terms import Atom, Compound, Number, Term, Var, distinct_variables, make_list, substitute, variables
 from .binarize import END_MARK, START_MARK
 from ..frontend.errors import RetalisSemanticError
 from .unit import BinaryRule, GeneratedRule, Operand, Step, Unit
@@ -93,6 +95,10 @@ def rule_policy(unit: Unit, rule: BinaryRule) -> str:
         raise RetalisSemanticError(f"the consumption_policy of a rule must be one of {', '.join(RULE_POLICIES)}",
                                    rule.rule.span)
     return value.name
+
+
+def list_term(items: List[Term]) -> Term:
+    return make_list(items)
 
 
 def V(name_: str) -> Var:
@@ -343,8 +349,9 @@ class _RuleGenerator:
         key, left_other = _split(left_vars, right_vars)
         _, right_other = _split(right_vars, left_vars)
         recent = self.policy == "recent"
-        lefts = self.store(step, "lefts", key + left_other + [s1, e1], newest_first=recent)
-        rights = self.store(step, "rights", key + right_other + [s2, e2], newest_first=recent)
+        pl, pr = self.positions()
+        lefts = self.store(step, "lefts", key + left_other + pl + [s1, e1], newest_first=recent)
+        rights = self.store(step, "rights", key + right_other + pr + [s2, e2], newest_first=recent)
         s, start_goals = self.interval(start_expr, self.t("S"))
         e, end_goals = self.interval(end_expr, self.t("E"))
         match = self.expr(relation) + start_goals + end_goals + [self.window_check(step, s, e)]
@@ -355,7 +362,9 @@ class _RuleGenerator:
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
             self.arrival(operand, handler, os_, oe)
             found = conj([self.lookup(step, partner_store, oe)] + match)
-            self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s, e)
+            self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s, e,
+                               key, side)
+        self.policy_facts(step, key, lefts, rights, matched, s, e)
 
     def first_join_clauses(self, step: Step) -> None:
         """The `first` selection: each left instance L pairs with its first matching right
@@ -435,8 +444,16 @@ class _RuleGenerator:
             self.if_stored(step, rights, C("forall", self.record_lookup(paired), conj(
                 [self.record_take(paired)] + own["bounds"] + [own["retract"], pair_best(e1)])))]))
 
+    def positions(self) -> Tuple[List[Var], List[Var]]:
+        """Under a consumption policy, the position arguments of the left and right stores
+        (prolog_runtime/rtl_policy.pl): the input event that brought each instance."""
+        if self.policy == "unrestricted":
+            return [], []
+        return [V(self.fresh("LPos"))], [V(self.fresh("RPos"))]
+
     def join_handlers(self, step: Step, handler: str, own_vars: List[Var], os_: Var, oe: Var, own_store: Term,
-                      partner_store: Term, found: Term, matched: Optional[Term], s: Term, e: Term) -> None:
+                      partner_store: Term, found: Term, matched: Optional[Term], s: Term, e: Term,
+                      key: List[Var], side: str) -> None:
         """The add and delete rules of one side of a join (also of `cnot`): unrestricted, every
         partner found makes a result, and deleting takes back what the instance made with the
         partners still stored; under a policy, see consuming_join/consumed_retract."""
@@ -450,10 +467,58 @@ class _RuleGenerator:
         # A partner that fails the step's conditions is not a match: it is neither chosen nor
         # consumed, as when the condition is pushed onto an event (the output checks them again).
         selected = conj([found] + [self.times(c, s, e) for c in step.conditions])
-        self.clauses.append(clause(head, [
-            self.consuming_join(step, selected, partner_store, own_store, matched, self.output(step, s, e))]))
+        position = own_store.args[-3]
+        at = C(handler + "_at", position, *own_vars, os_, oe)
+        body = self.consuming_join(step, selected, partner_store, own_store, matched, self.output(step, s, e))
+        self.clauses.append(clause(head, [self.positioned(step, key, position, at, body)]))
+        self.clauses.append(clause(at, [body]))
         self.clauses.append(clause(retract_head, [
-            self.consumed_retract(step, own_store, matched, self.output(step, s, e, retract=True))]))
+            C("rtl_policy_delete", Atom(step.name), Atom(side), list_term(key), own_store)]))
+
+    def positioned(self, step: Step, key: Optional[List[Var]], position: Var, at: Term, body: Term) -> Term:
+        """Process an instance at its position (`body`, also the clause of `at`): now, or,
+        when it comes from a replay (its position is in the past), rewinding the step first
+        (rtl_policy_insert/4)."""
+        # (rtl_position/2 inline: this runs for every instance)
+        replay = V(self.fresh("Replay"))
+        insert = C("rtl_policy_insert", Atom(step.name), V("_") if key is None else list_term(key), position, at)
+        return conj([C("nb_getval", Atom("rtl_replay_position"), replay),
+                     C(";", C("->", C("==", replay, Atom("none")), conj([C("nb_getval", Atom("events"), position), body])),
+                       conj([C("=", position, replay), insert]))])
+
+    def policy_facts(self, step: Step, key: List[Var], lefts: Term, rights: Term, matched: Optional[Term],
+                     s: Term, e: Term, negs: Optional[Term] = None) -> None:
+        """`<step>_policy/1`: what the runtime needs to rewind the step (rtl_policy.pl)."""
+        if matched is None:
+            return
+        info = f"{step.name}_policy"
+        self.clauses.append(C(info, C("order", Atom(self.policy))))
+        for side, stored in (("left", lefts), ("right", rights)):
+            own = operand_vars(step.left if side == "left" else step.right)
+            kept = self.kept_of(stored) if step.window is not None else []
+            at = C(f"{step.name}_{side}_at", stored.args[-3], *own, stored.args[-2], stored.args[-1])
+            self.clauses.append(C(info, C("entry", Atom(side), list_term(key), stored.args[-3], stored,
+                                          list_term(kept), at)))
+        self.clauses.append(C(info, C("match", list_term(key), list_term(self.generations(matched)),
+                                      lefts.args[-3], rights.args[-3], self.output(step, s, e, retract=True),
+                                      lefts, rights)))
+        if self.policy == "recent":
+            for stored in (lefts, rights):
+                dropped = self.dropped_record(step, stored)
+                self.clauses.append(C(info, C("dropped", list_term(self.generations(dropped)), dropped.args[0],
+                                              dropped.args[1])))
+        if negs is not None:
+            kept = self.kept_of(negs) if step.window is not None else []
+            self.clauses.append(C(info, C("blocker", negs.args[-3], negs, list_term(kept))))
+
+    def dropped_record(self, step: Step, stored: Term) -> Term:
+        """Under `recent`, the record of a waiting twin replaced by a new arrival (its stored
+        form, and the position of the arrival)."""
+        by = V(self.fresh("ByPos"))
+        name_ = f"{step.name}_dropped"
+        if not any(r[0] == name_ for r in self.records):
+            self.record(step, "dropped", [V("_"), V("_")], rotated=True)
+        return C(name_, stored, by)
 
     def matched_record(self, step: Step, lefts: Term, rights: Term, s: Term, e: Term) -> Optional[Term]:
         """Under a consumption policy, the record of a match made: both instances and the
@@ -484,18 +549,19 @@ class _RuleGenerator:
         wait = C(store, own)
         if self.policy == "recent":
             # a twin is the same events (a variant: a partial match from one branch of an `or`
-            # leaves the other branch's variables unbound, and must not unify with another)
-            twin = Compound(own.name, tuple(own.args[:-2]) + (Var("_"), Var("_")))
-            drop = C(";", C("->", C("ground", own), self.drop_all(step, twin)), C("rtl_drop_twins", own))
+            # leaves the other branch's variables unbound, and must not unify with another);
+            # a replaced twin is recorded, for deletions (rtl_policy.pl)
+            times = [V(self.fresh(n)) for n in ("TwinPos", "TwinStart", "TwinEnd")]
+            twin = Compound(own.name, tuple(own.args[:-3]) + tuple(times))
+            dropped = self.dropped_record(step, twin)
+            dropped = Compound(dropped.name, (twin, own.args[-3]))
+            stores = [twin] + (self.kept_of(twin) if step.window is not None else [])
+            # (one at most: every instance that waits replaces its twins)
+            drop_all = conj([C(";", C("->", C("retract", t), self.record_add(dropped)), Atom("true")) for t in stores])
+            drop = C(";", C("->", C("ground", own), drop_all), C("rtl_drop_twins", own))
             wait = C(",", drop, wait)
         consume = conj([self.take(step, partner), self.record_add(matched), output])
         return C(";", C("->", C("once", found), consume), wait)
-
-    def consumed_retract(self, step: Step, own: Term, matched: Term, output: Term) -> Term:
-        """Deleting an instance under a policy: a waiting one has made nothing yet; a consumed
-        one made one match, whose result is taken back (its partner stays consumed)."""
-        return C(";", C("->", self.take(step, own), Atom("true")),
-                 C(";", C("->", self.record_take(matched), output), Atom("true")))
 
     def negation_clauses(self, step: Step) -> None:
         """not(N).[L, R]: L seq R with no N strictly between L's end and R's start. Under a
@@ -508,11 +574,16 @@ class _RuleGenerator:
         pair_vars = distinct_variables(left_vars + right_vars)
         negated_key, negated_other = _split(negated_vars, pair_vars)
         recent = self.policy == "recent"
-        lefts = self.store(step, "lefts", key + left_other + [s1, e1], newest_first=recent)
-        rights = self.store(step, "rights", key + right_other + [s2, e2], newest_first=recent)
-        negs = self.store(step, "negs", negated_key + negated_other + [sn, en])
+        pl, pr = self.positions()
+        pn = [V(self.fresh("NPos"))] if pl else []
+        lefts = self.store(step, "lefts", key + left_other + pl + [s1, e1], newest_first=recent)
+        rights = self.store(step, "rights", key + right_other + pr + [s2, e2], newest_first=recent)
+        negs = self.store(step, "negs", negated_key + negated_other + pn + [sn, en])
         between = [C("<", e1, sn), C("<", en, s2), Atom("!")]
-        unblocked = self.unblocked(step, f"{step.name}_blocked", negated_key + [e1, s2], negs, between, e2)
+        if pn:
+            # under a policy a blocker blocks the pairs made after it arrived (rtl_policy.pl)
+            between.insert(0, C("<", pn[0], C("max", pl[0], pr[0])))
+        unblocked = self.unblocked(step, f"{step.name}_blocked", negated_key + [e1, s2] + pl + pr, negs, between, e2)
         window = self.window_check(step, s1, e2)
         pair = [C("<", e1, s2), window, unblocked]
         matched = self.matched_record(step, lefts, rights, s1, e2)
@@ -523,16 +594,23 @@ class _RuleGenerator:
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
             self.arrival(operand, handler, os_, oe)
             found = conj([self.lookup(step, partner_store, oe)] + pair)
-            self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s1, e2)
+            self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s1, e2,
+                               key, side)
+        self.policy_facts(step, key, lefts, rights, matched, s1, e2, negs if pn else None)
         # a blocker takes back the results it falls inside of; deleting it restores them
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
         inside = conj([self.lookup(step, lefts, en), C("<", e1, sn), self.lookup(step, rights, en), C("<", en, s2),
                        window, unblocked])
         if self.policy != "unrestricted":
-            self.clauses.append(clause(C(handler, *negated_vars, sn, en), [C("assertz", negs)]))
+            # the pairs made after the blocker arrived are made again without it, or with it
+            # when it comes from a replay (rtl_policy.pl)
+            at = C(handler + "_at", pn[0], *negated_vars, sn, en)
+            self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
+                self.positioned(step, None, pn[0], at, C("assertz", negs))]))
+            self.clauses.append(clause(at, [C("assertz", negs)]))
             self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-                C(";", C("->", self.take(step, negs), Atom("true")), Atom("true"))]))
+                C("rtl_policy_delete", Atom(step.name), Atom("negated"), V("_"), negs)]))
             return
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
             C("forall", inside, self.output(step, s1, e2, retract=True)), C("assertz", negs)]))

@@ -1,0 +1,234 @@
+:- module(rtl_policy,
+          [ rtl_position/2,             % -Position, -Mode
+            rtl_policy_insert/4,        % +Step, ?Key, +Position, :Arrival
+            rtl_policy_delete/4,        % +Step, +Side, ?Key, :Stored
+            rtl_policy_positioned/2     % +Module, +StoreName
+          ]).
+
+/** <module> Consumption policies: exact deletion by rewinding and replaying a step
+
+Under `recent` and `chronological` a step of a rule (`L op R`, or the two sides of
+`not(N).[L, R]`) pairs each arriving instance with one waiting partner and consumes both, so
+what it derives depends on the order in which its instances arrived. Deleting an instance
+must give the output of a run in which it never arrived: the match it was consumed in is
+taken back, the partner it consumed waits again, and every later decision of the step for the
+same join key may change (the freed partner can pair with a later instance, which then leaves
+another one waiting, ...).
+
+Every instance a policy step stores or records carries its *position*: the number of the input
+event whose processing brought it (the `events` counter; rtl_position/2, which compiled code
+reads inline). Instances of one key
+arrive in position order, so the step's stores and records are its log:
+
+  - the instances still waiting (the live store and, for a windowed step, its kept
+    generations), each with its position;
+  - the matches made (`<step>_matched`, kept for the retraction horizon), with the positions
+    of both instances: a match was made when the later of them arrived;
+  - under `recent`, the waiting twins an arrival replaced (`<step>_dropped`), with the
+    position of the arrival.
+
+Rewinding a step for a key to a position Min takes back every match made at Min or later
+(its result is retracted), lets the instances that arrived before Min and were consumed or
+replaced at Min or later wait again (in position order), and removes the instances that
+arrived at Min or later; they are then replayed in position order (left before right at equal
+positions, the order of the triggers), each with its own position. A deletion rewinds to the
+deleted instance's position and replays the others. A replay passes its results on with the
+position of the instance replayed (rtl_replay_position), so a later policy step that receives
+such a result receives it "in the past" and rewinds itself to that position before taking it
+(rtl_policy_insert/4): steps of one rule and rules fed by derived events stay exact together.
+A blocker of a policy negation (`not(N).[L, R]`) blocks the pairs made after it arrived; its
+deletion (or its arrival in the past) rewinds every key of the step.
+
+The compiled program describes each policy step by facts of `<step>_policy/1`:
+
+  - `order(recent)` or `order(chronological)`;
+  - `entry(Side, Key, Position, Live, Kept, Arrival)`: a side (`left`, `right`) of the step,
+    its store Live (and kept generations Kept), the join Key, and the goal that processes an
+    instance at Position (`<step>_<side>_at/N`);
+  - `match(Key, Generations, LPos, RPos, Retract, Left, Right)`: a match record in its two
+    generations, the goal retracting its result, and the stored forms of its two instances;
+  - `dropped(Generations, Stored, Position)`: a twin replaced by the arrival at Position;
+  - `blocker(Position, Live, Kept)`: the blocker store of a negation.
+
+The cost falls on deletions and on results passed on by a replay; processing an input event
+only reads its position. What is exact: within the retraction horizon (rtl_horizon.pl), when
+each input event reaches a step through at most one side; an event that reaches one step
+several times at the same position (`a(X) seq a(Y)`, or through two paths) is replayed in the
+order left, right, which is the order of its triggers but not necessarily the order of the
+results it derived on the way.
+*/
+
+:- use_module(library(lists)).
+:- use_module(library(pairs)).
+
+:- meta_predicate rtl_policy_insert(+, ?, +, 0), rtl_policy_delete(+, +, ?, :).
+
+%!  rtl_position(-Position:integer, -Mode) is det.
+%
+%   The position of the instance a policy step is receiving: the number of the input event
+%   being processed (Mode `now`), or, inside a replay, the position of the instance replayed
+%   (Mode `replay`: the instance comes from the past).
+
+rtl_position(Position, Mode) :-
+    nb_getval(rtl_replay_position, R),          % set by rtl_reset/0
+    (   R == none
+    ->  nb_getval(events, Position), Mode = now
+    ;   Position = R, Mode = replay
+    ).
+
+%!  rtl_policy_insert(+Step, ?Key, +Position, :Arrival) is det.
+%
+%   An instance of Step arrives from the past (at Position, during a replay): rewind Step
+%   for Key to just after Position, process the instance (Arrival), and replay what came
+%   after it. An unbound Key rewinds every key (a blocker).
+
+rtl_policy_insert(Step, Key, Position, M:Arrival) :-
+    Min is Position + 1,
+    rewind(M, Step, Key, Min, Replays),
+    with_position(Position, M:Arrival),
+    replay(M, Replays).
+
+%!  rtl_policy_delete(+Step, +Side, ?Key, :Stored) is det.
+%
+%   Delete an instance of Step (Stored, a term of its store for Side, `left`, `right` or
+%   `negated`, with its position unbound) as if it had never arrived. The latest arrival of
+%   the instance is deleted; an instance that is not known (never added, or forgotten after
+%   the retraction horizon) changes nothing.
+
+rtl_policy_delete(Step, negated, _, M:Stored) :-
+    !,
+    policy_info(M, Step, blocker(Position, Stored, Kept)),
+    (   aggregate_all(max(Position), ( member(T, [Stored|Kept]), clause(M:T, true) ), Latest)
+    ->  Position = Latest,
+        once(( member(T, [Stored|Kept]), clause(M:T, true, Ref) )),
+        erase(Ref),
+        Min is Latest + 1,
+        rewind(M, Step, _AnyKey, Min, Replays),
+        replay(M, Replays)
+    ;   true
+    ).
+rtl_policy_delete(Step, Side, Key, M:Stored) :-
+    (   aggregate_all(max(P), known_position(M, Step, Side, Key, Stored, P), Latest)
+    ->  copy_term(Stored, Deleted),
+        policy_info(M, Step, entry(Side, _, Latest, Deleted, _, _)),
+        rewind(M, Step, Key, Latest, Replays0),
+        side_index(Side, I),
+        (   select(Latest-I-(D-_), Replays0, Replays), D =@= Deleted
+        ->  true
+        ;   Replays = Replays0
+        ),
+        replay(M, Replays)
+    ;   true
+    ).
+
+% The positions at which an instance like Stored arrived: waiting, consumed in a match, or
+% replaced by a twin.
+known_position(M, Step, Side, Key, Stored0, P) :-
+    copy_term(Key-Stored0, Key1-Stored),
+    policy_info(M, Step, entry(Side, Key1, P, Stored, Kept, _)),
+    (   member(T, [Stored|Kept]), clause(M:T, true)
+    ;   policy_info(M, Step, match(Key1, Gens, PL, PR, _, L, R)),
+        (   Side == left -> L = Stored, P = PL ; R = Stored, P = PR ),
+        member(G, Gens), clause(M:G, true)
+    ;   policy_info(M, Step, dropped(Gens, Stored, _)),
+        member(G, Gens), clause(M:G, true)
+    ).
+
+side_index(left, 0).
+side_index(right, 1).
+
+%   rewind(+M, +Step, ?Key, +Min, -Replays)
+%
+%   Undo what Step did for Key from position Min on (see the module header). Replays are the
+%   instances to process again, `Position-SideIndex-(Stored-Arrival)`, in order.
+rewind(M, Step, Key, Min, Replays) :-
+    findall(Made-m(Ref, PL, PR, Retract, L, R),
+            ( policy_info(M, Step, match(Key, Gens, PL, PR, Retract, L, R)),
+              member(G, Gens),
+              clause(M:G, true, Ref),
+              Made is max(PL, PR),
+              Made >= Min ),
+            Matches0),
+    keysort(Matches0, Ascending),
+    reverse(Ascending, Matches),                    % the latest result is taken back first
+    forall(member(_-m(Ref, _, _, _, _, _), Matches), erase(Ref)),
+    forall(member(_-m(_, _, _, Retract, _, _), Matches), ignore(M:Retract)),
+    findall(Item, ( member(_-m(_, PL, PR, _, L, R), Matches),
+                    ( Item = left-PL-L ; Item = right-PR-R ) ), Consumed),
+    findall(Side-P-Stored,
+            ( policy_info(M, Step, dropped(Gens, Stored, By)),
+              member(G, Gens),
+              clause(M:G, true, Ref),
+              By >= Min,
+              policy_info(M, Step, entry(Side, Key, P, Stored, _, _)),
+              erase(Ref) ),
+            Dropped),
+    findall(Side-P-Live,
+            ( policy_info(M, Step, entry(Side, Key, P, Live, Kept, _)),
+              member(T, [Live|Kept]),
+              clause(M:T, true, Ref),
+              P >= Min,
+              erase(Ref) ),
+            Waiting),
+    append([Consumed, Dropped, Waiting], Instances),
+    partition(later(Min), Instances, Later, Earlier),
+    restore(M, Step, Key, Earlier),
+    findall(P-I-(Stored-Arrival),
+            ( member(Side-P-Stored, Later),
+              side_index(Side, I),
+              policy_info(M, Step, entry(Side, _, P, Stored, _, Arrival)) ),
+            Replays0),
+    keysort(Replays0, Replays).
+
+later(Min, _-P-_) :- P >= Min.
+
+%   Instances that arrived before the rewind point wait again: each side's live store for
+%   Key is rebuilt in position order (newest first under `recent`, oldest first else).
+restore(_, _, _, []) :- !.
+restore(M, Step, Key, Instances) :-
+    policy_info(M, Step, order(Order)),
+    forall(( member(Side, [left, right]), memberchk(Side-_-_, Instances) ),
+           (   policy_info(M, Step, entry(Side, Key, _, Live, _, _)),
+               findall(P-Live, ( clause(M:Live, true, Ref), entry_position(M, Step, Side, Live, P),
+                                 erase(Ref) ),
+                       Present),
+               findall(P-S, member(Side-P-S, Instances), Back),
+               append(Present, Back, All),
+               keysort(All, Sorted),
+               pairs_values(Sorted, Stored),
+               (   Order == recent
+               ->  forall(member(S, Stored), asserta(M:S))
+               ;   forall(member(S, Stored), assertz(M:S))
+               )
+           )).
+
+entry_position(M, Step, Side, Live, P) :-
+    policy_info(M, Step, entry(Side, _, P, Live, _, _)).
+
+replay(M, Replays) :-
+    forall(member(P-_-(_-Arrival), Replays), with_position(P, M:Arrival)).
+
+%   Process Goal as an instance arriving at Position: what it passes on comes from there.
+with_position(Position, Goal) :-
+    nb_getval(rtl_replay_position, Old),
+    setup_call_cleanup(nb_setval(rtl_replay_position, Position),
+                       ignore(Goal),
+                       nb_setval(rtl_replay_position, Old)).
+
+%!  rtl_policy_positioned(+Module, +StoreName) is semidet.
+%
+%   StoreName (a live store or a kept generation) belongs to a policy step: its partial
+%   matches carry a position before their start and end (tracing shows them without it).
+
+rtl_policy_positioned(M, Name) :-
+    member(Suffix, ['_lefts', '_rights', '_negs']),
+    sub_atom(Name, Before, _, _, Suffix),
+    sub_atom(Name, 0, Before, _, Step),
+    atom_concat(Step, '_policy', Info),
+    current_predicate(M:Info/1),
+    !.
+
+policy_info(M, Step, Info) :-
+    atom_concat(Step, '_policy', Name),
+    Goal =.. [Name, Info],
+    M:Goal.

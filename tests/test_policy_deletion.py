@@ -1,0 +1,276 @@
+"""Deletion under the consumption policies is exact (issue 21, item 3): under `recent` and
+`chronological` (program flag or rule property), deleting an input event inside the retraction
+horizon nets the output to that of a run in which the event never arrived: the partner it
+consumed is free again, and the later decisions of the rule are made again
+(prolog_runtime/rtl_policy.pl).
+
+Checked three ways: golden cases; a brute-force simulation of the policies in arrival order
+(`simulate`, for one-step rules); and, for every rule shape (hierarchies, negation, windows,
+several steps, rules fed by derived events), the engine against itself on the stream without
+the deleted events, in any arrival order and within a delay bound."""
+from collections import Counter
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from retalisc.driver.engine import Engine
+
+from ele_oracle import net_output
+
+
+def outputs(engine, batch):
+    return [(o.op, o.event, o.start, o.end) for o in engine.feed_batch(batch)]
+
+
+def fresh(engine, max_delay="inf"):
+    engine.activate()           # one program per process: another test may have loaded its own
+    engine.clear()
+    engine.set_flag("max_delay", max_delay)
+    return engine
+
+
+# ---- golden cases ------------------------------------------------------------------------
+
+def test_a_deleted_event_frees_the_partner_it_consumed_recent():
+    program = ":- set_etalis_flag(event_consumption_policy, recent).\nr(I, X, Y) <- a(I, X) seq b(I, Y).\n"
+    engine = fresh(Engine.from_source(program, "recent.rtl"))
+    assert outputs(engine, [("a(1, x)", 1), ("a(1, y)", 2), ("b(1, p)", 3), ("b(1, q)", 4)]) == [
+        ("add", "r(1,y,p)", 2, 3), ("add", "r(1,x,q)", 1, 4)]
+    # without a(1, y): b(1, p) takes a(1, x), and b(1, q) finds nothing left
+    assert outputs(engine, [("a(1, y)", 2, 2, "retract")]) == [
+        ("retract", "r(1,x,q)", 1, 4), ("retract", "r(1,y,p)", 2, 3), ("add", "r(1,x,p)", 1, 3)]
+    # the b(1, q) waits again: a late a(1, z) that happened before it takes it
+    assert outputs(engine, [("a(1, z)", 3.5), ("b(1, s)", 5)]) == [("add", "r(1,z,q)", 3.5, 4)]
+
+
+def test_a_deleted_event_frees_the_partner_it_consumed_chronological():
+    program = "r1([property(consumption_policy, chronological)]) 'rule:' r(I, X, Y) <- a(I, X) seq b(I, Y).\n"
+    engine = fresh(Engine.from_source(program, "chrono.rtl"))
+    assert outputs(engine, [("a(1, x)", 1), ("a(1, y)", 2), ("b(1, p)", 3), ("b(1, q)", 4)]) == [
+        ("add", "r(1,x,p)", 1, 3), ("add", "r(1,y,q)", 2, 4)]
+    # without b(1, p): a(1, x) pairs with b(1, q), a(1, y) waits
+    assert net_output(engine.feed_batch([("b(1, p)", 3, 3, "retract")])) == Counter(
+        {"r(1,x,p)@1-3": -1, "r(1,y,q)@2-4": -1, "r(1,x,q)@1-4": 1})
+    assert outputs(engine, [("b(1, t)", 6)]) == [("add", "r(1,y,t)", 2, 6)]
+
+
+def test_a_deletion_reaches_the_later_steps_of_the_rule():
+    program = ":- set_etalis_flag(event_consumption_policy, recent).\nr(X, Y, Z) <- a(X) seq b(Y) seq c(Z).\n"
+    engine = fresh(Engine.from_source(program, "three.rtl"))
+    events = [("a(1)", 1), ("a(2)", 2), ("b(3)", 3), ("c(4)", 4), ("b(5)", 5), ("c(6)", 6)]
+    assert outputs(engine, events) == [("add", "r(2,3,4)", 2, 4), ("add", "r(1,5,6)", 1, 6)]
+    # without a(2): a(1) seq b(3) takes c(4); b(5) and c(6) find nothing
+    engine.feed_batch([("a(2)", 2, 2, "retract")])
+    assert engine.feed("c(7)", 7) == []
+    fresh(engine)
+    expected = outputs(engine, [e for e in events if e[0] != "a(2)"] + [("c(7)", 7)])
+    fresh(engine)
+    assert net_output(engine.feed_batch(events + [("a(2)", 2, 2, "retract"), ("c(7)", 7)])) == Counter(
+        f"{e}@{s}-{t}" for _, e, s, t in expected)
+
+
+def test_deleting_a_blocker_under_a_policy_pairs_again():
+    program = (":- set_etalis_flag(event_consumption_policy, chronological).\n"
+               "r(X, Y) <- not(c).[a(X), b(Y)].\n")
+    engine = fresh(Engine.from_source(program, "not.rtl"))
+    assert outputs(engine, [("a(1)", 1), ("c", 2), ("b(3)", 3), ("a(4)", 4), ("b(5)", 5)]) == [
+        ("add", "r(4,5)", 4, 5)]
+    # without c: a(1) pairs with b(3), and a(4) with b(5) as before
+    assert net_output(engine.feed_batch([("c", 2, 2, "retract")])) == Counter({"r(1,3)@1-3": 1})
+    # a blocker that arrives late (after the pairs) takes nothing back: arrival order decides
+    assert outputs(engine, [("c", 2)]) == []
+
+
+def test_a_deletion_within_the_horizon_of_a_windowed_rule():
+    program = (":- set_etalis_flag(event_consumption_policy, recent).\n"
+               "r(X, Y) <- (a(X) seq b(Y)).5.\n")
+    engine = fresh(Engine.from_source(program, "window.rtl"), "1")
+    assert outputs(engine, [("a(1)", 1), ("a(2)", 2), ("b(3)", 3), ("b(4)", 4), ("a(7)", 7)]) == [
+        ("add", "r(2,3)", 2, 3), ("add", "r(1,4)", 1, 4)]
+    assert net_output(engine.feed_batch([("a(2)", 2, 2, "retract")])) == Counter(
+        {"r(2,3)@2-3": -1, "r(1,4)@1-4": -1, "r(1,3)@1-3": 1})
+
+
+def test_a_rule_fed_by_a_derived_event_follows_the_deletion():
+    program = (":- set_etalis_flag(event_consumption_policy, recent).\n"
+               "x(X, Y) <- a(X) seq b(Y).\n"
+               "y(X, Z) <- x(X, _) seq c(Z).\n")
+    engine = fresh(Engine.from_source(program, "hierarchy.rtl"))
+    events = [("a(1)", 1), ("a(2)", 2), ("b(3)", 3), ("b(4)", 4), ("c(5)", 5)]
+    before = outputs(engine, events)
+    assert ("add", "y(1,5)", 1, 5) in before
+    # without a(1): x(2, 3) is the only x, and c(5) pairs with it
+    assert net_output(engine.feed_batch([("a(1)", 1, 1, "retract")])) == Counter(
+        {"x(1,4)@1-4": -1, "y(1,5)@1-5": -1, "y(2,5)@2-5": 1})
+
+
+# ---- a brute-force simulation of the policies ----------------------------------------------
+
+SIMULATED = {
+    "sq": ("seq", None, lambda s1, e1, s2, e2: e1 < s2, lambda s1, e1, s2, e2: (s1, e2)),
+    "wa": ("and", 3, lambda s1, e1, s2, e2: True, lambda s1, e1, s2, e2: (min(s1, s2), max(e1, e2))),
+    "nt": ("not", None, lambda s1, e1, s2, e2: e1 < s2, lambda s1, e1, s2, e2: (s1, e2)),
+}
+
+
+def simulated_program(policy):
+    return (f":- set_etalis_flag(event_consumption_policy, {policy}).\n"
+            "sq(I, X, Y) <- a(I, X) seq b(I, Y).\n"
+            "wa(I, X, Y) <- (a(I, X) and b(I, Y)).3.\n"
+            "nt(I, X, Y) <- not(c(I, _)).[a(I, X), b(I, Y)].\n")
+
+
+def simulate(policy, arrival):
+    """Each rule in arrival order: an instance pairs with the newest (recent) or oldest
+    (chronological) waiting partner of the other side with its key that fits, and both are
+    consumed; else it waits, under `recent` replacing a waiting identical twin. A blocker
+    blocks the pairs made after it arrived."""
+    result = Counter()
+    for name, (op, window, relation, interval) in SIMULATED.items():
+        waiting = {"a": [], "b": []}
+        blockers = []
+        for kind, key, value, start, duration in arrival:
+            end = start + duration
+            if kind == "c":
+                blockers.append((key, start, end))
+                continue
+            other = "b" if kind == "a" else "a"
+
+            def fits(partner):
+                (k2, v2, s2, e2) = partner
+                if k2 != key:
+                    return False
+                (ls, le, rs, re_) = (start, end, s2, e2) if kind == "a" else (s2, e2, start, end)
+                if not relation(ls, le, rs, re_):
+                    return False
+                s, e = interval(ls, le, rs, re_)
+                if window is not None and e - s > window:
+                    return False
+                if op == "not" and any(bk == key and le < bs and be < rs for bk, bs, be in blockers):
+                    return False
+                return True
+            candidates = [p for p in waiting[other] if fits(p)]
+            if candidates:
+                partner = candidates[-1] if policy == "recent" else candidates[0]
+                waiting[other].remove(partner)
+                (_, v2, s2, e2) = partner
+                (x, ls, le, y, rs, re_) = (value, start, end, v2, s2, e2) if kind == "a" else (v2, s2, e2, value, start, end)
+                s, e = interval(ls, le, rs, re_)
+                result[f"{name}({key},{x},{y})@{s}-{e}"] += 1
+            else:
+                if policy == "recent":
+                    waiting[kind] = [w for w in waiting[kind] if (w[0], w[1]) != (key, value)]
+                waiting[kind].append((key, value, start, end))
+    return result
+
+
+event = st.tuples(st.sampled_from("aabbc"), st.integers(1, 2), st.integers(0, 2), st.integers(0, 8),
+                  st.sampled_from([0, 0, 1]))
+
+
+def with_deletions(data, arrival):
+    """The operations: every event added in arrival order, some deleted again at a later point;
+    and the events that remain, in arrival order (a deletion removes the latest arrival of an
+    identical event added before it)."""
+    doomed = data.draw(st.lists(st.integers(0, len(arrival) - 1), unique=True, max_size=len(arrival)))
+    ops = [("add", e) for e in arrival]
+    for index in sorted(doomed, reverse=True):
+        ops.insert(data.draw(st.integers(index + 1, len(ops))), ("retract", arrival[index]))
+    present = []
+    for op, e in ops:
+        if op == "add":
+            present.append(e)
+        else:
+            del present[len(present) - 1 - present[::-1].index(e)]
+    return ops, present
+
+
+def feed(engine, ops, max_delay="inf"):
+    fresh(engine, max_delay)
+    return net_output(engine.feed_batch([(f"{k}({i}, {x})", s, s + d, op)
+                                         for op, (k, i, x, s, d) in ops]))
+
+
+@pytest.fixture(scope="module", params=["recent", "chronological"])
+def simulated(request):
+    engine = Engine.from_source(simulated_program(request.param), f"{request.param}.rtl")
+    yield request.param, engine
+    fresh(engine, "1.0")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(event, min_size=2, max_size=12), st.data())
+def test_deletions_match_the_simulation_without_the_deleted_events(simulated, events, data):
+    policy, engine = simulated
+    arrival = data.draw(st.permutations(events))
+    ops, remaining = with_deletions(data, arrival)
+    assert feed(engine, ops) == simulate(policy, remaining)
+
+
+# ---- every rule shape against a run without the deleted events ----------------------------
+
+SHAPES = [
+    "sq{p}(I, X, Y) <- a(I, X) seq b(I, Y).",
+    "th{p}(I, X, Z) <- a(I, X) seq b(I, _) seq c(I, Z).",
+    "wd{p}(I, X, Y) <- (a(I, X) and b(I, Y)).3.",
+    "wh{p}(I, X, Y) <- a(I, X) seq b(I, Y) where X =< Y.",
+    "nt{p}(I, X) <- not(c(I, _)).[a(I, X), b(I, _)].",
+    "cn{p}(I, X) <- (a(I, X) seq b(I, _)) cnot c(_, _).",
+    "hi{p}(I, X) <- sq{p}(I, X, _) seq c(I, _).",
+    "nk{p}(X, Y) <- a(_, X) seq b(_, Y).",
+]
+
+
+def shapes_program():
+    rules = []
+    for policy, tag in (("recent", "r"), ("chronological", "c"), ("unrestricted", "u")):
+        for n, shape in enumerate(SHAPES):
+            rules.append(f"{tag}{n}([property(consumption_policy, {policy})]) 'rule:' " + shape.format(p=tag))
+    return "\n".join(rules) + "\n"
+
+
+@pytest.fixture(scope="module")
+def shapes():
+    engine = Engine.from_source(shapes_program(), "shapes.rtl")
+    yield engine
+    fresh(engine, "1.0")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(event, min_size=2, max_size=12), st.data())
+def test_every_shape_nets_to_the_run_without_the_deleted_events(shapes, events, data):
+    arrival = data.draw(st.permutations(events))
+    ops, remaining = with_deletions(data, arrival)
+    assert feed(shapes, ops) == feed(shapes, [("add", e) for e in remaining])
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(st.tuples(event, st.integers(0, 2)), min_size=2, max_size=14), st.data())
+def test_deletions_inside_the_horizon_within_the_delay_bound(shapes, delayed, data):
+    """Events arrive up to 2 s late (the delay bound); deletions come at a random later point
+    and only while the event is inside the retraction horizon (H = 2 + 3 s, the largest window)."""
+    arrival = [e for e, _ in sorted(delayed, key=lambda ed: ed[0][3] + ed[0][4] + ed[1])]
+    ops, _ = with_deletions(data, arrival)
+    kept, clock, present = [], float("-inf"), []
+    for op, e in ops:
+        end = e[3] + e[4]
+        if op == "add":
+            clock = max(clock, end)
+            present.append(e)
+        elif end >= clock - 5:
+            del present[len(present) - 1 - present[::-1].index(e)]
+        else:
+            continue
+        kept.append((op, e))
+    assert feed(shapes, kept, "2") == feed(shapes, [("add", e) for e in present], "2")
+
+
+def test_a_rule_added_at_run_time_deletes_exactly_too():
+    """Rules added while events flow pass the sandbox (rtl_sandbox.pl) with the policy runtime."""
+    engine = fresh(Engine.from_source("base(X) <- a(X, _).\n", "base.rtl"))
+    assert engine.add_rules("late([property(consumption_policy, recent)]) 'rule:' pair(X, Y) <- a(1, X) seq b(1, Y).\n"
+                            ) == ["late"]
+    engine.feed_batch([("a(1, x)", 1), ("a(1, y)", 2), ("b(1, p)", 3), ("b(1, q)", 4)])
+    assert net_output(engine.feed_batch([("a(1, y)", 2, 2, "retract")])) == Counter(
+        {"base(1)@2-2": -1, "pair(y,p)@2-3": -1, "pair(x,q)@1-4": -1, "pair(x,p)@1-3": 1})
