@@ -430,12 +430,27 @@ runtime_goal(IM, G, M, S, V0, V) :-
     S = st(Policy, _),
     (   builtin(Where, IM:G, Called),
         ( Where == any ; Policy = rule(_, _, _) )
-    ->  walk_list(Called, M, S, V0, V)
+    ->  own_step(IM:G, S),
+        walk_list(Called, M, S, V0, V)
     ;   catch(sandbox:safe_primitive(IM:G), _, fail)
     ->  V = V0
     ;   goal_pi(G, PI),
         refuse(S, PI, runtime)
     ).
+
+%   The policy runtime (rtl_policy.pl) rewinds the step it is given, retracting that step's
+%   matches: an added rule may name only its own steps.
+own_step(rtl_policy:G, S) :-
+    policy_step(G, Step), !,
+    S = st(rule(Id, _, _), Path),
+    (   atom(Step), rtl_rules:rule_pred_name(Id, Step)
+    ->  true
+    ;   throw(error(rtl_unsafe(Step, not_own_step, Path), _))
+    ).
+own_step(_, _).
+
+policy_step(rtl_policy_insert(Step, _, _, _), Step).
+policy_step(rtl_policy_delete(Step, _, _, _), Step).
 
 %   A predicate of the program (or of `user`): check its clauses, for the most general call
 %   first; if that needs more instantiation (a clause calls an argument), for this call.
@@ -596,6 +611,8 @@ reason_text(too_deep, C, T) :-
     format(string(T), "unsafe goal: ~q (too deep to check)", [C]).
 reason_text(head, C, T) :-
     format(string(T), "unsafe clause: an added rule may only define its triggers and its own predicates, not ~q", [C]).
+reason_text(not_own_step, C, T) :-
+    format(string(T), "unsafe goal: the step ~q is not one of the added rule's own", [C]).
 reason_text(rule_id, C, T) :-
     format(string(T), "unsafe rule: its id ~q is not an atom", [C]).
 reason_text(store, C, T) :-

@@ -96,6 +96,9 @@ def test_one_unsafe_rule_refuses_the_whole_text(engine, tmp_path):
     ("'$rtl_rule'(zz, []).\nlocated(s9, garage).\n", "may only define its triggers and its own predicates, not located/2"),
     ("'$rtl_rule'(zz, []).\n:- shell('touch {m}').\n", "a directive"),
     ("'$rtl_rule'(zz, []).\nele_trigger(go, _, _) :- shell('touch {m}').\n", "unsafe goal: shell/1"),
+    ("'$rtl_rule'(zz, [store(e_zz_1_lefts, 1, none)]).\n"
+     "ele_trigger(go, _, _) :- rtl_policy:rtl_policy_delete(e_r1_1, left, [], e_zz_1_lefts(_)).\n",
+     "the step e_r1_1 is not one of the added rule's own"),
 ])
 def test_compiled_rule_text_is_checked_whatever_its_source(engine, tmp_path, clauses, message):
     """rtl_install_rules/3 checks the clauses themselves, not only what the compiler makes."""
