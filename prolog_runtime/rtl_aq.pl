@@ -826,7 +826,7 @@ add_fact(Fact) :-
 %!  aq_assert_all(+Facts) is det.
 aq_assert_all(Facts) :-
     must_be(list, Facts),
-    maplist(check_fact, Facts),
+    check_facts(Facts),
     (   aq_conf(negation, true)
     ->  maplist(aq_assert, Facts)
     ;   add_facts(Facts),
@@ -836,11 +836,20 @@ aq_assert_all(Facts) :-
 %   The facts of a batch, propagated one after the other (depth-first, as
 %   far as schedule/3 goes) and the agenda drained once at the end: the
 %   order in which additions propagate does not change what they derive.
+%   A ground fact is implied by a stored one exactly when calling it
+%   succeeds (implied_fact/1), tested in place: a batch of a belief base
+%   that few queries watch costs little more than the plain assertz/1s.
 add_facts([]).
 add_facts([F|Fs]) :-
-    (   implied_fact(F)
+    (   ground(F)
+    ->  (   user:F
+        ->  true
+        ;   assertz(user:F),
+            forall(user:'$aq_wrec'(F, S), go(S, F, 0))
+        )
+    ;   has_fact(F)
     ->  true
-    ;   ( ground(F) -> true ; not_all_ground(F) ),
+    ;   not_all_ground(F),
         assertz(user:F),
         forall(user:'$aq_wrec'(F, S), go(S, F, 0))
     ),
@@ -858,7 +867,7 @@ aq_retract(Fact) :-
 %   Remove all Facts in one DRed pass.
 aq_retract_all(Facts0) :-
     must_be(list, Facts0),
-    maplist(check_fact, Facts0),
+    check_facts(Facts0),
     neg_update(retract_facts(Facts0)).
 
 %   Facts that are stored and that some state waits on go through one DRed
@@ -868,21 +877,26 @@ retract_facts(Facts0) :-
     sort(Awaited0, Awaited),
     (   Awaited == [] -> true ; dred(Awaited) ).
 
+%   A fact no state waits on derived nothing: it goes without DRed (most
+%   retractions of a belief base that a few queries watch are such facts),
+%   and without asking first whether it is stored (erasing a fact that is
+%   not there does nothing).
 quiet_retract([], []).
 quiet_retract([F|Fs], Awaited) :-
-    (   \+ has_fact(F)
-    ->  Awaited = Awaited1
-    ;   awaited(F)
-    ->  Awaited = [F|Awaited1]
-    ;   erase_fact(F),
+    (   \+ user:'$aq_wrec'(F, _)
+    ->  erase_fact(F),
         Awaited = Awaited1
+    ;   has_fact(F)
+    ->  Awaited = [F|Awaited1]
+    ;   Awaited = Awaited1
     ),
     quiet_retract(Fs, Awaited1).
 
-%   A fact no state waits on derived nothing: it goes without DRed (most
-%   retractions of a belief base that a few queries watch are such facts).
-awaited(F) :-
-    \+ \+ user:'$aq_wrec'(F, _).
+%   Every fact of a batch is checked before any is changed.
+check_facts([]).
+check_facts([F|Fs]) :-
+    (   callable(F), user:'$aq_fact_pred'(F) -> true ; check_fact(F) ),
+    check_facts(Fs).
 
 check_fact(F) :-
     (   callable(F), user:'$aq_fact_pred'(F)
