@@ -95,6 +95,7 @@ aq_conf(negation, false).
 
 init_globals :-
     nb_setval(aq_phase, insert),
+    nb_setval(aq_ground, unknown),
     nb_setval(aq_registering, '$none'),
     trie_new(Sub), nb_setval(aq_subgoals, Sub),
     trie_new(St), nb_setval(aq_cstates, St),
@@ -112,6 +113,7 @@ init_globals :-
 
 aq_configure(Options) :-
     retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
+    nb_setval(aq_ground, unknown),
     forall(member(Opt, Options), configure(Opt)).
 
 configure(mode(M)) :- !,
@@ -944,16 +946,36 @@ stored_copy(F, Ref) :-
 %   ends it.
 ground_fact(F) :-
     ground(F),
-    functor(F, N, A),
-    (   aq_ground_facts(N, A, B)
-    ->  B == true
-    ;   functor(G, N, A),
-        (   \+ ( user:clause(G, true), \+ ground(G) ) -> B = true ; B = false ),
-        assertz(aq_ground_facts(N, A, B)),
-        B == true
+    nb_getval(aq_ground, All),
+    (   All == true
+    ->  true
+    ;   All == unknown
+    ->  (   all_facts_ground -> All1 = true ; All1 = false ),
+        nb_setval(aq_ground, All1),
+        ground_fact(F)
+    ;   functor(F, N, A),
+        (   aq_ground_facts(N, A, B)
+        ->  B == true
+        ;   functor(G, N, A),
+            (   \+ ( user:clause(G, true), \+ ground(G) ) -> B = true ; B = false ),
+            assertz(aq_ground_facts(N, A, B)),
+            B == true
+        )
     ).
 
+%   The global aq_ground is true while every stored fact of every dynamic
+%   predicate is ground (the usual case: then one global lookup answers
+%   ground_fact/1, a fifth of the cost of retracting a fact of a batch),
+%   false once one is not (then the flag per predicate decides), unknown
+%   until the first scan.
+all_facts_ground :-
+    \+ ( current_predicate(user:'$aq_fact_pred'/1),
+          user:'$aq_fact_pred'(G),
+          user:clause(G, true),
+          \+ ground(G) ).
+
 not_all_ground(F) :-
+    nb_setval(aq_ground, false),
     functor(F, N, A),
     retractall(aq_ground_facts(N, A, _)),
     assertz(aq_ground_facts(N, A, false)).
@@ -1098,8 +1120,9 @@ creates(aq_wait_neg(_, _, S, _), S).
 premise(act(T), none, _, 0) :- !,
     aq_tab(T, _, _, _, _).
 premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on their
-    user:Lit,                       % bound arguments, goal records often are not
-    user:'$aq_wrec'(Lit, P).
+    \+ \+ user:'$aq_wrec'(Lit, P),   % bound arguments, goal records often are not; but
+    user:Lit,                       % one look at the records first skips a rule whose
+    user:'$aq_wrec'(Lit, P).        % states wait elsewhere (another body order)
 premise(P, neg, '$aq_not'(Lit), 0) :- !,
     nb_getval(aq_nstates, NS),
     trie_gen(NS, ns(P, Lit), n(Kind, T, passed, _)),
