@@ -827,7 +827,7 @@ add_fact(Fact) :-
 
 %!  aq_assert_all(+Facts) is det.
 aq_assert_all(Facts) :-
-    must_be(list, Facts),
+    ( is_list(Facts) -> true ; must_be(list, Facts) ),
     check_facts(Facts),
     (   aq_conf(negation, true)
     ->  maplist(aq_assert, Facts)
@@ -868,7 +868,7 @@ aq_retract(Fact) :-
 %
 %   Remove all Facts in one DRed pass.
 aq_retract_all(Facts0) :-
-    must_be(list, Facts0),
+    ( is_list(Facts0) -> true ; must_be(list, Facts0) ),
     check_facts(Facts0),
     neg_update(retract_facts(Facts0)).
 
