@@ -95,6 +95,7 @@ aq_conf(negation, false).
 
 init_globals :-
     nb_setval(aq_phase, insert),
+    nb_setval(aq_ground, unknown),
     nb_setval(aq_registering, '$none'),
     trie_new(Sub), nb_setval(aq_subgoals, Sub),
     trie_new(St), nb_setval(aq_cstates, St),
@@ -112,6 +113,7 @@ init_globals :-
 
 aq_configure(Options) :-
     retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
+    nb_setval(aq_ground, unknown),
     forall(member(Opt, Options), configure(Opt)).
 
 configure(mode(M)) :- !,
@@ -825,8 +827,8 @@ add_fact(Fact) :-
 
 %!  aq_assert_all(+Facts) is det.
 aq_assert_all(Facts) :-
-    must_be(list, Facts),
-    maplist(check_fact, Facts),
+    ( is_list(Facts) -> true ; must_be(list, Facts) ),
+    check_facts(Facts),
     (   aq_conf(negation, true)
     ->  maplist(aq_assert, Facts)
     ;   add_facts(Facts),
@@ -836,11 +838,20 @@ aq_assert_all(Facts) :-
 %   The facts of a batch, propagated one after the other (depth-first, as
 %   far as schedule/3 goes) and the agenda drained once at the end: the
 %   order in which additions propagate does not change what they derive.
+%   A ground fact is implied by a stored one exactly when calling it
+%   succeeds (implied_fact/1), tested in place: a batch of a belief base
+%   that few queries watch costs little more than the plain assertz/1s.
 add_facts([]).
 add_facts([F|Fs]) :-
-    (   implied_fact(F)
+    (   ground(F)
+    ->  (   user:F
+        ->  true
+        ;   assertz(user:F),
+            forall(user:'$aq_wrec'(F, S), go(S, F, 0))
+        )
+    ;   has_fact(F)
     ->  true
-    ;   ( ground(F) -> true ; not_all_ground(F) ),
+    ;   not_all_ground(F),
         assertz(user:F),
         forall(user:'$aq_wrec'(F, S), go(S, F, 0))
     ),
@@ -857,8 +868,8 @@ aq_retract(Fact) :-
 %
 %   Remove all Facts in one DRed pass.
 aq_retract_all(Facts0) :-
-    must_be(list, Facts0),
-    maplist(check_fact, Facts0),
+    ( is_list(Facts0) -> true ; must_be(list, Facts0) ),
+    check_facts(Facts0),
     neg_update(retract_facts(Facts0)).
 
 %   Facts that are stored and that some state waits on go through one DRed
@@ -868,21 +879,26 @@ retract_facts(Facts0) :-
     sort(Awaited0, Awaited),
     (   Awaited == [] -> true ; dred(Awaited) ).
 
+%   A fact no state waits on derived nothing: it goes without DRed (most
+%   retractions of a belief base that a few queries watch are such facts),
+%   and without asking first whether it is stored (erasing a fact that is
+%   not there does nothing).
 quiet_retract([], []).
 quiet_retract([F|Fs], Awaited) :-
-    (   \+ has_fact(F)
-    ->  Awaited = Awaited1
-    ;   awaited(F)
-    ->  Awaited = [F|Awaited1]
-    ;   erase_fact(F),
+    (   \+ user:'$aq_wrec'(F, _)
+    ->  erase_fact(F),
         Awaited = Awaited1
+    ;   has_fact(F)
+    ->  Awaited = [F|Awaited1]
+    ;   Awaited = Awaited1
     ),
     quiet_retract(Fs, Awaited1).
 
-%   A fact no state waits on derived nothing: it goes without DRed (most
-%   retractions of a belief base that a few queries watch are such facts).
-awaited(F) :-
-    \+ \+ user:'$aq_wrec'(F, _).
+%   Every fact of a batch is checked before any is changed.
+check_facts([]).
+check_facts([F|Fs]) :-
+    (   callable(F), user:'$aq_fact_pred'(F) -> true ; check_fact(F) ),
+    check_facts(Fs).
 
 check_fact(F) :-
     (   callable(F), user:'$aq_fact_pred'(F)
@@ -930,16 +946,36 @@ stored_copy(F, Ref) :-
 %   ends it.
 ground_fact(F) :-
     ground(F),
-    functor(F, N, A),
-    (   aq_ground_facts(N, A, B)
-    ->  B == true
-    ;   functor(G, N, A),
-        (   \+ ( user:clause(G, true), \+ ground(G) ) -> B = true ; B = false ),
-        assertz(aq_ground_facts(N, A, B)),
-        B == true
+    nb_getval(aq_ground, All),
+    (   All == true
+    ->  true
+    ;   All == unknown
+    ->  (   all_facts_ground -> All1 = true ; All1 = false ),
+        nb_setval(aq_ground, All1),
+        ground_fact(F)
+    ;   functor(F, N, A),
+        (   aq_ground_facts(N, A, B)
+        ->  B == true
+        ;   functor(G, N, A),
+            (   \+ ( user:clause(G, true), \+ ground(G) ) -> B = true ; B = false ),
+            assertz(aq_ground_facts(N, A, B)),
+            B == true
+        )
     ).
 
+%   The global aq_ground is true while every stored fact of every dynamic
+%   predicate is ground (the usual case: then one global lookup answers
+%   ground_fact/1, a fifth of the cost of retracting a fact of a batch),
+%   false once one is not (then the flag per predicate decides), unknown
+%   until the first scan.
+all_facts_ground :-
+    \+ ( current_predicate(user:'$aq_fact_pred'/1),
+          user:'$aq_fact_pred'(G),
+          user:clause(G, true),
+          \+ ground(G) ).
+
 not_all_ground(F) :-
+    nb_setval(aq_ground, false),
     functor(F, N, A),
     retractall(aq_ground_facts(N, A, _)),
     assertz(aq_ground_facts(N, A, false)).
@@ -1084,8 +1120,9 @@ creates(aq_wait_neg(_, _, S, _), S).
 premise(act(T), none, _, 0) :- !,
     aq_tab(T, _, _, _, _).
 premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on their
-    user:Lit,                       % bound arguments, goal records often are not
-    user:'$aq_wrec'(Lit, P).
+    \+ \+ user:'$aq_wrec'(Lit, P),   % bound arguments, goal records often are not; but
+    user:Lit,                       % one look at the records first skips a rule whose
+    user:'$aq_wrec'(Lit, P).        % states wait elsewhere (another body order)
 premise(P, neg, '$aq_not'(Lit), 0) :- !,
     nb_getval(aq_nstates, NS),
     trie_gen(NS, ns(P, Lit), n(Kind, T, passed, _)),
