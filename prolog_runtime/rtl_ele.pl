@@ -236,21 +236,30 @@ rtl_clock(Clock) :-
 %   Process one input event: derive everything it completes, deliver the results.
 
 rtl_event(Event, Start, End) :-
-    note_duration(Start, End),
+    (   End > Start -> note_duration(Start, End) ; true ),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_setval(rtl_clock, End),
-        rtl_timers_run(before)
+        (   nb_current(rtl_next_timer, Due), Due < End      % a timer due before the event
+        ->  rtl_timers_run(before)
+        ;   true
+        )
     ;   late_check(End, Clock0)
     ),
-    rtl_count(events),
+    nb_getval(events, N0),
+    N is N0 + 1,
+    nb_setval(events, N),
     (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true),
-    rtl_timers_run(after),
-    nb_getval(rtl_next_sweep, Next),
-    (   End >= Next -> periodic_sweep ; true ).
+    nb_getval(rtl_clock, Clock),
+    (   nb_current(rtl_next_timer, Next), Next =< Clock  % due now, or set by the event
+    ->  rtl_timers_run(after)
+    ;   true
+    ),
+    nb_getval(rtl_next_sweep, Sweep),
+    (   End >= Sweep -> periodic_sweep ; true ).
 
 % The longest interval of an event seen so far: with the delay bound, it says how early a
 % later event can start (rtl_collect_garbage/0, negation stores).
