@@ -10,6 +10,7 @@
             rtl_underived/3,            % +Event, +Start, +End
             rtl_clock/1,                % -Clock
             rtl_advance_clock/1,        % +Time
+            rtl_started_after/1,        % +Time
             rtl_set_flag/2,             % +Flag, +Value
             rtl_flag/2,                 % ?Flag, ?Value
             rtl_max_steps/1,            % -Steps
@@ -83,7 +84,8 @@ flag_default(flush_timers, false).          % fire pending timers at the end of 
 rtl_use_program(Module) :-
     nb_setval(rtl_program, Module),
     rtl_timers_program(Module),
-    rtl_reset.
+    rtl_reset,
+    latest_start_known(Module).
 
 %!  rtl_program(-Module) is semidet.
 
@@ -116,7 +118,8 @@ rtl_clear :-
     forall(M:ele_partial_store(Name, Arity),
            ( functor(Head, Name, Arity), retractall(M:Head) )),
     forall(clear_hook, true),
-    rtl_reset.
+    rtl_reset,
+    nb_setval(rtl_latest_start, -inf).
 
 %!  clear_hook is det.
 %
@@ -237,6 +240,7 @@ rtl_clock(Clock) :-
 
 rtl_event(Event, Start, End) :-
     (   End > Start -> note_duration(Start, End) ; true ),
+    note_start(Start),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_setval(rtl_clock, End),
@@ -269,6 +273,38 @@ note_duration(Start, End) :-
         End - Start > Longest
     ->  Duration is End - Start,
         nb_setval(rtl_longest_event, Duration)
+    ;   true
+    ).
+
+%!  rtl_started_after(+Time:number) is semidet.
+%
+%   Some event given to the program's rules so far (input, derived or internal) started
+%   after Time, or that is not known. Every stored partial match starts when one of its
+%   events starts, so when this fails no stored match starts after Time: a `seq` step skips
+%   the search for a right partner of a left instance ending at Time (in a stream in time
+%   order, none can follow it). The latest start is known from a moment when the stores
+%   were empty (rtl_use_program/1, rtl_clear/0); a snapshot restores it with the stores.
+
+rtl_started_after(Time) :-
+    (   nb_current(rtl_latest_start, Latest)
+    ->  Latest > Time
+    ;   true
+    ).
+
+% The latest start, when known (it is not after a restore from a snapshot without it).
+note_start(Start) :-
+    (   nb_current(rtl_latest_start, Latest), Start > Latest
+    ->  nb_setval(rtl_latest_start, Start)
+    ;   true
+    ).
+
+% A program taken into use with empty stores: from now on the latest start is known. With
+% stored matches (another program was used meanwhile) it is not.
+latest_start_known(M) :-
+    (   \+ ( M:ele_partial_store(Name, Arity), functor(Head, Name, Arity), once(M:Head) )
+    ->  nb_setval(rtl_latest_start, -inf)
+    ;   nb_current(rtl_latest_start, _)
+    ->  nb_delete(rtl_latest_start)
     ;   true
     ).
 
@@ -320,6 +356,7 @@ rtl_retract_event(Event, Start, End) :-
 rtl_derived(Event, Start, End) :-
     rtl_count(derived),
     note_duration(Start, End),
+    note_start(Start),
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
@@ -332,6 +369,7 @@ rtl_derived(Event, Start, End) :-
 
 rtl_internal_event(Event, Start, End) :-
     note_duration(Start, End),
+    note_start(Start),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true).

@@ -114,6 +114,7 @@ builtin(any,  rtl_math:G, []) :-
     (   var(G) -> true ; predicate_property(rtl_math:G, exported) ).
 builtin(rule, rtl_ele:rtl_derived(_, _, _), []).
 builtin(rule, rtl_horizon:rtl_late(_), []).                % deletions and late events
+builtin(rule, rtl_ele:rtl_started_after(_), []).         % `seq` steps
 builtin(rule, rtl_horizon:rtl_kept_generation(_), []).
 builtin(rule, rtl_horizon:rtl_next_seq(_), []).
 builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
