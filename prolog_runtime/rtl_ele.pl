@@ -443,6 +443,11 @@ rtl_output_to(Sink) :-
 %   Deliver one output line (the JSON Lines format of docs/runtime.md, "Output").
 
 rtl_emit(Event, Start, End, Consumer, Op) :-
+    Consumer == (-), Op \== retract,
+    nb_getval(rtl_output_sink, print),
+    rtl_write_event_line(user_output, Event, Start, End),     % the common case, in C
+    !.
+rtl_emit(Event, Start, End, Consumer, Op) :-
     rtl_event_json(Event, Start, End, Consumer, Op, Line),
     rtl_emit_line(Line).
 

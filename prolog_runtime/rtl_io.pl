@@ -3,6 +3,7 @@
             rtl_parse_event_line/3,      % +LineString, +MaxDepth, -Parsed
             rtl_read_event_text/4,       % +Text, +MaxDepth, -Event, -Problem
             rtl_event_json/6,            % +Event, +Start, +End, +Consumer, +Op, -JsonString
+            rtl_write_event_line/4,      % +Stream, +Event, +Start, +End
             rtl_json_string_escape/2,    % +Text, -Escaped
             rtl_use_fast_reader/1        % +Bool
           ]).
@@ -481,6 +482,16 @@ rtl_event_json(Event, Start, End, Consumer, Op, Json) :-
         format(string(Json), "{\"event\": \"~s\", \"start\": ~w, \"end\": ~w~s~s}",
                [Escaped, S, E, ConsumerPart, OpPart])
     ).
+
+%!  rtl_write_event_line(+Stream, +Event, +Start, +End) is semidet.
+%
+%   Write the output line of Event (no consumer, Op `add`) and a newline to Stream, in one
+%   call, when the C writer can: Stream is UTF-8 and the times are finite. Fails without
+%   writing anything otherwise (the caller then writes rtl_event_json/6's line).
+
+rtl_write_event_line(Stream, Event, Start, End) :-
+    fast_writer,
+    rtl_fast_write_event(Stream, Event, Start, End).
 
 json_number(N, N) :- integer(N), !.
 json_number(N, T) :-

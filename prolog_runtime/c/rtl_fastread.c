@@ -30,7 +30,8 @@
 
     the term written as writeq/1 writes it (UTF-8), escaped as the inside of a JSON string
     the way rtl_json_string_escape/2 escapes; it fails when Start or End is not a finite
-    number (rtl_io.pl writes those).
+    number (rtl_io.pl writes those). rtl_fast_write_event(+Stream, +Event, +Start, +End)
+    writes that line and a newline to a UTF-8 stream.
 */
 
 #include <SWI-Stream.h>
@@ -476,25 +477,54 @@ static int json_time_text(buffer *b, term_t t)
   return ok;
 }
 
-static foreign_t
-pl_fast_event_json(term_t event, term_t start, term_t end, term_t json)
-{ buffer b = { NULL, 0, 0 };
-  char *text;
+/* The output line of the event into b (UTF-8, without a newline). */
+static int event_json(buffer *b, term_t event, term_t start, term_t end)
+{ char *text;
   size_t len;
   int ok;
 
   if ( !written(event, PL_WRT_QUOTED|PL_WRT_NUMBERVARS|PL_WRT_CHARESCAPES, &text, &len) )
     return FALSE;
-  ok = buf_text(&b, "{\"event\": \"") &&
-       json_escaped(&b, text, len) &&
-       buf_text(&b, "\", \"start\": ") &&
-       json_time_text(&b, start) &&
-       buf_text(&b, ", \"end\": ") &&
-       json_time_text(&b, end) &&
-       buf_text(&b, "}");
+  ok = buf_text(b, "{\"event\": \"") &&
+       json_escaped(b, text, len) &&
+       buf_text(b, "\", \"start\": ") &&
+       json_time_text(b, start) &&
+       buf_text(b, ", \"end\": ") &&
+       json_time_text(b, end) &&
+       buf_text(b, "}");
   free(text);
+  return ok;
+}
+
+static foreign_t
+pl_fast_event_json(term_t event, term_t start, term_t end, term_t json)
+{ buffer b = { NULL, 0, 0 };
+  int ok = event_json(&b, event, start, end) &&
+           PL_unify_chars(json, PL_STRING|REP_UTF8, b.len, b.data);
+  free(b.data);
+  return ok;
+}
+
+/* rtl_fast_write_event(+Stream, +Event, +Start, +End): the line and a newline written to
+   Stream, which must be a UTF-8 text stream (else it fails, as for times that are not
+   finite, before anything is written). */
+static foreign_t
+pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
+{ buffer b = { NULL, 0, 0 };
+  IOSTREAM *s;
+  int ok = event_json(&b, event, start, end) && buf_text(&b, "\n");
+
   if ( ok )
-    ok = PL_unify_chars(json, PL_STRING|REP_UTF8, b.len, b.data);
+  { if ( !PL_get_stream(stream, &s, SIO_OUTPUT) )
+    { free(b.data);
+      return FALSE;
+    }
+    if ( s->encoding == ENC_UTF8 )
+      ok = Sfwrite(b.data, 1, b.len, s) == b.len;
+    else
+      ok = FALSE;
+    ok = PL_release_stream(s) && ok;
+  }
   free(b.data);
   return ok;
 }
@@ -503,4 +533,5 @@ install_t
 install_rtl_fastread(void)
 { PL_register_foreign("rtl_fast_event_line", 7, pl_fast_event_line, 0);
   PL_register_foreign("rtl_fast_event_json", 4, pl_fast_event_json, 0);
+  PL_register_foreign("rtl_fast_write_event", 4, pl_fast_write_event, 0);
 }
