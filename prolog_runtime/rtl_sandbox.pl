@@ -100,6 +100,7 @@ builtin(any,  rtl_time:rtl_interval_seconds(_, _, _), []).
 builtin(any,  rtl_ele:rtl_flag(_, _), []).
 builtin(any,  rtl_ele:rtl_stat(_, _), []).
 builtin(any,  rtl_ele:rtl_store_size(_), []).
+builtin(any,  rtl_ele:rtl_started_after(_), []).          % (`seq` steps; reads a number)
 builtin(any,  rtl_slr:rtl_memory(_, _, _, _, _), []).
 builtin(any,  rtl_slr:rtl_memory_records(_, _), []).
 builtin(any,  rtl_slr:rtl_memory_last_end(_, _), []).
@@ -114,7 +115,6 @@ builtin(any,  rtl_math:G, []) :-
     (   var(G) -> true ; predicate_property(rtl_math:G, exported) ).
 builtin(rule, rtl_ele:rtl_derived(_, _, _), []).
 builtin(rule, rtl_horizon:rtl_late(_), []).                % deletions and late events
-builtin(rule, rtl_ele:rtl_started_after(_), []).         % `seq` steps
 builtin(rule, rtl_horizon:rtl_kept_generation(_), []).
 builtin(rule, rtl_horizon:rtl_next_seq(_), []).
 builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
