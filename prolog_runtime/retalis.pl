@@ -268,9 +268,12 @@ stream_options(Options) :-
 run_lines(end_of_file, _, _, _, _) :- !.
 run_lines(Line, In, Name, N, Options) :-
     rtl_process_line(Line, Options, Outcome),
-    print_outcome(Name, N, Outcome),
-    print_warnings(Name, N),
-    stop_if_needed(Outcome, Options),
+    (   Outcome == ok
+    ->  print_warnings(Name, N)
+    ;   print_outcome(Name, N, Outcome),
+        print_warnings(Name, N),
+        stop_if_needed(Outcome, Options)
+    ),
     (   Name == '<stdin>' -> flush_if_idle(In) ; true ),
     read_line_to_string(In, Next),
     N1 is N + 1,
@@ -300,11 +303,14 @@ print_outcome(Name, N, Outcome) :-
 % Warnings about line N (a deletion outside the retraction horizon, rtl_horizon.pl).
 print_warnings(Name, N) :-
     rtl_take_warnings(Warnings),
+    Warnings \== [],
+    !,
     forall(member(W, Warnings),
            (   Name == (-)
            ->  format(user_error, "warning: ~s~n", [W])
            ;   format(user_error, "~w:~w: warning: ~s~n", [Name, N, W])
            )).
+print_warnings(_, _).
 
 outcome_message(rejected(Reason), rejected, Reason).
 outcome_message(refused(Reason), error, Reason).
@@ -483,8 +489,11 @@ feed_lines([], _, _, []).
 feed_lines([Line|Lines], N, Options, Rejections) :-
     rtl_process_line(Line, Options, Outcome),
     rtl_take_warnings(Warnings),
-    findall(W, ( member(T, Warnings), format(string(W), "?~w\t~s", [N, T]) ), Ws),
-    append(Ws, Rejections0, Rejections),
+    (   Warnings == []
+    ->  Rejections = Rejections0
+    ;   findall(W, ( member(T, Warnings), format(string(W), "?~w\t~s", [N, T]) ), Ws),
+        append(Ws, Rejections0, Rejections)
+    ),
     (   Outcome == ok
     ->  Rejections0 = Rest,
         N1 is N + 1,

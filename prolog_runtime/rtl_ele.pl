@@ -10,6 +10,7 @@
             rtl_underived/3,            % +Event, +Start, +End
             rtl_clock/1,                % -Clock
             rtl_advance_clock/1,        % +Time
+            rtl_started_after/1,        % +Time
             rtl_set_flag/2,             % +Flag, +Value
             rtl_flag/2,                 % ?Flag, ?Value
             rtl_max_steps/1,            % -Steps
@@ -86,7 +87,8 @@ flag_default(max_timers, 100000).           % pending timers at most (rtl_timers
 rtl_use_program(Module) :-
     nb_setval(rtl_program, Module),
     rtl_timers_program(Module),
-    rtl_reset.
+    rtl_reset,
+    latest_start_known(Module).
 
 %!  rtl_program(-Module) is semidet.
 
@@ -121,7 +123,8 @@ rtl_clear :-
     forall(M:ele_partial_store(Name, Arity),
            ( functor(Head, Name, Arity), retractall(M:Head) )),
     forall(clear_hook, true),
-    rtl_reset.
+    rtl_reset,
+    nb_setval(rtl_latest_start, -inf).
 
 %!  clear_hook is det.
 %
@@ -244,21 +247,31 @@ rtl_clock(Clock) :-
 %   Process one input event: derive everything it completes, deliver the results.
 
 rtl_event(Event, Start, End) :-
-    note_duration(Start, End),
+    (   End > Start -> note_duration(Start, End) ; true ),
+    note_start(Start),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_setval(rtl_clock, End),
-        rtl_timers_run(before)
+        (   nb_current(rtl_next_timer, Due), Due < End      % a timer due before the event
+        ->  rtl_timers_run(before)
+        ;   true
+        )
     ;   late_check(End, Clock0)
     ),
-    rtl_count(events),
+    nb_getval(events, N0),
+    N is N0 + 1,
+    nb_setval(events, N),
     (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true),
-    rtl_timers_run(after),
-    nb_getval(rtl_next_sweep, Next),
-    (   End >= Next -> periodic_sweep ; true ).
+    nb_getval(rtl_clock, Clock),
+    (   nb_current(rtl_next_timer, Next), Next =< Clock  % due now, or set by the event
+    ->  rtl_timers_run(after)
+    ;   true
+    ),
+    nb_getval(rtl_next_sweep, Sweep),
+    (   End >= Sweep -> periodic_sweep ; true ).
 
 % The longest interval of an event seen so far: with the delay bound, it says how early a
 % later event can start (rtl_collect_garbage/0, negation stores).
@@ -268,6 +281,38 @@ note_duration(Start, End) :-
         End - Start > Longest
     ->  Duration is End - Start,
         nb_setval(rtl_longest_event, Duration)
+    ;   true
+    ).
+
+%!  rtl_started_after(+Time:number) is semidet.
+%
+%   Some event given to the program's rules so far (input, derived or internal) started
+%   after Time, or that is not known. Every stored partial match starts when one of its
+%   events starts, so when this fails no stored match starts after Time: a `seq` step skips
+%   the search for a right partner of a left instance ending at Time (in a stream in time
+%   order, none can follow it). The latest start is known from a moment when the stores
+%   were empty (rtl_use_program/1, rtl_clear/0); a snapshot restores it with the stores.
+
+rtl_started_after(Time) :-
+    (   nb_current(rtl_latest_start, Latest)
+    ->  Latest > Time
+    ;   true
+    ).
+
+% The latest start, when known (it is not after a restore from a snapshot without it).
+note_start(Start) :-
+    (   nb_current(rtl_latest_start, Latest), Start > Latest
+    ->  nb_setval(rtl_latest_start, Start)
+    ;   true
+    ).
+
+% A program taken into use with empty stores: from now on the latest start is known. With
+% stored matches (another program was used meanwhile) it is not.
+latest_start_known(M) :-
+    (   \+ ( M:ele_partial_store(Name, Arity), functor(Head, Name, Arity), once(M:Head) )
+    ->  nb_setval(rtl_latest_start, -inf)
+    ;   nb_current(rtl_latest_start, _)
+    ->  nb_delete(rtl_latest_start)
     ;   true
     ).
 
@@ -319,6 +364,7 @@ rtl_retract_event(Event, Start, End) :-
 rtl_derived(Event, Start, End) :-
     rtl_count(derived),
     note_duration(Start, End),
+    note_start(Start),
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
@@ -331,6 +377,7 @@ rtl_derived(Event, Start, End) :-
 
 rtl_internal_event(Event, Start, End) :-
     note_duration(Start, End),
+    note_start(Start),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
     forall(M:ele_trigger(Event, Start, End), true).
@@ -403,6 +450,11 @@ rtl_output_to(Sink) :-
 %
 %   Deliver one output line (the JSON Lines format of docs/runtime.md, "Output").
 
+rtl_emit(Event, Start, End, Consumer, Op) :-
+    Consumer == (-), Op \== retract,
+    nb_getval(rtl_output_sink, print),
+    rtl_write_event_line(user_output, Event, Start, End),     % the common case, in C
+    !.
 rtl_emit(Event, Start, End, Consumer, Op) :-
     rtl_event_json(Event, Start, End, Consumer, Op, Line),
     rtl_emit_line(Line).

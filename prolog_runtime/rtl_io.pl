@@ -3,6 +3,7 @@
             rtl_parse_event_line/3,      % +LineString, +MaxDepth, -Parsed
             rtl_read_event_text/4,       % +Text, +MaxDepth, -Event, -Problem
             rtl_event_json/6,            % +Event, +Start, +End, +Consumer, +Op, -JsonString
+            rtl_write_event_line/4,      % +Stream, +Event, +Start, +End
             rtl_json_string_escape/2,    % +Text, -Escaped
             rtl_use_fast_reader/1        % +Bool
           ]).
@@ -28,7 +29,7 @@ rejection. Without the C reader, every line takes the Prolog road, with the same
 :- use_module(library(http/json)).
 :- use_module(rtl_time).
 
-:- dynamic fast_reader/0.
+:- dynamic fast_reader/0, fast_writer/0.
 
 % The C reader is optional: a runtime without it (not built, another platform) reads
 % every line in Prolog.
@@ -39,7 +40,16 @@ load_fast_reader :-
         catch(load_foreign_library(Lib), _, fail),     % (use_foreign_library/1 defers the load)
         current_predicate(rtl_fast_event_line/7)
     ->  retractall(fast_reader),
-        assertz(fast_reader)
+        assertz(fast_reader),
+        fast_writer_present
+    ;   true
+    ).
+
+% The C helper for output lines (rtl_event_json/6) comes with the reader.
+fast_writer_present :-
+    retractall(fast_writer),
+    (   current_predicate(rtl_fast_event_json/4)
+    ->  assertz(fast_writer)
     ;   true
     ).
 
@@ -47,17 +57,20 @@ load_fast_reader :-
 
 %!  rtl_use_fast_reader(+Bool) is det.
 %
-%   Read the common case of event lines in C (`true`, the default when the C reader is
-%   built) or every line in Prolog (`false`). For tests comparing the two.
+%   Read the common case of event lines and write the common case of output lines in C
+%   (`true`, the default when the C helpers are built) or everything in Prolog (`false`).
+%   For tests comparing the two.
 
 rtl_use_fast_reader(true) :-
     (   current_predicate(rtl_fast_event_line/7)
     ->  retractall(fast_reader),
-        assertz(fast_reader)
+        assertz(fast_reader),
+        fast_writer_present
     ;   existence_error(foreign_library, rtl_fastread)
     ).
 rtl_use_fast_reader(false) :-
-    retractall(fast_reader).
+    retractall(fast_reader),
+    retractall(fast_writer).
 
 %!  rtl_parse_event_line(+Line:string, -Parsed) is det.
 %!  rtl_parse_event_line(+Line:string, +MaxDepth:integer, -Parsed) is det.
@@ -79,8 +92,11 @@ rtl_parse_event_line(Line, Parsed) :-
 rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     fast_reader,
     rtl_fast_event_line(Line, MaxDepth, Event, T, S, E, Op),
-    rtl_input_interval(T, S, E, Start, End, Problem),
-    var(Problem),
+    (   number(T), var(S), var(E)               % "t": a finite number (the C reader checks)
+    ->  Start = T, End = T
+    ;   rtl_input_interval(T, S, E, Start, End, Problem),
+        var(Problem)
+    ),
     !,
     ( Op == retract -> Op1 = retract ; Op1 = add ),
     Parsed = event(Op1, Event, Start, End).
@@ -450,22 +466,40 @@ list_tail_within(T, Left) :-
 %   `retract`.
 
 rtl_event_json(Event, Start, End, Consumer, Op, Json) :-
+    Consumer == (-), Op \== retract,
+    fast_writer,
+    rtl_fast_event_json(Event, Start, End, Json),     % C: the common case (finite times)
+    !.
+rtl_event_json(Event, Start, End, Consumer, Op, Json) :-
     format(string(Text), "~q", [Event]),
     rtl_json_string_escape(Text, Escaped),
-    (   Consumer == (-)
-    ->  ConsumerPart = ""
-    ;   format(string(ConsumerText), "~w", [Consumer]),
-        rtl_json_string_escape(ConsumerText, C),
-        format(string(ConsumerPart), ", \"consumer\": \"~s\"", [C])
-    ),
-    (   Op == retract
-    ->  OpPart = ", \"op\": \"retract\""
-    ;   OpPart = ""
-    ),
     json_number(Start, S),
     json_number(End, E),
-    format(string(Json), "{\"event\": \"~s\", \"start\": ~w, \"end\": ~w~s~s}",
-           [Escaped, S, E, ConsumerPart, OpPart]).
+    (   Consumer == (-), Op \== retract           % the common case: one format/3
+    ->  format(string(Json), "{\"event\": \"~s\", \"start\": ~w, \"end\": ~w}", [Escaped, S, E])
+    ;   (   Consumer == (-)
+        ->  ConsumerPart = ""
+        ;   format(string(ConsumerText), "~w", [Consumer]),
+            rtl_json_string_escape(ConsumerText, C),
+            format(string(ConsumerPart), ", \"consumer\": \"~s\"", [C])
+        ),
+        (   Op == retract
+        ->  OpPart = ", \"op\": \"retract\""
+        ;   OpPart = ""
+        ),
+        format(string(Json), "{\"event\": \"~s\", \"start\": ~w, \"end\": ~w~s~s}",
+               [Escaped, S, E, ConsumerPart, OpPart])
+    ).
+
+%!  rtl_write_event_line(+Stream, +Event, +Start, +End) is semidet.
+%
+%   Write the output line of Event (no consumer, Op `add`) and a newline to Stream, in one
+%   call, when the C writer can: Stream is UTF-8 and the times are finite. Fails without
+%   writing anything otherwise (the caller then writes rtl_event_json/6's line).
+
+rtl_write_event_line(Stream, Event, Start, End) :-
+    fast_writer,
+    rtl_fast_write_event(Stream, Event, Start, End).
 
 json_number(N, N) :- integer(N), !.
 json_number(N, T) :-
@@ -480,14 +514,22 @@ json_number(N, N).
 %   `\u` and four hex digits.
 
 rtl_json_string_escape(Text, Escaped) :-
-    (   \+ sub_string(Text, _, _, _, "\""),
-        \+ sub_string(Text, _, _, _, "\\"),
-        \+ ( string_code(_, Text, C), C < 0x20 )
+    json_special(Special),
+    (   split_string(Text, Special, "", [_])       % one scan: nothing to escape
     ->  Escaped = Text
     ;   string_codes(Text, Codes),
         phrase(escaped(Codes), Out),
         string_codes(Escaped, Out)
     ).
+
+% json_special(-Chars): the characters escaped in a JSON string, `"`, `\` and the control
+% characters (NUL last: split_string/4 ignores the separators after a NUL).
+:- dynamic json_special/1.
+:- numlist(1, 0x1f, Controls),
+   append([0'", 0'\\|Controls], [0], Codes),
+   string_codes(Special, Codes),
+   retractall(json_special(_)),
+   assertz(json_special(Special)).
 
 escaped([]) --> [].
 escaped([C|Cs]) --> escaped_code(C), escaped(Cs).

@@ -116,10 +116,15 @@ rtl_raise_internal(Event, Start, End) :-
 rtl_input(Op, Event, Start, End) :-
     (   nb_current(rtl_raise_busy, true)
     ->  process(Op, Event, Start, End)           % nested call from a rule: no draining here
-    ;   guarded(( drain,
-                  process(Op, Event, Start, End),
-                  drain ))
+    ;   guarded(drained(Op, Event, Start, End))
     ).
+
+% The event after the queued ones, then those it raised (a predicate: call/1 of a
+% conjunction would compile it for every event).
+drained(Op, Event, Start, End) :-
+    drain,
+    process(Op, Event, Start, End),
+    drain.
 
 %   guarded(:Goal) is det.
 %

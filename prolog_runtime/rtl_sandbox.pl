@@ -100,6 +100,7 @@ builtin(any,  rtl_time:rtl_interval_seconds(_, _, _), []).
 builtin(any,  rtl_ele:rtl_flag(_, _), []).
 builtin(any,  rtl_ele:rtl_stat(_, _), []).
 builtin(any,  rtl_ele:rtl_store_size(_), []).
+builtin(any,  rtl_ele:rtl_started_after(_), []).          % (`seq` steps; reads a number)
 builtin(any,  rtl_slr:rtl_memory(_, _, _, _, _), []).
 builtin(any,  rtl_slr:rtl_memory_records(_, _), []).
 builtin(any,  rtl_slr:rtl_memory_last_end(_, _), []).

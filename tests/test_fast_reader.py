@@ -166,3 +166,83 @@ def test_without_the_c_reader_the_runtime_reads_every_line_in_prolog(tmp_path, s
         runs[name] = (done.stdout, done.stderr.splitlines()[0])
     assert runs["c"] == runs["prolog"]
     assert runs["c"][0].startswith('{"event": "both(1,\'x y\')"')
+
+
+# The C writer of output lines (rtl_fast_event_json/4) against rtl_event_json/6 in Prolog:
+# each event text is read as a term and written both ways with each pair of times.
+WRITE_CHECK = r"""
+:- use_module(library(readutil)).
+main :-
+    current_prolog_flag(argv, [File|_]),
+    read_file_to_string(File, Text, []),
+    split_string(Text, "\n", "", Lines0),
+    append(Lines, [_], Lines0),
+    foldl(compare_output, Lines, 0-0, Taken-Differ),
+    format("taken ~w differ ~w~n", [Taken, Differ]).
+
+compare_output(Line, T0-D0, T-D) :-
+    catch(term_string(Event, Line), _, fail),       % (random texts need not be terms)
+    ground(Event),                                  % (a variable's name depends on the stack)
+    !,
+    Inf is inf, NaN is nan, Big is 2^70,
+    Times = [1-2, 1.5-2.25, 0-0, -3-(-1), 1.0e20-1.0e21, 0.1-0.30000000000000004, -0.0-1.0e-300,
+             Inf-1, 1-NaN, Big-Big],
+    foldl(compare_times(Event), Times, T0-D0, T-D).
+compare_output(_, TD, TD).
+
+compare_times(Event, S-E, T0-D0, T-D) :-
+    rtl_use_fast_reader(false),
+    rtl_event_json(Event, S, E, -, add, Slow),
+    rtl_use_fast_reader(true),
+    rtl_event_json(Event, S, E, -, add, Fast),
+    (   rtl_io:rtl_fast_event_json(Event, S, E, _) -> T is T0 + 1 ; T = T0 ),
+    written_line(Event, S, E, Written),
+    (   Slow == Fast, ( Written == "" ; string_concat(Slow, "\n", Written) )
+    ->  D = D0
+    ;   D is D0 + 1,
+        format("DIFFER ~q~n  prolog ~s~n  c      ~s~n  stream ~s~n", [Event, Slow, Fast, Written])
+    ).
+
+% What rtl_write_event_line/4 writes to a UTF-8 file ("" when it leaves the line to Prolog).
+written_line(Event, S, E, Written) :-
+    tmp_file_stream(utf8, File, Out),
+    (   rtl_write_event_line(Out, Event, S, E) -> true ; true ),
+    close(Out),
+    read_file_to_string(File, Written, [encoding(utf8)]),
+    delete_file(File).
+"""
+
+OUTPUT_TERMS = [
+    "p(1, 2)", "a", "'A b'", "'it''s'", "f(\"str\\\"ing\")", "'new\\nline'", "'tab\\there'", "'café'",
+    "'中文'(x)", "f('$VAR'(1))", "f('$VAR'('X'))", "- 1", "-(1)", "1-2", "a:b:c", "[1,2|t]", "{x,y}",
+    "'a.b'", "f(-1)", "f(- 1)", "f(1.5e300)", "f(1.0Inf)", "f(1.5NaN)", "f(0'a)", "f(1.0)",
+    "f(123456789012345678901234567890)", "[]", "'[]'", "'{}'", "f(;)", "f((a:-b))", "f(\\+a)",
+    "f('\\x1\\')", "f('\\x7f\\')", "f(\"back\\\\slash\")", "f('quo\"te')", "f(a= \\+)", "f(1r3)",
+    "f(- (-1))", "f(-(-(1)))", "f(1.0e-10)", "f(-0.0)", "f(\"\\x0\\\")",
+]
+
+
+def compare_output(tmp_path, swipl, texts):
+    events = tmp_path / "terms.txt"
+    events.write_text("".join(text + "\n" for text in texts), encoding="utf-8")
+    script = tmp_path / "write_check.pl"
+    script.write_text(f":- use_module('{ROOT / 'prolog_runtime' / 'rtl_io'}').\n" + WRITE_CHECK)
+    done = subprocess.run([swipl, "-g", "main", "-t", "halt", str(script), str(events)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "DIFFER" not in done.stdout, done.stdout
+    last = done.stdout.strip().splitlines()[-1].split()
+    return int(last[1]), int(last[3])
+
+
+def test_output_lines_written_in_c_are_those_written_in_prolog(tmp_path, swipl):
+    taken, differ = compare_output(tmp_path, swipl, OUTPUT_TERMS)
+    assert differ == 0
+    # every term with finite times of at most 64 bits (7 of the 10 pairs) is written in C
+    assert taken == 7 * len(OUTPUT_TERMS)
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(terms(3), min_size=10, max_size=30))
+def test_random_output_lines_are_written_the_same(tmp_path, swipl, texts):
+    compare_output(tmp_path, swipl, texts)

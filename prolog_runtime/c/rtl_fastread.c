@@ -22,9 +22,21 @@
       - "op": "add" or "retract" (unbound Op when absent)
 
     Only ASCII: a byte outside 0x20..0x7e anywhere in the line fails.
+
+    rtl_fast_event_json(+Event, +Start, +End, -Json) is the common output line, written
+    as rtl_io:rtl_event_json/6 writes it for no consumer and Op `add`:
+
+        {"event": "p(1,'A b')", "start": 12, "end": 12.5}
+
+    the term written as writeq/1 writes it (UTF-8), escaped as the inside of a JSON string
+    the way rtl_json_string_escape/2 escapes; it fails when Start or End is not a finite
+    number (rtl_io.pl writes those). rtl_fast_write_event(+Stream, +Event, +Start, +End)
+    writes that line and a newline to a UTF-8 stream.
 */
 
+#include <SWI-Stream.h>
 #include <SWI-Prolog.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <errno.h>
@@ -382,7 +394,144 @@ pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
   return TRUE;
 }
 
+/* ---- output lines ------------------------------------------------------------------ */
+
+typedef struct {
+  char *data;
+  size_t len, size;
+} buffer;
+
+static int buf_grow(buffer *b, size_t extra)
+{ if ( b->len + extra <= b->size ) return TRUE;
+  size_t size = b->size ? b->size : 256;
+  while ( size < b->len + extra ) size *= 2;
+  char *data = realloc(b->data, size);
+  if ( !data ) return FALSE;
+  b->data = data;
+  b->size = size;
+  return TRUE;
+}
+
+static int buf_add(buffer *b, const char *s, size_t n)
+{ if ( !buf_grow(b, n) ) return FALSE;
+  memcpy(b->data + b->len, s, n);
+  b->len += n;
+  return TRUE;
+}
+
+static int buf_text(buffer *b, const char *s)
+{ return buf_add(b, s, strlen(s));
+}
+
+/* The term as writeq/1 writes it, UTF-8 encoded, into a fresh malloc()ed text. */
+static int written(term_t t, int flags, char **text, size_t *len)
+{ *text = NULL;
+  *len = 0;
+  IOSTREAM *s = Sopenmem(text, len, "w");
+  if ( !s ) return FALSE;
+  s->encoding = ENC_UTF8;
+  int ok = PL_write_term(s, t, 1200, flags);
+  ok = (Sclose(s) == 0) && ok;
+  if ( !ok ) { free(*text); *text = NULL; }
+  return ok;
+}
+
+/* The inside of a JSON string: `"`, `\`, and control characters as \n, \t or \u00xx. */
+static int json_escaped(buffer *b, const char *s, size_t n)
+{ static const char hex[] = "0123456789abcdef";
+  for (size_t i = 0; i < n; i++)
+  { unsigned char c = (unsigned char)s[i];
+    char esc[6];
+    if ( c == '"' || c == '\\' )
+    { esc[0] = '\\'; esc[1] = (char)c;
+      if ( !buf_add(b, esc, 2) ) return FALSE;
+    } else if ( c == '\n' )
+    { if ( !buf_add(b, "\\n", 2) ) return FALSE;
+    } else if ( c == '\t' )
+    { if ( !buf_add(b, "\\t", 2) ) return FALSE;
+    } else if ( c < 0x20 )
+    { esc[0] = '\\'; esc[1] = 'u'; esc[2] = '0'; esc[3] = '0';
+      esc[4] = hex[c >> 4]; esc[5] = hex[c & 0xf];
+      if ( !buf_add(b, esc, 6) ) return FALSE;
+    } else if ( !buf_add(b, (const char *)&s[i], 1) ) return FALSE;
+  }
+  return TRUE;
+}
+
+/* A time: an integer, or a finite float written as write/1 writes it. */
+static int json_time_text(buffer *b, term_t t)
+{ if ( PL_is_integer(t) )
+  { int64_t i;
+    char num[32];
+    if ( !PL_get_int64(t, &i) ) return FALSE;       /* a big integer: rtl_io.pl */
+    int n = snprintf(num, sizeof(num), "%lld", (long long)i);
+    return buf_add(b, num, (size_t)n);
+  }
+  double d;
+  if ( !PL_is_float(t) || !PL_get_float(t, &d) || !isfinite(d) ) return FALSE;
+  char *text;
+  size_t len;
+  if ( !written(t, 0, &text, &len) ) return FALSE;
+  int ok = buf_add(b, text, len);
+  free(text);
+  return ok;
+}
+
+/* The output line of the event into b (UTF-8, without a newline). */
+static int event_json(buffer *b, term_t event, term_t start, term_t end)
+{ char *text;
+  size_t len;
+  int ok;
+
+  if ( !written(event, PL_WRT_QUOTED|PL_WRT_NUMBERVARS|PL_WRT_CHARESCAPES, &text, &len) )
+    return FALSE;
+  ok = buf_text(b, "{\"event\": \"") &&
+       json_escaped(b, text, len) &&
+       buf_text(b, "\", \"start\": ") &&
+       json_time_text(b, start) &&
+       buf_text(b, ", \"end\": ") &&
+       json_time_text(b, end) &&
+       buf_text(b, "}");
+  free(text);
+  return ok;
+}
+
+static foreign_t
+pl_fast_event_json(term_t event, term_t start, term_t end, term_t json)
+{ buffer b = { NULL, 0, 0 };
+  int ok = event_json(&b, event, start, end) &&
+           PL_unify_chars(json, PL_STRING|REP_UTF8, b.len, b.data);
+  free(b.data);
+  return ok;
+}
+
+/* rtl_fast_write_event(+Stream, +Event, +Start, +End): the line and a newline written to
+   Stream, which must be a UTF-8 text stream (else it fails, as for times that are not
+   finite, before anything is written). */
+static foreign_t
+pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
+{ buffer b = { NULL, 0, 0 };
+  IOSTREAM *s;
+  int ok = event_json(&b, event, start, end) && buf_text(&b, "\n");
+
+  if ( ok )
+  { if ( !PL_get_stream(stream, &s, SIO_OUTPUT) )
+    { free(b.data);
+      return FALSE;
+    }
+    if ( s->encoding == ENC_UTF8 )
+      ok = Sfwrite(b.data, 1, b.len, s) == b.len;
+    else
+      ok = FALSE;
+    ok = PL_release_stream(s) && ok;
+  }
+  free(b.data);
+  return ok;
+}
+
 install_t
 install_rtl_fastread(void)
 { PL_register_foreign("rtl_fast_event_line", 7, pl_fast_event_line, 0);
+  PL_register_foreign("rtl_fast_event_json", 4, pl_fast_event_json, 0);
+  PL_register_foreign("rtl_fast_write_event", 4, pl_fast_write_event, 0);
 }

@@ -21,6 +21,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import re
 import shutil
 import tempfile
 import threading
@@ -96,10 +97,20 @@ class OutputEvent:
 
     @classmethod
     def from_line(cls, line: str) -> "OutputEvent":
+        common = _COMMON_LINE.match(line)
+        if common is not None:              # the runtime's common line: no JSON decoder needed
+            event, start, end = common.groups()
+            return cls(event, int(start), int(end), None, "add", line)
         data = json.loads(line)
         if "query" in data:
             return cls("", data["at"], data["at"], None, "answer", line, data)
         return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line)
+
+
+# An output line as the runtime writes it for an event with integer times, no consumer and no
+# op, its event text without JSON escapes (docs/runtime.md, "Output").
+_COMMON_LINE = re.compile(r'\{"event": "([^"\\\x00-\x1f]*)", "start": (-?(?:0|[1-9][0-9]*)), '
+                          r'"end": (-?(?:0|[1-9][0-9]*))\}\Z')
 
 
 class QueryError(Exception):

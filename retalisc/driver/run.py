@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import io
+import itertools
 import math
 import os
 import queue
@@ -21,15 +22,18 @@ PROGRESS_THRESHOLD = 5_000_000     # bytes of input before a progress display is
 
 def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str], int]]:
     """(first line number, lines, bytes read) per batch."""
-    first, batch, size = 1, [], 0
-    for number, line in enumerate(stream, start=1):
-        size += len(line.encode("utf-8")) if not line.isascii() else len(line)
-        batch.append(line.rstrip("\n"))
-        if len(batch) >= batch_size:
-            yield first, batch, size
-            first, batch, size = number + 1, [], 0
-    if batch:
-        yield first, batch, size
+    first = 1
+    while True:
+        batch = list(itertools.islice(stream, batch_size))
+        if not batch:
+            return
+        text = "".join(batch)
+        size = len(text) if text.isascii() else len(text.encode("utf-8"))
+        lines = text.split("\n")           # each line read ends with its one newline, the last maybe not
+        if text.endswith("\n"):
+            lines.pop()
+        yield first, lines, size
+        first += len(batch)
 
 
 def _is_live(events: str, source: IO[str]) -> bool:

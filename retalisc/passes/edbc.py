@@ -361,7 +361,10 @@ class _RuleGenerator:
             handler = f"{step.name}_{side}"
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
             self.arrival(operand, handler, os_, oe)
-            found = conj([self.lookup(step, partner_store, oe)] + match)
+            # A left instance of `seq` ending no earlier than every start seen so far has no
+            # right partner stored (rtl_started_after/1): in time order, the common case.
+            skip = C("rtl_started_after", oe) if step.op == "seq" and side == "left" else None
+            found = conj([skip, self.lookup(step, partner_store, oe)] + match)
             self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s, e,
                                key, side)
         self.policy_facts(step, key, lefts, rights, matched, s, e)
@@ -593,7 +596,8 @@ class _RuleGenerator:
             handler = f"{step.name}_{side}"
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
             self.arrival(operand, handler, os_, oe)
-            found = conj([self.lookup(step, partner_store, oe)] + pair)
+            skip = C("rtl_started_after", oe) if side == "left" else None     # as for `seq` (join_clauses)
+            found = conj([skip, self.lookup(step, partner_store, oe)] + pair)
             self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s1, e2,
                                key, side)
         self.policy_facts(step, key, lefts, rights, matched, s1, e2, negs if pn else None)

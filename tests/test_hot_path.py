@@ -1,0 +1,122 @@
+"""The fast paths of event processing give what the general paths give (issue 16): output
+lines read by the Python driver without the JSON decoder, and batches of input lines."""
+import io
+import json
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from retalisc.driver.engine import OutputEvent
+from retalisc.driver.run import _batches
+
+
+def decoded(line):
+    """OutputEvent as the JSON decoder gives it (the general path of from_line)."""
+    data = json.loads(line)
+    return OutputEvent(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"),
+                       line)
+
+
+TEXTS = st.text(alphabet=st.sampled_from(list("ab(1,)' \"\\é\n\t\x01") + ["中"]), max_size=12)
+TIMES = st.one_of(st.integers(-10**20, 10**20), st.floats(allow_nan=False, allow_infinity=False),
+                  st.sampled_from(["007", "-0", "1e5", "1.0", "- 1"]))
+
+
+@st.composite
+def output_lines(draw):
+    event = json.dumps(draw(TEXTS), ensure_ascii=draw(st.booleans()))
+    start, end = (t if isinstance(t, str) else json.dumps(t) for t in (draw(TIMES), draw(TIMES)))
+    line = f'{{"event": {event}, "start": {start}, "end": {end}}}'
+    if draw(st.integers(0, 4)) == 0:
+        line = line[:-1] + draw(st.sampled_from([', "consumer": "c"}', ', "op": "retract"}', '} ', '}}']))
+    return line
+
+
+@settings(max_examples=300, deadline=None)
+@given(output_lines())
+def test_output_lines_read_without_the_decoder_are_those_it_gives(line):
+    try:
+        expected = decoded(line)
+    except (ValueError, KeyError):
+        expected = None
+    try:
+        got = OutputEvent.from_line(line)
+    except (ValueError, KeyError):
+        got = None
+    assert got == expected
+    if got is not None:
+        assert type(got.start) is type(expected.start) and type(got.end) is type(expected.end)
+
+
+def test_the_common_line_is_taken_by_the_fast_path():
+    line = '{"event": "p(1,\'A b\')", "start": 12, "end": -3}'
+    assert OutputEvent.from_line(line) == OutputEvent("p(1,'A b')", 12, -3, None, "add", line)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.text(alphabet=st.sampled_from(list("ab \r{}é\ufeff")), max_size=5), max_size=30),
+       st.booleans(), st.integers(1, 7))
+def test_batches_hold_every_line_once_in_order(lines, final_newline, size):
+    text = "\n".join(lines) + ("\n" if final_newline and lines else "")
+    batches = list(_batches(io.StringIO(text), size))
+    expected = text.split("\n")
+    if expected[-1] == "":
+        expected.pop()
+    assert [line for _, batch, _ in batches for line in batch] == expected
+    assert all(len(batch) == size for _, batch, _ in batches[:-1])
+    assert [first for first, _, _ in batches] == [1 + size * k for k in range(len(batches))]
+    assert sum(n for _, _, n in batches) == len(text.encode("utf-8"))
+
+
+# ---- the `seq` skip (rtl_started_after/1) ------------------------------------------------
+
+import pytest  # noqa: E402
+from hypothesis import HealthCheck  # noqa: E402
+
+from retalisc.driver.engine import Engine  # noqa: E402
+
+SKIP_PROGRAM = """
+:- set_etalis_flag(event_consumption_policy, {policy}).
+pair(I, X, Y) <- a(I, X) seq b(I, Y).
+chain(I, X, Z) <- a(I, X) seq b(I, _) seq c(I, Z).
+gap(I, X, Y) <- (a(I, X) seq b(I, Y)) cnot c(I, _).
+window(I) <- (b(I, _) seq a(I, _)).3.
+"""
+
+STREAM = st.lists(st.tuples(st.sampled_from("abc"), st.integers(1, 2), st.integers(0, 3), st.integers(0, 12),
+                            st.integers(0, 2), st.integers(0, 5)), min_size=3, max_size=25)
+
+
+@pytest.fixture(scope="module", params=["unrestricted", "recent", "chronological"])
+def skip_engine(request):
+    return Engine.from_source(SKIP_PROGRAM.format(policy=request.param), "skip.rtl")
+
+
+def _skip_run(engine, events, scan_always):
+    """The output of the events (kind, id, value, start, length, retracted-after) in arrival
+    order, a retraction of an event following it when asked; with `scan_always` the latest
+    start is unknown for the whole run, so every `seq` step searches its store."""
+    engine.clear()
+    engine.set_flag("max_delay", "inf")
+    if scan_always:
+        engine.bridge.once("nb_delete(rtl_latest_start)")
+    batch = []
+    for kind, i, x, t, length, retract in events:
+        batch.append((f"{kind}({i}, {x})", t, t + length))
+        if retract == 0:
+            batch.append((f"{kind}({i}, {x})", t, t + length, "retract"))
+    return [(e.event, e.start, e.end, e.op) for e in engine.feed_batch(batch)]
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(STREAM)
+def test_skipping_the_search_changes_no_output(skip_engine, events):
+    # arrival in any order, intervals, deletions: the output is that of a search every time
+    assert _skip_run(skip_engine, events, False) == _skip_run(skip_engine, events, True)
+
+
+def test_the_latest_start_is_known_and_a_late_partner_still_matches(skip_engine):
+    out = _skip_run(skip_engine, [("b", 1, 1, 5, 0, 1), ("a", 1, 2, 1, 0, 1)], False)
+    assert ("pair(1,2,1)", 1, 5, "add") in out       # a arrives after b, ending before it
+    assert skip_engine.bridge.call_text("( nb_current(rtl_latest_start, L) -> format(string(R), '~w', [L]) "
+                                        "; R = none )", "R") == "5"
