@@ -15,7 +15,7 @@ import os
 import re
 from functools import lru_cache
 from pathlib import Path
-from typing import Union
+from typing import Optional, Union
 
 from ..runtime_location import runtime_dir
 
@@ -227,6 +227,67 @@ class RecoveryError(Exception):
     """The state directory cannot be used for this run (another program, another input)."""
 
 
+def restore_newest(directory: StateDir, engine, input_key: str, input_name: str, log):
+    """Restore the newest complete snapshot of `directory` into `engine` (an Engine or an
+    ActiveQueries: identity() and restore_state()) and return its manifest, or None for a
+    directory without snapshots (a first run). Incomplete snapshots are deleted first, corrupt
+    ones reported on `log` and passed over. RecoveryError for a snapshot of another program or
+    runtime version, or of a run over another input (the manifest's `input_key` is not
+    `input_name`)."""
+    directory.remove_incomplete()
+    identity = engine.identity()
+    found, problems = directory.snapshots()
+    for problem in problems:
+        print(f"retalisc: {directory.directory}/{problem}", file=log)
+    for manifest, state_path in found:
+        if manifest.get("identity") != identity:
+            raise RecoveryError(f"{state_path}: the snapshot was made by another program or runtime "
+                                f"version; use another --state directory or delete this one")
+        if manifest.get(input_key) != input_name:
+            raise RecoveryError(f"{state_path}: the snapshot belongs to a run over {manifest.get(input_key)}, "
+                                f"not {input_name}")
+        try:
+            engine.restore_state(state_path)
+        except StateError as error:
+            print(f"retalisc: {error}; trying an older snapshot", file=log)
+            continue
+        return manifest
+    if found:
+        raise RecoveryError(f"{directory.directory}: no snapshot could be restored")
+    return None
+
+
+def open_output(out: str, restored):
+    """The output file opened for binary writing: new for a first run, else cut back to the
+    length it had at the restored snapshot (RecoveryError if it is shorter than that)."""
+    if restored is None:
+        return open(out, "wb")
+    size = os.path.getsize(out) if os.path.exists(out) else -1
+    if size < restored["out_bytes"]:
+        raise RecoveryError(f"{out} has {max(size, 0)} bytes, fewer than the {restored['out_bytes']} it had at "
+                            f"snapshot {restored['number']}: it was changed; cannot go on from this snapshot")
+    sink = open(out, "r+b")
+    sink.truncate(restored["out_bytes"])
+    sink.seek(restored["out_bytes"])
+    return sink
+
+
+def take_snapshot(directory: StateDir, engine, sink, manifest: dict, log):
+    """Flush the output to disk, then write a snapshot of `engine` with `manifest` (the input
+    position) and the output position. A snapshot that cannot be written (a full disk) is
+    reported on `log` and None returned: the run goes on, the previous snapshot stays."""
+    from .bridge import PrologError
+
+    sink.flush()
+    os.fsync(sink.fileno())
+    try:
+        return directory.save(engine, dict(manifest, out_bytes=sink.tell()))
+    except (OSError, PrologError) as error:
+        print(f"retalisc: warning: the snapshot could not be written ({error}); the run goes on, "
+              f"the previous snapshot stays the one a restart uses", file=log)
+        return None
+
+
 def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batch_size: int = 2000,
                     snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
                     snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,
@@ -243,47 +304,17 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     import sys
     import time
 
-    from .bridge import PrologError
     from .run import Progress, RunStopped, end_the_input, summary_line
 
     log = log or sys.stderr
     started = time.perf_counter()
     directory = StateDir(state)
-    directory.remove_incomplete()
     events_path = os.path.abspath(events)
-    identity = engine.identity()
-    restored = None
-    found, problems = directory.snapshots()
-    for problem in problems:
-        print(f"retalisc: {directory.directory}/{problem}", file=log)
-    for manifest, state_path in found:
-        if manifest.get("identity") != identity:
-            raise RecoveryError(f"{state_path}: the snapshot was made by another program or runtime "
-                                f"version; use another --state directory or delete this one")
-        if manifest.get("events") != events_path:
-            raise RecoveryError(f"{state_path}: the snapshot belongs to a run over {manifest.get('events')}, "
-                                f"not {events_path}")
-        try:
-            engine.restore_state(state_path)
-        except StateError as error:
-            print(f"retalisc: {error}; trying an older snapshot", file=log)
-            continue
-        restored = manifest
-        break
-    if found and restored is None:
-        raise RecoveryError(f"{directory.directory}: no snapshot could be restored")
-
+    restored = restore_newest(directory, engine, "events", events_path, log)
+    sink = open_output(out, restored)
     if restored is None:
-        sink = open(out, "wb")
         offset, line = 0, 1
     else:
-        size = os.path.getsize(out) if os.path.exists(out) else -1
-        if size < restored["out_bytes"]:
-            raise RecoveryError(f"{out} has {max(size, 0)} bytes, fewer than the {restored['out_bytes']} it had at "
-                                f"snapshot {restored['number']}: it was changed; cannot go on from this snapshot")
-        sink = open(out, "r+b")
-        sink.truncate(restored["out_bytes"])
-        sink.seek(restored["out_bytes"])
         offset, line = restored["input_bytes"], restored["input_line"]
         print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
               f"(input line {line}, {restored['out_bytes']} output bytes)", file=log)
@@ -298,15 +329,8 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             sink.write(event.line.encode("utf-8") + b"\n")
 
     def snapshot(offset, line):
-        sink.flush()
-        os.fsync(sink.fileno())
-        try:
-            return directory.save(engine, {"events": events_path, "input_bytes": offset, "input_line": line,
-                                           "out_bytes": sink.tell()})
-        except (OSError, PrologError) as error:
-            print(f"retalisc: warning: the snapshot could not be written ({error}); the run goes on, "
-                  f"the previous snapshot stays the one a restart uses", file=log)
-            return None
+        return take_snapshot(directory, engine, sink, {"events": events_path, "input_bytes": offset,
+                                                       "input_line": line}, log)
 
     try:
         if restored is None:
@@ -348,4 +372,63 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
         source.close()
         engine.bridge.once("retalis:rtl_close_action_output")
     print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
+    return status
+
+
+DEFAULT_AQ_SNAPSHOT_COMMANDS = 10_000   # script commands between two snapshots of `retalisc aq --state`
+DEFAULT_AQ_BATCH = 100                  # commands run per call into the runtime
+
+
+def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], display_name: Optional[str] = None,
+                       batch_size: int = DEFAULT_AQ_BATCH, snapshot_commands: int = DEFAULT_AQ_SNAPSHOT_COMMANDS,
+                       snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, log=None) -> int:
+    """`retalisc aq --script SCRIPT --out OUT --state DIR`: the update script run on the loaded
+    ActiveQueries `aq`, its notifications written to `out` as `retalisc aq` prints them, and the
+    run survives a crash as `run_recoverable` does: a snapshot (the tables, records, facts and
+    rules, with the script line reached and the output position) when the run starts and every
+    `snapshot_commands` commands or `snapshot_seconds` seconds; a restart with the same DIR
+    restores the newest complete one, cuts `out` back and goes on from its script line. A bad
+    script line or a failed command ends the run as without --state (its message on `log`,
+    with `display_name` for the script; exit status 2 or 1). Returns the exit status."""
+    import sys
+    import time
+
+    log = log or sys.stderr
+    batch_size = max(1, min(batch_size, snapshot_commands))   # snapshots fall between batches
+    directory = StateDir(state)
+    script_path = os.path.abspath(script)
+    restored = restore_newest(directory, aq, "script", script_path, log)
+    sink = open_output(out, restored)
+    line = 1 if restored is None else restored["input_line"]
+    if restored is not None:
+        print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
+              f"(script line {line}, {restored['out_bytes']} output bytes)", file=log)
+
+    def snapshot(line):
+        return take_snapshot(directory, aq, sink, {"script": script_path, "input_line": line}, log)
+
+    status = 0
+    try:
+        if restored is None:
+            snapshot(line)
+        since_commands, since_time = 0, time.monotonic()
+        while True:
+            batch = aq.run_script_batch(script_path, line, batch_size)
+            sink.write(batch.output.encode("utf-8"))
+            if batch.status == "error":
+                sink.flush()
+                print(batch.message.replace(script_path, display_name or script), file=log)
+                status = batch.exit_status
+                break
+            since_commands += batch_size
+            line = batch.next_line
+            if batch.status == "done":
+                break
+            directory.journal({"input_line": line, "out_bytes": sink.tell()})
+            if since_commands >= snapshot_commands or time.monotonic() - since_time >= snapshot_seconds:
+                snapshot(line)
+                since_commands, since_time = 0, time.monotonic()
+    finally:
+        sink.flush()
+        sink.close()
     return status
