@@ -242,14 +242,17 @@ def test_full_disk_while_snapshotting_keeps_the_run_and_the_previous_snapshot(se
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--events", "-"], "--state needs --events FILE"),
+    (["--heartbeat", "0.5"], "--state does not go with --heartbeat"),
     (["--out", "-"], "--state needs --out FILE"),
 ])
 def test_state_needs_files(setup, tmp_path, args, message):
     _, program, events, _ = setup
     cmd = run_cmd(program, events, tmp_path / "o.jsonl", tmp_path / "s")
     for option, value in zip(args[::2], args[1::2]):
-        cmd[cmd.index(option) + 1] = value
+        if option in cmd:
+            cmd[cmd.index(option) + 1] = value
+        else:
+            cmd += [option, value]
     done = CliRunner().invoke(main, cmd[3:])
     assert done.exit_code == 2 and message in done.output
 
@@ -261,3 +264,80 @@ def test_an_output_file_shorter_than_the_snapshot_says_is_refused(setup, tmp_pat
     out.write_bytes(b"")
     with pytest.raises(recovery.RecoveryError, match="fewer than the .* it had at snapshot"):
         run_here(program, events, out, state, 2500)
+
+
+# ---- standard input: the journal holds the events themselves ---------------------------------
+
+class Crash(Exception):
+    """Stands for the process dying in the middle of a batch."""
+
+
+def _stdin_from(monkeypatch, tmp_path, data: bytes):
+    path = tmp_path / f"stdin-{len(data)}"
+    path.write_bytes(data)
+    monkeypatch.setattr(sys, "stdin", open(path, "r", encoding="utf-8"))
+
+
+def test_stdin_lines_journaled_before_a_crash_are_not_lost(setup, tmp_path, monkeypatch):
+    _, program, events, expected = setup
+    lines = events.read_bytes().splitlines(keepends=True)[:3000]
+    whole = tmp_path / "whole.jsonl"
+    whole.write_bytes(b"".join(lines))
+    reference = tmp_path / "reference.jsonl"
+    subprocess.run(run_cmd(program, whole, reference), check=True, env=_env(), capture_output=True)
+    out, state = tmp_path / "out.jsonl", tmp_path / "state"
+    engine = Engine.load(program)
+    calls = []
+    real_feed = engine.feed_lines
+
+    def crashing_feed(text, first, **options):
+        calls.append(first)
+        if len(calls) == 9:            # batch 9 is in the journal, not yet processed
+            raise Crash()
+        return real_feed(text, first, **options)
+
+    monkeypatch.setattr(engine, "feed_lines", crashing_feed)
+    _stdin_from(monkeypatch, tmp_path, b"".join(lines[:1500]))
+    with pytest.raises(Crash):
+        recovery.run_recoverable(engine, "-", str(out), state, batch_size=100, snapshot_events=300,
+                                 log=io.StringIO())
+    assert calls[-1] == 801 and _snapshot_numbers(state) == [1, 2]     # at lines 1, 301 and 601
+    journal = recovery.EventJournal(recovery.StateDir(state))
+    assert [number for number, _ in journal.segments()] == [1, 2]      # after the snapshots kept
+    assert journal.replay(2) == [line.decode().rstrip("\n") for line in lines[600:900]]  # batches 7-9
+    # started again, with standard input going on after what was read: nothing lost, nothing twice
+    _stdin_from(monkeypatch, tmp_path, b"".join(lines[900:]))
+    log = io.StringIO()
+    status = recovery.run_recoverable(Engine.load(program), "-", str(out), state, batch_size=100,
+                                      snapshot_events=300, log=log)
+    assert status == 0
+    assert "restored snapshot 2" in log.getvalue() and "input line 601" in log.getvalue()
+    assert out.read_bytes() == reference.read_bytes()
+
+
+def test_kill_9_on_standard_input_then_restart_gives_the_uninterrupted_output(setup, tmp_path):
+    _, program, events, _ = setup
+    lines = events.read_bytes().splitlines(keepends=True)[:2500]
+    whole = tmp_path / "whole.jsonl"
+    whole.write_bytes(b"".join(lines))
+    reference = tmp_path / "reference.jsonl"
+    subprocess.run(run_cmd(program, whole, reference), check=True, env=_env(), capture_output=True)
+    out, state = tmp_path / "out.jsonl", tmp_path / "state"
+    cmd = run_cmd(program, "-", out, state, every=400)
+    process = subprocess.Popen(cmd, env=_env(), stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.PIPE)
+    process.stdin.write(b"".join(lines[:1250]))
+    process.stdin.flush()
+    journal = state / "journal.jsonl"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:             # until the 1250 lines are processed
+        records = recovery.StateDir(state).journal_records() if journal.exists() else []
+        if records and records[-1]["input_line"] == 1251:
+            break
+        time.sleep(0.01)
+    os.kill(process.pid, signal.SIGKILL)            # standard input still open: a live source
+    process.communicate(timeout=60)
+    again = subprocess.run(cmd, env=_env(), input=b"".join(lines[1250:]), capture_output=True, timeout=300)
+    assert again.returncode == 0, again.stderr.decode()
+    assert b"restored snapshot" in again.stderr
+    assert out.read_bytes() == reference.read_bytes()

@@ -217,8 +217,8 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     if state is None and (snapshot_every is not None or snapshot_seconds is not None):
         raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
     if state is not None:
-        if bag["bag"] is not None or events == "-":
-            raise click.UsageError("--state needs --events FILE (a file that can be read again, not '-' or --bag)")
+        if heartbeat is not None:
+            raise click.UsageError("--state does not go with --heartbeat (a replay would not see the same clock)")
         if out in (None, "-"):
             raise click.UsageError("--state needs --out FILE (standard output cannot be cut back after a crash)")
         if consumer_dir is not None:

@@ -223,6 +223,71 @@ def _binary_batches(stream, offset: int, first_line: int, batch_size: int):
         yield start, batch, size, position
 
 
+class EventJournal:
+    """The journal of a live input (standard input), whose events cannot be read again: the
+    lines read after snapshot N are appended to `events-N.jsonl` (flushed to the operating
+    system before they are processed, fsynced at each snapshot), so a process killed at any
+    point loses none of the lines it has read. A restart from snapshot N replays the segments
+    from N on; segments older than the oldest snapshot kept are deleted."""
+
+    def __init__(self, directory: StateDir):
+        self.directory = directory.directory
+        self.stream = None
+
+    def segments(self):
+        found = []
+        for path in self.directory.glob("events-*.jsonl"):
+            number = path.stem.split("-", 1)[1]
+            if number.isdigit():
+                found.append((int(number), path))
+        return sorted(found)
+
+    def replay(self, first: int):
+        """The complete lines of the segments from snapshot `first` on, in order; a line cut by
+        a crash (the end of a segment without a newline) is removed from its file."""
+        lines = []
+        for number, path in self.segments():
+            if number < first:
+                continue
+            data = path.read_bytes()
+            complete = data[:data.rfind(b"\n") + 1]
+            if len(complete) != len(data):
+                with open(path, "r+b") as stream:
+                    stream.truncate(len(complete))
+            lines += complete.decode("utf-8", errors="replace").split("\n")[:-1]
+        return lines
+
+    def open(self, number: int) -> None:
+        """Append from now on to the segment of snapshot `number` (made if missing)."""
+        self.close()
+        path = self.directory / f"events-{number:08d}.jsonl"
+        self.stream = open(path, "ab")
+        fsync_directory(self.directory)
+
+    def append(self, lines) -> None:
+        if self.stream is None:          # no snapshot could be written yet: nothing to replay from
+            return
+        self.stream.write("".join(line + "\n" for line in lines).encode("utf-8"))
+        self.stream.flush()
+
+    def sync(self) -> None:
+        if self.stream is not None:
+            self.stream.flush()
+            os.fsync(self.stream.fileno())
+
+    def prune(self, directory: StateDir) -> None:
+        kept = [int(p.stem.split("-")[1]) for p in directory._manifests()]
+        if kept:
+            for number, path in self.segments():
+                if number < min(kept):
+                    path.unlink(missing_ok=True)
+
+    def close(self) -> None:
+        if self.stream is not None:
+            self.stream.close()
+            self.stream = None
+
+
 class RecoveryError(Exception):
     """The state directory cannot be used for this run (another program, another input)."""
 
@@ -300,7 +365,10 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     restores the newest complete snapshot, cuts the output file back to the snapshot's output
     position and reads the input from the snapshot's input position: the output file ends
     byte-identical to that of a run that never stopped. A snapshot that cannot be written (a
-    full disk) is reported and the run goes on. Returns the exit status."""
+    full disk) is reported and the run goes on. With `events` '-' (standard input, a live
+    input) the lines are journaled (EventJournal) before they are processed, a restart
+    replays the journal after the snapshot and then reads standard input on; the output is
+    flushed after each batch. Returns the exit status."""
     import sys
     import time
 
@@ -309,28 +377,46 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     log = log or sys.stderr
     started = time.perf_counter()
     directory = StateDir(state)
-    events_path = os.path.abspath(events)
+    live = events == "-"
+    events_path = "-" if live else os.path.abspath(events)
     restored = restore_newest(directory, engine, "events", events_path, log)
     sink = open_output(out, restored)
     if restored is None:
         offset, line = 0, 1
     else:
-        offset, line = restored["input_bytes"], restored["input_line"]
+        offset, line = restored.get("input_bytes", 0), restored["input_line"]
         print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
               f"(input line {line}, {restored['out_bytes']} output bytes)", file=log)
-    source = open(events_path, "rb")
-    total = os.path.getsize(events_path)
-    display = Progress(stream=sys.stderr, total=total, enabled=progress)
+    journal = EventJournal(directory) if live else None
+    if live and restored is None:
+        for _, path in journal.segments():              # of a run that never took its first snapshot
+            path.unlink(missing_ok=True)
+    if live:
+        source = None
+        batches = _journaled_batches(journal, restored, line, batch_size)
+        display = Progress(stream=sys.stderr, total=None, enabled=False)
+    else:
+        source = open(events_path, "rb")
+        batches = _binary_batches(source, offset, line, batch_size)
+        display = Progress(stream=sys.stderr, total=os.path.getsize(events_path), enabled=progress)
     status = 0
-    name = events
+    name = "<stdin>" if live else events
 
     def write(produced):
         for event in produced:
             sink.write(event.line.encode("utf-8") + b"\n")
 
     def snapshot(offset, line):
-        return take_snapshot(directory, engine, sink, {"events": events_path, "input_bytes": offset,
-                                                       "input_line": line}, log)
+        position = {"events": events_path, "input_line": line}
+        if not live:
+            position["input_bytes"] = offset
+        else:
+            journal.sync()
+        manifest = take_snapshot(directory, engine, sink, position, log)
+        if live and manifest is not None:
+            journal.open(manifest["number"])        # the lines read from now on
+            journal.prune(directory)
+        return manifest
 
     try:
         if restored is None:
@@ -342,7 +428,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
                 write(produced)
             snapshot(offset, line)
         since_events, since_time = 0, time.monotonic()
-        for first, lines, size, position in _binary_batches(source, offset, line, batch_size):
+        for first, lines, size, position in batches:
             produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
@@ -358,7 +444,11 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
                 raise RunStopped()
             offset, line = position, first + len(lines)
             since_events += len(lines)
-            directory.journal({"input_bytes": offset, "input_line": line, "out_bytes": sink.tell()})
+            if live:
+                sink.flush()                    # the output of a live input leaves as it is made
+                directory.journal({"input_line": line, "out_bytes": sink.tell()})
+            else:
+                directory.journal({"input_bytes": offset, "input_line": line, "out_bytes": sink.tell()})
             if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
                 snapshot(offset, line)
                 since_events, since_time = 0, time.monotonic()
@@ -369,10 +459,37 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
         display.close()
         sink.flush()
         sink.close()
-        source.close()
+        if source is not None:
+            source.close()
+        if journal is not None:
+            journal.close()
         engine.bridge.once("retalis:rtl_close_action_output")
     print(summary_line(engine.stats(), time.perf_counter() - started), file=sys.stderr)
     return status
+
+
+def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int):
+    """As `_binary_batches`, for standard input with a journal: first the journaled lines read
+    after the restored snapshot (replayed), then the lines of standard input as they arrive,
+    each batch appended to the journal before it is processed. The journal's segment is that
+    of the newest snapshot: the caller opens it when it takes the first snapshot of a new run."""
+    import sys
+
+    from .run import _live_batches
+
+    line = first_line
+    if restored is not None:
+        replayed = journal.replay(restored["number"])
+        segments = [number for number, _ in journal.segments() if number >= restored["number"]]
+        journal.open(segments[-1] if segments else restored["number"])
+        for start in range(0, len(replayed), batch_size):
+            lines = replayed[start:start + batch_size]
+            yield line, lines, 0, 0
+            line += len(lines)
+    for _, lines, size in _live_batches(sys.stdin.fileno(), batch_size):
+        journal.append(lines)
+        yield line, lines, size, 0
+        line += len(lines)
 
 
 DEFAULT_AQ_SNAPSHOT_COMMANDS = 10_000   # script commands between two snapshots of `retalisc aq --state`
