@@ -341,3 +341,31 @@ def test_kill_9_on_standard_input_then_restart_gives_the_uninterrupted_output(se
     assert again.returncode == 0, again.stderr.decode()
     assert b"restored snapshot" in again.stderr
     assert out.read_bytes() == reference.read_bytes()
+
+
+# ---- a recording (--bag): the input position is the number of messages replayed --------------
+
+def test_kill_9_a_bag_replay_then_restart_gives_the_uninterrupted_output(tmp_path):
+    from retalisc.robot_io.samples import write_nao_bag
+
+    bag = write_nao_bag(tmp_path / "nao.bag", "ros1", seconds=8.0)
+    program = ROOT / "examples" / "nao_markers" / "nao_markers.rtl"
+    run = [sys.executable, "-m", "retalisc", "run", str(program), "--bag", str(bag), "--batch-size", "100"]
+    expected = tmp_path / "expected.jsonl"
+    subprocess.run(run + ["--out", str(expected)], check=True, env=_env(), capture_output=True)
+    expected = expected.read_bytes()
+    assert len(expected) > 20_000
+    out, state = tmp_path / "out.jsonl", tmp_path / "state"
+    kills = kill_and_restart(run + ["--out", str(out), "--state", str(state), "--snapshot-every", "200"],
+                             out, expected, 2, 5)
+    assert kills >= 1
+    assert out.read_bytes() == expected
+    manifest = json.loads(sorted(state.glob("snapshot-*.json"))[-1].read_text(encoding="utf-8"))
+    assert manifest["input_messages"] > 0 and json.loads(manifest["bag"])["bag"] == str(bag)
+
+
+def test_state_with_a_paced_bag_replay_is_refused(tmp_path):
+    done = CliRunner().invoke(main, ["run", str(ROOT / "examples" / "nao_markers" / "nao_markers.rtl"),
+                                     "--bag", str(ROOT / "README.md"), "--rate", "1", "--out",
+                                     str(tmp_path / "o.jsonl"), "--state", str(tmp_path / "s")])
+    assert done.exit_code == 2 and "not with --rate" in done.output

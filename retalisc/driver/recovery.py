@@ -549,3 +549,105 @@ def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], displ
         sink.flush()
         sink.close()
     return status
+
+
+def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path], options=None,
+                        batch_size: int = 2000, snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
+                        snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,
+                        first_output=(), log=None) -> int:
+    """`retalisc run PROGRAM --bag RECORDING --out OUT --state DIR`: the recording replayed as
+    `replay_bag` replays it (as fast as possible), surviving a crash as `run_recoverable` does.
+    The input position is the number of messages of the selection replayed (the recording and
+    the options that select and convert its messages are part of the snapshot's input name:
+    a state directory of another selection is refused); a restart passes over that many
+    messages and goes on. Returns the exit status (2: the recording cannot be read)."""
+    import sys
+    import time
+
+    import click
+
+    from ..robot_io.bags import BagError, Recording
+    from ..robot_io.replay import BagOptions, ReplayStats, bag_events
+    from .bridge import PrologError
+
+    log = log or sys.stderr
+    options = options or BagOptions()
+    directory = StateDir(state)
+    selection = json.dumps({"bag": os.path.abspath(bag_path), "topics": options.topics, "start": options.start,
+                            "duration": options.duration, "stamp": options.stamp,
+                            "typestore": options.typestore, "wrap_topic": options.convention.wrap_topic,
+                            "plain_strings": options.convention.plain_strings}, sort_keys=True)
+    restored = restore_newest(directory, engine, "bag", selection, log)
+    name = str(bag_path)
+    try:
+        bag = Recording(bag_path, options.typestore).__enter__()
+    except BagError as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+    sink = open_output(out, restored)
+    done = 0 if restored is None else restored["input_messages"]
+    if restored is not None:
+        print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
+              f"(message {done + 1}, {restored['out_bytes']} output bytes)", file=log)
+    stats = ReplayStats()
+    status = 0
+    started = time.perf_counter()
+
+    def write(produced):
+        for event in produced:
+            sink.write(event.line.encode("utf-8") + b"\n")
+
+    def report(topic: str, number: int, reason: str) -> None:
+        click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
+
+    def feed(batch) -> None:
+        while batch:
+            try:
+                write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
+                return
+            except PrologError as error:
+                if getattr(error, "batch_index", None) is None:
+                    raise
+                write(error.delivered)
+                _, _, (topic, number) = batch[error.batch_index]
+                sink.flush()
+                click.echo(f"{name}:{topic}#{number}: error: {str(error).split(': ', 1)[-1]}", err=True)
+                stats.failed += 1
+                batch = batch[error.batch_index + 1:]
+
+    def snapshot(done):
+        return take_snapshot(directory, engine, sink, {"bag": selection, "input_messages": done}, log)
+
+    try:
+        if restored is None:
+            for produced in first_output:
+                write(produced)
+            snapshot(done)
+        since_events, since_time = 0, time.monotonic()
+        batch = []
+        for text, seconds, record in bag_events(bag, options, stats, report, skip=done):
+            batch.append((text, seconds, (record.topic, stats.messages)))
+            if len(batch) >= batch_size:
+                feed(batch)
+                done = batch[-1][2][1]
+                since_events += len(batch)
+                batch = []
+                directory.journal({"input_messages": done, "out_bytes": sink.tell()})
+                if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
+                    snapshot(done)
+                    since_events, since_time = 0, time.monotonic()
+        if batch:
+            feed(batch)
+        write(engine.end_of_input(drop_pending))
+    except PrologError as error:
+        sink.flush()
+        click.echo(f"{name}: error: {error}", err=True)
+        status = 1
+    finally:
+        bag.__exit__(None, None, None)
+        sink.flush()
+        sink.close()
+    stats.seconds = time.perf_counter() - started
+    click.echo(stats.summary(name), err=True)
+    click.echo(engine.summary(), err=True)
+    return status

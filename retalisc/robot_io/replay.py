@@ -85,9 +85,10 @@ most this late, together with the others that fell due meanwhile (one Prolog cal
 
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
                report: Callable[[str, int, str], None],
-               converter: Optional[MessageConverter] = None) -> Iterator[Tuple[str, float, Record]]:
+               converter: Optional[MessageConverter] = None, skip: int = 0) -> Iterator[Tuple[str, float, Record]]:
     """(event text, time in seconds, record) for each message replayed, in record order. Messages that cannot be decoded or converted go to `report(topic, number, reason)`
-    and are counted in `stats.rejected`."""
+    and are counted in `stats.rejected`. The first `skip` messages are counted, not converted
+    (a replay going on from a snapshot, docs/recovery.md)."""
     converter = converter or MessageConverter(bag.typestore, options.convention)
     start_ns, stop_ns = window(bag, options)
     record_stamp = options.stamp == "record"
@@ -95,6 +96,8 @@ def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
     for record in bag.records(options.topics, start_ns, stop_ns):
         number += 1
         stats.per_topic[record.topic] += 1
+        if number <= skip:
+            continue
         if record.msg is None:
             stats.rejected += 1
             report(record.topic, number, record.error or "cannot decode")
