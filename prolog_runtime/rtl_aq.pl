@@ -1200,15 +1200,18 @@ aq_run_script(File) :-
 %   `done` (the script has no command after Next), or error(Exit, Message)
 %   after a bad line or a failed command (Output holds what the commands
 %   before it printed; Message is the line aq_script_main/1 prints, Exit its
-%   exit status).  The lines of File are read once per process.
+%   exit status).  The lines of File are read again only when it changed
+%   (its modification time or size).
 
 aq_script_batch(File, From, Max, Output, Next, Status) :-
     must_be(positive_integer, From),
     must_be(nonneg, Max),
-    (   nb_current('$aq_script_lines', File-Lines)
+    time_file(File, Modified),
+    size_file(File, Size),
+    (   nb_current('$aq_script_lines', script(File, Modified, Size, Lines))
     ->  true
     ;   script_lines(File, Lines),
-        nb_setval('$aq_script_lines', File-Lines)
+        nb_setval('$aq_script_lines', script(File, Modified, Size, Lines))
     ),
     aq_set_notify(none),
     with_output_to(string(Output),

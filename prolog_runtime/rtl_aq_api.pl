@@ -151,26 +151,30 @@ aq_api_script_batch(FileText, From, Max, Out) :-
 aq_api_save_state(Path, Identity, "") :-
     must_be(text, Path),
     must_be(string, Identity),
-    rtl_state_save(Path, Identity).
+    aq_program(Program),
+    rtl_state_save(Path, Identity, Program).
 
 aq_api_restore_state(Path, Identity, "") :-
     must_be(text, Path),
     must_be(string, Identity),
-    rtl_state_restore(Path, Identity).
+    aq_program(Program),
+    rtl_state_restore(Path, Identity, Program).
 
 aq_api_state_digest(Hash) :-
-    rtl_state_digest(H),
+    aq_program(Program),
+    rtl_state_digest(Program, H),
     atom_string(H, Hash).
 
 %   The state of an active-query program that lives in `user` (rtl_state.pl
 %   saves every dynamic predicate of the rtl_ modules by itself): the rules
 %   as transformed (with those added at run time), the kinds of predicates,
 %   the stored facts and the goal records waiting for them.
-:- multifile rtl_state:state_program/2.
-rtl_state:state_program(user, PIs) :-
-    current_predicate(user:'$aq_kind'/2),
-    findall(PI, aq_state_predicate(PI), PIs0),
-    sort(PIs0, PIs).
+aq_program(user-PIs) :-
+    (   current_predicate(user:'$aq_kind'/2)
+    ->  findall(PI, aq_state_predicate(PI), PIs0),
+        sort(PIs0, PIs)
+    ;   throw(error(existence_error(active_query_program, user), _))
+    ).
 
 aq_state_predicate(PI) :-
     member(PI, ['$aq_act'/2, '$aq_go'/3, '$aq_final'/6, '$aq_kind'/2]).

@@ -1,8 +1,11 @@
 :- module(rtl_state,
           [ rtl_state_save/2,           % +File, +Identity
+            rtl_state_save/3,           % +File, +Identity, +Program
             rtl_state_restore/2,        % +File, +Identity
+            rtl_state_restore/3,        % +File, +Identity, +Program
             rtl_state_capture/1,        % -State
-            rtl_state_digest/1          % -Hash
+            rtl_state_digest/1,         % -Hash
+            rtl_state_digest/2          % +Program, -Hash
           ]).
 
 /** <module> Snapshots of the whole runtime state, for restarts that lose nothing
@@ -27,10 +30,10 @@ added to active queries at run time) is written as the predicate and position of
 clause and found again on restore. Other blobs (streams) cannot be written: a global
 holding one is skipped, a clause holding one makes the save fail with an error.
 
-The program is the module given by rtl_program/1 (all its dynamic predicates are
-state), or, when no event program is loaded, what the multifile hook state_program/2
-names: an active-query program (rtl_aq_api.pl) keeps its facts, goal records and
-run-time rules in `user`, and names those predicates. What
+The program is the event program of rtl_program/1 (all the dynamic predicates of its
+module are state), or one given as `Module-PIs` to the /3 forms: an active-query program
+(rtl_aq_api.pl) keeps its facts, goal records and run-time rules in `user` and names those
+predicates. What
 must not be restored is listed by excluded_predicate/1 and excluded_global/1 (output sinks,
 streams, per-call state), which other modules may extend (multifile).
 
@@ -82,28 +85,24 @@ excluded_global(rtl_drop_pending).
 excluded_global(rtl_slr_log).
 excluded_global(rtl_slr_view).
 
-%!  state_program(-Module, -Predicates) is semidet.
-%
-%   Multifile: the program whose state is saved when no event program is loaded
-%   (rtl_program/1 fails): its module and the list of its state predicates (Name/Arity).
-
-:- multifile state_program/2.
-
-% program(-Program): M-all (every dynamic predicate of M) or M-PIs.
+% program(-Program): the event program, M-all (every dynamic predicate of M).
 program(M-all) :-
     rtl_program(M), !.
-program(M-PIs) :-
-    state_program(M, PIs), !.
 program(_) :-
     state_error("no program is loaded", []).
 
 %!  rtl_state_save(+File, +Identity) is det.
+%!  rtl_state_save(+File, +Identity, +Program) is det.
 %
 %   Write the state to File (created or overwritten), tagged with Identity (any ground
-%   term).
+%   term): that of the event program, or of Program, `Module-all` or `Module-PIs` (a list
+%   of Name/Arity: the state predicates of Module).
 
 rtl_state_save(File, Identity) :-
     program(Program),
+    rtl_state_save(File, Identity, Program).
+
+rtl_state_save(File, Identity, Program) :-
     state_version(V),
     setup_call_cleanup(open(File, write, Out, [type(binary)]),
                        write_state(Out, V, Identity, Program),
@@ -255,6 +254,7 @@ flag_key(K) :-
     (   sub_atom(K, 0, _, _, rtl_) -> true ; sub_atom(K, 0, _, _, aq_) ).
 
 %!  rtl_state_restore(+File, +Identity) is det.
+%!  rtl_state_restore(+File, +Identity, +Program) is det.
 %
 %   Replace the state by the one saved in File. Raises
 %   `error(rtl_state_error(Message), _)` (Message a string) and changes nothing when the
@@ -262,6 +262,9 @@ flag_key(K) :-
 
 rtl_state_restore(File, Identity) :-
     program(Program),
+    rtl_state_restore(File, Identity, Program).
+
+rtl_state_restore(File, Identity, Program) :-
     read_snapshot(File, Terms),
     check_snapshot(Terms, Identity, OldM, Tries, Preds, Globals, Flags),
     apply_state(Program, OldM, Tries, Preds, Globals, Flags).
@@ -326,16 +329,25 @@ apply_state(Program, OldM, TrieEntries, Preds, Globals, Flags) :-
     list_to_assoc(IdTries, ById),
     Map = map(OldM, M, ById),
     maplist(fill_trie(Map), TrieEntries),
+    % A module loaded after the snapshot was taken (active queries next to an event program
+    % in one process) keeps its state: only the modules the snapshot has are replaced.
+    findall(SM, ( member(P, Preds), arg(1, P, SM0), ( SM0 == OldM -> SM = M ; SM = SM0 ) ), SMs0),
+    sort([M|SMs0], SMs),
     captured_predicates(Program, Current),
-    forall(member(CM:Name/Arity, Current),
+    forall(( member(CM:Name/Arity, Current), memberchk(CM, SMs) ),
            ( functor(H, Name, Arity), retractall(CM:H) )),
     maplist(restore_pred(Map), Preds),
     captured_globals(CurrentGlobals),
-    forall(( member(K-_, CurrentGlobals), \+ memberchk(K-_, Globals) ), nb_delete(K)),
+    forall(( member(K-_, CurrentGlobals), \+ memberchk(K-_, Globals), owned_by(K, SMs) ), nb_delete(K)),
     forall(member(K-V0, Globals), ( reblob(Map, V0, V), nb_setval(K, V) )),
     captured_flags(CurrentFlags),               % 0 (as a new flag) unless the snapshot has it
-    forall(( member(K-_, CurrentFlags), \+ memberchk(K-_, Flags) ), flag(K, _, 0)),
+    forall(( member(K-_, CurrentFlags), \+ memberchk(K-_, Flags), owned_by(K, SMs) ), flag(K, _, 0)),
     forall(member(K-V, Flags), flag(K, _, V)).
+
+% The globals and flags of active queries (aq_) belong to rtl_aq; the others to the runtime
+% every snapshot has.
+owned_by(K, Modules) :-
+    (   sub_atom(K, 0, _, _, aq_) -> memberchk(rtl_aq, Modules) ; true ).
 
 new_trie(T) :- trie_new(T).
 
@@ -402,8 +414,11 @@ reblob_list([A|As], [C|Cs], OldM, NewM, ById) :-
 %   the program module as `'$program'`, predicates without clauses left out), to compare
 %   two states (tests).
 
-rtl_state_capture(state(Preds, Globals, Flags)) :-
+rtl_state_capture(State) :-
     program(Program),
+    rtl_state_capture(Program, State).
+
+rtl_state_capture(Program, state(Preds, Globals, Flags)) :-
     Program = M-_,
     captured_predicates(Program, PIs),
     findall(pred(CM, Name, Arity, Clauses),
@@ -457,7 +472,11 @@ numbered(T, C) :-
 %   A hash of rtl_state_capture/1.
 
 rtl_state_digest(Hash) :-
-    rtl_state_capture(State),
+    program(Program),
+    rtl_state_digest(Program, Hash).
+
+rtl_state_digest(Program, Hash) :-
+    rtl_state_capture(Program, State),
     variant_sha1(State, Hash).
 
 :- multifile prolog:error_message//1.
