@@ -187,13 +187,12 @@ def aq_snapshot_costs(tmp: Path, sizes) -> list:
         started = time.perf_counter()
         aq.save_state(path)
         save = time.perf_counter() - started
-        digest = aq.state_digest()
         again = ActiveQueries.from_file(program)
         started = time.perf_counter()
         again.restore_state(path)
         restore = time.perf_counter() - started
-        assert again.state_digest() == digest
         answers = n * (n + 1) // 2
+        assert len(again.answers("q")) == answers
         rows.append({"edges": n, "answers": answers, "bytes": path.stat().st_size, "save_seconds": save,
                      "restore_seconds": restore})
         print(f"  {n:>6,} edges, {answers:>9,} answers: {path.stat().st_size / 1e6:7.2f} MB, save {save:6.2f} s, "

@@ -412,7 +412,7 @@ reblob_list([A|As], [C|Cs], OldM, NewM, ById) :-
 %
 %   The state a snapshot holds, as one term without blobs (tries as their sorted entries,
 %   the program module as `'$program'`, predicates without clauses left out), to compare
-%   two states (tests).
+%   two states (tests). A trie is written out wherever it occurs: for small states only.
 
 rtl_state_capture(State) :-
     program(Program),
