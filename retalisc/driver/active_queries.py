@@ -88,7 +88,9 @@ class ActiveQueries:
         previous = _loaded["path"]
         if previous is not None:
             if self.bridge.once("current_predicate(rtl_aq:aq_reset/0)"):
-                self.bridge.once("rtl_aq:aq_reset")
+                # the globals of rtl_aq may be gone (an Engine snapshot restored in this
+                # process without them): made again first, then everything is reset
+                self.bridge.once("( nb_current(aq_subgoals, _) -> true ; rtl_aq:init_globals ), rtl_aq:aq_reset")
             # drop the facts asserted at run time too (reloading keeps them otherwise), and the
             # rules added at run time (their clauses and records)
             self.bridge.once("forall(catch(user:'$aq_fact_pred'(F), _, fail), retractall(user:F))")
