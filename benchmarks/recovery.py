@@ -11,6 +11,13 @@
       slow path; the runtime modules also hold what the earlier programs of the process kept).
   (c) restart time for a state of 1,000,000 records: loading the program and restoring the
       snapshot in a new process (`retalisc run --state` does exactly this before reading on).
+  (d) active queries (`retalisc aq --state`): snapshot size, save and restore time against the
+      size of the answer tables (path/2 over a chain of N edges: N(N+1)/2 answers), restored
+      into a new load of the program; and the CPU time of an update script of 3,000 commands
+      (tests/test_recovery_aq.py's program and script) without --state, with --state taking
+      only the first snapshot, at the default interval and with a snapshot every 100 commands.
+      Runs before (b): the process has loaded no event program yet, whose memories the runtime
+      modules would still hold (and an AQ snapshot would carry).
 
 Usage: python benchmarks/recovery.py [--quick] [--out-dir DIR]
 Writes DIR/recovery.json and DIR/recovery.png (default DIR: benchmarks/results). `--quick`
@@ -159,6 +166,79 @@ def restart_time(tmp: Path, n: int) -> dict:
             "restore_seconds": float(restore)}
 
 
+CHAIN_PROGRAM = """\
+path(X, Y) :- edge(X, Y).
+path(X, Y) :- edge(X, Z), path(Z, Y).
+:- dynamic edge/2.
+"""
+
+
+def aq_snapshot_costs(tmp: Path, sizes) -> list:
+    from retalisc.driver.active_queries import ActiveQueries
+    rows = []
+    for n in sizes:
+        program = tmp / f"chain{n}.pl"
+        program.write_text(CHAIN_PROGRAM + "".join(f"edge({i}, {i + 1}).\n" for i in range(n)), encoding="utf-8")
+        script = tmp / f"chain{n}.txt"
+        script.write_text("?q path(X, Y).\n", encoding="utf-8")
+        aq = ActiveQueries.from_file(program)
+        assert aq.run_script_batch(script, 1, 10).status == "done"
+        path = tmp / f"chain-{n}.state"
+        started = time.perf_counter()
+        aq.save_state(path)
+        save = time.perf_counter() - started
+        again = ActiveQueries.from_file(program)
+        started = time.perf_counter()
+        again.restore_state(path)
+        restore = time.perf_counter() - started
+        answers = n * (n + 1) // 2
+        assert len(again.answers("q")) == answers
+        rows.append({"edges": n, "answers": answers, "bytes": path.stat().st_size, "save_seconds": save,
+                     "restore_seconds": restore})
+        print(f"  {n:>6,} edges, {answers:>9,} answers: {path.stat().st_size / 1e6:7.2f} MB, save {save:6.2f} s, "
+              f"restore {restore:6.2f} s", file=sys.stderr)
+        path.unlink()
+        again.bridge.once("rtl_aq:aq_reset")      # the tables go: (b) measures event programs alone
+    return rows
+
+
+def aq_cpu(args) -> float:
+    """CPU seconds (user + system) of one `retalisc aq` process and its children."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run([sys.executable, "-m", "retalisc", "aq", *map(str, args)], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def aq_throughput(tmp: Path, commands: int, repeats: int) -> dict:
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_recovery_aq import PROGRAM, write_script
+    program, script = tmp / "aq.pl", tmp / "aq.txt"
+    program.write_text(PROGRAM, encoding="utf-8")
+    write_script(script, commands, 11)
+    variants = {"without --state": [], "--state, first snapshot only": [], "--state (default interval)": [],
+                "--state every 100": []}
+    outputs = {}
+    for repeat in range(repeats):
+        for name in variants:
+            out = tmp / f"aq-out-{len(outputs)}-{repeat}.jsonl"
+            args = [program, "--script", script, "--out", out]
+            if name != "without --state":
+                args += ["--state", tmp / f"aq-state-{repeat}-{len(outputs)}"]
+                if "first" in name:
+                    args += ["--snapshot-every", 10 ** 9, "--snapshot-seconds", "inf"]
+                elif "every" in name:
+                    args += ["--snapshot-every", 100]
+            variants[name].append(aq_cpu(args))
+            outputs[name] = out.read_bytes()
+    assert len(set(outputs.values())) == 1, "every variant must write the same output"
+    best = {name: min(times) for name, times in variants.items()}
+    base = best["--state, first snapshot only"]
+    return {"commands": commands, "cpu_seconds": variants, "best": best,
+            "slowdown_against_first_snapshot_only": {name: t / base - 1 for name, t in best.items()}}
+
+
 def plot(results: dict, path: Path) -> None:
     plt = pyplot()
     if plt is None:
@@ -204,6 +284,14 @@ def main(argv=None) -> int:
         for name, rate in t["events_per_second"].items():
             print(f"  {name:28s} {rate:10,.0f} events/CPU s  {t['slowdown'][name]:+.1%}", file=sys.stderr)
         print(f"  target <= 10%: {'met' if t['met'] else 'MISSED'}", file=sys.stderr)
+        print("(d) active queries: snapshot size and time", file=sys.stderr)
+        results["aq_snapshot_costs"] = aq_snapshot_costs(tmp, [30] if quick else [50, 100, 150])
+        print("    update script with and without --state", file=sys.stderr)
+        results["aq_throughput"] = aq_throughput(tmp, 150 if quick else 3000, 1 if quick else 3)
+        a = results["aq_throughput"]
+        for name, seconds in a["best"].items():
+            print(f"  {name:30s} {seconds:7.2f} CPU s  {a['slowdown_against_first_snapshot_only'][name]:+.1%}",
+                  file=sys.stderr)
         print("(b) snapshot size and time", file=sys.stderr)
         results["snapshot_costs"] = snapshot_costs(tmp, [1_000, 10_000] if quick else [10_000, 100_000, 1_000_000])
         print("(c) restart", file=sys.stderr)

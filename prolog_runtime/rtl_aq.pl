@@ -57,6 +57,7 @@
             aq_reset/0,
             aq_run_script/1,        % +File
             aq_script_main/1,       % +File
+            aq_script_batch/6,      % +File, +From, +Max, -Output, -Next, -Status
             aq_wait_fact/2,         % +Literal, +State         (called by generated code)
             aq_wait_call/2,         % +Literal, +State         (called by generated code)
             aq_wait_neg/4,          % +Kind, +Literal, +State, +Stratum (called by generated code)
@@ -1221,43 +1222,96 @@ aq_remove_rule(Rule) :-
 %   fails while it runs.
 
 aq_run_script(File) :-
-    read_file_to_string(File, Text, []),
-    split_string(Text, "\n", "\r", Lines),
+    script_lines(File, Lines),
     aq_set_notify(none),
-    run_lines(Lines, 1).
+    run_lines(Lines, 1, inf, _).
 
-%   A command whose quoted atom or string is not closed on its line goes on
-%   on the next lines (a quoted item may contain newlines, as in programs);
-%   errors name the line the command starts on.
-run_lines([], _).
-run_lines([Line0|Lines0], N) :-
-    strip(Line0, Line),
-    (   ( Line == "" ; sub_string(Line, 0, 1, _, "%") )
-    ->  N1 is N + 1,
-        run_lines(Lines0, N1)
-    ;   sub_string(Line, 0, 1, _, C),
-        sub_string(Line, 1, _, 0, Rest0),
-        strip(Rest0, Rest1),
-        command_text(Rest1, Lines0, N, C, T, Lines, N1),
-        run_command_line(C, T, N, Line),
-        run_lines(Lines, N1)
+%!  aq_script_batch(+File, +From, +Max, -Output, -Next, -Status) is det.
+%
+%   Run at most Max commands of the update script File, from its line From
+%   (1 is the first) on, as aq_run_script/1 runs them, for a run that
+%   survives a crash (`retalisc aq --state`, retalisc/driver/recovery.py):
+%   the caller snapshots the state between two batches and, after a crash,
+%   goes on from the line a snapshot names.  Output is what the commands
+%   print; Next the line after the last command run; Status is `more`,
+%   `done` (the script has no command after Next), or error(Exit, Message)
+%   after a bad line or a failed command (Output holds what the commands
+%   before it printed; Message is the line aq_script_main/1 prints, Exit its
+%   exit status).  The lines of File are read again only when it changed
+%   (its modification time or size).
+
+aq_script_batch(File, From, Max, Output, Next, Status) :-
+    must_be(positive_integer, From),
+    must_be(nonneg, Max),
+    time_file(File, Modified),
+    size_file(File, Size),
+    (   nb_current('$aq_script_lines', script(File, Modified, Size, Lines))
+    ->  true
+    ;   script_lines(File, Lines),
+        nb_setval('$aq_script_lines', script(File, Modified, Size, Lines))
+    ),
+    aq_set_notify(none),
+    with_output_to(string(Output),
+                   catch(( run_lines(Lines, From, Max, Next),
+                           (   functor(Lines, _, Count), Next > Count
+                           ->  Status = done
+                           ;   Status = more
+                           ) ),
+                         E,
+                         ( Next = From,
+                           script_error_text(File, E, Exit, Message),
+                           Status = error(Exit, Message) ))).
+
+%   The lines of a script file as the arguments of one term (arg/3 reaches
+%   any line at once).
+script_lines(File, Lines) :-
+    read_file_to_string(File, Text, []),
+    split_string(Text, "\n", "\r", List),
+    compound_name_arguments(Lines, lines, List).
+
+%   run_lines(+Lines, +N, +Max, -Next): run the commands from line N on, at
+%   most Max of them (inf: all); Next is the line after the last one run
+%   (the number of lines + 1 at the end of the script).  A command whose
+%   quoted atom or string is not closed on its line goes on on the next
+%   lines (a quoted item may contain newlines, as in programs); errors name
+%   the line the command starts on.
+run_lines(Lines, N, Max, Next) :-
+    functor(Lines, _, Count),
+    (   ( N > Count ; Max == 0 )
+    ->  Next = N
+    ;   arg(N, Lines, Line0),
+        strip(Line0, Line),
+        (   ( Line == "" ; sub_string(Line, 0, 1, _, "%") )
+        ->  N1 is N + 1,
+            run_lines(Lines, N1, Max, Next)
+        ;   sub_string(Line, 0, 1, _, C),
+            sub_string(Line, 1, _, 0, Rest0),
+            strip(Rest0, Rest1),
+            command_text(Rest1, Lines, N, N, C, T, N1),
+            run_command_line(C, T, N, Line),
+            (   Max == inf -> Max1 = inf ; Max1 is Max - 1 ),
+            run_lines(Lines, N1, Max1, Next)
+        )
     ).
 
 strip(Text, Stripped) :-
     split_string(Text, "", " \t", [Stripped]).
 
-%   Parse the command's text, taking further lines while a quoted item is
-%   open at the end of the text.
-command_text(Rest, Lines0, N, C, T, Lines, N1) :-
+%   Parse the command's text (starting on line N, taken up to line Last),
+%   taking further lines while a quoted item is open at the end of the
+%   text; N1 is the line after the last one taken.
+command_text(Rest, Lines, N, Last, C, T, N1) :-
     catch(parse_command(C, Rest, T0), E, true),
     (   var(E)
-    ->  T = T0, Lines = Lines0, N1 is N + 1
+    ->  T = T0, N1 is Last + 1
     ;   E = error(syntax_error(end_of_file_in_quoted(_)), _),
-        Lines0 = [Next|More]
-    ->  string_concat(Rest, "\n", Rest2),
+        Last1 is Last + 1,
+        functor(Lines, _, Count),
+        Last1 =< Count
+    ->  arg(Last1, Lines, Next),
+        string_concat(Rest, "\n", Rest2),
         string_concat(Rest2, Next, Rest3),
-        command_text(Rest3, More, N, C, T, Lines, N2),
-        N1 is N2 + 1
+        command_text(Rest3, Lines, N, Last1, C, T, N1)
     ;   parse_error(N, E)
     ).
 
@@ -1370,14 +1424,17 @@ aq_script_main(File) :-
     ),
     halt(Status).
 
-script_error(File, aq_script_error(Line, Msg), 2) :- !,
+script_error(File, E, Status) :-
     flush_output,
-    format(user_error, '~w:~w: error: ~w~n', [File, Line, Msg]).
-script_error(File, aq_runtime_error(Line, E), 1) :- !,
-    flush_output,
+    script_error_text(File, E, Status, Text),
+    format(user_error, '~w~n', [Text]).
+
+%   The message of a script error and the exit status that goes with it.
+script_error_text(File, aq_script_error(Line, Msg), 2, Text) :- !,
+    format(string(Text), '~w:~w: error: ~w', [File, Line, Msg]).
+script_error_text(File, aq_runtime_error(Line, E), 1, Text) :- !,
     message_to_codes(E, Msg),
-    format(user_error, '~w:~w: runtime error: ~w~n', [File, Line, Msg]).
-script_error(_, E, 1) :-
-    flush_output,
+    format(string(Text), '~w:~w: runtime error: ~w', [File, Line, Msg]).
+script_error_text(_, E, 1, Text) :-
     message_to_codes(E, Msg),
-    format(user_error, 'error: ~w~n', [Msg]).
+    format(string(Text), 'error: ~w', [Msg]).

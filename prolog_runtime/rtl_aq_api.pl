@@ -9,7 +9,11 @@
             aq_api_remove_rule/2,       % +RuleText, -Out
             aq_api_events/1,            % -EventLines
             aq_api_stats/1,             % -StatLines
-            aq_api_unload/2             % +File, -Out
+            aq_api_unload/2,            % +File, -Out
+            aq_api_script_batch/4,      % +File, +From, +Max, -Out
+            aq_api_save_state/3,        % +Path, +Identity, -Out
+            aq_api_restore_state/3,     % +Path, +Identity, -Out
+            aq_api_state_digest/1       % -Hash
           ]).
 
 /** <module> The entry points of the Python ActiveQueries class: values as data
@@ -26,6 +30,7 @@ arguments are data. Out is a string: lines of writeq text.
 :- use_module(library(lists)).
 :- use_module(rtl_aq).
 :- use_module(rtl_text).
+:- use_module(rtl_state).
 
 %!  aq_api_register(+Id, +GoalText:text, -Answers:string) is det.
 
@@ -114,6 +119,71 @@ aq_api_unload(FileText, "") :-
     must_be(text, FileText),
     atom_string(File, FileText),
     unload_file(File).
+
+%!  aq_api_script_batch(+File:text, +From:integer, +Max:integer, -Out:string) is det.
+%
+%   Run at most Max commands of the update script File from its line From on
+%   (aq_script_batch/6). Out is a first line `Next Status Exit Length`
+%   (Status `more`, `done` or `error`; Exit the exit status of an error, else
+%   0), then Length characters of the error message, then what the commands
+%   printed (JSON Lines).
+
+aq_api_script_batch(FileText, From, Max, Out) :-
+    must_be(text, FileText),
+    atom_string(File, FileText),
+    aq_script_batch(File, From, Max, Output, Next, Status),
+    (   Status = error(Exit, Message)
+    ->  Word = error
+    ;   Word = Status, Exit = 0, Message = ""
+    ),
+    string_length(Message, Length),
+    format(string(Out), "~w ~w ~w ~w~n~w~w", [Next, Word, Exit, Length, Message, Output]).
+
+%!  aq_api_save_state(+Path:text, +Identity:string, -Out) is det.
+%!  aq_api_restore_state(+Path:text, +Identity:string, -Out) is det.
+%!  aq_api_state_digest(-Hash:string) is det.
+%
+%   Snapshots of the active queries (rtl_state.pl): their tables, consumer
+%   and goal records, the stored facts, the rules added at run time, the
+%   globals and counters of rtl_aq. A snapshot of another program or runtime
+%   version (Identity) is refused and nothing changes.
+
+aq_api_save_state(Path, Identity, "") :-
+    must_be(text, Path),
+    must_be(string, Identity),
+    aq_program(Program),
+    rtl_state_save(Path, Identity, Program).
+
+aq_api_restore_state(Path, Identity, "") :-
+    must_be(text, Path),
+    must_be(string, Identity),
+    aq_program(Program),
+    rtl_state_restore(Path, Identity, Program).
+
+aq_api_state_digest(Hash) :-
+    aq_program(Program),
+    rtl_state_digest(Program, H),
+    atom_string(H, Hash).
+
+%   The state of an active-query program that lives in `user` (rtl_state.pl
+%   saves every dynamic predicate of the rtl_ modules by itself): the rules
+%   as transformed (with those added at run time), the kinds of predicates,
+%   the stored facts and the goal records waiting for them.
+aq_program(user-PIs) :-
+    (   current_predicate(user:'$aq_kind'/2)
+    ->  findall(PI, aq_state_predicate(PI), PIs0),
+        sort(PIs0, PIs)
+    ;   throw(error(existence_error(active_query_program, user), _))
+    ).
+
+aq_state_predicate(PI) :-
+    member(PI, ['$aq_act'/2, '$aq_go'/3, '$aq_final'/6, '$aq_kind'/2]).
+aq_state_predicate(Name/Arity) :-
+    user:'$aq_fact_pred'(F),
+    (   G = F
+    ;   user:'$aq_whead'(F, _, G)
+    ),
+    functor(G, Name, Arity).
 
 query_id(Id0, Id) :-
     (   integer(Id0)

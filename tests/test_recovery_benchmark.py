@@ -12,7 +12,8 @@ def test_recovery_benchmark_quick(tmp_path):
                            "--out-dir", str(tmp_path)], capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     results = json.loads((tmp_path / "recovery_quick.json").read_text())
-    assert set(results) == {"throughput", "snapshot_costs", "restart"}
+    assert set(results) == {"throughput", "snapshot_costs", "restart", "aq_snapshot_costs", "aq_throughput"}
+    assert results["aq_snapshot_costs"][0]["answers"] == 465 and results["aq_snapshot_costs"][0]["bytes"] > 0
     assert "target <= 10%" in done.stderr
     sizes = [row["bytes"] for row in results["snapshot_costs"]]
     assert sizes == sorted(sizes) and sizes[0] > 0       # more records, a larger snapshot

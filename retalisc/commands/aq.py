@@ -2,7 +2,10 @@
 
 Compiles the definite program with the chosen transformation and runs the script in a plain
 `swipl` process (`aq_script_main/1` of `prolog_runtime/rtl_aq.pl`), printing one JSON object
-per notification on standard output (docs/active_queries.md).
+per notification on standard output or to `--out FILE` (docs/active_queries.md). With
+`--state DIR` the script runs in this process instead (the in-process bridge), with snapshots
+of the active queries in DIR so that a run killed and started again ends with the same
+`--out` file as a run that never stopped (docs/recovery.md).
 """
 from __future__ import annotations
 
@@ -17,6 +20,7 @@ import click
 
 from ..compiler import AQ_MODES, AqOptions, compile_source
 from ..frontend.errors import RetalisError
+from .options import Seconds, output_directory, output_file
 
 
 def _swipl() -> str:
@@ -61,28 +65,76 @@ with UPDATES.txt:
 @click.option("--mode", type=click.Choice(AQ_MODES), default="tabled", show_default=True,
               help="Active-query transformation (thesis 6.4, 6.5, 6.6).")
 @click.option("--subsumption", is_flag=True, help="Tabled mode: reuse the table of a subsuming sub-goal.")
-def aq_command(program: str, script: str, mode: str, subsumption: bool) -> None:
+@click.option("--out", "out", type=click.Path(dir_okay=False, allow_dash=True), default="-", show_default=True,
+              help="Write the notifications to this file ('-' for standard output).")
+@click.option("--state", "state", type=click.Path(file_okay=False), default=None, metavar="DIR",
+              help="Survive a crash: keep snapshots of the active queries in DIR; started again with the same "
+                   "DIR, the run goes on from the newest complete snapshot and the --out file ends byte-identical "
+                   "to that of a run that never stopped (docs/recovery.md). Needs --out FILE.")
+@click.option("--snapshot-every", "snapshot_every", type=click.IntRange(1), default=None, metavar="N",
+              help="With --state: a snapshot every N script commands (default 10000).")
+@click.option("--snapshot-seconds", "snapshot_seconds", type=Seconds(allow_inf=True), default=None, metavar="S",
+              help="With --state: a snapshot every S seconds at the latest (default 60; inf: only by "
+                   "--snapshot-every).")
+def aq_command(program: str, script: str, mode: str, subsumption: bool, out: str, state, snapshot_every,
+               snapshot_seconds) -> None:
     """Register active queries on PROGRAM (rules and initial facts) and run UPDATES.
 
     Prints JSON Lines {"query": Id, "op": "answer"|"add"|"delete", "answer": TEXT}: the answers at
     registration, then every change, in script order (sorted within one line). TEXT is the goal
     instance written with writeq.
     """
+    if state is None and (snapshot_every is not None or snapshot_seconds is not None):
+        raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
+    if state is not None:
+        if out == "-":
+            raise click.UsageError("--state needs --out FILE (standard output cannot be cut back after a crash)")
+        output_directory(state, "--state")
+    output_file(out, "--out")
     prolog = compile_program_or_exit(program, mode, subsumption)
+    if state is not None:
+        sys.exit(_run_with_state(program, script, mode, subsumption, out, state, snapshot_every,
+                                 snapshot_seconds))
     with tempfile.TemporaryDirectory(prefix="retalisc_aq_") as tmp:
-        out = Path(tmp) / "program.pl"
-        out.write_text(prolog, encoding="utf-8")
+        compiled = Path(tmp) / "program.pl"
+        compiled.write_text(prolog, encoding="utf-8")
         script_path = str(Path(script).resolve())
         cmd = [_swipl(), "--no-tty", "-q", "--no-packs", "-g", f"aq_script_main({_prolog_atom(script_path)})",
-               "-t", "halt(1)", str(out)]
-        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    sys.stdout.write(proc.stdout)
-    err = proc.stderr.replace(script_path, script)
+               "-t", "halt(1)", str(compiled)]
+        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    if out == "-":
+        sys.stdout.flush()
+        sys.stdout.buffer.write(proc.stdout)
+        sys.stdout.flush()
+    else:
+        with open(out, "wb") as sink:
+            sink.write(proc.stdout)
+    err = proc.stderr.decode("utf-8", errors="replace").replace(script_path, script)
     if err:
         sys.stderr.write(err)
     if proc.returncode not in (0, 1, 2):
         sys.exit(1)
     sys.exit(proc.returncode)
+
+
+def _run_with_state(program, script, mode, subsumption, out, state, snapshot_every, snapshot_seconds) -> int:
+    from ..driver import recovery
+    from ..driver.active_queries import ActiveQueries
+    from ..driver.bridge import PrologError
+
+    try:
+        aq = ActiveQueries.from_file(program, mode=mode, subsumption=subsumption)
+    except PrologError as error:
+        click.echo(f"{program}: error: the program cannot be loaded: {error}", err=True)
+        return 2
+    try:
+        return recovery.run_aq_recoverable(
+            aq, script, out, state, display_name=script,
+            snapshot_commands=snapshot_every or recovery.DEFAULT_AQ_SNAPSHOT_COMMANDS,
+            snapshot_seconds=recovery.DEFAULT_SNAPSHOT_SECONDS if snapshot_seconds is None else snapshot_seconds)
+    except recovery.RecoveryError as error:
+        click.echo(f"error: --state {state}: {error}", err=True)
+        return 2
 
 
 COMMANDS = [aq_command]

@@ -218,8 +218,12 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     if state is None and (snapshot_every is not None or snapshot_seconds is not None):
         raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
     if state is not None:
-        if bag["bag"] is not None or events == "-":
-            raise click.UsageError("--state needs --events FILE (a file that can be read again, not '-' or --bag)")
+        if heartbeat is not None:
+            raise click.UsageError("--state does not go with --heartbeat (a replay would not see the same clock)")
+        if bag["bag"] is not None and (bag["rate"] is not None or bag["out_bag"] is not None
+                                       or bag["foxglove"] is not None):
+            raise click.UsageError("--state replays a recording as fast as it can: not with --rate, --out-bag "
+                                   "or --foxglove")
         if out in (None, "-"):
             raise click.UsageError("--state needs --out FILE (standard output cannot be cut back after a crash)")
         if consumer_dir is not None:
@@ -256,6 +260,19 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         add_cli_memory(engine, request)
     posted = [post_cli_query(engine, number, at, goal, query_timeout)
               for number, (at, goal) in enumerate(queries, start=1)]
+    if bag["bag"] is not None and state is not None:
+        from ..driver import recovery
+        from ..robot_io.replay import BagOptions
+        try:
+            status = recovery.run_bag_recoverable(
+                engine, bag["bag"], out, state, BagOptions.from_cli(bag), batch_size=batch_size,
+                snapshot_events=snapshot_every or recovery.DEFAULT_SNAPSHOT_EVENTS,
+                snapshot_seconds=recovery.DEFAULT_SNAPSHOT_SECONDS if snapshot_seconds is None else snapshot_seconds,
+                drop_pending=drop_pending, first_output=posted)
+        except recovery.RecoveryError as error:
+            click.echo(f"error: --state {state}: {error}", err=True)
+            sys.exit(2)
+        sys.exit(status)
     if bag["bag"] is not None:
         from ..robot_io.replay import replay_from_cli
         sys.exit(replay_from_cli(engine, out, bag, batch_size=batch_size, consumer_dir=consumer_dir,

@@ -19,15 +19,25 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from typing import Callable, Dict, Iterable, List, Optional, Union
+from typing import Callable, Dict, Iterable, List, NamedTuple, Optional, Union
 
 from ..compiler import AqOptions, compile_source
-from .bridge import Bridge
+from . import recovery
+from .bridge import Bridge, PrologError
 
 _API = "rtl_aq_api"
 
 QueryId = Union[str, int]
 Callback = Callable[[QueryId, str], None]
+
+
+class ScriptBatch(NamedTuple):
+    """What one `ActiveQueries.run_script_batch` call did."""
+    output: str            # the JSON Lines the commands printed
+    next_line: int         # the script line after the last command run
+    status: str            # "more", "done" or "error"
+    exit_status: int       # with "error": 2 for a bad line, 1 for a failed command
+    message: str           # with "error": the message `retalisc aq` prints
 
 _loaded: Dict[str, Optional[str]] = {"path": None}
 
@@ -53,6 +63,7 @@ class ActiveQueries:
         self._on_delete: List[Callback] = []
         self._ids: Dict[str, QueryId] = {}
         self._tmp = tempfile.TemporaryDirectory(prefix="retalisc_aq_")
+        self._identity: Optional[str] = None
 
     # -- loading ---------------------------------------------------------------------------
     @classmethod
@@ -77,9 +88,15 @@ class ActiveQueries:
         previous = _loaded["path"]
         if previous is not None:
             if self.bridge.once("current_predicate(rtl_aq:aq_reset/0)"):
-                self.bridge.once("rtl_aq:aq_reset")
-            # drop the facts asserted at run time too (reloading keeps them otherwise)
+                # the globals of rtl_aq may be gone (an Engine snapshot restored in this
+                # process without them): made again first, then everything is reset
+                self.bridge.once("( nb_current(aq_subgoals, _) -> true ; rtl_aq:init_globals ), rtl_aq:aq_reset")
+            # drop the facts asserted at run time too (reloading keeps them otherwise), and the
+            # rules added at run time (their clauses and records)
             self.bridge.once("forall(catch(user:'$aq_fact_pred'(F), _, fail), retractall(user:F))")
+            self.bridge.once("forall(member(P, ['$aq_act'(_, _), '$aq_go'(_, _, _), '$aq_final'(_, _, _, _, _, _), "
+                             "'$aq_kind'(_, _)]), retractall(user:P)), retractall(rtl_aq:aq_rule(_, _, _)), "
+                             "flag(aq_rule_id, _, 0)")
             self.bridge.apply(_API, "aq_api_unload", previous)
         self.bridge.consult(out)
         # the API module next to the runtime the program loaded (a constant goal, no values)
@@ -87,6 +104,7 @@ class ActiveQueries:
                          "directory_file_path(D, 'rtl_aq_api.pl', P), use_module(user:P)")
         _loaded["path"] = str(out)
         self._ids.clear()
+        self._identity = recovery.program_identity(prolog, "")
 
     # -- callbacks -------------------------------------------------------------------------
     def on_add(self, callback: Callback) -> None:
@@ -158,3 +176,39 @@ class ActiveQueries:
     def stats(self) -> Dict[str, int]:
         text = self.bridge.apply(_API, "aq_api_stats")
         return {k: int(v) for k, v in (line.split() for line in text.splitlines())}
+
+    # -- update scripts and snapshots (docs/recovery.md) ----------------------------------
+    def run_script_batch(self, script: Union[str, Path], first_line: int, max_commands: int) -> ScriptBatch:
+        """Run at most `max_commands` commands of the update script file `script` (the format
+        of `retalisc aq --script`) from its line `first_line` on; the callbacks do not fire,
+        the notifications come back as the JSON Lines `retalisc aq` prints."""
+        text = self.bridge.apply(_API, "aq_api_script_batch", str(script), int(first_line), int(max_commands))
+        head, rest = text.split("\n", 1)
+        next_line, status, exit_status, length = head.split(" ")
+        length = int(length)
+        return ScriptBatch(rest[length:], int(next_line), status, int(exit_status), rest[:length])
+
+    def identity(self) -> str:
+        """The hash of the compiled program and the runtime a snapshot carries."""
+        if self._identity is None:
+            raise RuntimeError("no program is loaded")
+        return self._identity
+
+    def save_state(self, path: Union[str, Path]) -> None:
+        """Write the state (registered queries, their tables and records, stored facts, rules
+        added at run time) to `path`, atomically (a temporary file, fsync, rename)."""
+        recovery.replace_atomically(
+            Path(path), lambda temporary: self.bridge.apply(_API, "aq_api_save_state", str(temporary),
+                                                            self.identity()))
+
+    def restore_state(self, path: Union[str, Path]) -> None:
+        """Replace the state by the one `save_state` wrote; `recovery.StateError` (and nothing
+        changed) for a file that is not a complete snapshot of this program and runtime."""
+        try:
+            self.bridge.apply(_API, "aq_api_restore_state", str(path), self.identity())
+        except PrologError as error:
+            raise recovery.StateError(f"{path}: {error}") from None
+
+    def state_digest(self) -> str:
+        """A hash of everything a snapshot holds (equal states, equal digests)."""
+        return self.bridge.apply(_API, "aq_api_state_digest")

@@ -15,7 +15,7 @@ import os
 import re
 from functools import lru_cache
 from pathlib import Path
-from typing import Union
+from typing import Optional, Union
 
 from ..runtime_location import runtime_dir
 
@@ -223,8 +223,134 @@ def _binary_batches(stream, offset: int, first_line: int, batch_size: int):
         yield start, batch, size, position
 
 
+class EventJournal:
+    """The journal of a live input (standard input), whose events cannot be read again: the
+    lines read after snapshot N are appended to `events-N.jsonl` (flushed to the operating
+    system before they are processed, fsynced at each snapshot), so a process killed at any
+    point loses none of the lines it has read. A restart from snapshot N replays the segments
+    from N on; segments older than the oldest snapshot kept are deleted."""
+
+    def __init__(self, directory: StateDir):
+        self.directory = directory.directory
+        self.stream = None
+
+    def segments(self):
+        found = []
+        for path in self.directory.glob("events-*.jsonl"):
+            number = path.stem.split("-", 1)[1]
+            if number.isdigit():
+                found.append((int(number), path))
+        return sorted(found)
+
+    def replay(self, first: int):
+        """The complete lines of the segments from snapshot `first` on, in order; a line cut by
+        a crash (the end of a segment without a newline) is removed from its file."""
+        lines = []
+        for number, path in self.segments():
+            if number < first:
+                continue
+            data = path.read_bytes()
+            complete = data[:data.rfind(b"\n") + 1]
+            if len(complete) != len(data):
+                with open(path, "r+b") as stream:
+                    stream.truncate(len(complete))
+            lines += complete.decode("utf-8", errors="replace").split("\n")[:-1]
+        return lines
+
+    def open(self, number: int) -> None:
+        """Append from now on to the segment of snapshot `number` (made if missing)."""
+        self.close()
+        path = self.directory / f"events-{number:08d}.jsonl"
+        self.stream = open(path, "ab")
+        fsync_directory(self.directory)
+
+    def append(self, lines) -> None:
+        if self.stream is None:          # no snapshot could be written yet: nothing to replay from
+            return
+        self.stream.write("".join(line + "\n" for line in lines).encode("utf-8"))
+        self.stream.flush()
+
+    def sync(self) -> None:
+        if self.stream is not None:
+            self.stream.flush()
+            os.fsync(self.stream.fileno())
+
+    def prune(self, directory: StateDir) -> None:
+        kept = [int(p.stem.split("-")[1]) for p in directory._manifests()]
+        if kept:
+            for number, path in self.segments():
+                if number < min(kept):
+                    path.unlink(missing_ok=True)
+
+    def close(self) -> None:
+        if self.stream is not None:
+            self.stream.close()
+            self.stream = None
+
+
 class RecoveryError(Exception):
     """The state directory cannot be used for this run (another program, another input)."""
+
+
+def restore_newest(directory: StateDir, engine, input_key: str, input_name: str, log):
+    """Restore the newest complete snapshot of `directory` into `engine` (an Engine or an
+    ActiveQueries: identity() and restore_state()) and return its manifest, or None for a
+    directory without snapshots (a first run). Incomplete snapshots are deleted first, corrupt
+    ones reported on `log` and passed over. RecoveryError for a snapshot of another program or
+    runtime version, or of a run over another input (the manifest's `input_key` is not
+    `input_name`)."""
+    directory.remove_incomplete()
+    identity = engine.identity()
+    found, problems = directory.snapshots()
+    for problem in problems:
+        print(f"retalisc: {directory.directory}/{problem}", file=log)
+    for manifest, state_path in found:
+        if manifest.get("identity") != identity:
+            raise RecoveryError(f"{state_path}: the snapshot was made by another program or runtime "
+                                f"version; use another --state directory or delete this one")
+        if manifest.get(input_key) != input_name:
+            raise RecoveryError(f"{state_path}: the snapshot belongs to a run over {manifest.get(input_key)}, "
+                                f"not {input_name}")
+        try:
+            engine.restore_state(state_path)
+        except StateError as error:
+            print(f"retalisc: {error}; trying an older snapshot", file=log)
+            continue
+        return manifest
+    if found:
+        raise RecoveryError(f"{directory.directory}: no snapshot could be restored")
+    return None
+
+
+def open_output(out: str, restored):
+    """The output file opened for binary writing: new for a first run, else cut back to the
+    length it had at the restored snapshot (RecoveryError if it is shorter than that)."""
+    if restored is None:
+        return open(out, "wb")
+    size = os.path.getsize(out) if os.path.exists(out) else -1
+    if size < restored["out_bytes"]:
+        raise RecoveryError(f"{out} has {max(size, 0)} bytes, fewer than the {restored['out_bytes']} it had at "
+                            f"snapshot {restored['number']}: it was changed; cannot go on from this snapshot")
+    sink = open(out, "r+b")
+    sink.truncate(restored["out_bytes"])
+    sink.seek(restored["out_bytes"])
+    return sink
+
+
+def take_snapshot(directory: StateDir, engine, sink, manifest: dict, log):
+    """Flush the output to disk, then write a snapshot of `engine` with `manifest` (the input
+    position) and the output position. A snapshot that cannot be written (a full disk) is
+    reported on `log` and None returned: the run goes on, the previous snapshot stays."""
+    from .bridge import PrologError
+
+    sink.flush()
+    os.fsync(sink.fileno())
+    try:
+        return directory.save(engine, dict(manifest, out_bytes=sink.tell()))
+    except (OSError, PrologError) as error:
+        print(f"retalisc: warning: the snapshot could not be written ({error}); the run goes on, "
+              f"the previous snapshot stays the one a restart uses", file=log)
+        return None
 
 
 def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batch_size: int = 2000,
@@ -239,7 +365,10 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     restores the newest complete snapshot, cuts the output file back to the snapshot's output
     position and reads the input from the snapshot's input position: the output file ends
     byte-identical to that of a run that never stopped. A snapshot that cannot be written (a
-    full disk) is reported and the run goes on. Returns the exit status."""
+    full disk) is reported and the run goes on. With `events` '-' (standard input, a live
+    input) the lines are journaled (EventJournal) before they are processed, a restart
+    replays the journal after the snapshot and then reads standard input on; the output is
+    flushed after each batch. Returns the exit status."""
     import sys
     import time
 
@@ -249,64 +378,46 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     log = log or sys.stderr
     started = time.perf_counter()
     directory = StateDir(state)
-    directory.remove_incomplete()
-    events_path = os.path.abspath(events)
-    identity = engine.identity()
-    restored = None
-    found, problems = directory.snapshots()
-    for problem in problems:
-        print(f"retalisc: {directory.directory}/{problem}", file=log)
-    for manifest, state_path in found:
-        if manifest.get("identity") != identity:
-            raise RecoveryError(f"{state_path}: the snapshot was made by another program or runtime "
-                                f"version; use another --state directory or delete this one")
-        if manifest.get("events") != events_path:
-            raise RecoveryError(f"{state_path}: the snapshot belongs to a run over {manifest.get('events')}, "
-                                f"not {events_path}")
-        try:
-            engine.restore_state(state_path)
-        except StateError as error:
-            print(f"retalisc: {error}; trying an older snapshot", file=log)
-            continue
-        restored = manifest
-        break
-    if found and restored is None:
-        raise RecoveryError(f"{directory.directory}: no snapshot could be restored")
-
+    live = events == "-"
+    events_path = "-" if live else os.path.abspath(events)
+    restored = restore_newest(directory, engine, "events", events_path, log)
+    sink = open_output(out, restored)
     if restored is None:
-        sink = open(out, "wb")
         offset, line = 0, 1
     else:
-        size = os.path.getsize(out) if os.path.exists(out) else -1
-        if size < restored["out_bytes"]:
-            raise RecoveryError(f"{out} has {max(size, 0)} bytes, fewer than the {restored['out_bytes']} it had at "
-                                f"snapshot {restored['number']}: it was changed; cannot go on from this snapshot")
-        sink = open(out, "r+b")
-        sink.truncate(restored["out_bytes"])
-        sink.seek(restored["out_bytes"])
-        offset, line = restored["input_bytes"], restored["input_line"]
+        offset, line = restored.get("input_bytes", 0), restored["input_line"]
         print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
               f"(input line {line}, {restored['out_bytes']} output bytes)", file=log)
-    source = open(events_path, "rb")
-    total = os.path.getsize(events_path)
-    display = Progress(stream=sys.stderr, total=total, enabled=progress)
+    journal = EventJournal(directory) if live else None
+    if live and restored is None:
+        for _, path in journal.segments():              # of a run that never took its first snapshot
+            path.unlink(missing_ok=True)
+    if live:
+        source = None
+        batches = _journaled_batches(journal, restored, line, batch_size)
+        display = Progress(stream=sys.stderr, total=None, enabled=False)
+    else:
+        source = open(events_path, "rb")
+        batches = _binary_batches(source, offset, line, batch_size)
+        display = Progress(stream=sys.stderr, total=os.path.getsize(events_path), enabled=progress)
     status = 0
-    name = events
+    name = "<stdin>" if live else events
 
     def write(produced):
         for event in produced:
             sink.write(event.line.encode("utf-8") + b"\n")
 
     def snapshot(offset, line):
-        sink.flush()
-        os.fsync(sink.fileno())
-        try:
-            return directory.save(engine, {"events": events_path, "input_bytes": offset, "input_line": line,
-                                           "out_bytes": sink.tell()})
-        except (OSError, PrologError) as error:
-            print(f"retalisc: warning: the snapshot could not be written ({error}); the run goes on, "
-                  f"the previous snapshot stays the one a restart uses", file=log)
-            return None
+        position = {"events": events_path, "input_line": line}
+        if not live:
+            position["input_bytes"] = offset
+        else:
+            journal.sync()
+        manifest = take_snapshot(directory, engine, sink, position, log)
+        if live and manifest is not None:
+            journal.open(manifest["number"])        # the lines read from now on
+            journal.prune(directory)
+        return manifest
 
     try:
         if restored is None:
@@ -318,7 +429,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
                 write(produced)
             snapshot(offset, line)
         since_events, since_time = 0, time.monotonic()
-        for first, lines, size, position in _binary_batches(source, offset, line, batch_size):
+        for first, lines, size, position in batches:
             produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
@@ -334,7 +445,11 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
                 raise RunStopped()
             offset, line = position, first + len(lines)
             since_events += len(lines)
-            directory.journal({"input_bytes": offset, "input_line": line, "out_bytes": sink.tell()})
+            if live:
+                sink.flush()                    # the output of a live input leaves as it is made
+                directory.journal({"input_line": line, "out_bytes": sink.tell()})
+            else:
+                directory.journal({"input_bytes": offset, "input_line": line, "out_bytes": sink.tell()})
             if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
                 snapshot(offset, line)
                 since_events, since_time = 0, time.monotonic()
@@ -345,7 +460,199 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
         display.close()
         sink.flush()
         sink.close()
-        source.close()
+        if source is not None:
+            source.close()
+        if journal is not None:
+            journal.close()
         engine.bridge.once("retalis:rtl_close_action_output")
     print_summary(engine, time.perf_counter() - started)
+    return status
+
+
+def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int):
+    """As `_binary_batches`, for standard input with a journal: first the journaled lines read
+    after the restored snapshot (replayed), then the lines of standard input as they arrive,
+    each batch appended to the journal before it is processed. The journal's segment is that
+    of the newest snapshot: the caller opens it when it takes the first snapshot of a new run."""
+    import sys
+
+    from .run import _live_batches
+
+    line = first_line
+    if restored is not None:
+        replayed = journal.replay(restored["number"])
+        segments = [number for number, _ in journal.segments() if number >= restored["number"]]
+        journal.open(segments[-1] if segments else restored["number"])
+        for start in range(0, len(replayed), batch_size):
+            lines = replayed[start:start + batch_size]
+            yield line, lines, 0, 0
+            line += len(lines)
+    for _, lines, size in _live_batches(sys.stdin.fileno(), batch_size):
+        journal.append(lines)
+        yield line, lines, size, 0
+        line += len(lines)
+
+
+DEFAULT_AQ_SNAPSHOT_COMMANDS = 10_000   # script commands between two snapshots of `retalisc aq --state`
+DEFAULT_AQ_BATCH = 100                  # commands run per call into the runtime
+
+
+def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], display_name: Optional[str] = None,
+                       batch_size: int = DEFAULT_AQ_BATCH, snapshot_commands: int = DEFAULT_AQ_SNAPSHOT_COMMANDS,
+                       snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, log=None) -> int:
+    """`retalisc aq --script SCRIPT --out OUT --state DIR`: the update script run on the loaded
+    ActiveQueries `aq`, its notifications written to `out` as `retalisc aq` prints them, and the
+    run survives a crash as `run_recoverable` does: a snapshot (the tables, records, facts and
+    rules, with the script line reached and the output position) when the run starts and every
+    `snapshot_commands` commands or `snapshot_seconds` seconds; a restart with the same DIR
+    restores the newest complete one, cuts `out` back and goes on from its script line. A bad
+    script line or a failed command ends the run as without --state (its message on `log`,
+    with `display_name` for the script; exit status 2 or 1). Returns the exit status."""
+    import sys
+    import time
+
+    log = log or sys.stderr
+    batch_size = max(1, min(batch_size, snapshot_commands))   # snapshots fall between batches
+    directory = StateDir(state)
+    script_path = os.path.abspath(script)
+    restored = restore_newest(directory, aq, "script", script_path, log)
+    sink = open_output(out, restored)
+    line = 1 if restored is None else restored["input_line"]
+    if restored is not None:
+        print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
+              f"(script line {line}, {restored['out_bytes']} output bytes)", file=log)
+
+    def snapshot(line):
+        return take_snapshot(directory, aq, sink, {"script": script_path, "input_line": line}, log)
+
+    status = 0
+    try:
+        if restored is None:
+            snapshot(line)
+        since_commands, since_time = 0, time.monotonic()
+        while True:
+            batch = aq.run_script_batch(script_path, line, batch_size)
+            sink.write(batch.output.encode("utf-8"))
+            if batch.status == "error":
+                sink.flush()
+                print(batch.message.replace(script_path, display_name or script), file=log)
+                status = batch.exit_status
+                break
+            since_commands += batch_size
+            line = batch.next_line
+            if batch.status == "done":
+                break
+            directory.journal({"input_line": line, "out_bytes": sink.tell()})
+            if since_commands >= snapshot_commands or time.monotonic() - since_time >= snapshot_seconds:
+                snapshot(line)
+                since_commands, since_time = 0, time.monotonic()
+    finally:
+        sink.flush()
+        sink.close()
+    return status
+
+
+def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path], options=None,
+                        batch_size: int = 2000, snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
+                        snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,
+                        first_output=(), log=None) -> int:
+    """`retalisc run PROGRAM --bag RECORDING --out OUT --state DIR`: the recording replayed as
+    `replay_bag` replays it (as fast as possible), surviving a crash as `run_recoverable` does.
+    The input position is the number of messages of the selection replayed (the recording and
+    the options that select and convert its messages are part of the snapshot's input name:
+    a state directory of another selection is refused); a restart passes over that many
+    messages and goes on. Returns the exit status (2: the recording cannot be read)."""
+    import sys
+    import time
+
+    import click
+
+    from ..robot_io.bags import BagError, Recording
+    from ..robot_io.replay import BagOptions, ReplayStats, bag_events
+    from .bridge import PrologError
+    from .run import detections_line
+
+    log = log or sys.stderr
+    options = options or BagOptions()
+    directory = StateDir(state)
+    selection = json.dumps({"bag": os.path.abspath(bag_path), "topics": options.topics, "start": options.start,
+                            "duration": options.duration, "stamp": options.stamp,
+                            "typestore": options.typestore, "wrap_topic": options.convention.wrap_topic,
+                            "plain_strings": options.convention.plain_strings}, sort_keys=True)
+    restored = restore_newest(directory, engine, "bag", selection, log)
+    name = str(bag_path)
+    try:
+        bag = Recording(bag_path, options.typestore).__enter__()
+    except BagError as error:
+        click.echo(f"error: {error}", err=True)
+        return 2
+    sink = open_output(out, restored)
+    done = 0 if restored is None else restored["input_messages"]
+    if restored is not None:
+        print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
+              f"(message {done + 1}, {restored['out_bytes']} output bytes)", file=log)
+    stats = ReplayStats()
+    status = 0
+    started = time.perf_counter()
+
+    def write(produced):
+        for event in produced:
+            sink.write(event.line.encode("utf-8") + b"\n")
+
+    def report(topic: str, number: int, reason: str) -> None:
+        click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
+
+    def feed(batch) -> None:
+        while batch:
+            try:
+                write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
+                return
+            except PrologError as error:
+                if getattr(error, "batch_index", None) is None:
+                    raise
+                write(error.delivered)
+                _, _, (topic, number) = batch[error.batch_index]
+                sink.flush()
+                click.echo(f"{name}:{topic}#{number}: error: {str(error).split(': ', 1)[-1]}", err=True)
+                stats.failed += 1
+                batch = batch[error.batch_index + 1:]
+
+    def snapshot(done):
+        return take_snapshot(directory, engine, sink, {"bag": selection, "input_messages": done}, log)
+
+    try:
+        if restored is None:
+            for produced in first_output:
+                write(produced)
+            snapshot(done)
+        since_events, since_time = 0, time.monotonic()
+        batch = []
+        for text, seconds, record in bag_events(bag, options, stats, report, skip=done):
+            batch.append((text, seconds, (record.topic, stats.messages)))
+            if len(batch) >= batch_size:
+                feed(batch)
+                done = batch[-1][2][1]
+                since_events += len(batch)
+                batch = []
+                directory.journal({"input_messages": done, "out_bytes": sink.tell()})
+                if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
+                    snapshot(done)
+                    since_events, since_time = 0, time.monotonic()
+        if batch:
+            feed(batch)
+        write(engine.end_of_input(drop_pending))
+    except PrologError as error:
+        sink.flush()
+        click.echo(f"{name}: error: {error}", err=True)
+        status = 1
+    finally:
+        bag.__exit__(None, None, None)
+        sink.flush()
+        sink.close()
+    stats.seconds = time.perf_counter() - started
+    click.echo(stats.summary(name), err=True)
+    detections = detections_line(engine.detections())
+    if detections:
+        click.echo(detections, err=True)
+    click.echo(engine.summary(), err=True)
     return status

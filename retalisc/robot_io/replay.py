@@ -94,12 +94,14 @@ the cost of that latency."""
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
                report: Callable[[str, int, str], None],
                converter: Optional[MessageConverter] = None,
-               ros1_terms: Optional[Ros1Terms] = None) -> Iterator[Tuple[object, float, Record]]:
+               ros1_terms: Optional[Ros1Terms] = None, skip: int = 0) -> Iterator[Tuple[object, float, Record]]:
     """(event, time in seconds, record) for each message replayed, in record order: the
     event is its text, or, with `ros1_terms` on a ROS 1 recording, a `Ros1Bytes` the runtime
     reads itself (the record is then undecoded: `raw` holds its bytes; `message_event`
     converts it when the runtime refuses the bytes). Messages that cannot be decoded or
-    converted go to `report(topic, number, reason)` and are counted in `stats.rejected`."""
+    converted go to `report(topic, number, reason)` and are counted in `stats.rejected`.
+    The first `skip` messages are counted, not converted (a replay going on from a snapshot,
+    docs/recovery.md)."""
     converter = converter or MessageConverter(bag.typestore, options.convention)
     start_ns, stop_ns = window(bag, options)
     record_stamp = options.stamp == "record"
@@ -109,6 +111,8 @@ def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
     for record in records:
         number += 1
         stats.per_topic[record.topic] += 1
+        if number <= skip:
+            continue
         if raw:
             fast = ros1_terms.event(record.raw, record.msgtype, record.topic, record.time_ns, record_stamp)
             if fast is not None:
