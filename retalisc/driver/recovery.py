@@ -568,7 +568,9 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
     import click
 
     from ..robot_io.bags import BagError, Recording
-    from ..robot_io.replay import BagOptions, ReplayStats, bag_events
+    from ..robot_io.messages import MessageConverter
+    from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages
+    from ..robot_io.ros1_terms import Ros1Terms
     from .bridge import PrologError
     from .run import detections_line
 
@@ -602,20 +604,22 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
     def report(topic: str, number: int, reason: str) -> None:
         click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
 
+    def rejected(topic: str, number: int, reason: str) -> None:
+        stats.rejected += 1
+        sink.flush()
+        report(topic, number, reason)
+
+    def failed(topic: str, number: int, reason: str) -> None:
+        sink.flush()
+        click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
+        stats.failed += 1
+
+    converter = MessageConverter(bag.typestore, options.convention)
+    # ROS 1 messages go to the runtime as bytes, as in replay_bag
+    ros1_terms = Ros1Terms(engine, bag.typestore, options.convention) if hasattr(engine, "ros1_schema") else None
+
     def feed(batch) -> None:
-        while batch:
-            try:
-                write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
-                return
-            except PrologError as error:
-                if getattr(error, "batch_index", None) is None:
-                    raise
-                write(error.delivered)
-                _, _, (topic, number) = batch[error.batch_index]
-                sink.flush()
-                click.echo(f"{name}:{topic}#{number}: error: {str(error).split(': ', 1)[-1]}", err=True)
-                stats.failed += 1
-                batch = batch[error.batch_index + 1:]
+        feed_messages(engine, bag, converter, options.stamp == "record", batch, write, rejected, failed)
 
     def snapshot(done):
         return take_snapshot(directory, engine, sink, {"bag": selection, "input_messages": done}, log)
@@ -627,8 +631,8 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
             snapshot(done)
         since_events, since_time = 0, time.monotonic()
         batch = []
-        for text, seconds, record in bag_events(bag, options, stats, report, skip=done):
-            batch.append((text, seconds, (record.topic, stats.messages)))
+        for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms, skip=done):
+            batch.append((text, seconds, (record.topic, stats.messages, record)))
             if len(batch) >= batch_size:
                 feed(batch)
                 done = batch[-1][2][1]

@@ -148,6 +148,38 @@ def message_event(bag: Recording, converter: MessageConverter, record: Record,
     return text, seconds
 
 
+def feed_messages(engine, bag: Recording, converter: MessageConverter, record_stamp: bool, batch: list,
+                  write: Callable, rejected: Callable[[str, int, str], None],
+                  failed: Callable[[str, int, str], None]) -> None:
+    """Feeds `batch`, a list of (event, seconds, (topic, number, record)), writing what it
+    produces with `write`. A message whose processing fails goes to `failed(topic, number,
+    reason)` and the batch goes on after it; a message whose bytes the runtime refuses is
+    converted as text instead (`message_event`), or goes to `rejected` when that fails too."""
+    from ..driver.bridge import PrologError
+
+    while batch:
+        try:
+            write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
+            return
+        except PrologError as error:
+            if getattr(error, "batch_index", None) is None:
+                raise
+            write(error.delivered)
+            _, _, (topic, number, record) = batch[error.batch_index]
+            rest = batch[error.batch_index + 1:]
+            if getattr(error, "undecodable", False):      # the runtime refused the bytes
+                try:
+                    text, seconds = message_event(bag, converter, record, record_stamp)
+                except _Rejected as refusal:
+                    rejected(topic, number, str(refusal))
+                    batch = rest
+                else:
+                    batch = [(text, seconds, (topic, number, record))] + rest
+                continue
+            failed(topic, number, str(error).split(": ", 1)[-1])
+            batch = rest
+
+
 def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
     """The record-time window [start, stop) in ns of --start and --duration."""
     start_ns = bag.start_ns + round(options.start * 1e9) if options.start else None
@@ -239,34 +271,20 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
             ros1_terms = (Ros1Terms(engine, bag.typestore, options.convention)
                           if publisher is None and hasattr(engine, "ros1_schema") else None)
 
+            def rejected(topic: str, number: int, reason: str) -> None:
+                stats.rejected += 1
+                sink.flush()
+                report(topic, number, reason)
+
+            def failed(topic: str, number: int, reason: str) -> None:
+                sink.flush()
+                click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
+                stats.failed += 1
+
             def feed(batch) -> None:
                 if publisher is not None:
                     publisher.fed([(text, seconds) for text, seconds, _ in batch])
-                while batch:
-                    try:
-                        write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
-                        return
-                    except PrologError as error:
-                        if getattr(error, "batch_index", None) is None:
-                            raise
-                        write(error.delivered)
-                        _, _, (topic, number, record) = batch[error.batch_index]
-                        if getattr(error, "undecodable", False):      # the runtime refused the bytes
-                            try:
-                                text, seconds = message_event(bag, converter, record, options.stamp == "record")
-                            except _Rejected as rejected:
-                                stats.rejected += 1
-                                sink.flush()
-                                report(topic, number, str(rejected))
-                                batch = batch[error.batch_index + 1:]
-                            else:
-                                batch = [(text, seconds, (topic, number, record))] + batch[error.batch_index + 1:]
-                            continue
-                        reason = str(error).split(": ", 1)[-1]
-                        sink.flush()
-                        click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
-                        stats.failed += 1
-                        batch = batch[error.batch_index + 1:]
+                feed_messages(engine, bag, converter, options.stamp == "record", batch, write, rejected, failed)
 
             for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms):
                 record_ns = record.time_ns
