@@ -1,11 +1,11 @@
-"""Absence rule against the 1 Hz tick work-around (issue 21): "a person was seen, then the door
+"""Absence rule against the 1 Hz tick work-around: "a person was seen, then the door
 closed within 10 s, and no one was seen in the room for 30 s after".
 
 The same stream of sightings and door closings (ROOMS rooms, one situation per room every
 GAP seconds on average, half of them broken by a sighting inside the 30 s) goes through
 
   absence   empty(R, P) <- not(seen(_, R)).[(seen(P, R) seq door_closed(R)).10, 30].
-  ticks     the work-around of the issue: the same pattern closed by a `tick` input event
+  ticks     the work-around: the same pattern closed by a `tick` input event
             every second, `where T - E >= 30, T - E < 31`, inside a window of 41 s
             (without it the pairs are never forgotten), fed one tick per second of stream
 
@@ -13,7 +13,7 @@ through the Python driver (`Engine.feed_batch`, batches of 2000, the same harnes
 The absence run ends with `end_of_input` under `flush_timers` so that it decides the last
 situations too; both must detect the same (room, person, sighting time) situations. The
 figure is events of the situation stream per second of run time, and the target is the
-absence rule at least 5x cheaper than the tick version (issue 21). Densities: the robot
+absence rule at least 5x cheaper than the tick version. Densities: the robot
 (sparse: GAP 300 s, the default target) and a busy building (GAP 40 s).
 
 Usage: python benchmarks/absence.py [--seconds N] [--out-dir DIR] [--quick]

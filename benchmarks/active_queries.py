@@ -8,8 +8,8 @@ Every figure is CPU seconds inside one fresh `swipl` process per (scenario, syst
 of --repeats such processes (the machine is shared and noisy: +-30 % between runs); the
 `recompute` baseline is `abolish_all_tables` + re-evaluation after the update; `point` is a
 fresh evaluation of path(0, N) after the updates; `peak MB` is the process's peak resident memory
-(VmHWM) after the initial query, the add and the delete.  After the table, every target of the
-issue is printed with its ratio and met/MISSED; then the 2APL usecases (benchmarks/aq_2apl.py).
+(VmHWM) after the initial query, the add and the delete.  After the table, every target
+is printed with its ratio and met/MISSED; then the 2APL usecases (benchmarks/aq_2apl.py).
 """
 from __future__ import annotations
 
@@ -261,7 +261,7 @@ def print_targets(rows, n, big, nodes, n_edges, users):
         checks.append((f"{scen} add <= 0.05x incremental", ratio(scen, "SWI incremental", "add"), 0.05))
         checks.append((f"{scen} delete <= 0.5x recompute (table)", ratio(scen, "SWI table", "delete"), 0.5))
         checks.append((f"{scen} delete <= 0.25x monotonic", ratio(scen, "SWI monotonic", "delete"), 0.25))
-    # issue 16 part 4: initial evaluation and peak memory within 1.5x `table` everywhere
+    # targets: initial evaluation and peak memory within 1.5x `table` everywhere
     for scen in (chain_r, chain_l, rand, "program6", f"program6-{users}q"):
         checks.append((f"{scen} initial <= 1.5x table", ratio(scen, "SWI table", "initial"), 1.5))
         checks.append((f"{scen} peak memory <= 1.5x table", ratio(scen, "SWI table", "peak_mb"), 1.5))

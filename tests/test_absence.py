@@ -1,4 +1,4 @@
-"""Absence over a duration, `not(C).[A, D]` (issue 21, item 1): no C in the D seconds after A
+"""Absence over a duration, `not(C).[A, D]`: no C in the D seconds after A
 ends, decided once the clock has passed A's end + D + max_delay, one event over
 [start of A, end of A + D], taken back by a late blocker inside the retraction horizon.
 

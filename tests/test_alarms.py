@@ -1,4 +1,4 @@
-"""Timers on event time (issue 21, item 2): `alarm(E, D) <- P` (and ETALIS's
+"""Timers on event time: `alarm(E, D) <- P` (and ETALIS's
 `exceptionAlarm(E, D)`) raises E over [P's start, P's end + D] once the clock reaches P's end
 + D, without moving the clock; pending timers fire in time order, are deleted with their match, are
 removed with their rule, and do not fire at the end of the input unless `flush_timers`."""

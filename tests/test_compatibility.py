@@ -1,4 +1,4 @@
-"""Programs written for ETALIS and for Retalis 2015 (issue 14, docs/compatibility.md): the
+"""Programs written for ETALIS and for Retalis 2015 (docs/compatibility.md): the
 forms that are not covered by a golden case (tests/golden/etalis_*, retalis_2015_*)."""
 import subprocess
 import sys

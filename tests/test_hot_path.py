@@ -1,4 +1,4 @@
-"""The fast paths of event processing give what the general paths give (issue 16): output
+"""The fast paths of event processing give what the general paths give: output
 lines read by the Python driver without the JSON decoder, and batches of input lines."""
 import io
 import json

@@ -1,4 +1,4 @@
-"""The clock without events (issue 21, item 5): Engine.advance_clock (a heartbeat), the live
+"""The clock without events: Engine.advance_clock (a heartbeat), the live
 heartbeat of `retalisc run --events - --heartbeat SECONDS`, and `--flush-timers` at the end
 of the input (retalisc run and the standalone program)."""
 import os

@@ -1,4 +1,4 @@
-"""Deletion under the consumption policies is exact (issue 21, item 3): under `recent` and
+"""Deletion under the consumption policies is exact: under `recent` and
 `chronological` (program flag or rule property), deleting an input event inside the retraction
 horizon nets the output to that of a run in which the event never arrived: the partner it
 consumed is free again, and the later decisions of the rule are made again

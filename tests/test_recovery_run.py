@@ -4,13 +4,13 @@ that never stopped; crashes while a snapshot is written, a journal line cut shor
 snapshot and a full disk do not change that.
 
 The fault-injection test's size (each restart costs a new process, ~1 s CPU, which dominates):
-by default (CI) the event program (a windowed seq, a negation, an SLR memory read by prev/next
-in conditions, a synchronized rule) runs over RETALISC_FAULT_EVENTS=10000 events and is killed
-at RETALISC_FAULT_KILLS=6 seeded random points, the active-query script (recursion, negation,
-rules added and removed, queries unregistered) has RETALISC_FAULT_AQ_COMMANDS=1000 commands and
-is killed at RETALISC_FAULT_AQ_KILLS=5 points; snapshots every 1500 events (100 commands), so
-the kills land between snapshots. The issue's full size, 100,000 events and 20 kills for both
-(an AQ script of 6000 commands), is `RETALISC_FAULT_FULL=1` (docs/recovery.md gives its time)."""
+the event program (a windowed seq, a negation, an SLR memory read by prev/next in conditions, a
+synchronized rule) runs over RETALISC_FAULT_EVENTS=100000 events and is killed at
+RETALISC_FAULT_KILLS=20 seeded random points; the active-query script (recursion, negation,
+rules added and removed, queries unregistered) has RETALISC_FAULT_AQ_COMMANDS=6000 commands and
+is killed at RETALISC_FAULT_AQ_KILLS=20 points; snapshots every 1500 events (100 commands), so
+the kills land between snapshots (about 60 s on an idle 2-core machine). `RETALISC_FAULT_SMALL=1`
+gives a quick local run: 10,000 events and 6 kills, 1,000 commands and 5 kills."""
 import errno
 import io
 import json
@@ -30,11 +30,11 @@ from retalisc.driver import recovery
 from retalisc.driver.engine import Engine
 
 ROOT = Path(__file__).resolve().parent.parent
-FULL = os.environ.get("RETALISC_FAULT_FULL") == "1"
-FAULT_EVENTS = int(os.environ.get("RETALISC_FAULT_EVENTS", 100_000 if FULL else 10_000))
-FAULT_KILLS = int(os.environ.get("RETALISC_FAULT_KILLS", 20 if FULL else 6))
-FAULT_AQ_COMMANDS = int(os.environ.get("RETALISC_FAULT_AQ_COMMANDS", 6000 if FULL else 1000))
-FAULT_AQ_KILLS = int(os.environ.get("RETALISC_FAULT_AQ_KILLS", 20 if FULL else 5))
+SMALL = os.environ.get("RETALISC_FAULT_SMALL") == "1"
+FAULT_EVENTS = int(os.environ.get("RETALISC_FAULT_EVENTS", 10_000 if SMALL else 100_000))
+FAULT_KILLS = int(os.environ.get("RETALISC_FAULT_KILLS", 6 if SMALL else 20))
+FAULT_AQ_COMMANDS = int(os.environ.get("RETALISC_FAULT_AQ_COMMANDS", 1000 if SMALL else 6000))
+FAULT_AQ_KILLS = int(os.environ.get("RETALISC_FAULT_AQ_KILLS", 5 if SMALL else 20))
 
 # a windowed seq, a negation, an SLR memory read with prev/next in conditions, a synchronized rule
 PROGRAM = """\

@@ -1,4 +1,4 @@
-"""Per-rule selection (issue 21, item 3): a rule's own consumption policy, as a label property
+"""Per-rule selection: a rule's own consumption policy, as a label property
 (`r1([property(consumption_policy, recent)]) 'rule:' ...`) or an `event_rule_property/3`
 fact, overrides the program's flag; and the `first` selection pairs each left event with its
 first matching right event only (by time, whatever the arrival order), exactly under any

@@ -1,4 +1,4 @@
-"""Sliding aggregates by group (issue 21, item 4): `sliding(F, P, Group, D, V)` outputs the
+"""Sliding aggregates by group: `sliding(F, P, Group, D, V)` outputs the
 value of F over each group's matches of P that ended in the last D seconds whenever it
 changes, also when a match leaves the window; exact under out-of-order arrival and deletion
 (checked against a brute-force oracle), memory bounded by the matches inside the window."""
