@@ -141,3 +141,19 @@ def test_state_refuses_standard_output(tmp_path):
                              "--out", "-", "--duration", "1"], capture_output=True, text=True, cwd=ROOT,
                             env=retalisc_env(), timeout=60)
     assert result.returncode == 2 and "--state" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_state_of_another_program_is_refused(tmp_path):
+    out = tmp_path / "out.jsonl"
+    node, _ = node_for("cdr", state=LiveState(tmp_path / "state", str(out), log=lambda text: None))
+    feed(node, range(3), "cdr")
+    node.close()
+    before = sorted(path.name for path in (tmp_path / "state").iterdir())
+    program = tmp_path / "other.rtl"
+    program.write_text("q(X) <- geometry_msgs__0__PointStamped(X, _).\n")
+    result = subprocess.run([sys.executable, "-m", "retalisc", "ros2", str(program), "--state", str(tmp_path / "state"),
+                             "--out", str(out), "--duration", "1"], capture_output=True, text=True, cwd=ROOT,
+                            env=retalisc_env(), timeout=60)
+    assert result.returncode == 2, result.stderr
+    assert "another program" in result.stderr and "Traceback" not in result.stderr
+    assert sorted(path.name for path in (tmp_path / "state").iterdir()) == before

@@ -73,6 +73,7 @@ class LiveState:
         self.since_events, self.since_time = 0, time.monotonic()
         self.restored = None
         self.replayed = (0, 0)           # events, service requests
+        self.ready = False               # recovered: snapshots may be written
 
     # ---- start: restore and replay (called by LiveNode.start before live input is taken) -------
 
@@ -87,6 +88,7 @@ class LiveState:
         if restored is None:
             for _, path in self.journal.segments():        # of a run that never took its first snapshot
                 path.unlink(missing_ok=True)
+            self.ready = True
             self.snapshot(node)
             return
         saved = restored.get("node")
@@ -128,6 +130,7 @@ class LiveState:
         finally:
             self.replaying = False
         self.replayed = (events, calls)
+        self.ready = True
         self.journal.open(restored["number"])
         self.log(f"retalisc: restored snapshot {restored['number']} of {self.directory.directory} and replayed "
                  f"{events} journaled events and {calls} service requests; outputs {first_output + 1} to "
@@ -168,7 +171,7 @@ class LiveState:
 
     def fed(self, node, count: int) -> None:
         """After a batch: a snapshot when N events or S seconds have passed since the last."""
-        if self.replaying:
+        if self.replaying or not self.ready:
             return
         self.since_events += count
         if self.since_events >= self.snapshot_events or time.monotonic() - self.since_time >= self.snapshot_seconds:
@@ -189,8 +192,9 @@ class LiveState:
         self.since_events, self.since_time = 0, time.monotonic()
 
     def close(self, node) -> None:
-        """A clean stop: a last snapshot, files closed."""
-        self.snapshot(node)
+        """A clean stop: a last snapshot (not when the start failed), files closed."""
+        if self.ready:
+            self.snapshot(node)
         self.journal.close()
         if self.raw is not None:
             self.raw.close()
