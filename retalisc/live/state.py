@@ -132,9 +132,10 @@ class LiveState:
         self.replayed = (events, calls)
         self.ready = True
         self.journal.open(restored["number"])
+        again = (f"; outputs {first_output + 1} to {node.outputs} of the run were produced (and published) again: "
+                 f"live outputs are at-least-once" if node.outputs > first_output else "")
         self.log(f"retalisc: restored snapshot {restored['number']} of {self.directory.directory} and replayed "
-                 f"{events} journaled events and {calls} service requests; outputs {first_output + 1} to "
-                 f"{node.outputs} were produced again (published again: live outputs are at-least-once)")
+                 f"{events} journaled events and {calls} service requests{again}")
 
     def _event(self, node, record: dict):
         if "r" in record:                 # a ROS 1 message fed as its bytes: made again as it was
