@@ -166,8 +166,8 @@ class LiveNode:
         self.transport.close()
         if self.out is not None:
             self.out.flush()
-        if self.state is not None:
-            self.state.close(self)
+        if self.state is not None:      # no last snapshot while the consumer is still feeding
+            self.state.close(self, snapshot=not self._thread.is_alive())
 
     # ---- arrivals (any thread) ---------------------------------------------------------------
 

@@ -192,9 +192,9 @@ class LiveState:
             self.journal.prune(self.directory)
         self.since_events, self.since_time = 0, time.monotonic()
 
-    def close(self, node) -> None:
+    def close(self, node, snapshot: bool = True) -> None:
         """A clean stop: a last snapshot (not when the start failed), files closed."""
-        if self.ready:
+        if self.ready and snapshot:
             self.snapshot(node)
         self.journal.close()
         if self.raw is not None:
