@@ -34,6 +34,15 @@ def _common(command):
         click.option("--linger", type=Seconds(allow_inf=False), default=0.0, metavar="SECONDS",
                      help="Feed messages arriving within SECONDS of each other in one batch (fewer Prolog "
                           "calls, less CPU, that much more latency; default 0: feed what is waiting at once)."),
+        click.option("--state", "state", type=click.Path(file_okay=False), default=None, metavar="DIR",
+                     help="Survive a crash: journal every event and service request in DIR before it is fed, "
+                          "keep snapshots there; started again with the same DIR, the node restores the newest "
+                          "snapshot and replays the journal (docs/recovery.md). --out must then be a file."),
+        click.option("--snapshot-every", "snapshot_every", type=click.IntRange(1), default=None, metavar="N",
+                     help="With --state: a snapshot every N events (default 200000)."),
+        click.option("--snapshot-seconds", "snapshot_seconds", type=Seconds(allow_inf=True), default=None,
+                     metavar="S", help="With --state: a snapshot every S seconds at the latest, checked when events "
+                                       "come (default 60; inf: only by --snapshot-every)."),
     ]
     for option in reversed(options):
         command = option(command)
@@ -41,14 +50,22 @@ def _common(command):
 
 
 def serve(program: str, config_path: Optional[str], make_transport: Callable, out: Optional[str],
-          wrap_topic: bool, plain_strings: bool, max_delay, duration, describe: Callable, linger: float = 0.0) -> int:
+          wrap_topic: bool, plain_strings: bool, max_delay, duration, describe: Callable, linger: float = 0.0,
+          recovery: Optional[dict] = None) -> int:
     from ..driver.engine import Engine
+    from ..driver.recovery import RecoveryError
     from ..live.config import ConfigError, PubSubConfig, load_config
     from ..live.node import LiveNode
     from ..robot_io import MissingDependency
     from ..robot_io.messages import Convention
 
     output_file(out, "--out")
+    recovery = recovery or {}
+    if recovery.get("state") is None and (recovery.get("snapshot_every") is not None
+                                          or recovery.get("snapshot_seconds") is not None):
+        raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
+    if recovery.get("state") is not None and out == "-":
+        raise click.UsageError("--state needs --out FILE (or no --out): standard output cannot be cut back")
     try:
         config = load_config(config_path) if config_path else PubSubConfig()
     except ConfigError as error:
@@ -62,15 +79,29 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
     engine = Engine.from_compiled(compile_or_exit(program))
     if max_delay is not None:
         engine.set_flag("max_delay", repr(max_delay))
-    sink = None if out is None else (sys.stdout if out == "-" else open(out, "w", encoding="utf-8"))
+    state = None
+    if recovery.get("state") is not None:
+        from ..driver.recovery import DEFAULT_SNAPSHOT_EVENTS, DEFAULT_SNAPSHOT_SECONDS
+        from ..live.state import LiveState
+
+        every, seconds = recovery.get("snapshot_every"), recovery.get("snapshot_seconds")
+        state = LiveState(recovery["state"], out, DEFAULT_SNAPSHOT_EVENTS if every is None else every,
+                          DEFAULT_SNAPSHOT_SECONDS if seconds is None else seconds,
+                          log=lambda text: click.echo(text, err=True))
+        sink = None                      # the state opens the output file (cut back to its snapshot)
+    else:
+        sink = None if out is None else (sys.stdout if out == "-" else open(out, "w", encoding="utf-8"))
     node = LiveNode(engine, transport, config, Convention(plain_strings=plain_strings, wrap_topic=wrap_topic),
-                    out=sink, linger=linger)
+                    out=sink, linger=linger, state=state)
     stop = threading.Event()
     previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
     status = 0
     try:
         try:
             node.start()
+        except RecoveryError as error:
+            click.echo(f"error: --state {recovery['state']}: {error}", err=True)
+            status = 2
         except Exception as error:
             click.echo(f"error: {error}", err=True)
             status = 2
@@ -104,7 +135,8 @@ Example (after `bash setup.sh`, with a ROS master running):
 @_common
 @click.option("--name", "node_name", default="retalis", show_default=True,
               help="The node's name; its services are /NAME/add_output_subscription, ... (docs/ros.md).")
-def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, node_name) -> None:
+def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, state, snapshot_every,
+                snapshot_seconds, node_name) -> None:
     """Run PROGRAM as a live ROS 1 node: subscribe to the topics of PUB_SUB.xml, publish
     subscription deliveries, and offer the services of the 2015 release (thesis A.1):
     add/delete_output_subscription, add/delete_memory, add/delete_input_subscription,
@@ -127,7 +159,8 @@ def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay,
                 f"services /{node_name}/{{add,delete}}_{{output_subscription,memory,input_subscription}}, "
                 f"/{node_name}/query_one, /{node_name}/query_all")
 
-    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger,
+                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds)))
 
 
 @click.command("ros2", epilog="""\b
@@ -137,7 +170,8 @@ Example: two components on one machine, the second consuming what the first deli
 @_common
 @click.option("--domain", type=click.IntRange(0, 232), default=None,
               help="The DDS domain (default: $ROS_DOMAIN_ID, else 0).")
-def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, domain) -> None:
+def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, state, snapshot_every,
+                 snapshot_seconds, domain) -> None:
     """Run PROGRAM as a live component on ROS 2 topics, over DDS (cyclonedds) without a ROS 2
     installation: ROS 2's topic and type names, CDR and default QoS (docs/ros.md). DDS stays
     on the loopback interface unless CYCLONEDDS_URI configures it."""
@@ -149,7 +183,8 @@ def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay
     def describe(node):
         return f"ros2: DDS domain {node.transport.domain}: subscribed to {_inputs(node)}"
 
-    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger,
+                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds)))
 
 
 @click.command("zenoh", epilog="""\b
@@ -161,8 +196,8 @@ Example: two components, the second consuming what the first delivers:
               help="Listen for other components here (tcp/127.0.0.1:PORT); repeatable.")
 @click.option("--connect", multiple=True, metavar="ENDPOINT",
               help="Connect to a component listening here; repeatable; retried until it is up.")
-def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, listen,
-                  connect) -> None:
+def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, state,
+                  snapshot_every, snapshot_seconds, listen, connect) -> None:
     """Run PROGRAM as a live component over Zenoh, without a ROS master: a Zenoh peer with
     multicast scouting off and explicit endpoints; topic /name is key `name`, messages are
     ROS 2 CDR (docs/ros.md)."""
@@ -177,7 +212,8 @@ def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_dela
         return (f"zenoh: peer listening on {', '.join(listen) or 'nothing'}, connecting to "
                 f"{', '.join(connect) or 'nothing'}: subscribed to {_inputs(node)}")
 
-    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger))
+    sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger,
+                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds)))
 
 
 def _master() -> str:

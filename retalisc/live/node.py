@@ -41,6 +41,7 @@ from ..robot_io.data_terms import read_data_term, write_data_term
 from ..robot_io.messages import ConversionError, Convention, MessageConverter
 from ..robot_io.ros1_terms import Ros1Terms
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
+from .state import STATEFUL_CALLS
 
 BATCH = 2000
 REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
@@ -111,7 +112,7 @@ class LiveNode:
     def __init__(self, engine, transport: Transport, config: Optional[PubSubConfig] = None,
                  convention: Convention = Convention(), out: Optional[IO[str]] = None,
                  log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True),
-                 linger: float = 0.0):
+                 linger: float = 0.0, state=None):
         from ..robot_io.bags import typestore
 
         self.engine = engine
@@ -131,12 +132,18 @@ class LiveNode:
         self._deliveries: List[Callable] = []      # extra observers of outputs (tests, benchmark)
         self.fed = 0
         self.linger = linger       # seconds to wait for more messages before feeding a batch
+        self.state = state         # live/state.py LiveState (--state DIR) or None
+        self.learned: Dict[str, str] = {}          # types learned from definitions -> the definition
+        self.outputs = 0           # output lines produced (counted over restarts with --state)
+        self._replay_now: Optional[float] = None   # the wall clock of a replayed request
         engine.on_output(self._output)
 
     # ---- life cycle ------------------------------------------------------------------------
 
     def start(self) -> None:
         self.transport.start(self)
+        if self.state is not None:     # restore and replay before the live input queued meanwhile
+            self.state.recover(self)
         self._thread.start()
         for spec in self.config.subscribe:
             reply = self.call(self._add_input, spec.name, spec.msgtype)
@@ -159,6 +166,8 @@ class LiveNode:
         self.transport.close()
         if self.out is not None:
             self.out.flush()
+        if self.state is not None:      # no last snapshot while the consumer is still feeding
+            self.state.close(self, snapshot=not self._thread.is_alive())
 
     # ---- arrivals (any thread) ---------------------------------------------------------------
 
@@ -218,6 +227,14 @@ class LiveNode:
 
     def _run_call(self, function, args) -> Reply:
         self.stats.calls += 1
+        name = getattr(function, "__name__", "")
+        if self.state is not None and name in STATEFUL_CALLS:
+            now = time.time()
+            self.state.call(name, args, now)     # journaled before it runs
+            try:
+                return self._replay_call(name, args, now)
+            finally:
+                self.state.fed(self, 0)
         try:
             return function(*args)
         except Exception as error:       # a request is data: whatever goes wrong is its reply
@@ -254,6 +271,22 @@ class LiveNode:
             msg = self.store.deserialize_cdr(data, name)
         return self.converter.event(msg, name, topic, arrival_ns)
 
+    def _replay_call(self, name: str, args, now: Optional[float]) -> Reply:
+        """A stateful service request by name (also one replayed from the journal, `now`
+        meaning the wall-clock time it first ran at; None: the clock)."""
+        if name not in STATEFUL_CALLS:
+            return Reply(False, f"not a service request: {name}")
+        self._replay_now = now
+        try:
+            return getattr(self, name)(*args)
+        except Exception as error:
+            return Reply(False, str(error) or type(error).__name__)
+        finally:
+            self._replay_now = None
+
+    def _now(self) -> float:
+        return time.time() if self._replay_now is None else self._replay_now
+
     def _reject(self, topic: str, number: int, error: Exception) -> None:
         self.stats.rejected[topic] += 1
         if self.stats.rejected[topic] <= REPORTS_PER_TOPIC:
@@ -267,10 +300,14 @@ class LiveNode:
         types = {key: value for key, value in get_types_from_msg(definition, name).items()
                  if key not in self.store.fielddefs}
         self.store.register(types)
+        self.learned[name] = definition
 
     def _feed(self, events: List[tuple]) -> None:
         from ..driver.bridge import PrologError
 
+        if self.state is not None:
+            self.state.events(events)       # journaled (flushed) before they are fed
+        count = len(events)
         while events:       # the output comes through _output (Engine.on_output), in order
             try:
                 self.engine.feed_batch([(event, seconds) for event, seconds, _ in events])
@@ -298,8 +335,11 @@ class LiveNode:
                 events = events[index + 1:]
         if self.out is not None:
             self.out.flush()
+        if self.state is not None and count:
+            self.state.fed(self, count)
 
     def _output(self, event) -> None:
+        self.outputs += 1
         if self.out is not None:
             self.out.write(event.line + "\n")
         if event.consumer is not None and event.op == "add":
@@ -370,7 +410,7 @@ class LiveNode:
         subscription_id = self.engine.subscribe(
             topic.strip(), event,
             template if template.strip() else None, conditions if conditions.strip() else "[]",
-            _bound(start, "-inf"), _bound(end, "inf"))
+            _bound(start, "-inf", self._now), _bound(end, "inf", self._now))
         if msgtype is not None:
             self.output_types[resolved] = msgtype
         known = msgtype or self.config.publish_type(resolved)
@@ -379,7 +419,7 @@ class LiveNode:
         return Reply(True, value=subscription_id)
 
     def _delete_output(self, subscription_id: str, end: str) -> Reply:
-        self.engine.unsubscribe(subscription_id, _bound(end, "now"))
+        self.engine.unsubscribe(subscription_id, _bound(end, "now", self._now))
         return Reply(True)
 
     def _add_memory(self, request: str) -> Reply:
@@ -437,11 +477,11 @@ def _time_value(text: str) -> Optional[float]:
     return float(text)
 
 
-def _bound(text: str, default: str):
+def _bound(text: str, default: str, now: Callable[[], float] = time.time):
     """A time bound of a request: seconds, `now` (the wall clock), `inf`, `-inf`, or the default."""
     text = (text or "").strip() or default
     if text == "now":
-        return time.time()
+        return now()
     if text in ("inf", "-inf"):
         return text
     try:

@@ -1,0 +1,227 @@
+"""`--state DIR` for the live nodes (`retalisc ros`, `ros2`, `zenoh`; docs/recovery.md).
+
+The node's input cannot be read again: every event it feeds (its text and time, or for ROS 1
+the message's bytes, type, topic and arrival time, from which the event is made again the
+same way) and every service request that changes the state (with the wall-clock time it ran
+at, which `now` means in it) is appended to the journal segment of the newest snapshot
+(recovery.EventJournal, one JSON object a line) and flushed before it is processed.
+Snapshots (recovery.StateDir: the engine's state, the node's subscriptions, the types it
+learned, the output counts) are taken when the node starts, every N events or S seconds
+(checked between two batches) and when it stops. Started again with the same DIR, the node
+restores the newest complete snapshot, replays the journal after it and then takes live
+input. The --out file is cut back to the snapshot's length, so it ends as that of a run that
+never stopped over the same input; what leaves the process (published topics) is
+at-least-once: what was produced after the snapshot is published again.
+"""
+from __future__ import annotations
+
+import base64
+import json
+import time
+from pathlib import Path
+from typing import Callable, Optional, Union
+
+from ..driver.recovery import (DEFAULT_SNAPSHOT_EVENTS, DEFAULT_SNAPSHOT_SECONDS, EventJournal, StateDir,
+                               open_output, restore_newest, take_snapshot)
+
+# the service requests that change the state: journaled and replayed
+STATEFUL_CALLS = ("_add_output", "_delete_output", "_add_memory", "_delete_memory", "_add_input", "_delete_input")
+
+
+class _TextSink:
+    """The node writes text; the recoverable output file is binary (positions are bytes)."""
+
+    def __init__(self, raw):
+        self.raw = raw
+
+    def write(self, text: str) -> None:
+        self.raw.write(text.encode("utf-8"))
+
+    def flush(self) -> None:
+        self.raw.flush()
+
+    def close(self) -> None:
+        self.raw.close()
+
+
+class _NoOutput:
+    """The output position of a node without --out: always 0."""
+
+    def flush(self) -> None:
+        pass
+
+    def fileno(self) -> int:
+        raise OSError("no output file")
+
+    def tell(self) -> int:
+        return 0
+
+
+class LiveState:
+    def __init__(self, directory: Union[str, Path], out: Optional[str] = None,
+                 snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
+                 snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS,
+                 log: Callable[[str], None] = print):
+        self.directory = StateDir(directory)
+        self.out_path = out
+        self.snapshot_events = snapshot_events
+        self.snapshot_seconds = snapshot_seconds
+        self.log = log
+        self.journal = EventJournal(self.directory)
+        self.raw = None
+        self.replaying = False
+        self.since_events, self.since_time = 0, time.monotonic()
+        self.restored = None
+        self.replayed = (0, 0)           # events, service requests
+        self.ready = False               # recovered: snapshots may be written
+
+    # ---- start: restore and replay (called by LiveNode.start before live input is taken) -------
+
+    def recover(self, node) -> None:
+        from ..driver.recovery import RecoveryError
+
+        restored = restore_newest(self.directory, node.engine, "live", node.transport.name, _LogStream(self.log))
+        if self.out_path is not None:
+            self.raw = open_output(self.out_path, restored)
+            node.out = _TextSink(self.raw)
+        self.restored = restored
+        if restored is None:
+            for _, path in self.journal.segments():        # of a run that never took its first snapshot
+                path.unlink(missing_ok=True)
+            self.ready = True
+            self.snapshot(node)
+            return
+        saved = restored.get("node")
+        if not isinstance(saved, dict):
+            raise RecoveryError(f"{self.directory.directory}: snapshot {restored['number']} is not one of a live node")
+        for name, definition in saved.get("learned", {}).items():
+            if name not in node.store.fielddefs:
+                node._learn_type(name, definition)
+                node.learned[name] = definition
+        node.output_types.update(saved.get("output_types", {}))
+        for topic, msgtype in node.output_types.items():
+            node._advertise(topic, msgtype)
+        for topic, msgtype in saved.get("inputs", {}).items():
+            reply = node._add_input(topic, msgtype)
+            if not reply.ok:
+                self.log(f"retalisc: {topic}: cannot subscribe again: {reply.error}")
+        node.outputs = saved.get("outputs", 0)
+        first_output = node.outputs
+        self.replaying = True
+        events, calls = 0, 0
+        try:
+            pending = []
+            for line in self.journal.replay(restored["number"]):
+                try:
+                    record = json.loads(line)
+                except ValueError:
+                    continue
+                if "c" in record:
+                    node._feed(pending)
+                    pending = []
+                    node._replay_call(record["c"], record["a"], record["now"])
+                    calls += 1
+                else:
+                    event = self._event(node, record)
+                    if event is not None:
+                        pending.append(event)
+                        events += 1
+            node._feed(pending)
+        finally:
+            self.replaying = False
+        self.replayed = (events, calls)
+        self.ready = True
+        self.journal.open(restored["number"])
+        again = (f"; outputs {first_output + 1} to {node.outputs} of the run were produced (and published) again: "
+                 f"live outputs are at-least-once" if node.outputs > first_output else "")
+        self.log(f"retalisc: restored snapshot {restored['number']} of {self.directory.directory} and replayed "
+                 f"{events} journaled events and {calls} service requests{again}")
+
+    def _event(self, node, record: dict):
+        if "r" in record:                 # a ROS 1 message fed as its bytes: made again as it was
+            data = base64.b64decode(record["r"])
+            arrival = (record["p"], 0, data, record["n"], record["ns"])
+            fast = node.ros1_terms.event(data, record["n"], record["p"], record["ns"]) if node.ros1_terms else None
+            if fast is not None:
+                return fast[0], fast[1], arrival
+            text, seconds = node._text_event(record["p"], data, record["n"], record["ns"])
+            return text, seconds, arrival
+        return record["e"], record["t"], None
+
+    # ---- while live (the consumer thread) --------------------------------------------------
+
+    def events(self, events) -> None:
+        """Journal events about to be fed: (event, seconds, arrival)."""
+        if self.replaying or not events:
+            return
+        from ..driver.engine import Ros1Bytes
+
+        lines = []
+        for event, seconds, arrival in events:
+            if isinstance(event, Ros1Bytes):
+                topic, _, data, name, arrival_ns = arrival
+                lines.append(json.dumps({"r": base64.b64encode(data).decode("ascii"), "n": name, "p": topic,
+                                         "ns": arrival_ns}))
+            else:
+                lines.append(json.dumps({"e": event, "t": seconds}))
+        self.journal.append(lines)
+
+    def call(self, name: str, args, now: float) -> None:
+        if not self.replaying:
+            self.journal.append([json.dumps({"c": name, "a": list(args), "now": now})])
+
+    def fed(self, node, count: int) -> None:
+        """After a batch: a snapshot when N events or S seconds have passed since the last."""
+        if self.replaying or not self.ready:
+            return
+        self.since_events += count
+        if self.since_events >= self.snapshot_events or time.monotonic() - self.since_time >= self.snapshot_seconds:
+            self.snapshot(node)
+
+    def snapshot(self, node) -> None:
+        self.journal.sync()
+        manifest = {"live": node.transport.name,
+                    "node": {"inputs": dict(node.inputs), "output_types": dict(node.output_types),
+                             "learned": dict(node.learned), "outputs": node.outputs}}
+        sink = self.raw if self.raw is not None else _NoOutput()
+        if self.raw is None:
+            manifest["out_bytes"] = 0
+        written = _snapshot(self.directory, node.engine, sink, manifest, _LogStream(self.log))
+        if written is not None:
+            self.journal.open(written["number"])         # what is fed from now on
+            self.journal.prune(self.directory)
+        self.since_events, self.since_time = 0, time.monotonic()
+
+    def close(self, node, snapshot: bool = True) -> None:
+        """A clean stop: a last snapshot (not when the start failed), files closed."""
+        if self.ready and snapshot:
+            self.snapshot(node)
+        self.journal.close()
+        if self.raw is not None:
+            self.raw.close()
+
+
+def _snapshot(directory, engine, sink, manifest, log):
+    if isinstance(sink, _NoOutput):
+        from ..driver.bridge import PrologError
+        try:
+            return directory.save(engine, manifest)
+        except (OSError, PrologError) as error:
+            print(f"retalisc: warning: the snapshot could not be written ({error}); the node goes on, "
+                  f"the previous snapshot stays the one a restart uses", file=log)
+            return None
+    return take_snapshot(directory, engine, sink, manifest, log)
+
+
+class _LogStream:
+    """A file-like front of the node's log function (recovery.py prints to a stream)."""
+
+    def __init__(self, log: Callable[[str], None]):
+        self.log = log
+
+    def write(self, text: str) -> None:
+        if text.strip():
+            self.log(text.rstrip("\n"))
+
+    def flush(self) -> None:
+        pass
