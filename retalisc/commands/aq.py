@@ -20,7 +20,7 @@ import click
 
 from ..compiler import AQ_MODES, AqOptions, compile_source
 from ..frontend.errors import RetalisError
-from .options import Seconds, output_directory, output_file
+from .options import check_snapshot_options, output_directory, output_file, state_options
 
 
 def _swipl() -> str:
@@ -67,15 +67,13 @@ with UPDATES.txt:
 @click.option("--subsumption", is_flag=True, help="Tabled mode: reuse the table of a subsuming sub-goal.")
 @click.option("--out", "out", type=click.Path(dir_okay=False, allow_dash=True), default="-", show_default=True,
               help="Write the notifications to this file ('-' for standard output).")
-@click.option("--state", "state", type=click.Path(file_okay=False), default=None, metavar="DIR",
-              help="Survive a crash: keep snapshots of the active queries in DIR; started again with the same "
-                   "DIR, the run goes on from the newest complete snapshot and the --out file ends byte-identical "
-                   "to that of a run that never stopped (docs/recovery.md). Needs --out FILE.")
-@click.option("--snapshot-every", "snapshot_every", type=click.IntRange(1), default=None, metavar="N",
-              help="With --state: a snapshot every N script commands (default 10000).")
-@click.option("--snapshot-seconds", "snapshot_seconds", type=Seconds(allow_inf=True), default=None, metavar="S",
-              help="With --state: a snapshot every S seconds at the latest (default 60; inf: only by "
-                   "--snapshot-every).")
+@state_options(
+    "Survive a crash: keep snapshots of the active queries in DIR; started again with the same "
+    "DIR, the run goes on from the newest complete snapshot and the --out file ends byte-identical "
+    "to that of a run that never stopped (docs/recovery.md). Needs --out FILE.",
+    "With --state: a snapshot every N script commands (default 10000).",
+    "With --state: a snapshot every S seconds at the latest (default 60; inf: only by "
+    "--snapshot-every).")
 def aq_command(program: str, script: str, mode: str, subsumption: bool, out: str, state, snapshot_every,
                snapshot_seconds) -> None:
     """Register active queries on PROGRAM (rules and initial facts) and run UPDATES.
@@ -84,8 +82,7 @@ def aq_command(program: str, script: str, mode: str, subsumption: bool, out: str
     registration, then every change, in script order (sorted within one line). TEXT is the goal
     instance written with writeq.
     """
-    if state is None and (snapshot_every is not None or snapshot_seconds is not None):
-        raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
+    check_snapshot_options(state, snapshot_every, snapshot_seconds)
     if state is not None:
         if out == "-":
             raise click.UsageError("--state needs --out FILE (standard output cannot be cut back after a crash)")

@@ -9,7 +9,7 @@ import click
 from ..compiler import AQ_MODES, AqOptions, compile_file, pass_names
 from ..frontend.errors import RetalisError
 from ..passes.pipeline import PASS_NAMES
-from .options import Seconds, output_directory, output_file
+from .options import Seconds, check_snapshot_options, output_directory, output_file, state_options
 from ..robot_io.options import BAG_DEFAULTS, bag_options
 
 
@@ -185,15 +185,13 @@ Examples:
 @click.option("--late", "late_file", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Write every input event that arrives more than --max-delay behind the latest one to FILE "
                    "(JSON Lines: its lateness and the rules whose partners it may have missed).")
-@click.option("--state", "state", type=click.Path(file_okay=False), default=None, metavar="DIR",
-              help="Survive a crash: keep snapshots of the state in DIR; started again with the same DIR, "
-                   "the run goes on from the newest complete snapshot and the --out file ends byte-identical "
-                   "to that of a run that never stopped (docs/recovery.md). Needs --events FILE and --out FILE.")
-@click.option("--snapshot-every", "snapshot_every", type=click.IntRange(1), default=None, metavar="N",
-              help="With --state: a snapshot every N input lines (default 200000).")
-@click.option("--snapshot-seconds", "snapshot_seconds", type=Seconds(allow_inf=True), default=None, metavar="S",
-              help="With --state: a snapshot every S seconds of processing at the latest (default 60; inf: "
-                   "only by --snapshot-every).")
+@state_options(
+    "Survive a crash: keep snapshots of the state in DIR; started again with the same DIR, "
+    "the run goes on from the newest complete snapshot and the --out file ends byte-identical "
+    "to that of a run that never stopped (docs/recovery.md). Needs --events FILE and --out FILE.",
+    "With --state: a snapshot every N input lines (default 200000).",
+    "With --state: a snapshot every S seconds of processing at the latest (default 60; inf: "
+    "only by --snapshot-every).")
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
@@ -215,8 +213,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
         raise click.UsageError("--topics, --rate, --start, --duration, --wrap-topic, --plain-strings, "
                                "--stamp, --typestore, --out-bag and --foxglove go with --bag")
-    if state is None and (snapshot_every is not None or snapshot_seconds is not None):
-        raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
+    check_snapshot_options(state, snapshot_every, snapshot_seconds)
     if state is not None:
         if heartbeat is not None:
             raise click.UsageError("--state does not go with --heartbeat (a replay would not see the same clock)")

@@ -13,7 +13,7 @@ from typing import Callable, Optional
 import click
 
 from .compile import compile_or_exit
-from .options import Seconds, output_file
+from .options import Seconds, check_snapshot_options, output_file, state_options
 
 
 def _common(command):
@@ -34,19 +34,16 @@ def _common(command):
         click.option("--linger", type=Seconds(allow_inf=False), default=0.0, metavar="SECONDS",
                      help="Feed messages arriving within SECONDS of each other in one batch (fewer Prolog "
                           "calls, less CPU, that much more latency; default 0: feed what is waiting at once)."),
-        click.option("--state", "state", type=click.Path(file_okay=False), default=None, metavar="DIR",
-                     help="Survive a crash: journal every event and service request in DIR before it is fed, "
-                          "keep snapshots there; started again with the same DIR, the node restores the newest "
-                          "snapshot and replays the journal (docs/recovery.md). --out must then be a file."),
-        click.option("--snapshot-every", "snapshot_every", type=click.IntRange(1), default=None, metavar="N",
-                     help="With --state: a snapshot every N events (default 200000)."),
-        click.option("--snapshot-seconds", "snapshot_seconds", type=Seconds(allow_inf=True), default=None,
-                     metavar="S", help="With --state: a snapshot every S seconds at the latest, checked when events "
-                                       "come (default 60; inf: only by --snapshot-every)."),
     ]
     for option in reversed(options):
         command = option(command)
-    return command
+    return state_options(
+        "Survive a crash: journal every event and service request in DIR before it is fed, "
+        "keep snapshots there; started again with the same DIR, the node restores the newest "
+        "snapshot and replays the journal (docs/recovery.md). --out must then be a file.",
+        "With --state: a snapshot every N events (default 200000).",
+        "With --state: a snapshot every S seconds at the latest, checked when events "
+        "come (default 60; inf: only by --snapshot-every).")(command)
 
 
 def serve(program: str, config_path: Optional[str], make_transport: Callable, out: Optional[str],
@@ -61,9 +58,7 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
 
     output_file(out, "--out")
     recovery = recovery or {}
-    if recovery.get("state") is None and (recovery.get("snapshot_every") is not None
-                                          or recovery.get("snapshot_seconds") is not None):
-        raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
+    check_snapshot_options(recovery.get("state"), recovery.get("snapshot_every"), recovery.get("snapshot_seconds"))
     if recovery.get("state") is not None and out == "-":
         raise click.UsageError("--state needs --out FILE (or no --out): standard output cannot be cut back")
     try:

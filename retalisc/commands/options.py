@@ -72,3 +72,28 @@ def output_directory(path: str, option: str) -> None:
         raise click.BadParameter(f"cannot make the directory {path}: {error.strerror}", param_hint=option) from None
     if not os.access(path, os.W_OK):
         raise click.BadParameter(f"cannot write in the directory {path}", param_hint=option)
+
+
+def state_options(state_help: str, every_help: str, seconds_help: str):
+    """The crash-recovery options of a command (docs/recovery.md): `--state DIR`,
+    `--snapshot-every N`, `--snapshot-seconds S`, with the command's own help texts."""
+    options = [
+        click.option("--state", "state", type=click.Path(file_okay=False), default=None, metavar="DIR",
+                     help=state_help),
+        click.option("--snapshot-every", "snapshot_every", type=click.IntRange(1), default=None, metavar="N",
+                     help=every_help),
+        click.option("--snapshot-seconds", "snapshot_seconds", type=Seconds(allow_inf=True), default=None,
+                     metavar="S", help=seconds_help),
+    ]
+
+    def decorate(command):
+        for option in reversed(options):
+            command = option(command)
+        return command
+    return decorate
+
+
+def check_snapshot_options(state, snapshot_every, snapshot_seconds) -> None:
+    """Fail with a usage error when a snapshot option comes without --state."""
+    if state is None and (snapshot_every is not None or snapshot_seconds is not None):
+        raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
