@@ -604,22 +604,12 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
     def report(topic: str, number: int, reason: str) -> None:
         click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
 
-    def rejected(topic: str, number: int, reason: str) -> None:
-        stats.rejected += 1
-        sink.flush()
-        report(topic, number, reason)
-
-    def failed(topic: str, number: int, reason: str) -> None:
-        sink.flush()
-        click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
-        stats.failed += 1
-
     converter = MessageConverter(bag.typestore, options.convention)
     # ROS 1 messages go to the runtime as bytes, as in replay_bag
     ros1_terms = Ros1Terms(engine, bag.typestore, options.convention) if hasattr(engine, "ros1_schema") else None
 
     def feed(batch) -> None:
-        feed_messages(engine, bag, converter, options.stamp == "record", batch, write, rejected, failed)
+        feed_messages(engine, bag, converter, options.stamp == "record", batch, write, sink, stats, name, report)
 
     def snapshot(done):
         return take_snapshot(directory, engine, sink, {"bag": selection, "input_messages": done}, log)

@@ -149,13 +149,25 @@ def message_event(bag: Recording, converter: MessageConverter, record: Record,
 
 
 def feed_messages(engine, bag: Recording, converter: MessageConverter, record_stamp: bool, batch: list,
-                  write: Callable, rejected: Callable[[str, int, str], None],
-                  failed: Callable[[str, int, str], None]) -> None:
+                  write: Callable, sink: IO, stats: ReplayStats, name: str,
+                  report: Callable[[str, int, str], None]) -> None:
     """Feeds `batch`, a list of (event, seconds, (topic, number, record)), writing what it
-    produces with `write`. A message whose processing fails goes to `failed(topic, number,
-    reason)` and the batch goes on after it; a message whose bytes the runtime refuses is
-    converted as text instead (`message_event`), or goes to `rejected` when that fails too."""
+    produces with `write` to `sink`. A message whose processing fails is reported on standard
+    error as `NAME:TOPIC#N: error: ...`, counted in `stats.failed`, and the batch goes on after
+    it; a message whose bytes the runtime refuses is converted as text instead
+    (`message_event`), or goes to `report(topic, number, reason)` and `stats.rejected` when
+    that fails too."""
     from ..driver.bridge import PrologError
+
+    def rejected(topic: str, number: int, reason: str) -> None:
+        stats.rejected += 1
+        sink.flush()
+        report(topic, number, reason)
+
+    def failed(topic: str, number: int, reason: str) -> None:
+        sink.flush()
+        click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
+        stats.failed += 1
 
     while batch:
         try:
@@ -271,20 +283,11 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
             ros1_terms = (Ros1Terms(engine, bag.typestore, options.convention)
                           if publisher is None and hasattr(engine, "ros1_schema") else None)
 
-            def rejected(topic: str, number: int, reason: str) -> None:
-                stats.rejected += 1
-                sink.flush()
-                report(topic, number, reason)
-
-            def failed(topic: str, number: int, reason: str) -> None:
-                sink.flush()
-                click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
-                stats.failed += 1
-
             def feed(batch) -> None:
                 if publisher is not None:
                     publisher.fed([(text, seconds) for text, seconds, _ in batch])
-                feed_messages(engine, bag, converter, options.stamp == "record", batch, write, rejected, failed)
+                feed_messages(engine, bag, converter, options.stamp == "record", batch, write, sink, stats, name,
+                              report)
 
             for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms):
                 record_ns = record.time_ns
