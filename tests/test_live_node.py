@@ -143,6 +143,9 @@ def test_services_and_refusals():
                                        "<publish_to name='out' msg_type='geometry_msgs/Point'/></publish_subscribe>")
     assert transport.subscribed == {"/v": "geometry_msgs/Vector3"}
     assert ("/out", "geometry_msgs/Point") in transport.advertised
+    assert ("/out/seq", "std_msgs/UInt64") in transport.advertised       # the output numbers' topic
+    outputs = []
+    node._deliveries.append(outputs.append)
     reply = node.add_output_subscription("out", "", "pos(X)", "[X > 1]", "geometry_msgs__0__Point(X, 0.0, 0.0)")
     assert reply.ok and reply.value
     for x in (0.5, 2.0, 3.0):
@@ -172,9 +175,12 @@ def test_services_and_refusals():
     node.arrived("/w", vector(5.0))
     node.close()
     published = [(topic, msgtype) for topic, msgtype, _ in transport.published]
-    assert published == [("/out", "geometry_msgs/Point")] * 3
-    points = [STORE.deserialize_cdr(data, "geometry_msgs/msg/Point").x for _, _, data in transport.published]
+    assert published == [("/out/seq", "std_msgs/UInt64"), ("/out", "geometry_msgs/Point")] * 3
+    points = [STORE.deserialize_cdr(data, "geometry_msgs/msg/Point").x for _, _, data in transport.published[1::2]]
     assert points == [2.0, 3.0, 4.0]
+    # each message comes right after its output number: its line in all the node's outputs
+    numbers = [STORE.deserialize_cdr(data, "std_msgs/msg/UInt64").data for _, _, data in transport.published[::2]]
+    assert numbers == [i + 1 for i, output in enumerate(outputs) if output.consumer == "out"] and len(outputs) > 3
     assert node.stats.rejected["/w"] == 1 and node.stats.received["/w"] == 2
     assert node.stats.errors == 0
 

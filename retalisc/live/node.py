@@ -20,6 +20,15 @@ Subscription deliveries (outputs with a consumer) are published: consumer `marke
 `/marker1`, as the message type the topic was given (pub_sub.xml `publish_to`, or the
 add_output_subscription request), else the type named by the event's functor.
 
+Every published message carries its output number: the position of its output in all the
+outputs of the node (the line number of the --out file), counted from 1 and, with --state,
+over restarts, so a message published again after a crash has the number it had before
+(docs/recovery.md). Over ROS 1, a type whose first field is a std_msgs/Header has it in
+`header.seq` (modulo 2^32; rospy itself fills that field with its own count); over Zenoh it is
+the sample's attachment (8 bytes, unsigned little-endian); otherwise (ROS 2 over DDS, ROS 1
+types without a header) it is published on the companion topic `<topic>/seq` as a
+std_msgs/UInt64, right before the message.
+
 Time: an event is stamped with its message's `header.stamp`, or with the wall-clock time of
 its arrival when it has no header (or a zero stamp). A subscription or unsubscription at
 `now` (or with no time) means the wall clock's now.
@@ -29,6 +38,7 @@ from __future__ import annotations
 import json
 import queue
 import re
+import struct
 import sys
 import threading
 import time
@@ -46,6 +56,10 @@ from .state import STATEFUL_CALLS
 BATCH = 2000
 REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
 CALL_TIMEOUT = 60.0
+SEQ_SUFFIX = "/seq"          # the companion topic of the output numbers: `/out` -> `/out/seq`
+SEQ_TYPE = "std_msgs/UInt64"
+_HEADER = ("header", "std_msgs/msg/Header")
+_CDR_LE = b"\x00\x01\x00\x00"      # the CDR encapsulation header (little endian)
 
 
 @dataclass
@@ -83,6 +97,7 @@ class Transport:
 
     wire = "cdr"
     name = "transport"
+    attaches_seq = False     # publish(..., seq=N) carries the output number with the message itself
 
     def start(self, node: "LiveNode") -> None:
         raise NotImplementedError
@@ -98,6 +113,8 @@ class Transport:
         connected when it comes)."""
 
     def publish(self, topic: str, msgtype: str, data: bytes) -> None:
+        """Publish `data`; a transport with `attaches_seq` also takes `seq=N`, the output
+        number, and sends it with the message."""
         raise NotImplementedError
 
     def close(self) -> None:
@@ -135,6 +152,7 @@ class LiveNode:
         self.state = state         # live/state.py LiveState (--state DIR) or None
         self.learned: Dict[str, str] = {}          # types learned from definitions -> the definition
         self.outputs = 0           # output lines produced (counted over restarts with --state)
+        self._numbering: Dict[str, str] = {}       # type -> how its messages carry their number
         self._replay_now: Optional[float] = None   # the wall clock of a replayed request
         engine.on_output(self._output)
 
@@ -156,7 +174,22 @@ class LiveNode:
         if store_type(msgtype) not in self.store.fielddefs:
             return Reply(False, f"unknown message type {msgtype}")
         self.transport.advertise(topic, ros1_type(msgtype))
+        if self._numbered_by(store_type(msgtype)) == "topic":
+            self.transport.advertise(topic + SEQ_SUFFIX, SEQ_TYPE)
         return Reply(True)
+
+    def _numbered_by(self, name: str) -> str:
+        """How a message of type `name` carries its output number: "header" (ROS 1
+        header.seq), "attachment" (the transport's), "topic" (the companion topic)."""
+        how = self._numbering.get(name)
+        if how is None:
+            fields = self.store.fielddefs[name][1]
+            if self.transport.wire == "ros1" and fields and (fields[0][0], fields[0][1][1]) == _HEADER:
+                how = "header"
+            else:
+                how = "attachment" if self.transport.attaches_seq else "topic"
+            self._numbering[name] = how
+        return how
 
     def close(self, timeout: float = 10.0) -> None:
         """Stop taking messages, process what is queued, close the transport."""
@@ -195,7 +228,12 @@ class LiveNode:
     def _consume(self) -> None:
         pending: List[tuple] = []           # (event, time, the arrival: for the text road)
         while True:
-            item = self._queue.get()
+            idle = self.state.idle_timeout() if self.state is not None else None
+            try:
+                item = self._queue.get() if idle is None else self._queue.get(timeout=idle)
+            except queue.Empty:          # an idle node with --state: the time-based snapshot
+                self.state.idle(self)
+                continue
             deadline = time.monotonic() + self.linger if self.linger else None
             stop = False
             while True:
@@ -360,15 +398,27 @@ class LiveNode:
                 name = store_type(msgtype)
             name, msg = self.converter.message(term, name)
             if self.transport.wire == "ros1":
-                data = self.store.serialize_ros1(msg, name)
+                data = bytes(self.store.serialize_ros1(msg, name))
             else:
-                data = self.store.serialize_cdr(msg, name)
-            self.transport.publish(topic, ros1_type(name), bytes(data))
+                data = bytes(self.store.serialize_cdr(msg, name))
+            self._send(topic, ros1_type(name), data, self._numbered_by(name), self.outputs)
             self.stats.published[topic] += 1
         except Exception as error:
             self.stats.unpublished += 1
             if self.stats.unpublished <= REPORTS_PER_TOPIC:
                 self.log(f"{topic}: cannot publish {event.event[:120]}: {error}")
+
+    def _send(self, topic: str, msgtype: str, data: bytes, how: str, seq: int) -> None:
+        """Publish a message with its output number `seq` (see the module's docstring)."""
+        if how == "header":          # ROS 1: header.seq is the first 4 bytes of the message
+            self.transport.publish(topic, msgtype, struct.pack("<I", seq & 0xFFFFFFFF) + data[4:])
+        elif how == "attachment":
+            self.transport.publish(topic, msgtype, data, seq=seq)
+        else:
+            number = struct.pack("<Q", seq)
+            self.transport.publish(topic + SEQ_SUFFIX, SEQ_TYPE,
+                                   number if self.transport.wire == "ros1" else _CDR_LE + number)
+            self.transport.publish(topic, msgtype, data)
 
     def message_definition(self, msgtype: str) -> Tuple[str, str]:
         """(full definition text, md5) of a type in ROS 1 form (for ROS 1 publishers)."""

@@ -7,11 +7,15 @@ at, which `now` means in it) is appended to the journal segment of the newest sn
 (recovery.EventJournal, one JSON object a line) and flushed before it is processed.
 Snapshots (recovery.StateDir: the engine's state, the node's subscriptions, the types it
 learned, the output counts) are taken when the node starts, every N events or S seconds
-(checked between two batches) and when it stops. Started again with the same DIR, the node
+(checked between two batches, and, when nothing arrives, S seconds after the last snapshot
+if anything was journaled since: an idle node does not keep a long journal) and when it
+stops. Started again with the same DIR, the node
 restores the newest complete snapshot, replays the journal after it and then takes live
 input. The --out file is cut back to the snapshot's length, so it ends as that of a run that
 never stopped over the same input; what leaves the process (published topics) is
-at-least-once: what was produced after the snapshot is published again.
+at-least-once: what was produced after the snapshot is published again, with the output
+number it had (node.py), so a subscriber drops the repeats. The output topics are advertised
+before the replay, so subscribers can connect before it publishes.
 """
 from __future__ import annotations
 
@@ -71,6 +75,7 @@ class LiveState:
         self.raw = None
         self.replaying = False
         self.since_events, self.since_time = 0, time.monotonic()
+        self.journaled = False           # anything journaled since the last snapshot
         self.restored = None
         self.replayed = (0, 0)           # events, service requests
         self.ready = False               # recovered: snapshots may be written
@@ -101,6 +106,9 @@ class LiveState:
         node.output_types.update(saved.get("output_types", {}))
         for topic, msgtype in node.output_types.items():
             node._advertise(topic, msgtype)
+        for spec in node.config.publish:         # before the replay publishes on them
+            if spec.name not in node.output_types:
+                node._advertise(spec.name, spec.msgtype)
         for topic, msgtype in saved.get("inputs", {}).items():
             reply = node._add_input(topic, msgtype)
             if not reply.ok:
@@ -165,10 +173,25 @@ class LiveState:
             else:
                 lines.append(json.dumps({"e": event, "t": seconds}))
         self.journal.append(lines)
+        self.journaled = True
 
     def call(self, name: str, args, now: float) -> None:
         if not self.replaying:
             self.journal.append([json.dumps({"c": name, "a": list(args), "now": now})])
+            self.journaled = True
+
+    def idle_timeout(self) -> Optional[float]:
+        """How long the consumer may wait for input before the time-based snapshot is due;
+        None: no snapshot is due however long it waits (nothing journaled since the last)."""
+        if not self.ready or not self.journaled or self.snapshot_seconds == float("inf"):
+            return None
+        return max(0.0, self.since_time + self.snapshot_seconds - time.monotonic())
+
+    def idle(self, node) -> None:
+        """Nothing arrived for a while: the time-based snapshot, if it is due."""
+        if self.ready and not self.replaying and self.journaled and \
+                time.monotonic() - self.since_time >= self.snapshot_seconds:
+            self.snapshot(node)
 
     def fed(self, node, count: int) -> None:
         """After a batch: a snapshot when N events or S seconds have passed since the last."""
@@ -191,6 +214,7 @@ class LiveState:
             self.journal.open(written["number"])         # what is fed from now on
             self.journal.prune(self.directory)
         self.since_events, self.since_time = 0, time.monotonic()
+        self.journaled = False
 
     def close(self, node, snapshot: bool = True) -> None:
         """A clean stop: a last snapshot (not when the start failed), files closed."""

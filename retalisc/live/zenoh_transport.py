@@ -8,11 +8,15 @@ topics. Each component is a Zenoh peer with multicast scouting off: it listens o
 endpoints given with --listen and connects to those given with --connect (tcp/127.0.0.1:PORT
 on one machine), and keeps trying the ones that are not up, so a component that stops and
 starts again is back in the graph without restarting the others.
+
+A published sample carries its output number (node.py) as its attachment: 8 bytes, the
+number unsigned little-endian (`int.from_bytes(sample.attachment.to_bytes(), "little")`).
 """
 from __future__ import annotations
 
 import json
-from typing import Dict, List, Sequence
+import struct
+from typing import Dict, List, Optional, Sequence
 
 from ..robot_io import require
 from .node import LiveNode, Transport
@@ -39,9 +43,15 @@ def peer_config(listen: Sequence[str], connect: Sequence[str]):
     return config
 
 
+def seq_attachment(seq: int) -> bytes:
+    """The attachment of a published sample: its output number, 8 bytes, unsigned little-endian."""
+    return struct.pack("<Q", seq)
+
+
 class ZenohTransport(Transport):
     wire = "cdr"
     name = "zenoh"
+    attaches_seq = True
 
     def __init__(self, listen: Sequence[str] = (), connect: Sequence[str] = ()):
         self.zenoh = require("zenoh", "retalisc zenoh")
@@ -77,8 +87,11 @@ class ZenohTransport(Transport):
                 zenoh_key(topic), congestion_control=self.zenoh.CongestionControl.BLOCK)
         return publisher
 
-    def publish(self, topic: str, msgtype: str, data: bytes) -> None:
-        self.advertise(topic, msgtype).put(data)
+    def publish(self, topic: str, msgtype: str, data: bytes, seq: Optional[int] = None) -> None:
+        if seq is None:
+            self.advertise(topic, msgtype).put(data)
+        else:
+            self.advertise(topic, msgtype).put(data, attachment=seq_attachment(seq))
 
     def close(self) -> None:
         for subscriber in self._subscribers.values():
