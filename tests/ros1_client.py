@@ -5,11 +5,13 @@ prints what it saw as one JSON object.
     python ros1_client.py services NODE_NAME FILE_THAT_MUST_NOT_APPEAR
     python ros1_client.py nao SECONDS
     python ros1_client.py bag BAG RATE TOPICS EXPECTED OUT_TOPICS
+    python ros1_client.py numbered        (commands on standard input, one JSON reply a line)
 """
 from __future__ import annotations
 
 import json
 import sys
+import threading
 import time
 
 import rospy
@@ -269,6 +271,111 @@ def chain(first: str, second: str) -> dict:
     return {"positions": [x for x in positions() if x > 0]}
 
 
+NUMBERED_XS = [1.0, 5.0, 2.0, 7.0, 3.0, 0.5, 9.0, 4.0, 6.0, 8.0, 2.5, 10.0, 1.5, 11.0]
+
+
+def point_stamped(store, i: int) -> bytes:
+    """Event i of the `numbered` scenario: a geometry_msgs/PointStamped, x = NUMBERED_XS[i],
+    stamped 100 + i s, header.seq i + 1 (tests/test_live_ros1.py makes the same bytes)."""
+    types = store.types
+    header = types["std_msgs/msg/Header"](seq=i + 1, stamp=types["builtin_interfaces/msg/Time"](sec=100 + i, nanosec=0),
+                                          frame_id="f")
+    msg = types["geometry_msgs/msg/PointStamped"](header=header, point=types["geometry_msgs/msg/Point"](
+        x=NUMBERED_XS[i], y=0.0, z=0.0))
+    return bytes(store.serialize_ros1(msg, "geometry_msgs/msg/PointStamped"))
+
+
+def _live_connections(publisher) -> int:
+    """The subscribers of `publisher` whose connection is open: the connection of a killed
+    node stays in rospy's list until a write to it fails, and a message written to it is lost."""
+    import socket
+
+    alive = 0
+    for connection in list(publisher.impl.connections):
+        sock = getattr(connection, "socket", None)
+        if sock is None:
+            continue
+        try:
+            closed = sock.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b""
+        except BlockingIOError:
+            closed = False
+        except OSError:
+            closed = True
+        alive += not closed
+    return alive
+
+
+def numbered() -> None:
+    """A subscriber that outlives the node: publishes events on /p and takes /stamped
+    (geometry_msgs/PointStamped: the output number is header.seq) and /vec (geometry_msgs/Point,
+    its number the std_msgs/UInt64 that comes on /vec/seq right before it: the k-th number
+    received is the k-th message's). Commands on standard input, a JSON reply each:
+    `wait` (until /p and the three outputs are connected), `send I J` (events I to J-1),
+    `expect N` (until N messages that are not repeats came), `report` (what came: every
+    message in arrival order as [topic, number, x, y], the repeats dropped as a consumer
+    drops them, the count of repeats)."""
+    from retalisc.robot_io.bags import typestore
+
+    store = typestore("ros1_noetic")
+    publisher = rospy.Publisher("/p", raw_message_class("geometry_msgs/PointStamped", *reversed(
+        store.generate_msgdef("geometry_msgs/msg/PointStamped", ros_version=1))), queue_size=None)
+    lock = threading.Lock()
+    arrived, kept, highest, numbers, pending = [], [], {}, [], []
+
+    def keep(topic, number, point):
+        arrived.append([topic, number, point.x, point.y])
+        if number > highest.get(topic, 0):        # dropping repeats: a number not above the highest seen
+            highest[topic] = number
+            kept.append([topic, number, point.x, point.y])
+
+    def on_stamped(msg):
+        decoded = store.deserialize_ros1(msg._buff, "geometry_msgs/msg/PointStamped")
+        with lock:
+            keep("/stamped", decoded.header.seq, decoded.point)
+
+    def pair():
+        while numbers and pending:
+            keep("/vec", numbers.pop(0), pending.pop(0))
+
+    def on_vec(msg):
+        with lock:
+            pending.append(store.deserialize_ros1(msg._buff, "geometry_msgs/msg/Point"))
+            pair()
+
+    def on_vec_seq(msg):
+        with lock:
+            numbers.append(store.deserialize_ros1(msg._buff, "std_msgs/msg/UInt64").data)
+            pair()
+
+    subscribers = [rospy.Subscriber("/stamped", rospy.AnyMsg, on_stamped, queue_size=None),
+                   rospy.Subscriber("/vec", rospy.AnyMsg, on_vec, queue_size=None),
+                   rospy.Subscriber("/vec/seq", rospy.AnyMsg, on_vec_seq, queue_size=None)]
+    for line in sys.stdin:
+        command = line.split()
+        if not command:
+            continue
+        if command[0] == "wait":
+            reply = {"ready": wait_for(lambda: _live_connections(publisher) > 0
+                                       and all(s.get_num_connections() > 0 for s in subscribers), 20)}
+        elif command[0] == "send":
+            first, last = int(command[1]), int(command[2])
+            for i in range(first, last):
+                message = publisher.data_class()
+                message._buff = point_stamped(store, i)
+                publisher.publish(message)
+                time.sleep(0.02)
+            reply = {"sent": last - first}
+        elif command[0] == "expect":
+            wanted = int(command[1])
+            reply = {"came": wait_for(lambda: len(kept) >= wanted, 15), "kept": len(kept)}
+        else:
+            with lock:
+                reply = {"arrived": arrived, "kept": kept, "repeats": len(arrived) - len(kept),
+                         "unpaired": [len(numbers), len(pending)]}
+        print(json.dumps(reply))
+        sys.stdout.flush()
+
+
 def main() -> None:
     rospy.init_node("retalisc_test_client", anonymous=True, disable_signals=True)
     scenario = sys.argv[1]
@@ -280,6 +387,10 @@ def main() -> None:
         result = nao(float(sys.argv[2]))
     elif scenario == "bag":
         result = bag(sys.argv[2], float(sys.argv[3]), sys.argv[4], int(sys.argv[5]), sys.argv[6])
+    elif scenario == "numbered":
+        numbered()
+        rospy.signal_shutdown("done")
+        return
     else:
         raise SystemExit(f"unknown scenario {scenario}")
     print(json.dumps(result))

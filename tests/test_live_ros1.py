@@ -10,6 +10,7 @@ import re
 import shutil
 import signal
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -232,3 +233,118 @@ def _alive(pid: int) -> bool:
     except ProcessLookupError:
         return False
     return True
+
+
+NUMBERED_XS = [1.0, 5.0, 2.0, 7.0, 3.0, 0.5, 9.0, 4.0, 6.0, 8.0, 2.5, 10.0, 1.5, 11.0]   # as ros1_client.py
+
+
+def _numbered_reference():
+    """(output file, [[topic, number, x, y]] of the published messages) of numbered.rtl over
+    the events of ros1_client.py's `numbered` scenario, without a middleware and without a
+    stop: the same LiveNode code over an in-process transport."""
+    import io
+
+    from retalisc.driver.engine import Engine
+    from retalisc.live.config import load_config
+    from retalisc.live.node import LiveNode, Reply, Transport
+    from retalisc.robot_io.bags import typestore
+
+    store = typestore("ros1_noetic")
+    types = store.types
+
+    class Recorder(Transport):
+        wire, name = "ros1", "recorder"
+
+        def __init__(self):
+            self.published = []
+
+        def start(self, node):
+            pass
+
+        def subscribe(self, topic, msgtype):
+            pass
+
+        def publish(self, topic, msgtype, data):
+            self.published.append((topic, data))
+
+    out, transport = io.StringIO(), Recorder()
+    node = LiveNode(Engine.load(LIVE / "numbered.rtl"), transport, load_config(LIVE / "numbered.xml"), out=out,
+                    log=lambda text: None)
+    node.start()
+    for i, x in enumerate(NUMBERED_XS):
+        header = types["std_msgs/msg/Header"](seq=i + 1, stamp=types["builtin_interfaces/msg/Time"](sec=100 + i, nanosec=0),
+                                              frame_id="f")
+        msg = types["geometry_msgs/msg/PointStamped"](header=header, point=types["geometry_msgs/msg/Point"](x=x, y=0.0, z=0.0))
+        node.arrived("/p", bytes(store.serialize_ros1(msg, "geometry_msgs/msg/PointStamped")))
+    node.call(lambda: Reply(True))
+    node.close()
+    messages, number = [], None
+    for topic, data in transport.published:
+        if topic == "/vec/seq":
+            number = store.deserialize_ros1(data, "std_msgs/msg/UInt64").data
+        elif topic == "/vec":
+            point = store.deserialize_ros1(data, "geometry_msgs/msg/Point")
+            messages.append(["/vec", number, point.x, point.y])
+        else:
+            stamped = store.deserialize_ros1(data, "geometry_msgs/msg/PointStamped")
+            messages.append(["/stamped", stamped.header.seq, stamped.point.x, stamped.point.y])
+    return out.getvalue(), messages
+
+
+def test_ros1_node_killed_and_restarted_subscriber_drops_repeats_by_number(ros, tmp_path):
+    """`retalisc ros --state DIR` killed with SIGKILL after 9 of 14 events and started again
+    with the same DIR, while a subscriber stays up: dropping the messages whose output number
+    (header.seq of /stamped; the number on /vec/seq of /vec) it has already seen, the
+    subscriber gets exactly the messages of a node that never stopped, and some were repeats;
+    the --out file is that of an uninterrupted node."""
+    python, env, processes = ros
+    expected_out, expected = _numbered_reference()
+    ends = [json.loads(line)["end"] for line in expected_out.splitlines()]
+    assert {m[0] for m in expected} == {"/stamped", "/vec"} and len(expected) >= 10
+    out, state = tmp_path / "out.jsonl", tmp_path / "state"
+    argv = retalisc_argv(python, "ros", str(LIVE / "numbered.rtl"), "--config", str(LIVE / "numbered.xml"), "--name",
+                         "numbered", "--out", str(out), "--state", str(state), "--snapshot-every", "4",
+                         "--snapshot-seconds", "inf")
+    first = processes.start("numbered_first", argv, env)
+    client = subprocess.Popen([python, str(ROOT / "tests" / "ros1_client.py"), "numbered"], env=env,
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                              start_new_session=True)
+
+    def ask(command: str) -> dict:
+        client.stdin.write(command + "\n")
+        client.stdin.flush()
+        reply = client.stdout.readline()
+        assert reply, f"the client stopped at {command!r}"
+        return json.loads(reply)
+
+    second = None
+    try:
+        processes.wait_for_line(first, "ros: node /numbered")
+        assert ask("wait")["ready"]
+        ask("send 0 9")
+        # the messages of the first 9 events (stamped 100 to 108): their numbers are their lines
+        of_nine = [m for m in expected if ends[m[1] - 1] < 109]
+        assert 0 < len(of_nine) < len(expected)
+        assert ask(f"expect {len(of_nine)}")["came"], processes.err("numbered_first")
+        os.kill(first.pid, signal.SIGKILL)
+        first.wait()
+        second = processes.start("numbered_second", argv, env)
+        processes.wait_for_line(second, "ros: node /numbered")
+        assert ask("wait")["ready"]
+        ask("send 9 14")
+        assert ask(f"expect {len(expected)}")["came"], processes.err("numbered_second")
+        time.sleep(0.3)                   # a late repeat would show now
+        report = ask("report")
+    finally:
+        if client.poll() is None:
+            os.kill(client.pid, signal.SIGTERM)
+            client.wait(10)
+        status = processes.stop(second) if second is not None else None
+    err = processes.err("numbered_second")
+    assert status == 0, err
+    assert "restored snapshot" in err and "produced (and published) again" in err, err
+    for topic in ("/stamped", "/vec"):        # each topic in order (the two come on two connections)
+        assert [m for m in report["kept"] if m[0] == topic] == [m for m in expected if m[0] == topic], report
+    print(f"{len(report['arrived'])} messages came, {report['repeats']} of them repeats")
+    assert report["repeats"] > 0 and report["unpaired"] == [0, 0], report
+    assert out.read_text() == expected_out

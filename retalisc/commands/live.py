@@ -42,8 +42,8 @@ def _common(command):
         "keep snapshots there; started again with the same DIR, the node restores the newest "
         "snapshot and replays the journal (docs/recovery.md). --out must then be a file.",
         "With --state: a snapshot every N events (default 200000).",
-        "With --state: a snapshot every S seconds at the latest, checked when events "
-        "come (default 60; inf: only by --snapshot-every).")(command)
+        "With --state: a snapshot every S seconds at the latest, also when no event comes "
+        "(default 60; inf: only by --snapshot-every).")(command)
 
 
 def serve(program: str, config_path: Optional[str], make_transport: Callable, out: Optional[str],

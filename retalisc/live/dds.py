@@ -223,6 +223,10 @@ class DdsTransport(Transport):
                                             cls)
         return entry
 
+    def subscriber_count(self, topic: str) -> int:
+        entry = self._writers.get(topic)
+        return 0 if entry is None else len(entry[1].get_matched_subscriptions())
+
     def publish(self, topic: str, msgtype: str, data: bytes) -> None:
         _, writer, cls = self.advertise(topic, msgtype)
         if _write is not None:                # the CDR bytes as rosbags wrote them

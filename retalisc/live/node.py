@@ -117,6 +117,11 @@ class Transport:
         number, and sends it with the message."""
         raise NotImplementedError
 
+    def subscriber_count(self, topic: str) -> Optional[int]:
+        """How many subscribers the publisher of `topic` reaches now (0 if not advertised);
+        None: the middleware does not say."""
+        return None
+
     def close(self) -> None:
         pass
 
@@ -153,6 +158,7 @@ class LiveNode:
         self.learned: Dict[str, str] = {}          # types learned from definitions -> the definition
         self.outputs = 0           # output lines produced (counted over restarts with --state)
         self._numbering: Dict[str, str] = {}       # type -> how its messages carry their number
+        self.advertised: Dict[str, str] = {}       # output topic -> its type (companions included)
         self._replay_now: Optional[float] = None   # the wall clock of a replayed request
         engine.on_output(self._output)
 
@@ -174,8 +180,10 @@ class LiveNode:
         if store_type(msgtype) not in self.store.fielddefs:
             return Reply(False, f"unknown message type {msgtype}")
         self.transport.advertise(topic, ros1_type(msgtype))
+        self.advertised[topic] = ros1_type(msgtype)
         if self._numbered_by(store_type(msgtype)) == "topic":
             self.transport.advertise(topic + SEQ_SUFFIX, SEQ_TYPE)
+            self.advertised[topic + SEQ_SUFFIX] = SEQ_TYPE
         return Reply(True)
 
     def _numbered_by(self, name: str) -> str:

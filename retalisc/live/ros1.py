@@ -71,6 +71,10 @@ class Ros1Transport(Transport):
         message._buff = data
         publisher.publish(message)
 
+    def subscriber_count(self, topic: str) -> int:
+        publisher = self._publishers.get(topic)
+        return 0 if publisher is None else publisher.get_num_connections()
+
     def _raw_class(self, msgtype: str) -> type:
         cls = self._classes.get(msgtype)
         if cls is None:

@@ -28,6 +28,8 @@ from typing import Callable, Optional, Union
 from ..driver.recovery import (DEFAULT_SNAPSHOT_EVENTS, DEFAULT_SNAPSHOT_SECONDS, EventJournal, StateDir,
                                open_output, restore_newest, take_snapshot)
 
+RECONNECT_SECONDS = 2.0     # how long a restart waits for the subscribers of its outputs
+
 # the service requests that change the state: journaled and replayed
 STATEFUL_CALLS = ("_add_output", "_delete_output", "_add_memory", "_delete_memory", "_add_input", "_delete_input")
 
@@ -65,11 +67,12 @@ class LiveState:
     def __init__(self, directory: Union[str, Path], out: Optional[str] = None,
                  snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
                  snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS,
-                 log: Callable[[str], None] = print):
+                 log: Callable[[str], None] = print, reconnect_seconds: float = RECONNECT_SECONDS):
         self.directory = StateDir(directory)
         self.out_path = out
         self.snapshot_events = snapshot_events
         self.snapshot_seconds = snapshot_seconds
+        self.reconnect_seconds = reconnect_seconds
         self.log = log
         self.journal = EventJournal(self.directory)
         self.raw = None
@@ -109,6 +112,8 @@ class LiveState:
         for spec in node.config.publish:         # before the replay publishes on them
             if spec.name not in node.output_types:
                 node._advertise(spec.name, spec.msgtype)
+        if any(path.stat().st_size for number, path in self.journal.segments() if number >= restored["number"]):
+            self._wait_for_subscribers(node, saved.get("subscribers", {}))
         for topic, msgtype in saved.get("inputs", {}).items():
             reply = node._add_input(topic, msgtype)
             if not reply.ok:
@@ -144,6 +149,21 @@ class LiveState:
                  f"live outputs are at-least-once" if node.outputs > first_output else "")
         self.log(f"retalisc: restored snapshot {restored['number']} of {self.directory.directory} and replayed "
                  f"{events} journaled events and {calls} service requests{again}")
+
+    def _wait_for_subscribers(self, node, counts: dict) -> None:
+        """Before the replay publishes again: wait (at most `reconnect_seconds`) until every
+        output topic reaches as many subscribers as it did at the snapshot, so that those that
+        outlived the crash get what the replay publishes."""
+        deadline = time.monotonic() + self.reconnect_seconds
+        while True:
+            missing = [topic for topic, count in counts.items()
+                       if (node.transport.subscriber_count(topic) or 0) < count]
+            if not missing or time.monotonic() >= deadline:
+                break
+            time.sleep(0.02)
+        if missing:
+            self.log(f"retalisc: {', '.join(sorted(missing))}: fewer subscribers than at the snapshot after "
+                     f"{self.reconnect_seconds:g} s; the replay publishes without them")
 
     def _event(self, node, record: dict):
         if "r" in record:                 # a ROS 1 message fed as its bytes: made again as it was
@@ -205,7 +225,8 @@ class LiveState:
         self.journal.sync()
         manifest = {"live": node.transport.name,
                     "node": {"inputs": dict(node.inputs), "output_types": dict(node.output_types),
-                             "learned": dict(node.learned), "outputs": node.outputs}}
+                             "learned": dict(node.learned), "outputs": node.outputs,
+                             "subscribers": _subscribers(node)}}
         sink = self.raw if self.raw is not None else _NoOutput()
         if self.raw is None:
             manifest["out_bytes"] = 0
@@ -223,6 +244,19 @@ class LiveState:
         self.journal.close()
         if self.raw is not None:
             self.raw.close()
+
+
+def _subscribers(node) -> dict:
+    """topic -> how many subscribers its publisher reaches now (those the middleware counts)."""
+    counts = {}
+    for topic in node.advertised:
+        try:
+            count = node.transport.subscriber_count(topic)
+        except Exception:           # a middleware that cannot say now: no wait for it on restart
+            count = None
+        if count:
+            counts[topic] = count
+    return counts
 
 
 def _snapshot(directory, engine, sink, manifest, log):

@@ -93,6 +93,10 @@ class ZenohTransport(Transport):
         else:
             self.advertise(topic, msgtype).put(data, attachment=seq_attachment(seq))
 
+    def subscriber_count(self, topic: str) -> int:
+        publisher = self._publishers.get(topic)
+        return 1 if publisher is not None and publisher.matching_status.matching else 0    # some, or none
+
     def close(self) -> None:
         for subscriber in self._subscribers.values():
             subscriber.undeclare()
