@@ -142,12 +142,29 @@ def test_ros1_nao_markers_live_as_replayed(ros, tmp_path):
         processes.stop(node)
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     assert sorted((line["consumer"], line["event"]) for line in lines if "consumer" in line) == sorted(expected)
-    published = sorted(r["received"])
+    # the messages, their header.seq aside, are the deliveries; header.seq is the output's line
+    published = sorted([topic, _without_seq(term)] for topic, term in r["received"])
     want = []
     for consumer, event in expected:
         name, message = converter.message(event)
-        want.append(["/" + consumer, converter.term(message, name)])
+        want.append(["/" + consumer, _without_seq(converter.term(message, name))])
     assert published == sorted(want)
+    for topic, term in r["received"]:
+        line = lines[_seq(term) - 1]
+        name, message = converter.message(line["event"])
+        assert line["consumer"] == topic[1:] and _without_seq(converter.term(message, name)) == _without_seq(term)
+
+
+_HEADER_SEQ = re.compile(r"^(\w+\(std_msgs__0__Header\()(\d+),")
+
+
+def _seq(term: str) -> int:
+    """header.seq of a message written as a term."""
+    return int(_HEADER_SEQ.match(term).group(2))
+
+
+def _without_seq(term: str) -> str:
+    return _HEADER_SEQ.sub(r"\g<1>0,", term)
 
 
 def test_ros1_nao_application_live_against_the_ground_truth(ros, tmp_path):
@@ -180,14 +197,15 @@ def test_ros1_nao_application_live_against_the_ground_truth(ros, tmp_path):
     err = processes.err("nao_live")
     assert status == 0, err
     assert "ros: node /retalis" in err and " 0 rejected, 0 errors;" in err, err
-    keys = [(frame, seq, sec, nsec) for _, seq, sec, nsec, frame, _, _ in r["received"]]
+    keys = [(frame, sec, nsec) for _, _, sec, nsec, frame, _, _ in r["received"]]
     assert len(keys) == len(set(keys)), "a detection was published twice"
-    want = {(row["marker"], row["seq"], row["stamp"][0], row["stamp"][1]): row for row in truth}
+    want = {(row["marker"], row["stamp"][0], row["stamp"][1]): row for row in truth}
+    assert len(want) == len(truth)
     assert set(keys) == set(want), (sorted(set(want) - set(keys)), sorted(set(keys) - set(want)))
     worst_position = worst_angle = 0.0
     for topic, seq, sec, nsec, frame, position, orientation in r["received"]:
         assert topic == "/marker" + frame.split("_")[1]          # A.6: marker 4x4_K on /markerK
-        row = want[(frame, seq, sec, nsec)]
+        row = want[(frame, sec, nsec)]
         worst_position = max(worst_position, math.dist(position, row["position"]))
         dot = abs(sum(a * b for a, b in zip(orientation, row["orientation"])))
         worst_angle = max(worst_angle, 2 * math.acos(min(1.0, dot / math.sqrt(sum(a * a for a in orientation)))))
@@ -198,6 +216,9 @@ def test_ros1_nao_application_live_against_the_ground_truth(ros, tmp_path):
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     derived = [line for line in lines if "consumer" not in line and line["event"].startswith("geometry_msgs__0__PoseStamped(")]
     assert len(derived) == len(truth)
+    # header.seq of each published pose is the line of its delivery in the output file
+    assert all(lines[seq - 1].get("consumer") == topic[1:] for topic, seq, *_ in r["received"])
+    assert len({seq for _, seq, *_ in r["received"]}) == len(r["received"])
 
 
 def test_ros1_two_iecs_from_one_launch_file(ros, tmp_path):
