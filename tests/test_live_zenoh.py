@@ -31,6 +31,10 @@ def test_two_components_over_zenoh_and_a_restart(tmp_path):
     processes = Processes(tmp_path)
     session = zenoh.open(peer_config([], [first_at]))
     publisher = session.declare_publisher("tf")
+    numbered = []            # (the attachment: the output number, x) of what the first publishes on pos
+    listener = session.declare_subscriber("pos", lambda sample: numbered.append((
+        int.from_bytes(sample.attachment.to_bytes(), "little"),
+        store.deserialize_cdr(sample.payload.to_bytes(), "geometry_msgs/msg/Vector3").x)))
 
     def second_component(name):
         return processes.start(name, retalisc_argv(sys.executable, "zenoh", str(LIVE / "dds_second.rtl"), "--config",
@@ -68,8 +72,16 @@ def test_two_components_over_zenoh_and_a_restart(tmp_path):
         assert first.poll() is None
     finally:
         processes.stop_all()
+        listener.undeclare()
         publisher.undeclare()
         session.close()
     assert [e for e in seen("second") if e != "seen(10.0)"] == ["seen(11.0)", "seen(12.0)", "seen(13.0)"]
     assert [e for e in seen("again") if e != "seen(20.0)"] == ["seen(21.0)", "seen(22.0)", "seen(23.0)"]
     assert "zenoh: " in processes.err("first") and "0 rejected, 0 errors" in processes.err("first")
+    # each sample's attachment is its output's line in the first component's output
+    lines = [json.loads(line) for line in processes.out("first").splitlines()]
+    assert numbered and len(numbered) <= len(lines)
+    for number, x in numbered:
+        line = lines[number - 1]
+        assert line["consumer"] == "pos" and line["event"] == f"geometry_msgs__0__Vector3({x},0.0,0.0)", line
+    assert [number for number, _ in numbered] == sorted({number for number, _ in numbered})
