@@ -23,6 +23,18 @@ class _Store:
     store = typestore("ros2_humble")
 
 
+class _Collector:
+    """The node side of a DdsTransport used to listen: what came, by topic, in order."""
+
+    store = _Store.store
+
+    def __init__(self):
+        self.received = {}
+
+    def arrived(self, topic, data, *rest):
+        self.received.setdefault(topic, []).append(data)
+
+
 def tf_message(store, stamp: int, x: float, child: str = "base"):
     T = store.types
     return T["tf2_msgs/msg/TFMessage"](transforms=[T["geometry_msgs/msg/TransformStamped"](
@@ -77,9 +89,12 @@ def test_two_components_over_dds(tmp_path):
     env.pop("CYCLONEDDS_URI", None)
     store = _Store.store
     publisher = DdsTransport(domain)
-    publisher.start(_Store)
+    collector = _Collector()
+    publisher.start(collector)
     processes = Processes(tmp_path)
     try:
+        publisher.subscribe("/pos", "geometry_msgs/Vector3")          # the first's output, and its numbers
+        publisher.subscribe("/pos/seq", "std_msgs/UInt64")
         publisher.advertise("/tf_static", "tf2_msgs/TFMessage")
         publisher.publish("/tf_static", "tf2_msgs/TFMessage",
                           bytes(store.serialize_cdr(tf_message(store, 50, -5.0, "static"), "tf2_msgs/msg/TFMessage")))
@@ -120,3 +135,8 @@ def test_two_components_over_dds(tmp_path):
     assert first_out[0]["event"] == "geometry_msgs__0__Vector3(-5.0,0.0,0.0)" and first_out[0]["start"] == 50
     assert [line["start"] for line in first_out][-5:] == [201, 202, 203, 204, 205]    # header stamps
     assert "ros2: " in processes.err("first") and "0 rejected, 0 errors" in processes.err("first")
+    # every message on /pos came right after its output number on /pos/seq: its output's line
+    numbers = [store.deserialize_cdr(data, "std_msgs/msg/UInt64").data for data in collector.received["/pos/seq"]]
+    xs = [store.deserialize_cdr(data, "geometry_msgs/msg/Vector3").x for data in collector.received["/pos"]]
+    assert numbers == [i + 1 for i, line in enumerate(first_out) if line.get("consumer") == "pos"]
+    assert [f"geometry_msgs__0__Vector3({x},0.0,0.0)" for x in xs] == [first_out[n - 1]["event"] for n in numbers]
