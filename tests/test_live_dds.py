@@ -102,7 +102,9 @@ def test_two_components_over_dds(tmp_path):
         second = processes.start("second", retalisc_argv(sys.executable, "ros2", str(LIVE / "dds_second.rtl"),
                                                          "--config", str(LIVE / "second.xml"), "--out", "-"), env)
         first = processes.start("first", retalisc_argv(sys.executable, "ros2", str(LIVE / "dds_first.rtl"),
-                                                       "--config", str(LIVE / "first.xml"), "--out", "-"), env)
+                                                       "--config", str(LIVE / "first.xml"), "--out",
+                                                       str(tmp_path / "first.jsonl"), "--state", str(tmp_path / "state"),
+                                                       "--snapshot-every", "2"), env)     # snapshots wait for acks
         processes.wait_for_line(second, "ros2: DDS domain")
         processes.wait_for_line(first, "ros2: DDS domain")
         deadline = time.monotonic() + 20
@@ -130,7 +132,10 @@ def test_two_components_over_dds(tmp_path):
         publisher.close()
     events = seen()
     assert [e for e in events if e not in ("seen(0.0)", "seen(-5.0)")] == [f"seen({i}.0)" for i in range(1, 6)]
-    first_out = [json.loads(line) for line in processes.out("first").splitlines()]
+    first_out = [json.loads(line) for line in (tmp_path / "first.jsonl").read_text().splitlines()]
+    # the last snapshot counted the subscribers of the outputs (a restart waits for them)
+    last = sorted((tmp_path / "state").glob("snapshot-*.json"))[-1]
+    assert json.loads(last.read_text())["node"]["subscribers"] == {"/pos": 2, "/pos/seq": 1}
     # tf_static, published before the first component started, reached it (transient local)
     assert first_out[0]["event"] == "geometry_msgs__0__Vector3(-5.0,0.0,0.0)" and first_out[0]["start"] == 50
     assert [line["start"] for line in first_out][-5:] == [201, 202, 203, 204, 205]    # header stamps

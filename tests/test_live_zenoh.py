@@ -59,7 +59,9 @@ def test_two_components_over_zenoh_and_a_restart(tmp_path):
 
     try:
         first = processes.start("first", retalisc_argv(sys.executable, "zenoh", str(LIVE / "dds_first.rtl"),
-                                                       "--config", str(LIVE / "first.xml"), "--out", "-",
+                                                       "--config", str(LIVE / "first.xml"), "--out",
+                                                       str(tmp_path / "first.jsonl"), "--state", str(tmp_path / "state"),
+                                                       "--snapshot-every", "2",
                                                        "--listen", first_at, "--connect", second_at), env)
         second = second_component("second")
         processes.wait_for_line(first, "zenoh: peer")
@@ -79,7 +81,9 @@ def test_two_components_over_zenoh_and_a_restart(tmp_path):
     assert [e for e in seen("again") if e != "seen(20.0)"] == ["seen(21.0)", "seen(22.0)", "seen(23.0)"]
     assert "zenoh: " in processes.err("first") and "0 rejected, 0 errors" in processes.err("first")
     # each sample's attachment is its output's line in the first component's output
-    lines = [json.loads(line) for line in processes.out("first").splitlines()]
+    lines = [json.loads(line) for line in (tmp_path / "first.jsonl").read_text().splitlines()]
+    last = sorted((tmp_path / "state").glob("snapshot-*.json"))[-1]     # some subscribers of /pos
+    assert json.loads(last.read_text())["node"]["subscribers"] == {"/pos": 1}
     assert numbered and len(numbered) <= len(lines)
     for number, x in numbered:
         line = lines[number - 1]

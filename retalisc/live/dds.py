@@ -223,6 +223,23 @@ class DdsTransport(Transport):
                                             cls)
         return entry
 
+    def flush(self, timeout: float) -> None:
+        """Wait (in all at most `timeout` s) until the matched readers acknowledged every
+        sample written: a sample still to be repeated by a writer dies with the process."""
+        import time
+
+        from cyclonedds.util import duration
+
+        deadline = time.monotonic() + timeout
+        for _, writer, _ in list(self._writers.values()):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            try:
+                writer.wait_for_acks(duration(seconds=left))
+            except Exception:        # a timeout: a reader is behind; the snapshot goes on
+                pass
+
     def subscriber_count(self, topic: str) -> int:
         entry = self._writers.get(topic)
         return 0 if entry is None else len(entry[1].get_matched_subscriptions())

@@ -117,6 +117,16 @@ class Transport:
         number, and sends it with the message."""
         raise NotImplementedError
 
+    def recoverable(self) -> None:
+        """The node keeps its state (--state): before its first publication. A transport that
+        queues what it publishes in the process hands it to the operating system at once
+        from now on, or in `flush`."""
+
+    def flush(self, timeout: float) -> None:
+        """Before a snapshot: what was published so far is handed over (to the operating
+        system, or acknowledged by the subscribers), within `timeout` seconds; a snapshot
+        then never counts an output that a crash would lose inside the process."""
+
     def subscriber_count(self, topic: str) -> Optional[int]:
         """How many subscribers the publisher of `topic` reaches now (0 if not advertised);
         None: the middleware does not say."""
@@ -155,6 +165,8 @@ class LiveNode:
         self.fed = 0
         self.linger = linger       # seconds to wait for more messages before feeding a batch
         self.state = state         # live/state.py LiveState (--state DIR) or None
+        if state is not None:
+            transport.recoverable()
         self.learned: Dict[str, str] = {}          # types learned from definitions -> the definition
         self.outputs = 0           # output lines produced (counted over restarts with --state)
         self._numbering: Dict[str, str] = {}       # type -> how its messages carry their number
@@ -204,11 +216,11 @@ class LiveNode:
         if self._thread.is_alive():
             self._queue.put(_STOP)
             self._thread.join(timeout)
-        self.transport.close()
         if self.out is not None:
             self.out.flush()
         if self.state is not None:      # no last snapshot while the consumer is still feeding
-            self.state.close(self, snapshot=not self._thread.is_alive())
+            self.state.close(self, snapshot=not self._thread.is_alive())     # (with its subscriber counts)
+        self.transport.close()
 
     # ---- arrivals (any thread) ---------------------------------------------------------------
 

@@ -11,6 +11,7 @@ of ros1_services.py, under the node's private names (`/retalis/query_all` for no
 from __future__ import annotations
 
 import threading
+import warnings
 from typing import Dict
 
 from .node import LiveNode, Reply, Transport
@@ -61,8 +62,10 @@ class Ros1Transport(Transport):
         if publisher is None or publisher.data_class._type != msgtype:
             if publisher is not None:
                 publisher.unregister()
-            publisher = self._publishers[topic] = self.rospy.Publisher(
-                topic, self._raw_class(msgtype), queue_size=self.queue_size, tcp_nodelay=True)
+            with warnings.catch_warnings():      # rospy warns about queue_size=None (synchronous)
+                warnings.simplefilter("ignore", SyntaxWarning)
+                publisher = self._publishers[topic] = self.rospy.Publisher(
+                    topic, self._raw_class(msgtype), queue_size=self.queue_size, tcp_nodelay=True)
         return publisher
 
     def publish(self, topic: str, msgtype: str, data: bytes) -> None:
@@ -70,6 +73,13 @@ class Ros1Transport(Transport):
         message = publisher.data_class()
         message._buff = data
         publisher.publish(message)
+
+    def recoverable(self) -> None:
+        """Publish synchronously: rospy's queued publisher writes from a thread of its own, and
+        what is still in its queue when the process dies is lost although a snapshot taken
+        after it counts it as published; without the queue, `publish` returns once the bytes
+        are with the operating system (which sends them after a kill)."""
+        self.queue_size = None
 
     def subscriber_count(self, topic: str) -> int:
         publisher = self._publishers.get(topic)

@@ -29,6 +29,7 @@ from ..driver.recovery import (DEFAULT_SNAPSHOT_EVENTS, DEFAULT_SNAPSHOT_SECONDS
                                open_output, restore_newest, take_snapshot)
 
 RECONNECT_SECONDS = 2.0     # how long a restart waits for the subscribers of its outputs
+FLUSH_SECONDS = 1.0         # how long a snapshot waits for what was published to be handed over
 
 # the service requests that change the state: journaled and replayed
 STATEFUL_CALLS = ("_add_output", "_delete_output", "_add_memory", "_delete_memory", "_add_input", "_delete_input")
@@ -222,6 +223,7 @@ class LiveState:
             self.snapshot(node)
 
     def snapshot(self, node) -> None:
+        node.transport.flush(FLUSH_SECONDS)        # no output counted that a crash loses in the process
         self.journal.sync()
         manifest = {"live": node.transport.name,
                     "node": {"inputs": dict(node.inputs), "output_types": dict(node.output_types),
