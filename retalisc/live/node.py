@@ -27,7 +27,8 @@ over restarts, so a message published again after a crash has the number it had 
 `header.seq` (modulo 2^32; rospy itself fills that field with its own count); over Zenoh it is
 the sample's attachment (8 bytes, unsigned little-endian); otherwise (ROS 2 over DDS, ROS 1
 types without a header) it is published on the companion topic `<topic>/seq` as a
-std_msgs/UInt64, right before the message.
+std_msgs/UInt64, right before the message (unless the middleware says that topic has no
+subscriber: an extra message costs, over rospy, about as much as the message itself).
 
 Time: an event is stamped with its message's `header.stamp`, or with the wall-clock time of
 its arrival when it has no header (or a zero stamp). A subscription or unsubscription at
@@ -434,10 +435,11 @@ class LiveNode:
             self.transport.publish(topic, msgtype, struct.pack("<I", seq & 0xFFFFFFFF) + data[4:])
         elif how == "attachment":
             self.transport.publish(topic, msgtype, data, seq=seq)
-        else:
-            number = struct.pack("<Q", seq)
-            self.transport.publish(topic + SEQ_SUFFIX, SEQ_TYPE,
-                                   number if self.transport.wire == "ros1" else _CDR_LE + number)
+        else:             # the companion topic; not when the middleware says no one takes it
+            if self.transport.subscriber_count(topic + SEQ_SUFFIX) != 0:
+                number = struct.pack("<Q", seq)
+                self.transport.publish(topic + SEQ_SUFFIX, SEQ_TYPE,
+                                       number if self.transport.wire == "ros1" else _CDR_LE + number)
             self.transport.publish(topic, msgtype, data)
 
     def message_definition(self, msgtype: str) -> Tuple[str, str]:
