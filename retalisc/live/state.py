@@ -146,7 +146,8 @@ class LiveState:
         self.replayed = (events, calls)
         self.ready = True
         self.journal.open(restored["number"])
-        again = (f"; outputs {first_output + 1} to {node.outputs} of the run were produced (and published) again: "
+        again = (f"; outputs {first_output + 1} to {node.outputs} of the run were produced (and published) again, "
+                 f"with the same output numbers: "
                  f"live outputs are at-least-once" if node.outputs > first_output else "")
         self.log(f"retalisc: restored snapshot {restored['number']} of {self.directory.directory} and replayed "
                  f"{events} journaled events and {calls} service requests{again}")
