@@ -30,6 +30,7 @@ Prints one `target met|MISSED|figure ...` line per figure; writes nao[_quick].js
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import subprocess
@@ -103,9 +104,13 @@ syncronized(waited_{c}(Name, P), transform_marker(RelPose, [Sec, NSec], P),
 # ---- one measurement, in its own process --------------------------------------------------------
 
 def measure(spec: dict) -> dict:
+    from retalisc.driver.bridge import Bridge
     from retalisc.driver.engine import Engine
     from retalisc.robot_io.replay import BagOptions, replay_bag
 
+    for module in ("rosbags.rosbag1", "rosbags.typesys", "rosbags.interfaces", "rosbags.serde"):
+        importlib.import_module(module)             # modules loaded before the clock starts
+    Bridge.instance().run_in_calling_thread()       # as `retalisc run` runs it: Prolog in this thread
     engine = Engine.from_source(spec["source"], "nao_variant.rtl")
     engine.set_flag("echo_input", "false")
     samples: List[tuple] = []

@@ -357,6 +357,30 @@ class Engine:
         anything of the batch is processed. An event whose processing raises an error stops
         the batch: what the events before it produced is delivered (callbacks included),
         then PrologError says which event failed; the engine stays usable."""
+        delivered, _ = self._feed_items("rtl_api_feed_events", self._items(events))
+        return delivered
+
+    def feed_paced(self, events: Sequence[Sequence], dues: Sequence[float],
+                   tick: float = 0.01) -> Tuple[List[OutputEvent], int]:
+        """Process the items of `feed_batch`, each when it falls due: `dues[i]` is the
+        wall-clock time (`time.time()`) at which `events[i]` is due, in order. This thread
+        sleeps inside the one Prolog call until the first item not processed is due (at
+        least `tick` seconds at a time), then processes every item due by then as one batch:
+        the pacing of a recording replayed at a rate, without a Python step per batch.
+        Returns as soon as a batch produced output (so that it leaves as it is produced):
+        `(output, processed)`, `processed` the number of items done (all of them at the
+        end; the caller passes the rest again). Errors are raised as by `feed_batch`, with
+        the failing item's index in `events` (the items before it were processed). The
+        engine's lock is held meanwhile: other threads' calls wait."""
+        items = self._items(events)
+        if len(dues) != len(items):
+            raise ValueError(f"{len(dues)} due times for {len(items)} items")
+        if not items:
+            return [], 0
+        return self._feed_items("rtl_api_feed_paced", items, [float(d) for d in dues], float(tick))
+
+    @staticmethod
+    def _items(events: Iterable[Sequence]) -> list:
         items = []
         for item in events:
             event, start = item[0], item[1]
@@ -367,16 +391,22 @@ class Engine:
             start_value = time_value(start, "a start time")
             end_value = "" if end is None else time_value(end, "an end time")
             items.append([op, _event_value(event), start_value, end_value])
+        return items
+
+    def _feed_items(self, predicate: str, items: list, *extra) -> Tuple[List[OutputEvent], int]:
         if not items:
-            return []
+            return [], 0
         with self._lock:
             try:
-                output = self._call("rtl_api_feed_events", items)
+                output = self._call(predicate, items, *extra)
             except PrologError as error:
                 if (error.term or "").startswith("error(bad_item(") and "error(invalid_time(" in error.term:
                     raise ValueError(str(error)) from None
                 raise
             lines = output.splitlines()
+            processed = len(items)
+            if lines and lines[-1].startswith("!paced\t"):
+                processed = int(lines.pop().split("\t")[1])
             failure = lines.pop() if lines and lines[-1].startswith(("!error\t", "!undecodable\t")) else None
             delivered = self._deliver_lines(lines)
         if failure is not None and failure.startswith("!undecodable\t"):
@@ -393,7 +423,7 @@ class Engine:
             error.batch_index = int(index)      # the events after it were not processed
             error.delivered = delivered
             raise error
-        return delivered
+        return delivered, processed
 
     def ros1_schema(self, schema: str) -> Optional[int]:
         """The handle of a ROS 1 message schema (text of the ground term c/rtl_ros1.c

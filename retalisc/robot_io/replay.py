@@ -91,6 +91,13 @@ one run (a thread handoff, caches gone cold on a busy machine): a longer tick sa
 the cost of that latency."""
 
 
+PACED_AHEAD = 0.25
+"""With --rate on the wall clock, the replay reads this many seconds ahead of the clock and
+hands what it read to the runtime in one call, which sleeps until each message is due and
+feeds it then (Engine.feed_paced); the call returns early when output is produced, so the
+output is written as soon as it is produced. The latency is that of --tick."""
+
+
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
                report: Callable[[str, int, str], None],
                converter: Optional[MessageConverter] = None,
@@ -150,9 +157,12 @@ def message_event(bag: Recording, converter: MessageConverter, record: Record,
 
 def feed_messages(engine, bag: Recording, converter: MessageConverter, record_stamp: bool, batch: list,
                   write: Callable, sink: IO, stats: ReplayStats, name: str,
-                  report: Callable[[str, int, str], None]) -> None:
+                  report: Callable[[str, int, str], None], dues: Optional[List[float]] = None,
+                  tick: float = RATE_TICK) -> None:
     """Feeds `batch`, a list of (event, seconds, (topic, number, record)), writing what it
-    produces with `write` to `sink`. A message whose processing fails is reported on standard
+    produces with `write` to `sink`. With `dues` (the wall-clock time each message falls
+    due), each message is fed when it is due (`Engine.feed_paced`, sleeping at least `tick`
+    at a time) and the output is written and flushed as it is produced. A message whose processing fails is reported on standard
     error as `NAME:TOPIC#N: error: ...`, counted in `stats.failed`, and the batch goes on after
     it; a message whose bytes the runtime refuses is converted as text instead
     (`message_event`), or goes to `report(topic, number, reason)` and `stats.rejected` when
@@ -171,25 +181,35 @@ def feed_messages(engine, bag: Recording, converter: MessageConverter, record_st
 
     while batch:
         try:
-            write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
-            return
+            if dues is None:
+                write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
+                return
+            produced, done = engine.feed_paced([(text, seconds) for text, seconds, _ in batch], dues, tick)
+            write(produced)
+            sink.flush()
+            batch, dues = batch[done:], dues[done:]
         except PrologError as error:
             if getattr(error, "batch_index", None) is None:
                 raise
             write(error.delivered)
-            _, _, (topic, number, record) = batch[error.batch_index]
-            rest = batch[error.batch_index + 1:]
+            index = error.batch_index
+            _, _, (topic, number, record) = batch[index]
+            rest = batch[index + 1:]
+            if dues is not None:
+                dues = dues[index:]             # the message's own due time, then the rest's
             if getattr(error, "undecodable", False):      # the runtime refused the bytes
                 try:
                     text, seconds = message_event(bag, converter, record, record_stamp)
                 except _Rejected as refusal:
                     rejected(topic, number, str(refusal))
                     batch = rest
+                    dues = dues[1:] if dues is not None else None
                 else:
                     batch = [(text, seconds, (topic, number, record))] + rest
                 continue
             failed(topic, number, str(error).split(": ", 1)[-1])
             batch = rest
+            dues = dues[1:] if dues is not None else None
 
 
 def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
@@ -268,8 +288,15 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     first_ns = start_ns if start_ns is not None else bag.start_ns
     last_ns = min(stop_ns, bag.end_ns) if stop_ns is not None else bag.end_ns
     show = progress if progress is not None else sys.stderr.isatty()
+    # With a rate on the wall clock, and nothing to publish as each message falls due, the
+    # runtime paces the messages itself (Engine.feed_paced): this loop hands it what falls
+    # due in the next PACED_AHEAD seconds in one call, instead of sleeping and calling once
+    # per batch.
+    paced = (options.rate is not None and clock is None and publisher is None
+             and hasattr(engine, "feed_paced"))
     clock = clock or ReplayClock()
     began = clock.now()
+    began_wall = time.time()
     try:
         with (click.progressbar(length=max(1, (last_ns - first_ns) // 1_000_000), label=f"replaying {name}",
                                 file=sys.stderr) if show else _NoBar()) as bar:
@@ -283,15 +310,22 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
             ros1_terms = (Ros1Terms(engine, bag.typestore, options.convention)
                           if publisher is None and hasattr(engine, "ros1_schema") else None)
 
-            def feed(batch) -> None:
+            def feed(batch, dues=None) -> None:
                 if publisher is not None:
                     publisher.fed([(text, seconds) for text, seconds, _ in batch])
                 feed_messages(engine, bag, converter, options.stamp == "record", batch, write, sink, stats, name,
-                              report)
+                              report, dues, options.tick)
 
+            dues: List[float] = []
             for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms):
                 record_ns = record.time_ns
-                if options.rate is not None:
+                if paced:
+                    due = began_wall + (record_ns - first_ns) / 1e9 / options.rate
+                    if batch and (due - time.time() > PACED_AHEAD or len(batch) >= batch_size):
+                        feed(batch, dues)
+                        batch, dues = [], []
+                    dues.append(due)
+                elif options.rate is not None:
                     due = began + (record_ns - first_ns) / 1e9 / options.rate
                     wait = due - clock.now()
                     if wait > 0:
@@ -306,7 +340,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                     for target in sinks:
                         target.write(message)
                 batch.append((text, seconds, (record.topic, stats.messages, record)))
-                if len(batch) >= batch_size:
+                if len(batch) >= batch_size and not paced:
                     feed(batch)
                     batch = []
                 done_ms = (record_ns - first_ns) // 1_000_000
@@ -314,7 +348,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                     bar.update(done_ms - shown_ms)
                     shown_ms = done_ms
             if batch:
-                feed(batch)
+                feed(batch, dues if paced else None)
             if publisher is not None:
                 publisher.fed([])
             write(engine.end_of_input(drop_pending))
