@@ -5,6 +5,7 @@
             rtl_api_set_flag/3,         % +Name, +ValueText, -Out
             rtl_api_feed_events/2,      % +Items, -Output
             rtl_api_feed_paced/4,       % +Items, +Dues, +Tick, -Output
+            rtl_api_feed_paced_rest/2,  % +Tick, -Output
             rtl_api_ros1_schema/2,      % +SchemaText, -Handle
             rtl_api_feed_lines/5,       % +Text, +FirstLineNo, +AllowControl, +Strict, -Output
             rtl_api_set_action_output/2, % +Path, -Out
@@ -141,12 +142,13 @@ rtl_api_feed_events(Items, Output) :-
 %   then processes in one group every item due by then (a recording replayed at a rate,
 %   retalisc/robot_io/replay.py: the pacing of its Python loop, without a call per group).
 %   The call returns as soon as a group produced output (or a warning), so that the output
-%   leaves as it is produced: then, when items remain, the last line is
-%   `!paced<TAB>N`, N the number of items processed (the caller passes the rest again).
+%   leaves as it is produced: then, when items remain, the last line is `!paced<TAB>N`, N the
+%   number of items processed, and rtl_api_feed_paced_rest/2 goes on with the others.
 %   Errors end the call as in rtl_api_feed_events/2 (`!error` or `!undecodable` with the
-%   item's index in Items: the items before it were processed).
+%   item's index in Items: the items before it were processed; the others are dropped).
 
 rtl_api_feed_paced(Items, Dues, Tick, Output) :-
+    nb_setval(rtl_paced_rest, []),
     must_be(list, Items),
     must_be(list(number), Dues),
     must_be(number, Tick),
@@ -156,25 +158,43 @@ rtl_api_feed_paced(Items, Dues, Tick, Output) :-
     ;   domain_error(one_due_time_per_item, Dues)
     ),
     foldl(read_item, Items, Events, 0, _),
+    paced_output(Events, Dues, Tick, 0, Output).
+
+%!  rtl_api_feed_paced_rest(+Tick:number, -Output:string) is det.
+%
+%   Go on with the items a call of rtl_api_feed_paced/4 returned before (its last line
+%   `!paced<TAB>N`), as it does; indexes still count the items of that call. Output is `""`
+%   when none remain.
+
+rtl_api_feed_paced_rest(Tick, Output) :-
+    must_be(number, Tick),
+    (   nb_current(rtl_paced_rest, rest(Events, Dues, I))
+    ->  nb_setval(rtl_paced_rest, []),
+        paced_output(Events, Dues, Tick, I, Output)
+    ;   Output = ""
+    ).
+
+paced_output(Events, Dues, Tick, I, Output) :-
     rtl_output_to(buffer),
     rtl_action_stream(Stream),
     current_output(Old),
-    setup_call_cleanup(set_output(Stream), paced(Events, Dues, Tick, 0, Stop), set_output(Old)),
+    setup_call_cleanup(set_output(Stream), paced(Events, Dues, Tick, I, Stop), set_output(Old)),
     rtl_take_output(Lines0),
     rtl_take_warnings(Warnings),
     findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
     append(Lines0, Ws, Lines1),
     (   Stop == done
     ->  Lines = Lines1
-    ;   Stop = paced(Done)
-    ->  format(string(Last), "!paced\t~w", [Done]),
+    ;   Stop = paced(Done, Rest, RestDues)
+    ->  nb_setval(rtl_paced_rest, rest(Rest, RestDues, Done)),
+        format(string(Last), "!paced\t~w", [Done]),
         append(Lines1, [Last], Lines)
     ;   append(Lines1, [Stop], Lines)
     ),
     lines_output(Lines, Output).
 
-% paced(+Events, +Dues, +Tick, +Index, -Stop): Stop is `done`, paced(Processed) when a
-% group produced output and events remain, or the failure line.
+% paced(+Events, +Dues, +Tick, +Index, -Stop): Stop is `done`, paced(Processed, Rest,
+% RestDues) when a group produced output and events remain, or the failure line.
 paced([], _, _, _, done) :- !.
 paced(Events, [Due|Dues], Tick, I, Stop) :-
     get_time(Now),
@@ -194,7 +214,7 @@ paced(Events, [Due|Dues], Tick, I, Stop) :-
     ;   Rest == []
     ->  Stop = done
     ;   ( rtl_ele:rtl_output_line(_) ; rtl_horizon:warning_text(_) )
-    ->  Stop = paced(I1)
+    ->  Stop = paced(I1, Rest, RestDues)
     ;   paced(Rest, RestDues, Tick, I1, Stop)
     ).
 

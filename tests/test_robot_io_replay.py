@@ -13,6 +13,7 @@ import pytest
 
 from robot_io_support import ROOT, ROS1_ROS2_PAIRS, SHARED_NAMES, shared_bag, without_seq
 
+from retalisc.driver.bridge import PrologError  # noqa: E402
 from retalisc.driver.engine import Engine  # noqa: E402
 from retalisc.robot_io.bags import Recording  # noqa: E402
 from retalisc.robot_io.messages import Convention, MessageConverter  # noqa: E402
@@ -214,7 +215,7 @@ def test_on_the_wall_clock_the_runtime_paces_the_messages_and_the_output_is_the_
     assert sum(calls) >= len(fast) // 2 and len(calls) >= 2
 
 
-def test_feed_paced_feeds_each_item_when_it_is_due_and_returns_with_the_first_output():
+def test_feed_paced_feeds_each_item_when_it_is_due_and_delivers_the_output_at_once():
     import time as clock
 
     engine = Engine.from_source("b(X) <- a(X).\n", "paced_unit.rtl")
@@ -222,16 +223,28 @@ def test_feed_paced_feeds_each_item_when_it_is_due_and_returns_with_the_first_ou
     now = clock.time()
     items = [("z(1)", 1.0), ("z(2)", 2.0), ("a(3)", 3.0), ("z(4)", 4.0), ("a(5)", 5.0)]
     dues = [now + 0.02, now + 0.04, now + 0.06, now + 0.08, now + 0.1]
-    out, done = engine.feed_paced(items, dues, tick=0.005)
-    assert clock.time() >= dues[2] and done == 3                  # a(3) gave b(3): back at once
-    assert [event.text for event in out] == ["b(3)"]
-    out, done = engine.feed_paced(items[done:], dues[done:], tick=0.005)
-    assert clock.time() >= dues[4] and done == 2 and [event.text for event in out] == ["b(5)"]
-    # items already due are fed in one group without sleeping
-    out, done = engine.feed_paced([("a(6)", 6.0), ("a(7)", 7.0)], [0.0, 0.0], tick=0.5)
-    assert done == 2 and [event.text for event in out] == ["b(6)", "b(7)"]
+    delivered = []
+    last = engine.feed_paced(items, dues, 0.005, lambda out: delivered.append((clock.time(), out)))
+    assert clock.time() >= dues[4] and [event.text for event in last] == ["b(5)"]
+    assert len(delivered) == 1                                  # b(3), as soon as a(3) was fed
+    at, out = delivered[0]
+    assert dues[2] <= at < dues[4] and [event.text for event in out] == ["b(3)"]
+    # without `deliver`, everything comes back at the end; items already due go in one batch
+    assert [e.text for e in engine.feed_paced(items[2:], [0.0, 0.0, now + 0.12], 0.5)] == ["b(3)", "b(5)"]
     with pytest.raises(ValueError, match="due times"):
         engine.feed_paced(items, dues[:2])
+
+
+def test_feed_paced_stops_at_an_item_that_fails():
+    engine = Engine.from_source("b(X) <- a(X) where X > 0.\n", "paced_fail.rtl")
+    engine.set_flag("echo_input", "false")
+    delivered = []
+    with pytest.raises(PrologError) as caught:
+        engine.feed_paced([("a(1)", 1.0), ("a(2)", 2.0), ("a(x)", 3.0), ("a(4)", 4.0)], [0.0] * 4, 0.01,
+                          delivered.append)
+    assert caught.value.batch_index == 2
+    assert [e.text for batch in delivered for e in batch] + [e.text for e in caught.value.delivered] == ["b(1)", "b(2)"]
+    assert [e.text for e in engine.feed_paced([("a(5)", 5.0)], [0.0])] == ["b(5)"]
 
 
 @pytest.mark.parametrize("rate", [None, 20.0])

@@ -360,24 +360,34 @@ class Engine:
         delivered, _ = self._feed_items("rtl_api_feed_events", self._items(events))
         return delivered
 
-    def feed_paced(self, events: Sequence[Sequence], dues: Sequence[float],
-                   tick: float = 0.01) -> Tuple[List[OutputEvent], int]:
+    def feed_paced(self, events: Sequence[Sequence], dues: Sequence[float], tick: float = 0.01,
+                   deliver: Optional[Callable[[List[OutputEvent]], None]] = None) -> List[OutputEvent]:
         """Process the items of `feed_batch`, each when it falls due: `dues[i]` is the
         wall-clock time (`time.time()`) at which `events[i]` is due, in order. This thread
-        sleeps inside the one Prolog call until the first item not processed is due (at
-        least `tick` seconds at a time), then processes every item due by then as one batch:
-        the pacing of a recording replayed at a rate, without a Python step per batch.
-        Returns as soon as a batch produced output (so that it leaves as it is produced):
-        `(output, processed)`, `processed` the number of items done (all of them at the
-        end; the caller passes the rest again). Errors are raised as by `feed_batch`, with
-        the failing item's index in `events` (the items before it were processed). The
-        engine's lock is held meanwhile: other threads' calls wait."""
+        sleeps inside Prolog until the first item not processed is due (at least `tick`
+        seconds at a time), then processes every item due by then as one batch: the pacing
+        of a recording replayed at a rate, without a Python step per batch. The output is
+        passed to `deliver(output)` as soon as a batch produced it (then the call goes on
+        with the items left, which stay in the runtime: they are not passed again), and the
+        output of the last batches is returned. Errors are raised as by `feed_batch`, with
+        the failing item's index in `events` (the items before it were processed, their
+        output delivered; the items after it are dropped). The engine's lock is held
+        meanwhile: other threads' calls wait."""
         items = self._items(events)
         if len(dues) != len(items):
             raise ValueError(f"{len(dues)} due times for {len(items)} items")
         if not items:
-            return [], 0
-        return self._feed_items("rtl_api_feed_paced", items, [float(d) for d in dues], float(tick))
+            return []
+        tick = float(tick)
+        with self._lock:
+            produced, done = self._feed_items("rtl_api_feed_paced", items, [float(d) for d in dues], tick)
+            while done < len(items):
+                if deliver is not None:
+                    deliver(produced)
+                    produced = []
+                more, done = self._feed_items("rtl_api_feed_paced_rest", items, tick)
+                produced = produced + more
+            return produced
 
     @staticmethod
     def _items(events: Iterable[Sequence]) -> list:
@@ -394,11 +404,13 @@ class Engine:
         return items
 
     def _feed_items(self, predicate: str, items: list, *extra) -> Tuple[List[OutputEvent], int]:
+        """Call `predicate` with `items` (unless it continues a paced call: `extra` only)."""
         if not items:
             return [], 0
         with self._lock:
             try:
-                output = self._call(predicate, items, *extra)
+                args = extra if predicate == "rtl_api_feed_paced_rest" else (items, *extra)
+                output = self._call(predicate, *args)
             except PrologError as error:
                 if (error.term or "").startswith("error(bad_item(") and "error(invalid_time(" in error.term:
                     raise ValueError(str(error)) from None

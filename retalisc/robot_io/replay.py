@@ -179,15 +179,18 @@ def feed_messages(engine, bag: Recording, converter: MessageConverter, record_st
         click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
         stats.failed += 1
 
+    def delivered(produced) -> None:
+        write(produced)
+        sink.flush()
+
     while batch:
         try:
             if dues is None:
                 write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
                 return
-            produced, done = engine.feed_paced([(text, seconds) for text, seconds, _ in batch], dues, tick)
-            write(produced)
+            write(engine.feed_paced([(text, seconds) for text, seconds, _ in batch], dues, tick, delivered))
             sink.flush()
-            batch, dues = batch[done:], dues[done:]
+            return
         except PrologError as error:
             if getattr(error, "batch_index", None) is None:
                 raise
