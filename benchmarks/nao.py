@@ -4,7 +4,8 @@ about 7 marker detections/s, faces at 5 Hz).
 
 Every number is CPU seconds per second of replayed stream (the share of one core), measured
 in a fresh process per case around the replay only (time.process_time: the Prolog engine runs
-in that process), with the program a variant of examples/nao/nao.rtl:
+in that process, in the calling thread as in `retalisc run`; the modules are imported before
+the clock starts), with the program a variant of examples/nao/nao.rtl:
 
   Fig 5.2   the whole application, replayed in real time (rate 1, CPU sampled every 0.5 s:
             the time series; fed every 10 ms, the default --tick, and every 100 ms) and as

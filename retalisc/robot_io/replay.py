@@ -6,7 +6,8 @@ ROS 1 recording go as their bytes, which the runtime reads in C (ros1_terms.py),
 input is also published (--out-bag, --foxglove); a message it refuses is converted here. With a rate, the
 replay follows the recording's clock (times the rate), feeding each message when it is due.
 The output is written as by `retalisc run --events`; with a rate, messages are fed in slices
-of at most 10 ms of the recording's time (--tick), so a message is at most that late. rejected messages (that cannot be
+of at most 10 ms of the recording's time (--tick), so a message is at most that late (on the
+wall clock, with nothing published, the runtime paces them itself: PACED_AHEAD). Rejected messages (that cannot be
 decoded or converted) are reported on standard error as `BAG:TOPIC#N: rejected: REASON` (N
 counts the replayed messages from 1) and skipped; a summary closes the run.
 """
@@ -86,9 +87,9 @@ class ReplayClock:
 RATE_TICK = 0.01
 """With --rate, the replay sleeps at least this many seconds at a time (the default of
 --tick): a message is fed at most this late, together with the others that fell due
-meanwhile (one Prolog call). Each call after a sleep costs more than the same work done in
-one run (a thread handoff, caches gone cold on a busy machine): a longer tick saves CPU at
-the cost of that latency."""
+meanwhile (one batch). Each batch after a sleep costs more than the same work done in
+one run (caches gone cold on a busy machine): a longer tick saves CPU at the cost of that
+latency."""
 
 
 PACED_AHEAD = 0.25
