@@ -17,7 +17,7 @@ from retalisc.driver.bridge import PrologError  # noqa: E402
 from retalisc.driver.engine import Engine  # noqa: E402
 from retalisc.robot_io.bags import Recording  # noqa: E402
 from retalisc.robot_io.messages import Convention, MessageConverter  # noqa: E402
-from retalisc.robot_io.replay import RATE_TICK, BagOptions, replay_bag  # noqa: E402
+from retalisc.robot_io.replay import PACED_AHEAD, RATE_TICK, BagOptions, replay_bag  # noqa: E402
 from retalisc.robot_io.samples import TF_CHAIN, nao_records, sample_store, write_nao_bag  # noqa: E402
 
 NAO_PROGRAM = ROOT / "examples" / "nao_markers" / "nao_markers.rtl"
@@ -206,13 +206,14 @@ def test_on_the_wall_clock_the_runtime_paces_the_messages_and_the_output_is_the_
     engine = Engine.from_source(program, "paced.rtl")
     calls = []
     paced = engine.feed_paced
-    engine.feed_paced = lambda *args: calls.append(len(args[0])) or paced(*args)
+    engine.feed_paced = lambda *args: calls.append((len(args[0]), max(args[1]) - clock.time())) or paced(*args)
     began = clock.perf_counter()
     status, lines = replay(engine, nao_bags["ros1"], tmp_path, echo=True, rate=6.0)
     took = clock.perf_counter() - began
     assert status == 0 and lines == fast and len(fast) > 150
     assert 0.45 <= took <= 2.0, took                          # 3 s of recording at 6x
-    assert sum(calls) >= len(fast) // 2 and len(calls) >= 2
+    assert sum(n for n, _ in calls) >= len(fast) // 2 and len(calls) >= 2
+    assert all(ahead <= PACED_AHEAD for _, ahead in calls), calls  # never more than that ahead of the clock
 
 
 def test_feed_paced_feeds_each_item_when_it_is_due_and_delivers_the_output_at_once():

@@ -96,7 +96,9 @@ PACED_AHEAD = 0.25
 """With --rate on the wall clock, the replay reads this many seconds ahead of the clock and
 hands what it read to the runtime in one call, which sleeps until each message is due and
 feeds it then (Engine.feed_paced); the call returns early when output is produced, so the
-output is written as soon as it is produced. The latency is that of --tick."""
+output is written as soon as it is produced. The latency is that of --tick. A longer pause
+in the recording is waited out here, so that the runtime never sleeps much longer than
+this (an interrupt is seen when the call returns)."""
 
 
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
@@ -328,6 +330,9 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                     if batch and (due - time.time() > PACED_AHEAD or len(batch) >= batch_size):
                         feed(batch, dues)
                         batch, dues = [], []
+                    gap = due - time.time() - PACED_AHEAD
+                    if gap > 0:                 # a pause in the recording: waited here (Ctrl-C works)
+                        clock.sleep(gap)
                     dues.append(due)
                 elif options.rate is not None:
                     due = began + (record_ns - first_ns) / 1e9 / options.rate
