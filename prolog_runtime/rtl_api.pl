@@ -4,6 +4,8 @@
             rtl_api_output_to_buffer/1, % -Out
             rtl_api_set_flag/3,         % +Name, +ValueText, -Out
             rtl_api_feed_events/2,      % +Items, -Output
+            rtl_api_feed_paced/4,       % +Items, +Dues, +Tick, -Output
+            rtl_api_feed_paced_rest/2,  % +Tick, -Output
             rtl_api_ros1_schema/2,      % +SchemaText, -Handle
             rtl_api_feed_lines/5,       % +Text, +FirstLineNo, +AllowControl, +Strict, -Output
             rtl_api_set_action_output/2, % +Path, -Out
@@ -131,6 +133,100 @@ rtl_api_feed_events(Items, Output) :-
     ;   append(Lines1, [Failure], Lines)
     ),
     lines_output(Lines, Output).
+
+%!  rtl_api_feed_paced(+Items:list, +Dues:list(number), +Tick:number, -Output:string) is det.
+%
+%   The items of rtl_api_feed_events/2, each processed when it is due: Dues are the wall-clock
+%   times (get_time/1, seconds) at which the items fall due, in order. The caller's thread
+%   sleeps here until the first item not processed is due, at least Tick seconds at a time,
+%   then processes in one group every item due by then (a recording replayed at a rate,
+%   retalisc/robot_io/replay.py: the pacing of its Python loop, without a call per group).
+%   The call returns as soon as a group produced output (or a warning), so that the output
+%   leaves as it is produced: then, when items remain, the last line is `!paced<TAB>N`, N the
+%   number of items processed, and rtl_api_feed_paced_rest/2 goes on with the others.
+%   Errors end the call as in rtl_api_feed_events/2 (`!error` or `!undecodable` with the
+%   item's index in Items: the items before it were processed; the others are dropped).
+
+rtl_api_feed_paced(Items, Dues, Tick, Output) :-
+    nb_setval(rtl_paced_rest, []),
+    must_be(list, Items),
+    must_be(list(number), Dues),
+    must_be(number, Tick),
+    length(Items, N),
+    (   length(Dues, N)
+    ->  true
+    ;   domain_error(one_due_time_per_item, Dues)
+    ),
+    foldl(read_item, Items, Events, 0, _),
+    paced_output(Events, Dues, Tick, 0, Output).
+
+%!  rtl_api_feed_paced_rest(+Tick:number, -Output:string) is det.
+%
+%   Go on with the items a call of rtl_api_feed_paced/4 returned before (its last line
+%   `!paced<TAB>N`), as it does; indexes still count the items of that call. Output is `""`
+%   when none remain.
+
+rtl_api_feed_paced_rest(Tick, Output) :-
+    must_be(number, Tick),
+    (   nb_current(rtl_paced_rest, rest(Events, Dues, I))
+    ->  nb_setval(rtl_paced_rest, []),
+        paced_output(Events, Dues, Tick, I, Output)
+    ;   Output = ""
+    ).
+
+paced_output(Events, Dues, Tick, I, Output) :-
+    rtl_output_to(buffer),
+    rtl_action_stream(Stream),
+    current_output(Old),
+    setup_call_cleanup(set_output(Stream), paced(Events, Dues, Tick, I, Stop), set_output(Old)),
+    rtl_take_output(Lines0),
+    rtl_take_warnings(Warnings),
+    findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
+    append(Lines0, Ws, Lines1),
+    (   Stop == done
+    ->  Lines = Lines1
+    ;   Stop = paced(Done, Rest, RestDues)
+    ->  nb_setval(rtl_paced_rest, rest(Rest, RestDues, Done)),
+        format(string(Last), "!paced\t~w", [Done]),
+        append(Lines1, [Last], Lines)
+    ;   append(Lines1, [Stop], Lines)
+    ),
+    lines_output(Lines, Output).
+
+% paced(+Events, +Dues, +Tick, +Index, -Stop): Stop is `done`, paced(Processed, Rest,
+% RestDues) when a group produced output and events remain, or the failure line.
+paced([], _, _, _, done) :- !.
+paced(Events, [Due|Dues], Tick, I, Stop) :-
+    get_time(Now),
+    Wait is Due - Now,
+    (   Wait > 0
+    ->  Sleep is max(Wait, Tick),
+        sleep(Sleep),
+        get_time(Then)
+    ;   Then = Now
+    ),
+    due_group(Events, [Due|Dues], Then, Group, Rest, RestDues),
+    process_events(Group, I, Failure),
+    length(Group, K),
+    I1 is I + K,
+    (   nonvar(Failure)
+    ->  Stop = Failure
+    ;   Rest == []
+    ->  Stop = done
+    ;   ( rtl_ele:rtl_output_line(_) ; rtl_horizon:warning_text(_) )
+    ->  Stop = paced(I1, Rest, RestDues)
+    ;   paced(Rest, RestDues, Tick, I1, Stop)
+    ).
+
+% The first event and every one after it due by Now.
+due_group([E|Es], [_|Ds], Now, [E|Group], Rest, RestDues) :-
+    due_more(Es, Ds, Now, Group, Rest, RestDues).
+
+due_more([E|Es], [D|Ds], Now, [E|Group], Rest, RestDues) :-
+    D =< Now,
+    !,
+    due_more(Es, Ds, Now, Group, Rest, RestDues).
+due_more(Es, Ds, _, [], Es, Ds).
 
 read_item(Item, event(Op, Event, Start, End), I, I1) :-
     I1 is I + 1,

@@ -13,10 +13,11 @@ import pytest
 
 from robot_io_support import ROOT, ROS1_ROS2_PAIRS, SHARED_NAMES, shared_bag, without_seq
 
+from retalisc.driver.bridge import PrologError  # noqa: E402
 from retalisc.driver.engine import Engine  # noqa: E402
 from retalisc.robot_io.bags import Recording  # noqa: E402
 from retalisc.robot_io.messages import Convention, MessageConverter  # noqa: E402
-from retalisc.robot_io.replay import RATE_TICK, BagOptions, replay_bag  # noqa: E402
+from retalisc.robot_io.replay import PACED_AHEAD, RATE_TICK, BagOptions, replay_bag  # noqa: E402
 from retalisc.robot_io.samples import TF_CHAIN, nao_records, sample_store, write_nao_bag  # noqa: E402
 
 NAO_PROGRAM = ROOT / "examples" / "nao_markers" / "nao_markers.rtl"
@@ -193,11 +194,69 @@ def test_a_longer_tick_feeds_fewer_larger_slices(nao_bags):
     assert runs[0.05][1] == runs[RATE_TICK][1] and runs[RATE_TICK][1]
 
 
-def test_a_message_whose_processing_fails_is_reported_and_the_replay_goes_on(nao_bags, tmp_path, capsys):
+def test_on_the_wall_clock_the_runtime_paces_the_messages_and_the_output_is_the_same(nao_bags, tmp_path):
+    """With a rate and the wall clock, the messages go to the runtime a quarter of a second
+    ahead and it feeds each when it falls due (Engine.feed_paced): the replay takes the
+    recording's time over the rate, hands each message over once in a few calls, and gives
+    the output of the replay as fast as possible, line for line."""
+    import time as clock
+
+    program = NAO_PROGRAM.read_text(encoding="utf-8")
+    _, fast = replay(program, nao_bags["ros1"], tmp_path, echo=True, topics=None)
+    engine = Engine.from_source(program, "paced.rtl")
+    calls = []
+    paced = engine.feed_paced
+    engine.feed_paced = lambda *args: calls.append((len(args[0]), max(args[1]) - clock.time())) or paced(*args)
+    began = clock.perf_counter()
+    status, lines = replay(engine, nao_bags["ros1"], tmp_path, echo=True, rate=6.0)
+    took = clock.perf_counter() - began
+    assert status == 0 and lines == fast and len(fast) > 150
+    assert 0.45 <= took <= 2.0, took                          # 3 s of recording at 6x
+    with Recording(nao_bags["ros1"]) as bag:
+        assert sum(n for n, _ in calls) == bag.message_count      # each message handed over once
+    assert 2 <= len(calls) <= 10, calls                         # about one call per quarter second
+    assert all(ahead <= PACED_AHEAD for _, ahead in calls), calls  # never more than that ahead of the clock
+
+
+def test_feed_paced_feeds_each_item_when_it_is_due_and_delivers_the_output_at_once():
+    import time as clock
+
+    engine = Engine.from_source("b(X) <- a(X).\n", "paced_unit.rtl")
+    engine.set_flag("echo_input", "false")
+    now = clock.time()
+    items = [("z(1)", 1.0), ("z(2)", 2.0), ("a(3)", 3.0), ("z(4)", 4.0), ("a(5)", 5.0)]
+    dues = [now + 0.02, now + 0.04, now + 0.06, now + 0.08, now + 0.1]
+    delivered = []
+    last = engine.feed_paced(items, dues, 0.005, lambda out: delivered.append((clock.time(), out)))
+    assert clock.time() >= dues[4] and [event.text for event in last] == ["b(5)"]
+    assert len(delivered) == 1                                  # b(3), as soon as a(3) was fed
+    at, out = delivered[0]
+    assert dues[2] <= at < dues[4] and [event.text for event in out] == ["b(3)"]
+    # without `deliver`, everything comes back at the end; items already due go in one batch
+    assert [e.text for e in engine.feed_paced(items[2:], [0.0, 0.0, now + 0.12], 0.5)] == ["b(3)", "b(5)"]
+    with pytest.raises(ValueError, match="due times"):
+        engine.feed_paced(items, dues[:2])
+
+
+def test_feed_paced_stops_at_an_item_that_fails():
+    engine = Engine.from_source("b(X) <- a(X) where X > 0.\n", "paced_fail.rtl")
+    engine.set_flag("echo_input", "false")
+    delivered = []
+    with pytest.raises(PrologError) as caught:
+        engine.feed_paced([("a(1)", 1.0), ("a(2)", 2.0), ("a(x)", 3.0), ("a(4)", 4.0)], [0.0] * 4, 0.01,
+                          delivered.append)
+    assert caught.value.batch_index == 2
+    assert [e.text for batch in delivered for e in batch] + [e.text for e in caught.value.delivered] == ["b(1)", "b(2)"]
+    assert [e.text for e in engine.feed_paced([("a(5)", 5.0)], [0.0])] == ["b(5)"]
+
+
+@pytest.mark.parametrize("rate", [None, 20.0])
+def test_a_message_whose_processing_fails_is_reported_and_the_replay_goes_on(nao_bags, tmp_path, capsys, rate):
     # the condition raises (foo is no number) for every tf message; the poses still go through
     program = ("tf_seen <- tf2_msgs__0__TFMessage(_) where _ is foo + 1.\n"
                "pose_seen <- geometry_msgs__0__PoseStamped(_, _).\n")
-    status, out = replay(program, nao_bags["ros1"], tmp_path, topics=["/tf", "/robot_pose"], batch_size=7)
+    status, out = replay(program, nao_bags["ros1"], tmp_path, topics=["/tf", "/robot_pose"], batch_size=7,
+                         rate=rate)
     err = capsys.readouterr().err
     failures = [line for line in err.splitlines() if ": error: " in line]
     assert status == 0, err
@@ -208,7 +267,8 @@ def test_a_message_whose_processing_fails_is_reported_and_the_replay_goes_on(nao
     assert "tf_seen" not in [event["event"] for event in out]
 
 
-def test_messages_that_cannot_be_decoded_are_rejected_and_the_replay_goes_on(tmp_path, capsys):
+@pytest.mark.parametrize("rate", [None, 20.0])
+def test_messages_that_cannot_be_decoded_are_rejected_and_the_replay_goes_on(tmp_path, capsys, rate):
     from rosbags.rosbag1 import Writer
     store = sample_store(1)
     records = nao_records(store, seconds=0.2, tf_rate=20)
@@ -220,7 +280,7 @@ def test_messages_that_cannot_be_decoded_are_rejected_and_the_replay_goes_on(tmp
                 connections[topic] = writer.add_connection(topic, msgtype, typestore=store)
             data = store.serialize_ros1(msg, msgtype)
             writer.write(connections[topic], ns, data[:7] if number == 1 else data)
-    status, lines = replay("", path, tmp_path, echo=True)
+    status, lines = replay("", path, tmp_path, echo=True, rate=rate)
     err = capsys.readouterr().err
     assert status == 0 and len(lines) == len(records) - 1
     assert f"{path}:{records[1][0]}#2: rejected: cannot decode" in err

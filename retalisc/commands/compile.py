@@ -231,7 +231,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     result = compile_or_exit(program, module=_unique_module(program))    # a second run in one process loads anew
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
-    in_this_thread = bag["bag"] is None and _calls_in_this_thread()
+    in_this_thread = _calls_in_this_thread()
     engine = Engine.from_compiled(result)
     if echo_input:
         engine.set_flag("echo_input", "true")

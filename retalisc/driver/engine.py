@@ -357,6 +357,40 @@ class Engine:
         anything of the batch is processed. An event whose processing raises an error stops
         the batch: what the events before it produced is delivered (callbacks included),
         then PrologError says which event failed; the engine stays usable."""
+        delivered, _ = self._feed_items("rtl_api_feed_events", self._items(events))
+        return delivered
+
+    def feed_paced(self, events: Sequence[Sequence], dues: Sequence[float], tick: float = 0.01,
+                   deliver: Optional[Callable[[List[OutputEvent]], None]] = None) -> List[OutputEvent]:
+        """Process the items of `feed_batch`, each when it falls due: `dues[i]` is the
+        wall-clock time (`time.time()`) at which `events[i]` is due, in order. This thread
+        sleeps inside Prolog until the first item not processed is due (at least `tick`
+        seconds at a time), then processes every item due by then as one batch: the pacing
+        of a recording replayed at a rate, without a Python step per batch. The output is
+        passed to `deliver(output)` as soon as a batch produced it (then the call goes on
+        with the items left, which stay in the runtime: they are not passed again), and the
+        output of the last batches is returned. Errors are raised as by `feed_batch`, with
+        the failing item's index in `events` (the items before it were processed, their
+        output delivered; the items after it are dropped). The engine's lock is held
+        meanwhile: other threads' calls wait."""
+        items = self._items(events)
+        if len(dues) != len(items):
+            raise ValueError(f"{len(dues)} due times for {len(items)} items")
+        if not items:
+            return []
+        tick = float(tick)
+        with self._lock:
+            produced, done = self._feed_items("rtl_api_feed_paced", items, [float(d) for d in dues], tick)
+            while done < len(items):
+                if deliver is not None:
+                    deliver(produced)
+                    produced = []
+                more, done = self._feed_items("rtl_api_feed_paced_rest", items, tick)
+                produced = produced + more
+            return produced
+
+    @staticmethod
+    def _items(events: Iterable[Sequence]) -> list:
         items = []
         for item in events:
             event, start = item[0], item[1]
@@ -367,16 +401,24 @@ class Engine:
             start_value = time_value(start, "a start time")
             end_value = "" if end is None else time_value(end, "an end time")
             items.append([op, _event_value(event), start_value, end_value])
+        return items
+
+    def _feed_items(self, predicate: str, items: list, *extra) -> Tuple[List[OutputEvent], int]:
+        """Call `predicate` with `items` (unless it continues a paced call: `extra` only)."""
         if not items:
-            return []
+            return [], 0
         with self._lock:
             try:
-                output = self._call("rtl_api_feed_events", items)
+                args = extra if predicate == "rtl_api_feed_paced_rest" else (items, *extra)
+                output = self._call(predicate, *args)
             except PrologError as error:
                 if (error.term or "").startswith("error(bad_item(") and "error(invalid_time(" in error.term:
                     raise ValueError(str(error)) from None
                 raise
             lines = output.splitlines()
+            processed = len(items)
+            if lines and lines[-1].startswith("!paced\t"):
+                processed = int(lines.pop().split("\t")[1])
             failure = lines.pop() if lines and lines[-1].startswith(("!error\t", "!undecodable\t")) else None
             delivered = self._deliver_lines(lines)
         if failure is not None and failure.startswith("!undecodable\t"):
@@ -393,7 +435,7 @@ class Engine:
             error.batch_index = int(index)      # the events after it were not processed
             error.delivered = delivered
             raise error
-        return delivered
+        return delivered, processed
 
     def ros1_schema(self, schema: str) -> Optional[int]:
         """The handle of a ROS 1 message schema (text of the ground term c/rtl_ros1.c

@@ -6,7 +6,8 @@ ROS 1 recording go as their bytes, which the runtime reads in C (ros1_terms.py),
 input is also published (--out-bag, --foxglove); a message it refuses is converted here. With a rate, the
 replay follows the recording's clock (times the rate), feeding each message when it is due.
 The output is written as by `retalisc run --events`; with a rate, messages are fed in slices
-of at most 10 ms of the recording's time (--tick), so a message is at most that late. rejected messages (that cannot be
+of at most 10 ms of the recording's time (--tick), so a message is at most that late (on the
+wall clock, with nothing published, the runtime paces them itself: PACED_AHEAD). Rejected messages (that cannot be
 decoded or converted) are reported on standard error as `BAG:TOPIC#N: rejected: REASON` (N
 counts the replayed messages from 1) and skipped; a summary closes the run.
 """
@@ -86,9 +87,18 @@ class ReplayClock:
 RATE_TICK = 0.01
 """With --rate, the replay sleeps at least this many seconds at a time (the default of
 --tick): a message is fed at most this late, together with the others that fell due
-meanwhile (one Prolog call). Each call after a sleep costs more than the same work done in
-one run (a thread handoff, caches gone cold on a busy machine): a longer tick saves CPU at
-the cost of that latency."""
+meanwhile (one batch). Each batch after a sleep costs more than the same work done in
+one run (caches gone cold on a busy machine): a longer tick saves CPU at the cost of that
+latency."""
+
+
+PACED_AHEAD = 0.25
+"""With --rate on the wall clock, the replay reads this many seconds ahead of the clock and
+hands what it read to the runtime in one call, which sleeps until each message is due and
+feeds it then (Engine.feed_paced); the call returns early when output is produced, so the
+output is written as soon as it is produced. The latency is that of --tick. A longer pause
+in the recording is waited out here, so that the runtime never sleeps much longer than
+this (an interrupt is seen when the call returns)."""
 
 
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
@@ -150,9 +160,12 @@ def message_event(bag: Recording, converter: MessageConverter, record: Record,
 
 def feed_messages(engine, bag: Recording, converter: MessageConverter, record_stamp: bool, batch: list,
                   write: Callable, sink: IO, stats: ReplayStats, name: str,
-                  report: Callable[[str, int, str], None]) -> None:
+                  report: Callable[[str, int, str], None], dues: Optional[List[float]] = None,
+                  tick: float = RATE_TICK) -> None:
     """Feeds `batch`, a list of (event, seconds, (topic, number, record)), writing what it
-    produces with `write` to `sink`. A message whose processing fails is reported on standard
+    produces with `write` to `sink`. With `dues` (the wall-clock time each message falls
+    due), each message is fed when it is due (`Engine.feed_paced`, sleeping at least `tick`
+    at a time) and the output is written and flushed as it is produced. A message whose processing fails is reported on standard
     error as `NAME:TOPIC#N: error: ...`, counted in `stats.failed`, and the batch goes on after
     it; a message whose bytes the runtime refuses is converted as text instead
     (`message_event`), or goes to `report(topic, number, reason)` and `stats.rejected` when
@@ -169,27 +182,40 @@ def feed_messages(engine, bag: Recording, converter: MessageConverter, record_st
         click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
         stats.failed += 1
 
+    def delivered(produced) -> None:
+        write(produced)
+        sink.flush()
+
     while batch:
         try:
-            write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
+            if dues is None:
+                write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
+                return
+            write(engine.feed_paced([(text, seconds) for text, seconds, _ in batch], dues, tick, delivered))
+            sink.flush()
             return
         except PrologError as error:
             if getattr(error, "batch_index", None) is None:
                 raise
             write(error.delivered)
-            _, _, (topic, number, record) = batch[error.batch_index]
-            rest = batch[error.batch_index + 1:]
+            index = error.batch_index
+            _, _, (topic, number, record) = batch[index]
+            rest = batch[index + 1:]
+            if dues is not None:
+                dues = dues[index:]             # the message's own due time, then the rest's
             if getattr(error, "undecodable", False):      # the runtime refused the bytes
                 try:
                     text, seconds = message_event(bag, converter, record, record_stamp)
                 except _Rejected as refusal:
                     rejected(topic, number, str(refusal))
                     batch = rest
+                    dues = dues[1:] if dues is not None else None
                 else:
                     batch = [(text, seconds, (topic, number, record))] + rest
                 continue
             failed(topic, number, str(error).split(": ", 1)[-1])
             batch = rest
+            dues = dues[1:] if dues is not None else None
 
 
 def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
@@ -268,8 +294,15 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     first_ns = start_ns if start_ns is not None else bag.start_ns
     last_ns = min(stop_ns, bag.end_ns) if stop_ns is not None else bag.end_ns
     show = progress if progress is not None else sys.stderr.isatty()
+    # With a rate on the wall clock, and nothing to publish as each message falls due, the
+    # runtime paces the messages itself (Engine.feed_paced): this loop hands it what falls
+    # due in the next PACED_AHEAD seconds in one call, instead of sleeping and calling once
+    # per batch.
+    paced = (options.rate is not None and clock is None and publisher is None
+             and hasattr(engine, "feed_paced"))
     clock = clock or ReplayClock()
     began = clock.now()
+    began_wall = time.time()
     try:
         with (click.progressbar(length=max(1, (last_ns - first_ns) // 1_000_000), label=f"replaying {name}",
                                 file=sys.stderr) if show else _NoBar()) as bar:
@@ -283,15 +316,25 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
             ros1_terms = (Ros1Terms(engine, bag.typestore, options.convention)
                           if publisher is None and hasattr(engine, "ros1_schema") else None)
 
-            def feed(batch) -> None:
+            def feed(batch, dues=None) -> None:
                 if publisher is not None:
                     publisher.fed([(text, seconds) for text, seconds, _ in batch])
                 feed_messages(engine, bag, converter, options.stamp == "record", batch, write, sink, stats, name,
-                              report)
+                              report, dues, options.tick)
 
+            dues: List[float] = []
             for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms):
                 record_ns = record.time_ns
-                if options.rate is not None:
+                if paced:
+                    due = began_wall + (record_ns - first_ns) / 1e9 / options.rate
+                    if batch and (due - time.time() > PACED_AHEAD or len(batch) >= batch_size):
+                        feed(batch, dues)
+                        batch, dues = [], []
+                    gap = due - time.time() - PACED_AHEAD
+                    if gap > 0:                 # a pause in the recording: waited here (Ctrl-C works)
+                        clock.sleep(gap)
+                    dues.append(due)
+                elif options.rate is not None:
                     due = began + (record_ns - first_ns) / 1e9 / options.rate
                     wait = due - clock.now()
                     if wait > 0:
@@ -306,7 +349,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                     for target in sinks:
                         target.write(message)
                 batch.append((text, seconds, (record.topic, stats.messages, record)))
-                if len(batch) >= batch_size:
+                if len(batch) >= batch_size and not paced:
                     feed(batch)
                     batch = []
                 done_ms = (record_ns - first_ns) // 1_000_000
@@ -314,7 +357,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                     bar.update(done_ms - shown_ms)
                     shown_ms = done_ms
             if batch:
-                feed(batch)
+                feed(batch, dues if paced else None)
             if publisher is not None:
                 publisher.fed([])
             write(engine.end_of_input(drop_pending))
