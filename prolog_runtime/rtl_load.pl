@@ -9,7 +9,8 @@ of its `.pl` file whenever the `.qlf` file is up to date; when it is out of date
 was edited after the build, or the `.qlf` file was made by another SWI-Prolog version) and
 writable, SWI-Prolog recompiles it while loading, printing a message and rewriting the file.
 
-The entry points of the runtime (retalis.pl, rtl_aq_api.pl) load this module first. It
+The files a program or the Python driver loads first (retalis.pl, rtl_aq.pl,
+rtl_aq_api.pl) load this module first. It
 finds the out-of-date `.qlf` files and loads their modules from source, by the full name of
 the `.pl` file and with `.qlf` files out of sight meanwhile: nothing is printed, no file is
 written, and what is loaded is always what the sources say. The up-to-date ones are then

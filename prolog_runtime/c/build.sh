@@ -15,10 +15,11 @@ for src in c/*.c; do
     fi
 done
 # Quick Load Files of the runtime modules, next to their sources, where SWI-Prolog looks
-# for them. Not for the entry points (retalis.pl, rtl_aq_api.pl) and rtl_load.pl: they
-# are what checks, at each start, that the others are up to date.
+# for them. Not for the files a program or the Python driver loads first (retalis.pl,
+# rtl_aq.pl, rtl_aq_api.pl) and rtl_load.pl: they check, at each start, that the others are
+# up to date.
 for src in rtl_*.pl; do
-    case "$src" in rtl_load.pl|rtl_aq_api.pl) continue ;; esac
+    case "$src" in rtl_load.pl|rtl_aq.pl|rtl_aq_api.pl) rm -f "${src%.pl}.qlf"; continue ;; esac
     qlf="${src%.pl}.qlf"
     if [ ! -f "$qlf" ] || [ "$src" -nt "$qlf" ] || [ "$(command -v swipl)" -nt "$qlf" ]; then
         if swipl -q -g "qcompile('${src%.pl}')" -t halt >/dev/null 2>&1 </dev/null; then
