@@ -7,13 +7,17 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 eval "$(swipl --dump-runtime-variables)"
 mkdir -p foreign
-for src in c/*.c; do
-    lib="foreign/$(basename "${src%.c}").${PLSOEXT}"
-    if [ ! -f "$lib" ] || [ "$src" -nt "$lib" ]; then
-        ${CC:-gcc} -O2 -Wall -shared -fPIC -I"$PLBASE/include" -o "$lib" "$src"
-        echo "setup: built prolog_runtime/$lib" >&2
-    fi
-done
+if command -v "${CC:-gcc}" >/dev/null 2>&1; then
+    for src in c/*.c; do
+        lib="foreign/$(basename "${src%.c}").${PLSOEXT}"
+        if [ ! -f "$lib" ] || [ "$src" -nt "$lib" ]; then
+            ${CC:-gcc} -O2 -Wall -shared -fPIC -I"$PLBASE/include" -o "$lib" "$src"
+            echo "setup: built prolog_runtime/$lib" >&2
+        fi
+    done
+else
+    echo "setup: no C compiler: the runtime reads event lines in Prolog (slower)" >&2
+fi
 # Quick Load Files of the runtime modules, next to their sources, where SWI-Prolog looks
 # for them. Not for the files a program or the Python driver loads first (retalis.pl,
 # rtl_aq.pl, rtl_aq_api.pl) and rtl_load.pl: they check, at each start, that the others are
