@@ -28,11 +28,7 @@ if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,bench,live]'
-if command -v "${CC:-gcc}" >/dev/null 2>&1; then
-    bash prolog_runtime/c/build.sh
-else
-    echo "setup: no C compiler: the runtime reads event lines in Prolog (slower)" >&2
-fi
+bash prolog_runtime/c/build.sh        # the C helpers (with a C compiler) and the .qlf files
 
 if [ "${RETALISC_ROS:-1}" != "0" ]; then
     ROS_PACKAGES="python3-rospy python3-rosmaster python3-roslaunch python3-rostopic python3-rosservice

@@ -112,6 +112,7 @@ def main() -> int:
     jsonl.write_text("".join(json.dumps({"event": e, "t": t}) + "\n" for e, _, t in events))
     terms.write_text("".join(f"ev({e}, {s}, {t}).\n" for e, s, t in events))
 
+    load_before = os.getloadavg()
     patterns = {name: rule for name, rule in PATTERNS.items()
                 if not args.only or name[:2] in set(args.only) | {"P0", "P1"}}
     results = []
@@ -140,8 +141,18 @@ def main() -> int:
                          "derived": runs[0][1]}
         results.append(row)
 
+    load = {"before": load_before, "after": os.getloadavg()}
+    empty = work / "empty.jsonl"
+    empty.write_text("")
+    startup = statistics.median(measure_swipl(work / "p1.pl", empty)[0] for _ in range(args.repeat))
     report(results, args.events, etalis is not None)
-    (args.out_dir / "cep_vs_etalis.json").write_text(json.dumps(results, indent=2))
+    per_line = 1e6 * (results[0]["swipl"]["seconds"] - startup) / args.events
+    print(f"start-up: swipl with the P0 program on an empty file takes {startup:.3f} CPU s; "
+          f"the rest of P0 is {per_line:.2f} us per line")
+    print("load average (1, 5, 15 min): before {before}, after {after} (CPU times grow on a busy machine)".format(
+        **{k: ", ".join(f"{x:.2f}" for x in v) for k, v in load.items()}))
+    summary = {"events": args.events, "load_average": load, "startup_seconds": startup, "results": results}
+    (args.out_dir / "cep_vs_etalis.json").write_text(json.dumps(summary, indent=2))
     plot(results, args.out_dir / "cep_vs_etalis.png", args.events)
     print(f"wrote {args.out_dir / 'cep_vs_etalis.json'} and {args.out_dir / 'cep_vs_etalis.png'}")
     return 0

@@ -15,6 +15,7 @@
             rtl_end_of_input/2,         % +Mode, -Output
             rtl_heartbeat/2             % +Time, -Output
           ]).
+:- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
 :- reexport(rtl_time).
@@ -265,19 +266,48 @@ stream_options(Options) :-
     ;   Options = []
     ).
 
+% Each line read by read_line_to_string/2 (which waits for input) is followed by the lines
+% already in the input buffer, read in blocks by the C reader (rtl_buffered_lines/3).
 run_lines(end_of_file, _, _, _, _) :- !.
 run_lines(Line, In, Name, N, Options) :-
     rtl_process_line(Line, Options, Outcome),
+    line_done(Outcome, In, Name, N, Options),
+    N1 is N + 1,
+    run_buffered(In, Name, N1, Options, N2),
+    read_line_to_string(In, Next),
+    run_lines(Next, In, Name, N2, Options).
+
+line_done(Outcome, In, Name, N, Options) :-
     (   Outcome == ok
     ->  print_warnings(Name, N)
     ;   print_outcome(Name, N, Outcome),
         print_warnings(Name, N),
         stop_if_needed(Outcome, Options)
     ),
-    (   Name == '<stdin>' -> flush_if_idle(In) ; true ),
-    read_line_to_string(In, Next),
-    N1 is N + 1,
-    run_lines(Next, In, Name, N1, Options).
+    (   Name == '<stdin>' -> flush_if_idle(In) ; true ).
+
+run_buffered(In, Name, N0, Options, N) :-
+    rtl_flag(max_term_depth, MaxDepth),
+    rtl_buffered_lines(In, MaxDepth, Items),
+    (   Items == []
+    ->  N = N0
+    ;   run_items(Items, In, Name, N0, Options, N1),
+        run_buffered(In, Name, N1, Options, N)
+    ).
+
+run_items([], _, _, N, _, N).
+run_items([Item|Items], In, Name, N0, Options, N) :-
+    (   Item = a(Event, T)
+    ->  rtl_process_parsed(event(add, Event, T, T), Options, Outcome)
+    ;   Item = l(Line),
+        rtl_process_line(Line, Options, Outcome)
+    ),
+    (   Outcome == ok, Items \== []            % (the last one may flush the output)
+    ->  print_warnings(Name, N0)
+    ;   line_done(Outcome, In, Name, N0, Options)
+    ),
+    N1 is N0 + 1,
+    run_items(Items, In, Name, N1, Options, N).
 
 %   flush_if_idle(+In): on a live input (standard input: a pipe, a socket, a terminal), write
 %   the output produced so far as soon as no more input is waiting, so that each event's
@@ -356,6 +386,12 @@ with_action_output(Goal) :-
 rtl_process_line(Line, Options, Outcome) :-
     rtl_flag(max_term_depth, MaxDepth),
     rtl_parse_event_line(Line, MaxDepth, Parsed),
+    rtl_process_parsed(Parsed, Options, Outcome).
+
+%   rtl_process_parsed(+Parsed, +Options, -Outcome): rtl_process_line/3 for a line read
+%   already (Parsed as given by rtl_parse_event_line/3).
+
+rtl_process_parsed(Parsed, Options, Outcome) :-
     parsed_outcome(Parsed, Options, Outcome),
     count_outcome(Outcome).
 

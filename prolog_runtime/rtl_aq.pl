@@ -64,6 +64,7 @@
             aq_answer/3,            % +Table, +Answer, +Rank   (called by generated code)
             aq_adornment/2          % +Vars, -Mask             (called by generated code)
           ]).
+:- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- use_module(library(lists)).
 :- use_module(library(apply)).
 :- use_module(library(readutil)).

@@ -26,6 +26,7 @@ predicate of the program (aq_register/3 refuses anything else), so no other code
 arguments are data. Out is a string: lines of writeq text.
 */
 
+:- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- use_module(library(apply)).
 :- use_module(library(lists)).
 :- use_module(rtl_aq).

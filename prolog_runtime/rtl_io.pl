@@ -2,6 +2,7 @@
           [ rtl_parse_event_line/2,      % +LineString, -Parsed
             rtl_parse_event_line/3,      % +LineString, +MaxDepth, -Parsed
             rtl_read_event_text/4,       % +Text, +MaxDepth, -Event, -Problem
+            rtl_buffered_lines/3,        % +Stream, +MaxDepth, -Items
             rtl_event_json/6,            % +Event, +Start, +End, +Consumer, +Op, -JsonString
             rtl_write_event_line/4,      % +Stream, +Event, +Start, +End
             rtl_json_string_escape/2,    % +Text, -Escaped
@@ -22,11 +23,10 @@ escapes and lists) is read in C by `foreign/rtl_fastread.so` when the set-up bui
 (`c/rtl_fastread.c`); it takes only lines whose reading is beyond doubt and fails for the
 others. A JSON object is also a Prolog term (`{"k": V, ...}`), so the remaining lines are
 read by the Prolog reader in one call; lines it cannot read (JSON-only escapes such as
-`\/`, or bad input) go through library(http/json), which also names the reason of a
-rejection. Without the C reader, every line takes the Prolog road, with the same results.
+`\/`, or bad input) go through library(http/json) (loaded by the first such line), which
+also names the reason of a rejection. Without the C reader, every line takes the Prolog road, with the same results.
 */
 
-:- use_module(library(http/json)).
 :- use_module(rtl_time).
 
 :- dynamic fast_reader/0, fast_writer/0.
@@ -34,7 +34,8 @@ rejection. Without the C reader, every line takes the Prolog road, with the same
 % The C reader is optional: a runtime without it (not built, another platform) reads
 % every line in Prolog.
 load_fast_reader :-
-    prolog_load_context(directory, Dir),
+    source_location(File, _),                   % (loaded from a .qlf file, the load
+    file_directory_name(File, Dir),             % context is the file that loads this one)
     atomic_list_concat([Dir, '/foreign/rtl_fastread'], Lib),
     (   absolute_file_name(Lib, _, [file_type(executable), access(read), file_errors(fail)]),
         catch(load_foreign_library(Lib), _, fail),     % (use_foreign_library/1 defers the load)
@@ -123,6 +124,22 @@ rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     ;   Parsed = error("not a JSON object")
     ).
 
+%!  rtl_buffered_lines(+Stream, +MaxDepth:integer, -Items:list) is det.
+%
+%   The lines already read into Stream's input buffer (at most 4,096), taken from the
+%   stream without waiting for more input, by the C reader: each is `a(Event, T)`, an event
+%   line with a time `"t"` only that rtl_parse_event_line/3 would read as
+%   `event(add, Event, T, T)`, or `l(Line)`, any other line as read_line_to_string/2 would
+%   read it (to go through rtl_parse_event_line/3). Items is `[]` when no complete line is
+%   buffered, when the next line holds a byte outside 0x01..0x7f (read_line_to_string/2
+%   decodes it) or when the C reader is not in use.
+
+rtl_buffered_lines(Stream, MaxDepth, Items) :-
+    (   fast_reader
+    ->  rtl_fast_read_lines(Stream, 4096, MaxDepth, Items)
+    ;   Items = []
+    ).
+
 rule_change("add_rule", add).
 rule_change("delete_rule", delete).
 
@@ -206,8 +223,9 @@ digits0 --> digit, !, digits0.
 digits0 --> [].
 
 json_fields(Line, Fields) :-
+    json_reader_loaded,
     setup_call_cleanup(open_string(Line, In),
-                       ( json_read(In, Term, [value_string_as(string)]),
+                       ( json:json_read(In, Term, [value_string_as(string)]),
                          read_string(In, _, Rest) ),
                        close(In)),
     (   Term = json(Pairs)
@@ -224,6 +242,14 @@ json_fields(Line, Fields) :-
     ;   throw(error(syntax_error(json(illegal_number)), _))
     ),
     maplist(json_pair, Pairs, Fields).
+
+% library(http/json) is loaded by the first line that needs it: most input never does, and
+% loading it is a quarter of the runtime's start-up.
+json_reader_loaded :-
+    (   current_predicate(json:json_read/3)
+    ->  true
+    ;   use_module(library(http/json), [])
+    ).
 
 % The JSON reader accepts some numbers JSON does not (010): check every number outside
 % strings against the JSON grammar.

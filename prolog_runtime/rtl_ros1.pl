@@ -22,7 +22,8 @@ itself, which reports what is wrong or writes the floats as text.
 :- dynamic loaded/0.
 
 load_helper :-
-    prolog_load_context(directory, Dir),
+    source_location(File, _),                   % (loaded from a .qlf file, the load
+    file_directory_name(File, Dir),             % context is the file that loads this one)
     atomic_list_concat([Dir, '/foreign/rtl_ros1'], Lib),
     (   absolute_file_name(Lib, _, [file_type(executable), access(read), file_errors(fail)]),
         catch(load_foreign_library(Lib), _, fail),

@@ -35,7 +35,6 @@ of the unsafe goal, Path the program predicates through which it was reached. It
 nearby/2)`.
 */
 
-:- use_module(library(sandbox)).
 :- use_module(library(assoc)).
 :- use_module(library(apply)).
 :- use_module(library(lists)).
@@ -161,6 +160,15 @@ condition_list(Conds, Called) :-
 
 % ---- entry points -------------------------------------------------------------------------
 
+% library(sandbox) is loaded by the first check, not with the runtime: most programs never
+% check a goal, and loading it is a third of the runtime's start-up. (The clauses of
+% sandbox:safe_primitive/1 above are multifile: they stay when it loads.)
+sandbox_loaded :-
+    (   current_predicate(sandbox:safe_meta_call/3)
+    ->  true
+    ;   use_module(library(sandbox), [])
+    ).
+
 %!  rtl_check_goal(+Policy, +Module, :Goal) is det.
 %
 %   Throw rtl_unsafe/3 unless Goal, run in Module, is safe. Policy is `query(Writable)`:
@@ -168,6 +176,7 @@ condition_list(Conds, Called) :-
 %   temporary module; `[]` for conditions of subscriptions and memories).
 
 rtl_check_goal(Policy, Module, Goal) :-
+    sandbox_loaded,
     Policy = query(Writable),
     must_be(list(atom), Writable),
     copy_term(Goal, Copy),
@@ -184,6 +193,7 @@ rtl_check_goal(Policy, Module, Goal) :-
 %   the rule's stores.
 
 rtl_check_rule(M, Id, Stores, Clauses0) :-
+    sandbox_loaded,
     (   atom(Id) -> true ; throw(error(rtl_unsafe(Id, rule_id, []), _)) ),
     forall(member(Store, Stores),
            (   own_store(Id, Store)
@@ -506,7 +516,7 @@ library_goal(G, M, S, V0, V) :-
     ;   V = V0,
         Checked = G
     ),
-    catch(safe_goal(M:Checked), E, refuse_error(S, G, E)).
+    catch(sandbox:safe_goal(M:Checked), E, refuse_error(S, G, E)).
 
 calls_goals(Spec) :-
     sub_term(X, Spec), nonvar(X), calling_spec(X), !.

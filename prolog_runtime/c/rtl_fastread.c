@@ -321,25 +321,31 @@ static int key_index(const char *s, const char *e)
   return K_OTHER;
 }
 
-static foreign_t
-pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
-                   term_t start_out, term_t end_out, term_t op_out)
-{ char *text;
-  size_t len;
-  int depth_limit;
+/* The fields of an event line read in C: Event, the times as given (T, Start, End: fresh
+   term references, set when the key was there) and Op (0 when absent). */
+typedef struct {
+  term_t event;
+  term_t times[3];
+  int seen[5];
+  atom_t op;
+} event_line;
 
-  if ( !PL_get_nchars(line, &len, &text, CVT_STRING|CVT_ATOM) ) return FALSE;
-  if ( !PL_get_integer(max_depth, &depth_limit) ) return FALSE;
-  for (size_t i = 0; i < len; i++)
+static atom_t atom_add, atom_retract;
+
+/* The common case of one event line [text, text+len) into *out; FALSE for the others. */
+static int read_event_line(const char *text, size_t len, int depth_limit, event_line *out)
+{ for (size_t i = 0; i < len; i++)
   { unsigned char c = (unsigned char)text[i];
     if ( (c < 0x20 && !is_json_space((char)c)) || c > 0x7e ) return FALSE;
   }
 
   reader r = { text, text + len, depth_limit };
   const char *event_s = NULL, *event_e = NULL;
-  term_t times[3] = { PL_new_term_ref(), PL_new_term_ref(), PL_new_term_ref() };
-  int seen[5] = { 0, 0, 0, 0, 0 };
+  term_t *times = out->times;
+  int *seen = out->seen;
   atom_t op = 0;
+  for (int i = 0; i < 3; i++) times[i] = PL_new_term_ref();
+  for (int i = 0; i < 5; i++) seen[i] = 0;
 
   skip_json_space(&r);
   if ( peek(&r) != '{' ) return FALSE;
@@ -367,10 +373,9 @@ pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
       case K_OP:
       { const char *os, *oe;
         if ( !json_plain_string(&r, &os, &oe) ) return FALSE;
-        if ( oe - os == 3 && memcmp(os, "add", 3) == 0 ) op = PL_new_atom("add");
-        else if ( oe - os == 7 && memcmp(os, "retract", 7) == 0 ) op = PL_new_atom("retract");
+        if ( oe - os == 3 && memcmp(os, "add", 3) == 0 ) op = atom_add;
+        else if ( oe - os == 7 && memcmp(os, "retract", 7) == 0 ) op = atom_retract;
         else return FALSE;
-        PL_unregister_atom(op);                     /* add and retract never go away */
         break;
       }
       default:
@@ -384,14 +389,95 @@ pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
   skip_json_space(&r);
   if ( r.p != r.end || !event_s ) return FALSE;
 
-  term_t ev = PL_new_term_ref();
-  if ( !read_event_text(event_s, event_e, depth_limit, ev) ) return FALSE;
-  if ( !PL_unify(event, ev) ) return FALSE;
-  if ( seen[K_T] && !PL_unify(t_out, times[0]) ) return FALSE;
-  if ( seen[K_START] && !PL_unify(start_out, times[1]) ) return FALSE;
-  if ( seen[K_END] && !PL_unify(end_out, times[2]) ) return FALSE;
-  if ( op && !PL_unify_atom(op_out, op) ) return FALSE;
+  out->event = PL_new_term_ref();
+  out->op = op;
+  return read_event_text(event_s, event_e, depth_limit, out->event);
+}
+
+static foreign_t
+pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
+                   term_t start_out, term_t end_out, term_t op_out)
+{ char *text;
+  size_t len;
+  int depth_limit;
+  event_line l;
+
+  if ( !PL_get_nchars(line, &len, &text, CVT_STRING|CVT_ATOM) ) return FALSE;
+  if ( !PL_get_integer(max_depth, &depth_limit) ) return FALSE;
+  if ( !read_event_line(text, len, depth_limit, &l) ) return FALSE;
+  if ( !PL_unify(event, l.event) ) return FALSE;
+  if ( l.seen[K_T] && !PL_unify(t_out, l.times[0]) ) return FALSE;
+  if ( l.seen[K_START] && !PL_unify(start_out, l.times[1]) ) return FALSE;
+  if ( l.seen[K_END] && !PL_unify(end_out, l.times[2]) ) return FALSE;
+  if ( l.op && !PL_unify_atom(op_out, l.op) ) return FALSE;
   return TRUE;
+}
+
+/* ---- a block of lines ---------------------------------------------------------------- */
+
+/* rtl_fast_read_lines(+Stream, +MaxLines, +MaxDepth, -Items): the complete lines already in
+   the input buffer of Stream (a UTF-8 text stream), at most MaxLines, taken from the stream
+   without waiting for more input: Items is a list of
+
+     a(Event, T)    an event line of the common case (above) with "t" a number, no "start",
+                    "end", and "op" absent or "add": what rtl_parse_event_line/3 reads as
+                    event(add, Event, T, T) once the time is checked
+     l(Line)        any other line, as read_line_to_string/2 would give it
+
+   Items is [] when the buffer holds no complete line. Only lines of bytes 0x01..0x7f are
+   taken (they read the same in every encoding this accepts); the block ends before any
+   other line, which the caller then reads with read_line_to_string/2. The line is cut as
+   read_line_to_string/2 cuts it: at the newline, without '\r's at either end. */
+static foreign_t
+pl_fast_read_lines(term_t stream, term_t max_lines, term_t max_depth, term_t items)
+{ IOSTREAM *s;
+  int limit, depth_limit;
+  int ok = TRUE;
+
+  if ( !PL_get_integer_ex(max_lines, &limit) || !PL_get_integer_ex(max_depth, &depth_limit) )
+    return FALSE;
+  if ( !PL_get_stream(stream, &s, SIO_INPUT) ) return FALSE;
+  term_t tail = PL_copy_term_ref(items);
+  term_t head = PL_new_term_ref();
+  functor_t f_a = PL_new_functor(PL_new_atom("a"), 2);
+  functor_t f_l = PL_new_functor(PL_new_atom("l"), 1);
+
+  if ( s->encoding == ENC_UTF8 || s->encoding == ENC_ANSI || s->encoding == ENC_ISO_LATIN_1 ||
+       s->encoding == ENC_ASCII )
+  { for (int n = 0; n < limit && s->bufp < s->limitp; n++)
+    { char *start = s->bufp;
+      char *nl = memchr(start, '\n', (size_t)(s->limitp - start));
+      if ( !nl ) break;
+      int plain = TRUE;
+      for (char *p = start; p < nl; p++)
+      { unsigned char c = (unsigned char)*p;
+        if ( c == 0 || c > 0x7f ) { plain = FALSE; break; }
+      }
+      if ( !plain ) break;
+      s->bufp = nl + 1;
+      const char *b = start, *e = nl;
+      while ( b < e && *b == '\r' ) b++;
+      while ( e > b && e[-1] == '\r' ) e--;
+
+      fid_t fid = PL_open_foreign_frame();
+      event_line l;
+      term_t item = PL_new_term_ref();
+      if ( read_event_line(b, (size_t)(e - b), depth_limit, &l) &&
+           l.seen[K_T] && !l.seen[K_START] && !l.seen[K_END] && l.op != atom_retract &&
+           PL_is_number(l.times[0]) )
+        ok = PL_cons_functor(item, f_a, l.event, l.times[0]);
+      else
+      { term_t text = PL_new_term_ref();
+        ok = PL_put_chars(text, PL_STRING, (size_t)(e - b), b) &&
+             PL_cons_functor(item, f_l, text);
+      }
+      ok = ok && PL_unify_list(tail, head, tail) && PL_unify(head, item);
+      PL_close_foreign_frame(fid);
+      if ( !ok ) break;
+    }
+  }
+  ok = ok && PL_unify_nil(tail);
+  return PL_release_stream(s) && ok;
 }
 
 /* ---- output lines ------------------------------------------------------------------ */
@@ -531,7 +617,10 @@ pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
 
 install_t
 install_rtl_fastread(void)
-{ PL_register_foreign("rtl_fast_event_line", 7, pl_fast_event_line, 0);
+{ atom_add = PL_new_atom("add");                  /* registered: never garbage collected */
+  atom_retract = PL_new_atom("retract");
+  PL_register_foreign("rtl_fast_read_lines", 4, pl_fast_read_lines, 0);
+  PL_register_foreign("rtl_fast_event_line", 7, pl_fast_event_line, 0);
   PL_register_foreign("rtl_fast_event_json", 4, pl_fast_event_json, 0);
   PL_register_foreign("rtl_fast_write_event", 4, pl_fast_write_event, 0);
 }
