@@ -240,8 +240,16 @@ class Engine:
     def from_compiled(cls, result: CompileResult, bridge: Optional[Bridge] = None) -> "Engine":
         """Load an already compiled program. Programs loaded into one process need distinct
         module names: `load` and `from_source` make them unique."""
-        engine = cls._load_text(result.prolog, result.unit.module, bridge)
-        engine.rules = [rule.rule_id for rule in result.unit.rules]
+        return cls.from_prolog(result.prolog, result.unit.module, [rule.rule_id for rule in result.unit.rules],
+                               bridge)
+
+    @classmethod
+    def from_prolog(cls, prolog: str, module: str, rules: Sequence[str] = (),
+                    bridge: Optional[Bridge] = None) -> "Engine":
+        """Load the compiled program text `prolog`, the module `module` whose event rules
+        are labelled `rules` (as `from_compiled`, for a compilation kept as text)."""
+        engine = cls._load_text(prolog, module, bridge)
+        engine.rules = list(rules)
         return engine
 
     @classmethod
