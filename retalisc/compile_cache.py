@@ -232,13 +232,15 @@ def cached_compile(program: str, module: str, compile, output_name: str = "PROGR
                    use_cache: bool = True, found=None) -> CompiledProgram:
     """The compiled program of the file `program`: from the cache when it holds it (`found`
     is called with it first: the warnings are printed there), else `compile()` (a
-    `CompileResult`), stored for the next time when the file did not change meanwhile."""
+    `CompileResult`), stored for the next time when the file did not change meanwhile. Only
+    regular files are cached."""
     directory = cache_dir() if use_cache and enabled() else None
     source = key = None
     if directory is not None:
         try:
-            source = Path(program).read_bytes()
-            key = entry_key(source, str(program), module, output_name)
+            if stat.S_ISREG(os.stat(program).st_mode):     # not a pipe (`<(...)`): read once only
+                source = Path(program).read_bytes()
+                key = entry_key(source, str(program), module, output_name)
         except OSError:
             key = None
     cache = CompileCache(directory) if key is not None else None

@@ -249,3 +249,18 @@ def test_included_files_are_checked(cache_dir, tmp_path):
     rules.unlink()
     with pytest.raises(Exception, match="cannot read"):
         compiler.compiled()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes")
+def test_a_program_from_a_pipe_is_read_once_and_not_cached(cache_dir, tmp_path):
+    import threading
+
+    fifo = tmp_path / "program.rtl"
+    os.mkfifo(fifo)
+    writer = threading.Thread(target=lambda: fifo.write_text(PROGRAM))
+    writer.start()
+    compiler = Compiler(fifo)
+    compiled = compiler.compiled()
+    writer.join(timeout=10)
+    assert compiler.calls == 1 and "smoke" in compiled.prolog
+    assert not cache_dir.exists()
