@@ -28,6 +28,10 @@ if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test,bench,live]'
+# An editable install leaves the package's bytecode unwritten, and with PYTHONDONTWRITEBYTECODE
+# set every `retalisc` start would compile its modules again: compile them once here (a
+# module edited later is compiled afresh when its bytecode is out of date).
+.venv/bin/python -m compileall -q retalisc >/dev/null || true
 bash prolog_runtime/c/build.sh        # the C helpers (with a C compiler) and the .qlf files
 
 if [ "${RETALISC_ROS:-1}" != "0" ]; then

@@ -3,6 +3,7 @@
             rtl_main/0,
             rtl_run_jsonl_file/1,       % +File
             rtl_run_standard_input/3,   % +AllowControl, +Strict, -Outcome
+            rtl_run_event_file/4,       % +File, +AllowControl, +Strict, -Outcome
             rtl_feed_lines/3,           % +Text, +FirstLineNo, -Output
             rtl_feed_lines/4,           % +Text, +FirstLineNo, +Options, -Output
             rtl_process_line/3,         % +Line, +Options, -Outcome
@@ -240,7 +241,17 @@ rtl_run_jsonl_file(File) :-
 %   Outcome is `stopped` when the run must end (`--strict`, `halt` in program code), else
 %   `done`. Afterwards the output goes to the buffer again, as an Engine wants it.
 
-rtl_run_standard_input(AllowControl0, Strict0, Outcome) :-
+rtl_run_standard_input(AllowControl, Strict, Outcome) :-
+    rtl_run_event_file(-, AllowControl, Strict, Outcome).
+
+%!  rtl_run_event_file(+File:text, +AllowControl:text, +Strict:text, -Outcome:string) is det.
+%
+%   As rtl_run_standard_input/3, for the event file File (`-`: standard input): the loop
+%   of `swipl PROGRAM.pl FILE`, for `retalisc run --events FILE` in the retalisc program
+%   itself. Lines not processed and warnings go to standard error as `FILE:N: ...`.
+
+rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
+    atom_string(File, File0),
     atom_string(AllowControl, AllowControl0),
     atom_string(Strict, Strict0),
     must_be(boolean, AllowControl),
@@ -249,7 +260,7 @@ rtl_run_standard_input(AllowControl0, Strict0, Outcome) :-
     setup_call_cleanup(
         ( nb_setval(rtl_stream_options, [allow_control(AllowControl), strict(Strict)]),
           rtl_output_to(print) ),
-        catch(( rtl_run_jsonl_file(-), Outcome = "done" ), rtl_stop(_), Outcome = "stopped"),
+        catch(( rtl_run_jsonl_file(File), Outcome = "done" ), rtl_stop(_), Outcome = "stopped"),
         ( flush_output(user_output),
           rtl_output_to(buffer),
           nb_setval(rtl_stream_options, []) )).

@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from .commands import registered_commands
+from .commands import commands_of, registered_commands
 
 
 _NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
@@ -21,6 +21,18 @@ class _Group(click.Group):
     """A click group whose usage errors (a missing file, a bad option value, an unknown option)
     are one line on standard error, `retalisc CMD: error: MESSAGE (see retalisc CMD --help)`,
     with exit status 2, instead of click's usage block."""
+
+    def get_command(self, ctx, cmd_name):
+        """The command `cmd_name`, its module imported at the first use (`retalisc.commands`)."""
+        if cmd_name not in self.commands:
+            for command in commands_of(cmd_name):
+                self.commands.setdefault(command.name, command)
+        return self.commands.get(cmd_name)
+
+    def list_commands(self, ctx):
+        for command in registered_commands():
+            self.commands.setdefault(command.name, command)
+        return sorted(self.commands)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         if not standalone_mode:
@@ -70,10 +82,6 @@ def main() -> None:
     retalisc aq PROGRAM.pl --script UPDATES.txt      active queries
     retalisc compile-rules --module MODULE < RULES   rules for a running program
     """
-
-
-for _command in registered_commands():
-    main.add_command(_command)
 
 
 def entry() -> None:

@@ -1,11 +1,18 @@
+import os
 import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+
+# `retalisc run` keeps compiled programs in a cache directory (retalisc/compile_cache.py): the
+# tests (and the commands they start) use one of their own, not the user's.
+_CACHE = tempfile.TemporaryDirectory(prefix="retalisc-test-cache-")
+os.environ["RETALISC_CACHE_DIR"] = _CACHE.name
 
 
 def pytest_addoption(parser):

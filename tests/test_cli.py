@@ -1,10 +1,14 @@
 """The command line as users script it : outputs, exit codes, messages."""
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
+
+from retalisc.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 FIRE = ROOT / "examples" / "fire_alarm"
@@ -135,3 +139,30 @@ def test_compile_active_queries_runs_in_plain_swipl(tmp_path, swipl, mode):
     assert "path(1,2)" in initial and "path(1,3)" in initial
     assert added == "ev(q,add,path(1,4))"
     assert all(p in deleted for p in ("path(1,2)", "path(1,3)", "path(1,4)")) and "delete" in deleted
+
+
+def test_commands_are_imported_when_used():
+    """`retalisc.commands` names each module's commands; a command imports only its own
+    module, and `run --help` does not import the compiler."""
+    import importlib
+
+    from retalisc.commands import COMMAND_MODULES
+
+    for module, names in COMMAND_MODULES.items():
+        try:
+            commands = importlib.import_module(module).COMMANDS
+        except ModuleNotFoundError:
+            continue
+        assert tuple(command.name for command in commands) == names
+    probe = ("import sys; from retalisc.cli import main\n"
+             "try:\n    main(['run', '--help'])\nexcept SystemExit:\n    pass\n"
+             "print(sorted(m for m in sys.modules if m.split('.')[0] in ('lark', 'jinja2') "
+             "or m.startswith(('retalisc.commands.', 'retalisc.passes', 'retalisc.frontend.parser'))))")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert "--events" in done.stdout
+    assert done.stdout.splitlines()[-1] == "['retalisc.commands.compile', 'retalisc.commands.options']"
+    listing = CliRunner().invoke(main, ["--help"]).output
+    assert all(f"  {name} " in listing for names in COMMAND_MODULES.values() for name in names
+               if name not in ("ros", "ros2", "zenoh"))
+    assert CliRunner().invoke(main, ["no-such"]).exit_code == 2

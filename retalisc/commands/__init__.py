@@ -1,20 +1,45 @@
-"""CLI subcommands, one module per command family; `retalisc.cli` registers them."""
+"""CLI subcommands, one module per command family; `retalisc.cli` registers them.
+
+A module is imported when one of its commands runs (or when the command list is shown), so
+that a command does not pay for the imports of the others: `COMMAND_MODULES` names each
+module's commands, the names of its module-level list `COMMANDS`."""
 from __future__ import annotations
 
 import importlib
+from typing import Optional
 
-# Modules that define click commands in a module-level list `COMMANDS`.
-_COMMAND_MODULES = ["retalisc.commands.compile", "retalisc.commands.aq", "retalisc.commands.rules",
-                    "retalisc.commands.query", "retalisc.commands.plot", "retalisc.commands.explain",
-                    "retalisc.commands.live"]
+COMMAND_MODULES = {
+    "retalisc.commands.compile": ("compile", "check", "run"),
+    "retalisc.commands.aq": ("aq",),
+    "retalisc.commands.rules": ("compile-rules",),
+    "retalisc.commands.query": ("query",),
+    "retalisc.commands.plot": ("plot",),
+    "retalisc.commands.explain": ("explain",),
+    "retalisc.commands.live": ("ros", "ros2", "zenoh"),
+}
+_COMMAND_MODULES = list(COMMAND_MODULES)
+
+
+def _import(name: str):
+    """The module `name`, or None when it is not installed (an optional part)."""
+    try:
+        return importlib.import_module(name)
+    except ModuleNotFoundError as exc:
+        if exc.name == name:
+            return None
+        raise
 
 
 def registered_commands():
     for name in _COMMAND_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name == name:
-                continue
-            raise
-        yield from module.COMMANDS
+        module = _import(name)
+        if module is not None:
+            yield from module.COMMANDS
+
+
+def commands_of(command: str) -> list:
+    """The commands of the module that defines `command` (imported now), or [] when no
+    module defines it."""
+    module_name: Optional[str] = next((m for m, names in COMMAND_MODULES.items() if command in names), None)
+    module = _import(module_name) if module_name is not None else None
+    return list(module.COMMANDS) if module is not None else []

@@ -6,14 +6,11 @@ from pathlib import Path
 
 import click
 
-from ..compiler import AQ_MODES, AqOptions, compile_file, pass_names
-from ..frontend.errors import RetalisError
-from ..passes.pipeline import PASS_NAMES
-from .options import Seconds, check_snapshot_options, output_directory, output_file, state_options
+from .options import LazyChoice, Seconds, check_snapshot_options, output_directory, output_file, state_options
 from ..robot_io.options import BAG_DEFAULTS, bag_options
 
 
-def report_program_error(error: RetalisError) -> None:
+def report_program_error(error) -> None:
     """Print `file:line:col: message` with the offending line and exit with status 2."""
     click.echo(error.render(), err=True)
     sys.exit(2)
@@ -22,6 +19,9 @@ def report_program_error(error: RetalisError) -> None:
 def compile_or_exit(program: str, werror: bool = False, **kwargs):
     """Compile `program` or exit with status 2 on errors; print the warnings on standard error.
     With `werror`, the warnings are errors: printed as such, and exit status 2."""
+    from ..compiler import compile_file
+    from ..frontend.errors import RetalisError
+
     try:
         result = compile_file(program, **kwargs)
     except RetalisError as error:
@@ -47,6 +47,13 @@ def _as_error(warning: str) -> str:
     return f"{head}: error: {rest}" if sep else warning
 
 
+def _pipeline():
+    """The compiler's pass lists (imported when a command needs them, not for every command)."""
+    from ..passes import pipeline
+
+    return pipeline
+
+
 WERROR = click.option("--werror", is_flag=True,
                       help="Treat warnings (traps such as a window on the last operand only, an undefined "
                            "predicate in a condition) as errors: exit status 2.")
@@ -62,9 +69,9 @@ Examples:
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the Prolog program here "
               "(default: standard output).")
-@click.option("--dump-after", type=click.Choice(PASS_NAMES), help="Print the program after this pass "
-              "and stop (with --active-queries: aq_program or the pass of the transformation).")
-@click.option("--active-queries", "active_queries", type=click.Choice(AQ_MODES),
+@click.option("--dump-after", type=LazyChoice(lambda: _pipeline().PASS_NAMES),
+              help="Print the program after this pass and stop (with --active-queries: aq_program or the pass of the transformation).")
+@click.option("--active-queries", "active_queries", type=LazyChoice(lambda: _pipeline().AQ_MODES),
               help="Compile PROGRAM as a definite program for active queries with this transformation "
                    "(aq_register/2, aq_assert/1, ...; see docs/active_queries.md).")
 @click.option("--subsumption", is_flag=True, help="With --active-queries tabled: reuse tables by subsumption.")
@@ -77,6 +84,8 @@ def compile_command(program: str, output: str, dump_after: str, active_queries: 
     With --active-queries, PROGRAM is a definite program (rules and facts) compiled for
     active queries instead.
     """
+    from ..compiler import AqOptions, pass_names
+
     options = AqOptions(active_queries, subsumption) if active_queries else None
     if dump_after:
         if dump_after not in pass_names(options):
@@ -185,6 +194,9 @@ Examples:
 @click.option("--late", "late_file", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Write every input event that arrives more than --max-delay behind the latest one to FILE "
                    "(JSON Lines: its lateness and the rules whose partners it may have missed).")
+@click.option("--no-cache", "no_cache", is_flag=True,
+              help="Compile PROGRAM even when the compile cache holds it, and do not store it there "
+                   "(also: RETALISC_NO_CACHE=1; docs/reference.md).")
 @state_options(
     "Survive a crash: keep snapshots of the state in DIR; started again with the same DIR, "
     "the run goes on from the newest complete snapshot and the --out file ends byte-identical "
@@ -196,7 +208,7 @@ Examples:
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
                 flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, max_timers, action_output, progress,
-                traces, late_file, state, snapshot_every, snapshot_seconds,
+                traces, late_file, no_cache, state, snapshot_every, snapshot_seconds,
                 **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
 
@@ -204,6 +216,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     Example:
       retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
     """
+    from ..compile_cache import CompiledProgram, cached_compile
     from ..driver.bridge import PrologError
     from ..driver.engine import Engine, _unique_module
     from ..driver.run import run_event_file, set_action_output
@@ -228,11 +241,17 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         output_directory(state, "--state")
     steps = _max_steps(max_steps)
     timers = _max_steps(max_timers, DEFAULT_MAX_TIMERS, "--max-timers")
-    result = compile_or_exit(program, module=_unique_module(program))    # a second run in one process loads anew
+    module = _unique_module(program)            # a second run in one process loads anew
+    if traces or late_file:                     # these need the compiled unit itself
+        result = compile_or_exit(program, module=module)
+        compiled = CompiledProgram.of(result)
+    else:
+        compiled = cached_compile(program, module, lambda: compile_or_exit(program, module=module),
+                                  use_cache=not no_cache, found=_print_warnings)
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
     in_this_thread = _calls_in_this_thread()
-    engine = Engine.from_compiled(result)
+    engine = Engine.from_prolog(compiled.prolog, compiled.module, compiled.rules)
     if echo_input:
         engine.set_flag("echo_input", "true")
     if max_delay is not None:
@@ -292,6 +311,12 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
                             strict=strict, progress=progress, heartbeat=heartbeat, report=report,
                             stdin_in_prolog=in_this_thread)
     sys.exit(status)
+
+
+def _print_warnings(compiled) -> None:
+    """The warnings of a program taken from the compile cache, printed as its compilation does."""
+    for warning in compiled.warnings:
+        click.echo(warning, err=True)
 
 
 def _calls_in_this_thread() -> bool:

@@ -97,3 +97,19 @@ def check_snapshot_options(state, snapshot_every, snapshot_seconds) -> None:
     """Fail with a usage error when a snapshot option comes without --state."""
     if state is None and (snapshot_every is not None or snapshot_seconds is not None):
         raise click.UsageError("--snapshot-every and --snapshot-seconds go with --state DIR")
+
+
+class LazyChoice(click.Choice):
+    """A `click.Choice` whose choices come from `load()` when first needed (to check a value,
+    or for the help text), so that defining a command does not import what lists them."""
+
+    def __init__(self, load, case_sensitive: bool = True):
+        self._load = load
+        self._choices = None
+        self.case_sensitive = case_sensitive
+
+    @property
+    def choices(self):
+        if self._choices is None:
+            self._choices = tuple(self._load())
+        return self._choices

@@ -25,17 +25,18 @@ import re
 import shutil
 import tempfile
 import threading
-from concurrent.futures import Future
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 from types import TracebackType
-from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
+from typing import TYPE_CHECKING, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, module_name
-from . import recovery
 from .bridge import Bridge, PrologError
 from .values import Term, Time, Value, Variable, parse_term, time_value
+
+if TYPE_CHECKING:
+    from concurrent.futures import Future
 
 __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", "PrologError", "Term",
            "Variable", "Value", "Time"]
@@ -240,8 +241,16 @@ class Engine:
     def from_compiled(cls, result: CompileResult, bridge: Optional[Bridge] = None) -> "Engine":
         """Load an already compiled program. Programs loaded into one process need distinct
         module names: `load` and `from_source` make them unique."""
-        engine = cls._load_text(result.prolog, result.unit.module, bridge)
-        engine.rules = [rule.rule_id for rule in result.unit.rules]
+        return cls.from_prolog(result.prolog, result.unit.module, [rule.rule_id for rule in result.unit.rules],
+                               bridge)
+
+    @classmethod
+    def from_prolog(cls, prolog: str, module: str, rules: Sequence[str] = (),
+                    bridge: Optional[Bridge] = None) -> "Engine":
+        """Load the compiled program text `prolog`, the module `module` whose event rules
+        are labelled `rules` (as `from_compiled`, for a compilation kept as text)."""
+        engine = cls._load_text(prolog, module, bridge)
+        engine.rules = list(rules)
         return engine
 
     @classmethod
@@ -583,6 +592,8 @@ class Engine:
         the clock (event time) reaches `at + timeout` first, kind "dropped" when the input
         ends with `end_of_input(drop_pending=True)`. A goal that does not parse or that the
         sandbox refuses raises QueryError at once."""
+        from concurrent.futures import Future
+
         future: Future = Future()
         query_id = f"py{next(_python_queries)}"
         with self._lock:
@@ -700,6 +711,8 @@ class Engine:
     def identity(self) -> str:
         """The hash of the compiled program and the runtime a snapshot of this Engine carries."""
         if self._identity is None:
+            from . import recovery
+
             self._identity = recovery.program_identity(self.prolog_file.read_text(encoding="utf-8"), self.module)
         return self._identity
 
@@ -708,6 +721,8 @@ class Engine:
         rules added, postponed queries, active queries, flags, clock, counters) to the file
         `path`, atomically: a temporary file, flushed to disk, renamed over `path`. Call it
         between calls that feed events (never from a callback)."""
+        from . import recovery
+
         path = Path(path)
         with self._lock:
             recovery.replace_atomically(
@@ -721,6 +736,8 @@ class Engine:
             try:
                 self._call("rtl_api_restore_state", str(path), self.identity())
             except PrologError as error:
+                from . import recovery
+
                 raise recovery.StateError(f"{path}: {error}") from None
 
     def state_digest(self) -> str:

@@ -2,6 +2,7 @@
 output and the same rejection messages as `swipl PROGRAM.pl FILE`."""
 from __future__ import annotations
 
+import codecs
 import gc
 import io
 import itertools
@@ -187,9 +188,10 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     (`WallClock`), so absences and alarms fire on time.
     `report()`, if given, returns text printed on stderr before the summary (the counts of
     `--trace`). `stdin_in_prolog`: Prolog runs in this thread and may read standard input
-    itself (the `retalisc` program, `Bridge.run_in_calling_thread`); then standard input
-    going to standard output is read, processed and written by the runtime's own loop
-    (`in_prolog_loop`), with no call from Python per line. Returns the exit status."""
+    itself (the `retalisc` program, `Bridge.run_in_calling_thread`); then standard input or
+    a plain text file going to standard output is read, processed and written by the
+    runtime's own loop (`in_prolog_loop`), with no call from Python per line. Returns the
+    exit status."""
     started = time.perf_counter()
     name = "<stdin>" if events == "-" else events
     if events == "-":
@@ -233,7 +235,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         if stdin_in_prolog and in_prolog_loop(events, out, consumer_dir, progress, heartbeat):
             batches = iter(())
             sink.flush()
-            if engine.bridge.apply("retalis", "rtl_run_standard_input", "true" if allow_control else "false",
+            if engine.bridge.apply("retalis", "rtl_run_event_file", events, "true" if allow_control else "false",
                                    "true" if strict else "false") == "stopped":
                 raise RunStopped()
         elif heartbeat is not None:
@@ -293,14 +295,48 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
 
 def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],
                    heartbeat: Optional[float]) -> bool:
-    """Whether a run reads standard input in the runtime's loop (that of `swipl PROGRAM.pl -`,
-    prolog_runtime/retalis.pl, rtl_run_standard_input/3): standard input to standard output,
-    without --consumer-dir, --heartbeat or a progress line (forced with --progress, or
-    possible on a terminal), whose work Python does per batch."""
-    if events != "-" or out != "-" or consumer_dir is not None or heartbeat is not None or progress:
+    """Whether a run reads its input in the runtime's loop (that of `swipl PROGRAM.pl FILE`,
+    prolog_runtime/retalis.pl, rtl_run_event_file/4): standard input or a regular file, to
+    standard output, without --consumer-dir, --heartbeat or a progress line (forced with
+    --progress, or possible on a terminal), whose work Python does per batch. A file is
+    read there only when both loops see the same lines in it (`plain_text_file`)."""
+    if out != "-" or consumer_dir is not None or heartbeat is not None or progress:
+        return False
+    if events != "-" and not plain_text_file(events):
         return False
     isatty = getattr(sys.stderr, "isatty", None)
-    return progress is False or not (isatty and isatty())
+    return progress is False or not (isatty and isatty()) or (
+        events != "-" and os.path.getsize(events) <= PROGRESS_THRESHOLD)
+
+
+def plain_text_file(path: str, chunk_size: int = 1 << 20) -> bool:
+    """Whether `path` is a regular file of UTF-8 text whose line ends are all `\n` or
+    `\r\n`: the lines Python reads from it (universal newlines, undecodable bytes replaced)
+    are then the lines the runtime reads. Reads the file once, in chunks."""
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return False
+        decoder = codecs.getincrementaldecoder("utf-8")()
+        carriage_return = False             # the previous chunk ended with \r
+        with open(path, "rb") as stream:
+            while True:
+                chunk = stream.read(chunk_size)
+                if not chunk:
+                    decoder.decode(b"", final=True)
+                    return not carriage_return
+                if carriage_return and not chunk.startswith(b"\n"):
+                    return False
+                if not chunk.isascii() or decoder.getstate()[0]:
+                    decoder.decode(chunk)
+                returns = chunk.count(b"\r")
+                if returns:
+                    carriage_return = chunk.endswith(b"\r")
+                    if returns - carriage_return != chunk.count(b"\r\n"):
+                        return False
+                else:
+                    carriage_return = False
+    except (OSError, UnicodeDecodeError):
+        return False
 
 
 def _unbuffered(sink: IO[str]):

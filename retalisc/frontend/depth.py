@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import sys
 import threading
-from typing import Callable, TypeVar
-
-from lark import Tree
+from typing import TYPE_CHECKING, Callable, TypeVar
 
 from .terms import Compound, Term
+
+if TYPE_CHECKING:
+    from lark import Tree
 
 #: The deepest nesting of terms (and of brackets) a program may have.
 MAX_TERM_DEPTH = 10_000
@@ -45,6 +46,8 @@ def term_depth(term: Term) -> int:
 
 def deepest_tree(tree: Tree):
     """(depth, node) of the deepest node of a lark tree, computed without recursion."""
+    from lark import Tree
+
     best = (0, tree)
     stack = [(tree, 1)]
     while stack:

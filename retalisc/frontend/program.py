@@ -12,7 +12,7 @@ import itertools
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import List, Optional, Union
+from typing import List, Optional, Tuple, Union
 
 from .errors import RetalisSyntaxError
 from .operators import ETALIS_ALIASES
@@ -182,6 +182,8 @@ class Program:
     file: str
     clauses: List[Clause]
     text: str = ""
+    # the files its includes read, in order, with the text read (the compile cache checks them)
+    included: List[Tuple[str, str]] = field(default_factory=list)
 
     @property
     def event_rules(self) -> List[EventRule]:
@@ -221,10 +223,14 @@ def parse_program(text: str, file: str) -> Program:
     Two forms of the original Retalis are read too: goal lines without a final period, one
     per paragraph (`goalPredicates.txt`), and `compile_event_file(Path)`, which reads the
     clauses of Path (relative to the file that names it) in its place."""
-    return build_program(_read_with_includes(text, file, [file]), file, text)
+    included: List[Tuple[str, str]] = []
+    program = build_program(_read_with_includes(text, file, [file], included), file, text)
+    program.included = included
+    return program
 
 
-def _read_with_includes(text: str, file: str, loading: List[str]) -> List[ReadClause]:
+def _read_with_includes(text: str, file: str, loading: List[str],
+                        included: List[Tuple[str, str]]) -> List[ReadClause]:
     clauses = []
     for clause in read_goal_lines(text, file):
         path = _included_file(clause.term)
@@ -236,12 +242,13 @@ def _read_with_includes(text: str, file: str, loading: List[str]) -> List[ReadCl
             raise RetalisSyntaxError(f"{_include_name(clause.term)}: {path} is already being read (it includes itself)",
                                      clause.span)
         try:
-            included = target.read_text(encoding="utf-8-sig")
+            text_read = target.read_text(encoding="utf-8-sig")
         except (OSError, UnicodeDecodeError) as error:
             reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
             raise RetalisSyntaxError(f"{_include_name(clause.term)}: cannot read {path} ({target}): {reason}",
                                      clause.span) from None
-        clauses.extend(_read_with_includes(included, str(target), loading + [str(target)]))
+        included.append((str(target), text_read))
+        clauses.extend(_read_with_includes(text_read, str(target), loading + [str(target)], included))
     return clauses
 
 
