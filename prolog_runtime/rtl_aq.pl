@@ -1068,9 +1068,11 @@ dred(Facts) :-
 
 %   DRed from the derivations Seed over-deletes (in phase delete), Cleanup
 %   then removing what was deleted (the facts, or a rule's clauses).
+%   The phase and the trie are atomic: nb_linkval/2 stores them without the
+%   copy nb_setval/2 makes (a DRed pass of one fact sets them six times).
 dred_run(Seed, Cleanup) :-
     trie_new(D),
-    nb_setval(aq_dred, D),
+    nb_linkval(aq_dred, D),
     catch(dred_run(Seed, Cleanup, D), E, (dred_end(D), throw(E))),
     dred_end(D).
 
@@ -1081,9 +1083,9 @@ over_delete_facts(Facts) :-
            forall(user:'$aq_wrec'(F, S), go(S, F, 0))).
 
 dred_end(D) :-
-    retractall(aq_agenda(_, _, _)),
-    nb_setval(aq_phase, insert),
-    nb_setval(aq_dred, '$none'),
+    (   aq_agenda(_, _, _) -> retractall(aq_agenda(_, _, _)) ; true ),
+    nb_linkval(aq_phase, insert),
+    nb_linkval(aq_dred, '$none'),
     trie_destroy(D).
 
 %   Phase 1 removes what it over-deletes at once (states, goal and consumer
@@ -1097,18 +1099,18 @@ dred_end(D) :-
 %   Literal, State)) and the answers lost by registered queries (n(Id, A)).
 dred_run(Seed, Cleanup, D) :-
     % 1. over-delete
-    nb_setval(aq_phase, delete),
+    nb_linkval(aq_phase, delete),
     call(Seed),
     drain,
     call(Cleanup),
     % 2. re-derive the answers and states that may have another derivation,
     %    propagate them forward: that also restores the states and
     %    single-derivation answers that depend on them
-    nb_setval(aq_phase, restore),
+    nb_linkval(aq_phase, restore),
     forall(trie_gen(D, a(T, A)), ignore(rederive(T, A))),
     forall(trie_gen(D, s(Kind, Lit, S)), ignore(rederive_state(Kind, Lit, S))),
     drain,
-    nb_setval(aq_phase, insert),
+    nb_linkval(aq_phase, insert),
     findall(ev(Id, A), trie_gen(D, n(Id, A)), Pending0),
     msort(Pending0, Pending),
     forall(member(ev(Id, A), Pending),
