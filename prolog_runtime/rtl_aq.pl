@@ -720,16 +720,19 @@ kept_by_facts(T, A) :-
     user:'$aq_final'(A1, T, P, fact, Lit, Check),
     fact_only_state(P),
     \+ \+ user:'$aq_wrec'(Lit, P),
-    user:Lit,
-    \+ deleted_fact(Lit),
+    user:clause(Lit, true, Ref),
+    \+ deleted_fact(Ref),
     user:'$aq_wrec'(Lit, P),
     call(Check),
     A1 =@= A, !.
 
-%   Lit is one of the facts the current DRed pass deletes.
-deleted_fact(Lit) :-
+%   The stored fact Ref is one of the facts the current DRed pass deletes.
+%   It is looked up as stored, not as the literal it was resolved with: the
+%   literal may be an instance of it (e(X, 1) resolved for e(0, Y)).
+deleted_fact(Ref) :-
+    user:clause(F, true, Ref),
     nb_getval(aq_dred, D),
-    trie_lookup(D, f(Lit), _).
+    trie_lookup(D, f(F), _).
 
 %   Every state with the functor of P is created from stored facts only:
 %   by the activation of its table, or by resuming a state of that kind

@@ -128,3 +128,14 @@ def test_alternative_whose_seller_goes_in_the_same_batch():
         got = support._parse(lines, "inc")
         assert got[(1, 1)] == "[acc(1,0)]" and got[(3, 1)] == "[]"
         assert support._parse(lines, "events")[(3, 1)] == "[delete-acc(1,0)]"
+
+
+def test_alternative_that_is_the_deleted_non_ground_fact():
+    """t(0) is derived twice from e(X, 1), which the program lists twice; retracting e(X, 1)
+    removes both copies, so resolving t(0)'s literal e(0, 1) against a stored fact finds only
+    the fact being deleted: t(0) goes."""
+    source = ":- dynamic e/2.\nt(X) :- e(X, 1).\ne(X, 1).\ne(X, 1).\ne(2, 2).\n"
+    lines, scratch = run(source, ["t(0)"], [("-", ["e(X, 1)"])], "tabled")
+    assert support._parse(lines, "inc")[(0, 1)] == "[t(0)]"
+    assert support._parse(lines, "inc")[(1, 1)] == "[]" == scratch[(1, 1)]
+    assert support._parse(lines, "events")[(1, 1)] == "[delete-t(0)]"
