@@ -115,6 +115,7 @@ init_globals :-
 
 aq_configure(Options) :-
     retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
+    retractall(aq_fact_only(_, _, _)),
     nb_setval(aq_ground, unknown),
     forall(member(Opt, Options), configure(Opt)).
 
@@ -681,16 +682,96 @@ answer(restore, T, A, RA) :-
 %   RD is one more than the rank of the deleted derivation: it can have
 %   created A only if RD =< the rank of A.  A derivation of higher rank was
 %   not the first one, so A keeps the derivation that created it.
+%   An answer derived more than once that still has a derivation from
+%   facts alone (kept_by_facts/2) stays, and nothing behind it is visited.
 answer(delete, T, A, RD) :-
     (   trie_delete(T, A, V)
     ->  RA is abs(V),
         (   ( RD =< RA -> true ; aq_conf(dred, basic) )
-        ->  ( V < 0 -> mark(a(T, A)) ; true ),
-            schedule(T, A, RA)
+        ->  (   V > 0
+            ->  schedule(T, A, RA)
+            ;   kept_by_facts(T, A)
+            ->  trie_insert(T, A, V)
+            ;   mark(a(T, A)),
+                schedule(T, A, RA)
+            )
         ;   trie_insert(T, A, V)        % cheaper than a lookup first: most
         )                               % deletions do reach the creator
     ;   true
     ).
+
+%   Over-deletion reached answer A of table T, which was derived more than
+%   once.  A stays when it has a one-step derivation that the deletion
+%   cannot take away: a state P that is still there (it has its goal
+%   record) resumed with a stored fact that is not one of the facts being
+%   deleted, where P itself was derived from facts only (every literal of
+%   the rule before P's wait point is a stored fact: fact_only_state/1).
+%   Such a derivation cannot depend on A, so keeping A is not circular
+%   support.  Should P be over-deleted later in the same pass, its own
+%   forward propagation reaches A again (P resumed with the same fact) and
+%   A is checked again without P.  The rank of A stays: the derivation has
+%   rank 0, below any answer's rank, so a later deletion of it reaches A.
+%   Only for primary DRed (basic DRed over-deletes everything reachable);
+%   this is the support count of a non-recursive rule step, found by
+%   looking instead of counting, and it saves the over-deletion and the
+%   re-derivation of A and of what depends on it.
+kept_by_facts(T, A) :-
+    aq_conf(dred, primary),
+    copy_term(A, A1),
+    user:'$aq_final'(A1, T, P, fact, Lit, Check),
+    fact_only_state(P),
+    \+ \+ user:'$aq_wrec'(Lit, P),
+    user:clause(Lit, true, Ref),
+    \+ deleted_fact(Ref),
+    user:'$aq_wrec'(Lit, P),
+    call(Check),
+    A1 =@= A, !.
+
+%   The stored fact Ref is one of the facts the current DRed pass deletes.
+%   It is looked up as stored, not as the literal it was resolved with: the
+%   literal may be an instance of it (e(X, 1) resolved for e(0, Y)).
+deleted_fact(Ref) :-
+    user:clause(F, true, Ref),
+    nb_getval(aq_dred, D),
+    trie_lookup(D, f(F), _).
+
+%   Every state with the functor of P is created from stored facts only:
+%   by the activation of its table, or by resuming a state of that kind
+%   with a stored fact.  Known per functor (a rule added at run time has
+%   states of its own names).
+fact_only_state(P) :-
+    functor(P, N, Ar),
+    (   aq_fact_only(N, Ar, B)
+    ->  B == true
+    ;   functor(P0, N, Ar),
+        (   fact_only_creators(P0) -> B = true ; B = false ),
+        assertz(aq_fact_only(N, Ar, B)),
+        B == true
+    ).
+
+fact_only_creators(P) :-
+    \+ ( state_creator(P, How), \+ fact_only_creator(How) ).
+
+state_creator(S, act) :-
+    user:clause('$aq_act'(_, _), Body),
+    body_last(Body, _, Last),
+    creates(Last, S1),
+    \+ S1 \= S.
+state_creator(S, go(Prev, Lit)) :-
+    user:clause('$aq_go'(Prev, Lit, _), Body),
+    body_last(Body, _, Last),
+    creates(Last, S1),
+    \+ S1 \= S.
+
+fact_only_creator(act).
+fact_only_creator(go(Prev, Lit)) :-
+    nonvar(Prev), Prev \= q(_),
+    nonvar(Lit), Lit \= '$aq_not'(_),
+    \+ aq_conf(mode, naive),
+    user:'$aq_fact_pred'(Lit),
+    fact_only_state(Prev).
+
+:- dynamic aq_fact_only/3.
 
 %   The answers of a table with their ranks.
 answer_rank(Tr, A, RA) :-
@@ -991,20 +1072,24 @@ dred(Facts) :-
 
 %   DRed from the derivations Seed over-deletes (in phase delete), Cleanup
 %   then removing what was deleted (the facts, or a rule's clauses).
+%   The phase and the trie are atomic: nb_linkval/2 stores them without the
+%   copy nb_setval/2 makes (a DRed pass of one fact sets them six times).
 dred_run(Seed, Cleanup) :-
     trie_new(D),
-    nb_setval(aq_dred, D),
+    nb_linkval(aq_dred, D),
     catch(dred_run(Seed, Cleanup, D), E, (dred_end(D), throw(E))),
     dred_end(D).
 
 over_delete_facts(Facts) :-
+    nb_getval(aq_dred, D),
+    forall(member(F, Facts), ignore(trie_insert(D, f(F)))),
     forall(member(F, Facts),
            forall(user:'$aq_wrec'(F, S), go(S, F, 0))).
 
 dred_end(D) :-
-    retractall(aq_agenda(_, _, _)),
-    nb_setval(aq_phase, insert),
-    nb_setval(aq_dred, '$none'),
+    (   aq_agenda(_, _, _) -> retractall(aq_agenda(_, _, _)) ; true ),
+    nb_linkval(aq_phase, insert),
+    nb_linkval(aq_dred, '$none'),
     trie_destroy(D).
 
 %   Phase 1 removes what it over-deletes at once (states, goal and consumer
@@ -1018,18 +1103,18 @@ dred_end(D) :-
 %   Literal, State)) and the answers lost by registered queries (n(Id, A)).
 dred_run(Seed, Cleanup, D) :-
     % 1. over-delete
-    nb_setval(aq_phase, delete),
+    nb_linkval(aq_phase, delete),
     call(Seed),
     drain,
     call(Cleanup),
     % 2. re-derive the answers and states that may have another derivation,
     %    propagate them forward: that also restores the states and
     %    single-derivation answers that depend on them
-    nb_setval(aq_phase, restore),
+    nb_linkval(aq_phase, restore),
     forall(trie_gen(D, a(T, A)), ignore(rederive(T, A))),
     forall(trie_gen(D, s(Kind, Lit, S)), ignore(rederive_state(Kind, Lit, S))),
     drain,
-    nb_setval(aq_phase, insert),
+    nb_linkval(aq_phase, insert),
     findall(ev(Id, A), trie_gen(D, n(Id, A)), Pending0),
     msort(Pending0, Pending),
     forall(member(ev(Id, A), Pending),
