@@ -274,3 +274,56 @@ def test_a_rule_added_at_run_time_deletes_exactly_too():
     engine.feed_batch([("a(1, x)", 1), ("a(1, y)", 2), ("b(1, p)", 3), ("b(1, q)", 4)])
     assert net_output(engine.feed_batch([("a(1, y)", 2, 2, "retract")])) == Counter(
         {"base(1)@2-2": -1, "pair(y,p)@2-3": -1, "pair(x,q)@1-4": -1, "pair(x,p)@1-3": 1})
+
+
+# ---- harder shapes: partial matches with unbound variables, an event reaching a step twice,
+# identical events, the `first` selection, and rules fed by identical derived events ---------
+
+HARD_SHAPES = [
+    # one branch of an `or` leaves the other branch's variables unbound in the stored match
+    "ol{p}(I, Z) <- (a(I, X) or c(I, Y)) seq b(I, Z).",
+    "or{p}(I, X) <- a(I, X) seq (b(I, Y) or c(I, Z)).",
+    # the same input event reaches both sides of a step (and, below, two steps of the rule)
+    "rp{p}(I, X, Y) <- a(I, X) seq a(I, Y).",
+    "ra{p}(I, X, Y) <- (b(I, X) and b(I, Y)).3.",
+    "r3{p}(I, X, Z) <- a(I, X) seq b(I, _) seq a(I, Z).",
+    "ro{p}(I, X) <- (a(I, X) or b(I, X)) seq (b(I, _) or c(I, _)).",
+    # ... and reaches the second step of the rule through the first one before it reaches it
+    # directly: its arrivals there come right, then left
+    "rb{p}(I, X, Z) <- b(I, X) and (a(I, _) seq b(I, Z)).",
+    # a partial match whose join key is unbound (the `c` branch) pairs with every key
+    # NK
+    # identical derived events from different input events feed a rule
+    "dv{p}(I) <- pu(I) seq c(I, _).",
+]
+# the rule feeding `dv`: unrestricted, its head forgets which `a` and `b` it came from
+FEEDER = "pu(I) <- a(I, _) seq b(I, _)."
+
+
+def hard_program(policies=(("recent", "r"), ("chronological", "c"), ("unrestricted", "u"), ("first", "f"))):
+    rules = [FEEDER]
+    for policy, tag in policies:
+        for n, shape in enumerate(HARD_SHAPES):
+            rules.append(f"h{tag}{n}([property(consumption_policy, {policy})]) 'rule:' " + shape.format(p=tag))
+    return "\n".join(rules) + "\n"
+
+
+@pytest.fixture(scope="module")
+def hard():
+    engine = Engine.from_source(hard_program(), "hard.rtl")
+    yield engine
+    fresh(engine, "1.0")
+
+
+def with_duplicates(data, events):
+    """Some events twice (the same event, at the same times), in a random order."""
+    twice = data.draw(st.lists(st.sampled_from(events), max_size=3))
+    return data.draw(st.permutations(events + twice))
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(event, min_size=2, max_size=11), st.data())
+def test_hard_shapes_net_to_the_run_without_the_deleted_events(hard, events, data):
+    arrival = with_duplicates(data, events)
+    ops, remaining = with_deletions(data, arrival)
+    assert feed(hard, ops) == feed(hard, [("add", e) for e in remaining])

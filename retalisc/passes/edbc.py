@@ -429,8 +429,9 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler, *left_vars, s1, e1), [C("rtl_next_seq", lid), C("assertz", lefts),
                                                                      pair_best(e1)]))
         self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
-            self.if_stored(step, lefts, C(";", C("->", self.record_take(paired), conj(own["bounds"] + [own["retract"]])),
-                                          Atom("true")))]))
+            self.if_own_stored(step, lefts, left_vars + [s1, e1],
+                               C(";", C("->", self.record_take(paired), conj(own["bounds"] + [own["retract"]])),
+                                 Atom("true")))]))
         # a right instance: the L's it matches take it if it comes before their partner
         p_ = variant("P")
         take_over = conj([C("@<", own["rank"], p_["rank"]), self.record_take(p_["paired"])] + p_["bounds"]
@@ -444,7 +445,7 @@ class _RuleGenerator:
                 conj([self.record_add(paired), own["add"]])))]))
         # deleting a right instance: the L's paired with it take their next one
         self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
-            self.if_stored(step, rights, C("forall", self.record_lookup(paired), conj(
+            self.if_own_stored(step, rights, right_vars + [s2, e2], C("forall", self.record_lookup(paired), conj(
                 [self.record_take(paired)] + own["bounds"] + [own["retract"], pair_best(e1)])))]))
 
     def positions(self) -> Tuple[List[Var], List[Var]]:
@@ -465,7 +466,8 @@ class _RuleGenerator:
         if matched is None:
             self.clauses.append(clause(head, [C("forall", found, self.output(step, s, e)), C("assertz", own_store)]))
             self.clauses.append(clause(retract_head, [
-                self.if_stored(step, own_store, C("forall", found, self.output(step, s, e, retract=True)))]))
+                self.if_own_stored(step, own_store, own_vars + [os_, oe],
+                                   C("forall", found, self.output(step, s, e, retract=True)))]))
             return
         # A partner that fails the step's conditions is not a match: it is neither chosen nor
         # consumed, as when the condition is pushed onto an event (the output checks them again).
@@ -486,7 +488,7 @@ class _RuleGenerator:
         replay = V(self.fresh("Replay"))
         insert = C("rtl_policy_insert", Atom(step.name), V("_") if key is None else list_term(key), position, at)
         return conj([C("nb_getval", Atom("rtl_replay_position"), replay),
-                     C(";", C("->", C("==", replay, Atom("none")), conj([C("nb_getval", Atom("events"), position), body])),
+                     C(";", C("->", C("==", replay, Atom("none")), conj([C("rtl_next_seq", position), body])),
                        conj([C("=", position, replay), insert]))])
 
     def policy_facts(self, step: Step, key: List[Var], lefts: Term, rights: Term, matched: Optional[Term],
@@ -537,6 +539,14 @@ class _RuleGenerator:
         seen = {a.name for a in lefts.args if isinstance(a, Var)}
         return [a for a in rights.args if not (isinstance(a, Var) and a.name in seen)]
 
+    def if_own_stored(self, step: Step, stored: Term, own: List[Term], then: Term) -> Term:
+        """if_stored for the instance of the events whose variables are `own`: when they are
+        not all bound (a partial match from one branch of an `or`), the stored instance taken
+        is the one with the same unbound variables (rtl_take_instance/2), not any that unifies."""
+        own_term = C("own", *own)
+        take = C(";", C("->", C("ground", own_term), self.take(step, stored)), C("rtl_take_instance", stored, own_term))
+        return C(";", C("->", take, then), Atom("true"))
+
     def if_stored(self, step: Step, stored: Term, then: Term) -> Term:
         """Delete one stored instance and, only if there was one, take back what it made: a
         deletion of an event that was never added (or was already forgotten) changes nothing."""
@@ -561,7 +571,7 @@ class _RuleGenerator:
             stores = [twin] + (self.kept_of(twin) if step.window is not None else [])
             # (one at most: every instance that waits replaces its twins)
             drop_all = conj([C(";", C("->", C("retract", t), self.record_add(dropped)), Atom("true")) for t in stores])
-            drop = C(";", C("->", C("ground", own), drop_all), C("rtl_drop_twins", own))
+            drop = C(";", C("->", C("ground", own), drop_all), C("rtl_policy_drop_twins", Atom(step.name), own))
             wait = C(",", drop, wait)
         consume = conj([self.take(step, partner), self.record_add(matched), output])
         return C(";", C("->", C("once", found), consume), wait)
