@@ -328,9 +328,10 @@ rtl_take_warnings(Texts) :-
 %!  rtl_take_instance(:Stored, +Own) is semidet.
 %
 %   Remove one stored instance (live or kept) of the events Own (a term of the instance's
-%   own variables, as they appear in Stored) when Own is not ground: a partial match from one
-%   branch of an `or` leaves the other branch's variables unbound, and must not be taken for
-%   a stored match that merely unifies with it. Fails if there is none.
+%   own variables, as they appear in Stored), in a rule where a partial match from one branch
+%   of an `or` leaves the other branch's variables unbound: the instance taken has the same
+%   unbound variables, not merely one that unifies with it (either way). Fails if there is
+%   none.
 
 rtl_take_instance(M:Stored, Own) :-
     Stored =.. [Name|Args],
@@ -346,7 +347,8 @@ rtl_take_instance(M:Stored, Own) :-
     clause(M:Fresh, true, Ref),
     Found =@= Own,
     !,
-    erase(Ref).
+    erase(Ref),
+    Head = Fresh.                               % (binds what else Stored records: a number)
 
 %!  rtl_next_seq(-Seq:integer) is det.
 %

@@ -3,6 +3,7 @@
             rtl_policy_insert/4,        % +Step, ?Key, +Position, :Arrival
             rtl_policy_delete/4,        % +Step, +Side, ?Key, :Stored
             rtl_policy_drop_twins/2,    % +Step, :Stored
+            rtl_policy_take/3,          % +Step, :Stored, -Key
             rtl_policy_positioned/2     % +Module, +StoreName
           ]).
 
@@ -64,7 +65,7 @@ results it derived on the way.
 :- use_module(rtl_horizon, [rtl_next_seq/1, rtl_kept_generation/1]).
 
 :- meta_predicate rtl_policy_insert(+, ?, +, 0), rtl_policy_delete(+, +, ?, :),
-                  rtl_policy_drop_twins(+, :).
+                  rtl_policy_drop_twins(+, :), rtl_policy_take(+, :, -).
 
 %!  rtl_position(-Position:integer, -Mode) is det.
 %
@@ -300,6 +301,31 @@ rtl_policy_drop_twins(Step, M:Stored) :-
                (   rtl_kept_generation(a) -> assertz(M:GenA) ; assertz(M:GenB) )
            )).
 rtl_policy_drop_twins(_, _).
+
+%!  rtl_policy_take(+Step, :Stored, -Key:list) is det.
+%
+%   Consume the waiting partner Stored (live or kept) of a step whose join key may be
+%   unbound in a partial match, and give its key as it was stored: a partner that pairs with
+%   every key does so again when it is restored (rtl_policy.pl records it with the match).
+
+rtl_policy_take(Step, M:Partner, Key) :-
+    functor(Partner, Name, Arity),
+    policy_info(M, Step, entry(_, Key0, _, Stored, Kept, _)),
+    functor(Stored, Name, Arity),
+    !,
+    Partner =.. [_|Args],
+    member(T0, [Stored|Kept]),
+    functor(T0, StoreName, Arity),
+    T =.. [StoreName|Args],
+    clause(M:T, true, Ref),
+    !,
+    functor(Fresh, StoreName, Arity),
+    clause(M:Fresh, true, Ref),
+    erase(Ref),
+    Fresh =.. [_|FreshArgs],
+    length(Key0, N),
+    length(Key, N),
+    append(Key, _, FreshArgs).
 
 %!  rtl_policy_positioned(+Module, +StoreName) is semidet.
 %

@@ -125,6 +125,7 @@ builtin(rule, rtl_policy:rtl_position(_, _), []).                      % consump
 builtin(rule, rtl_policy:rtl_policy_insert(_, _, _, Goal), [Goal]).
 builtin(rule, rtl_policy:rtl_policy_delete(_, _, _, Stored), [retract(Stored)]).
 builtin(rule, rtl_policy:rtl_policy_drop_twins(_, Stored), [retract(Stored)]).
+builtin(rule, rtl_policy:rtl_policy_take(_, Stored, _), [retract(Stored)]).
 builtin(rule, rtl_ele:rtl_underived(_, _, _), []).
 builtin(rule, rtl_timers:rtl_timer_add(_, _, Goal), [Goal]).   % absences and alarms
 builtin(rule, rtl_timers:rtl_absence_wait(_, Goal), [Goal]).
@@ -454,6 +455,7 @@ own_step(_, _).
 policy_step(rtl_policy_insert(Step, _, _, _), Step).
 policy_step(rtl_policy_delete(Step, _, _, _), Step).
 policy_step(rtl_policy_drop_twins(Step, _), Step).
+policy_step(rtl_policy_take(Step, _, _), Step).
 
 %   A predicate of the program (or of `user`): check its clauses, for the most general call
 %   first; if that needs more instantiation (a clause calls an argument), for this call.

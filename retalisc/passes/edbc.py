@@ -166,6 +166,10 @@ class _RuleGenerator:
         self.records: List[tuple] = []
         self.kept: List[tuple] = []
         self.consumers: Dict[str, str] = {}
+        # policy steps whose join key may be unbound in a partial match (a rule with `or`):
+        # step name -> the variables recording each side's key as it was before the join
+        self.loose: Dict[str, Tuple[Var, Var]] = {}
+        self.branches: Dict[str, Var] = {}      # `or` step name -> its branch variable
 
     def t(self, base: str) -> Var:
         return V(self.time_names[base])
@@ -184,6 +188,14 @@ class _RuleGenerator:
         return target, [C("is", target, self.renamed(expression))]
 
     def generate(self) -> GeneratedRule:
+        if self.policy in ("recent", "chronological"):
+            # Under a consumption policy a partial match carries the branch of each `or` it
+            # came through: `a(X) or b(X)` makes different partial matches of a(1) and b(1)
+            # (no twins of each other under `recent`, and a deletion takes the right one).
+            for step in self.rule.steps:
+                if step.op == "or" and not step.derives_head:
+                    self.branches[step.name] = V(self.fresh("Branch"))
+                    step.output = Compound(step.output.name, step.output.args + (self.branches[step.name],))
         for step in self.rule.steps:
             for side, operand in (("left", step.left), ("right", step.right), ("negated", step.negated)):
                 if operand is not None and operand.step is not None:
@@ -336,8 +348,10 @@ class _RuleGenerator:
             params = operand_vars(operand)
             window = self.window_check(step, s1, e1)
             for suffix, retract in (("", False), ("_retract", True)):
-                self.clauses.append(clause(C(handler + suffix, *params, s1, e1),
-                                           [window, self.output(step, s1, e1, retract)]))
+                output = self.output(step, s1, e1, retract)
+                if step.name in self.branches:
+                    output = substitute(output, {self.branches[step.name].name: Atom(side)})
+                self.clauses.append(clause(C(handler + suffix, *params, s1, e1), [window, output]))
 
     def join_clauses(self, step: Step) -> None:
         if self.first:
@@ -388,7 +402,13 @@ class _RuleGenerator:
         paired = self.record(step, "first", key + left_other + [lid, s1, e1] + right_other + [s2, e2],
                              rotated=step.window is not None)
 
-        def with_right(r_other: List[Term], rs: Term, re_: Term):
+        # In a rule with `or`, a partial match may leave a key variable unbound: an L that pairs
+        # with every key. Its partners are then ranked with their key too, its pairing record
+        # is found by its number (whatever key the pairing bound), and it pairs again in the
+        # form it was stored in.
+        loose = bool(key) and any(other.op == "or" for other in self.rule.steps)
+
+        def with_right(r_key: List[Term], r_other: List[Term], rs: Term, re_: Term):
             """The goals and interval of a match of the L with right instance (r_other, rs, re_)."""
             names = {"S1": s1, "E1": e1, "S2": rs, "E2": re_}
             goals = [substitute(g, names) for g in relation]
@@ -397,18 +417,20 @@ class _RuleGenerator:
             s_, e_ = V(self.fresh("S")), V(self.fresh("E"))
             bounds = [C("is", s_, start), C("is", e_, end)]
             window = self.window_check(step, s_, e_)
-            rank = C("-", C("-", rs, re_), C("r", *r_other))
+            rank = C("-", C("-", rs, re_), C("r", *(r_key + r_other)))
             return goals, bounds + ([window] if window is not None else []), s_, e_, rank
 
         def variant(tag: str):
             """The right instance's terms with its variables renamed apart (`tag` "" keeps them)."""
+            renamed = right_other + [s2, e2] + (key if tag == "P" and loose else [])
             if tag:
-                names = {v.name: V(self.fresh(v.name + tag)) for v in right_other + [s2, e2]}
+                names = {v.name: V(self.fresh(v.name + tag)) for v in renamed}
                 r_other = [names[v.name] for v in right_other]
                 rs, re_ = names[s2.name], names[e2.name]
             else:
                 names, r_other, rs, re_ = {}, right_other, s2, e2
-            goals_, bounds_, s_, e_, rank_ = with_right(r_other, rs, re_)
+            r_key = [names.get(v.name, v) for v in key] if loose else []
+            goals_, bounds_, s_, e_, rank_ = with_right(r_key, r_other, rs, re_)
             store = substitute(rights, names)
             pairing = substitute(paired, names)
             out = [a if not isinstance(a, Var) else names.get(a.name, a) for a in step.output.args]
@@ -444,9 +466,15 @@ class _RuleGenerator:
               C(";", C("->", self.record_lookup(p_["paired"]), C(";", C("->", take_over, Atom("true")), Atom("true"))),
                 conj([self.record_add(paired), own["add"]])))]))
         # deleting a right instance: the L's paired with it take their next one
+        again = pair_best(e1)
+        if loose:
+            # (the L as it is stored, numbered LId: the pairing bound its key)
+            again = C(f"{step.name}_left_again", lid)
+            stored_left = lefts if step.window is None else C(";", lefts, self.kept_lookup(lefts))
+            self.clauses.append(clause(again, [stored_left, pair_best(e1)]))
         self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
             self.if_own_stored(step, rights, right_vars + [s2, e2], C("forall", self.record_lookup(paired), conj(
-                [self.record_take(paired)] + own["bounds"] + [own["retract"], pair_best(e1)])))]))
+                [self.record_take(paired)] + own["bounds"] + [own["retract"], again])))]))
 
     def positions(self) -> Tuple[List[Var], List[Var]]:
         """Under a consumption policy, the position arguments of the left and right stores
@@ -475,10 +503,12 @@ class _RuleGenerator:
         position = own_store.args[-3]
         at = C(handler + "_at", position, *own_vars, os_, oe)
         body = self.consuming_join(step, selected, partner_store, own_store, matched, self.output(step, s, e))
-        self.clauses.append(clause(head, [self.positioned(step, key, position, at, body)]))
+        runtime_key = None if step.name in self.loose else key
+        self.clauses.append(clause(head, [self.positioned(step, runtime_key, position, at, body)]))
         self.clauses.append(clause(at, [body]))
         self.clauses.append(clause(retract_head, [
-            C("rtl_policy_delete", Atom(step.name), Atom(side), list_term(key), own_store)]))
+            C("rtl_policy_delete", Atom(step.name), Atom(side),
+              V("_") if runtime_key is None else list_term(key), own_store)]))
 
     def positioned(self, step: Step, key: Optional[List[Var]], position: Var, at: Term, body: Term) -> Term:
         """Process an instance at its position (`body`, also the clause of `at`): now, or,
@@ -504,9 +534,20 @@ class _RuleGenerator:
             at = C(f"{step.name}_{side}_at", stored.args[-3], *own, stored.args[-2], stored.args[-1])
             self.clauses.append(C(info, C("entry", Atom(side), list_term(key), stored.args[-3], stored,
                                           list_term(kept), at)))
-        self.clauses.append(C(info, C("match", list_term(key), list_term(self.generations(matched)),
+        left_form, right_form, record = lefts, rights, matched
+        if step.name in self.loose:
+            names = {}
+            for var, form in zip(self.loose[step.name], (lefts, rights)):
+                kept_key = [V(self.fresh("K")) for _ in key]
+                names[var.name] = list_term(kept_key)
+                if form is lefts:
+                    left_form = C(form.name, *kept_key, *form.args[len(key):])
+                else:
+                    right_form = C(form.name, *kept_key, *form.args[len(key):])
+            record = substitute(matched, names)
+        self.clauses.append(C(info, C("match", list_term(key), list_term(self.generations(record)),
                                       lefts.args[-3], rights.args[-3], self.output(step, s, e, retract=True),
-                                      lefts, rights)))
+                                      left_form, right_form)))
         if self.policy == "recent":
             for stored in (lefts, rights):
                 dropped = self.dropped_record(step, stored)
@@ -531,7 +572,17 @@ class _RuleGenerator:
         if self.policy == "unrestricted":
             return None
         args = list(lefts.args) + self.partner_only_args(lefts, rights) + [s, e]
+        if self.key_of(step) and any(other.op == "or" for other in self.rule.steps):
+            # a partial match from one branch of an `or` may leave a key variable unbound: it
+            # pairs with every key, and the join binds it; the record keeps each side's key as
+            # it was stored, to restore it (rtl_policy.pl)
+            self.loose[step.name] = (V(self.fresh("LKey")), V(self.fresh("RKey")))
+            args += list(self.loose[step.name])
         return self.record(step, "matched", args, rotated=True)
+
+    def key_of(self, step: Step) -> List[Var]:
+        key, _ = _split(operand_vars(step.left), operand_vars(step.right))
+        return key
 
     @staticmethod
     def partner_only_args(lefts: Term, rights: Term) -> List[Term]:
@@ -540,12 +591,13 @@ class _RuleGenerator:
         return [a for a in rights.args if not (isinstance(a, Var) and a.name in seen)]
 
     def if_own_stored(self, step: Step, stored: Term, own: List[Term], then: Term) -> Term:
-        """if_stored for the instance of the events whose variables are `own`: when they are
-        not all bound (a partial match from one branch of an `or`), the stored instance taken
-        is the one with the same unbound variables (rtl_take_instance/2), not any that unifies."""
-        own_term = C("own", *own)
-        take = C(";", C("->", C("ground", own_term), self.take(step, stored)), C("rtl_take_instance", stored, own_term))
-        return C(";", C("->", take, then), Atom("true"))
+        """if_stored for the instance of the events whose variables are `own`: in a rule with
+        `or`, partial matches from one branch leave the other branch's variables unbound, so the
+        stored instance taken is the one with the same unbound variables (rtl_take_instance/2),
+        not any that unifies with it."""
+        if not any(other.op == "or" for other in self.rule.steps):
+            return self.if_stored(step, stored, then)
+        return C(";", C("->", C("rtl_take_instance", stored, C("own", *own)), then), Atom("true"))
 
     def if_stored(self, step: Step, stored: Term, then: Term) -> Term:
         """Delete one stored instance and, only if there was one, take back what it made: a
@@ -573,6 +625,14 @@ class _RuleGenerator:
             drop_all = conj([C(";", C("->", C("retract", t), self.record_add(dropped)), Atom("true")) for t in stores])
             drop = C(";", C("->", C("ground", own), drop_all), C("rtl_policy_drop_twins", Atom(step.name), own))
             wait = C(",", drop, wait)
+        if step.name in self.loose:
+            key = self.key_of(step)
+            own_key, partner_key = self.loose[step.name]
+            if own.name.endswith("_rights"):
+                partner_key, own_key = own_key, partner_key
+            consume = conj([C("rtl_policy_take", Atom(step.name), partner, partner_key), self.record_add(matched),
+                            output])
+            return conj([C("copy_term", list_term(key), own_key), C(";", C("->", C("once", found), consume), wait)])
         consume = conj([self.take(step, partner), self.record_add(matched), output])
         return C(";", C("->", C("once", found), consume), wait)
 
