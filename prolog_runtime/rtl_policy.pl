@@ -17,10 +17,10 @@ taken back, the partner it consumed waits again, and every later decision of the
 same join key may change (the freed partner can pair with a later instance, which then leaves
 another one waiting, ...).
 
-Every instance a policy step stores or records carries its *position*: the number of the input
-event whose processing brought it (the `events` counter; rtl_position/2, which compiled code
-reads inline). Instances of one key
-arrive in position order, so the step's stores and records are its log:
+Every instance a policy step stores or records carries its *position*: its arrival number
+(rtl_next_seq/1, one counter for every step, taken by compiled code inline; rtl_position/2).
+Instances arrive in position order, also when one input event reaches a step several times
+(`a(X) seq a(Y)`, or through two paths), so the step's stores and records are its log:
 
   - the instances still waiting (the live store and, for a windowed step, its kept
     generations), each with its position;
@@ -32,12 +32,21 @@ arrive in position order, so the step's stores and records are its log:
 Rewinding a step for a key to a position Min takes back every match made at Min or later
 (its result is retracted), lets the instances that arrived before Min and were consumed or
 replaced at Min or later wait again (in position order), and removes the instances that
-arrived at Min or later; they are then replayed in position order (left before right at equal
-positions, the order of the triggers), each with its own position. A deletion rewinds to the
-deleted instance's position and replays the others. A replay passes its results on with the
+arrived at Min or later; they are then replayed in position order, each with its own
+position. A deletion rewinds to the deleted instance's position and replays the others. A replay passes its results on with the
 position of the instance replayed (rtl_replay_position), so a later policy step that receives
 such a result receives it "in the past" and rewinds itself to that position before taking it
 (rtl_policy_insert/4): steps of one rule and rules fed by derived events stay exact together.
+A result taken back reaches the next policy step with the position of its match
+(rtl_retract_position): that step deletes the instance the match passed on, not an identical
+one (the same events at the same times) that arrived otherwise.
+
+Instances are told apart as variants, not by unification: a partial match from one branch of
+an `or` leaves the other branch's variables unbound (and, under a policy, carries the branch it
+came through, so `a(1) or b(1)` are two different partial matches). When such a variable is a
+join key, the instance pairs with every key: the step is rewound for every key, and a match
+record keeps each side's key as it was stored (rtl_policy_take/3), so a freed partner waits
+again as it was.
 A blocker of a policy negation (`not(N).[L, R]`) blocks the pairs made after it arrived; its
 deletion (or its arrival in the past) rewinds every key of the step.
 
@@ -53,11 +62,13 @@ The compiled program describes each policy step by facts of `<step>_policy/1`:
   - `blocker(Position, Live, Kept)`: the blocker store of a negation.
 
 The cost falls on deletions and on results passed on by a replay; processing an input event
-only reads its position. What is exact: within the retraction horizon (rtl_horizon.pl), when
-each input event reaches a step through at most one side; an event that reaches one step
-several times at the same position (`a(X) seq a(Y)`, or through two paths) is replayed in the
-order left, right, which is the order of its triggers but not necessarily the order of the
-results it derived on the way.
+only takes an arrival number. What is exact: within the retraction horizon (rtl_horizon.pl),
+the output nets to that of a run in which the deleted event never arrived; of several arrivals
+of the same input event, a deletion takes back the latest. The limit: a rule without a policy
+does not record when it made a result, so a policy rule fed by identical derived events of such
+a rule (the same event over the same interval from different input events) deletes the latest
+arrival of the one taken back, and takes a result derived again by a deletion there (a blocker
+of its negation deleted) as arriving then.
 */
 
 :- use_module(library(lists)).

@@ -167,6 +167,37 @@ def test_a_match_taken_back_deletes_the_instance_it_passed_on():
         f"{e}@{s}-{t}" for _, e, s, t in expected)
 
 
+def test_a_deletion_of_an_event_that_arrived_twice_takes_back_its_latest_arrival():
+    """Which of two arrivals of the same event "never arrived" matters under a policy: without
+    the first a(1, x), b(1, p) would take a(1, y). A deletion takes back the latest arrival (as
+    the oracle of the property tests, `with_deletions`, does), so the output is that of the
+    run without the second a(1, x)."""
+    program = ":- set_etalis_flag(event_consumption_policy, chronological).\nr(X, Y) <- a(1, X) seq b(1, Y).\n"
+    engine = fresh(Engine.from_source(program, "twice_in.rtl"))
+    events = [("a(1, x)", 1), ("a(1, y)", 2), ("b(1, p)", 3), ("a(1, x)", 1)]
+    assert outputs(engine, events) == [("add", "r(x,p)", 1, 3)]
+    assert outputs(engine, [("a(1, x)", 1, 1, "retract")]) == []
+    # the first a(1, x) is still there, consumed by b(1, p); a(1, y) waits
+    assert outputs(engine, [("b(1, q)", 4)]) == [("add", "r(y,q)", 2, 4)]
+    # a second deletion takes back the first arrival: b(1, p) takes a(1, y) instead
+    assert net_output(engine.feed_batch([("a(1, x)", 1, 1, "retract")])) == Counter(
+        {"r(x,p)@1-3": -1, "r(y,q)@2-4": -1, "r(y,p)@2-3": 1})
+
+
+def test_identical_events_of_an_unrestricted_rule_feeding_a_policy_rule():
+    """The limit: an unrestricted rule does not record when it made a result, so when it
+    takes back one of two identical results (the same event over the same interval, made from
+    different input events), the policy rule it feeds deletes the latest arrival, which need
+    not be the one taken back. Here the exact answer would be y(1)@0-5 (without a(1, p),
+    c(1, 0) takes the x(1) over [0, 3]); the deletion leaves y(1)@1-5."""
+    program = ("x(I) <- a(I, _) seq b(I, _).\n"
+               "r1([property(consumption_policy, chronological)]) 'rule:' y(I) <- x(I) seq c(I, _).\n")
+    engine = fresh(Engine.from_source(program, "limit.rtl"))
+    events = [("a(1, p)", 1), ("b(1, z)", 3), ("c(1, 0)", 5), ("a(1, r)", 0), ("a(1, q)", 1)]
+    assert ("add", "y(1)", 1, 5) in outputs(engine, events)
+    assert net_output(engine.feed_batch([("a(1, p)", 1, 1, "retract")])) == Counter({"x(1)@1-3": -1})
+
+
 # ---- a brute-force simulation of the policies ----------------------------------------------
 
 SIMULATED = {
@@ -385,3 +416,20 @@ def test_hard_shapes_net_to_the_run_without_the_deleted_events(hard, events, dat
     arrival = with_duplicates(data, events)
     ops, remaining = with_deletions(data, arrival)
     assert feed(hard, ops) == feed(hard, [("add", e) for e in remaining])
+
+
+@pytest.fixture(scope="module")
+def hard_added():
+    engine = fresh(Engine.from_source("base(X) <- a(X, _).\n", "base_hard.rtl"))
+    engine.add_rules(hard_program((("recent", "r"), ("chronological", "c"), ("first", "f"))))
+    yield engine
+    fresh(engine, "1.0")
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(event, min_size=2, max_size=10), st.data())
+def test_hard_shapes_added_at_run_time_net_to_the_run_without_the_deleted_events(hard_added, events, data):
+    """The same rules added while the program runs (through the sandbox)."""
+    arrival = with_duplicates(data, events)
+    ops, remaining = with_deletions(data, arrival)
+    assert feed(hard_added, ops) == feed(hard_added, [("add", e) for e in remaining])

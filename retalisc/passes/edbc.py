@@ -20,8 +20,8 @@ result back when a blocking event arrives late; deleting the blocker derives it 
 
 Under the `recent` and `chronological` consumption policies (ETALIS), an arriving event
 joins with the newest (or oldest) waiting partner only, and both are consumed; the match is
-recorded (`e_matched`), and every instance carries its position (the input event that brought
-it), so that deleting an event rewinds the step and replays its later arrivals
+recorded (`e_matched`), and every instance carries its position (its arrival number), so that
+deleting an event rewinds the step and replays its later arrivals
 (prolog_runtime/rtl_policy.pl): the output is that of a run without the deleted event.
 
 Deletions and late events (prolog_runtime/rtl_horizon.pl): the runtime moves the partial
@@ -188,6 +188,13 @@ class _RuleGenerator:
         return target, [C("is", target, self.renamed(expression))]
 
     def generate(self) -> GeneratedRule:
+        # the variables a partial match may leave unbound: those of one branch of an `or` only
+        self.unbound: Set[str] = set()
+        for step in self.rule.steps:
+            if step.op == "or":
+                left_names = {v.name for v in operand_vars(step.left)}
+                right_names = {v.name for v in operand_vars(step.right)}
+                self.unbound |= left_names ^ right_names
         if self.policy in ("recent", "chronological"):
             # Under a consumption policy a partial match carries the branch of each `or` it
             # came through: `a(X) or b(X)` makes different partial matches of a(1) and b(1)
@@ -406,7 +413,7 @@ class _RuleGenerator:
         # with every key. Its partners are then ranked with their key too, its pairing record
         # is found by its number (whatever key the pairing bound), and it pairs again in the
         # form it was stored in.
-        loose = bool(key) and any(other.op == "or" for other in self.rule.steps)
+        loose = any(v.name in self.unbound for v in key)
 
         def with_right(r_key: List[Term], r_other: List[Term], rs: Term, re_: Term):
             """The goals and interval of a match of the L with right instance (r_other, rs, re_)."""
@@ -478,7 +485,7 @@ class _RuleGenerator:
 
     def positions(self) -> Tuple[List[Var], List[Var]]:
         """Under a consumption policy, the position arguments of the left and right stores
-        (prolog_runtime/rtl_policy.pl): the input event that brought each instance."""
+        (prolog_runtime/rtl_policy.pl): the arrival number of each instance."""
         if self.policy == "unrestricted":
             return [], []
         return [V(self.fresh("LPos"))], [V(self.fresh("RPos"))]
@@ -514,11 +521,12 @@ class _RuleGenerator:
         """Process an instance at its position (`body`, also the clause of `at`): now, or,
         when it comes from a replay (its position is in the past), rewinding the step first
         (rtl_policy_insert/4)."""
-        # (rtl_position/2 inline: this runs for every instance)
+        # (rtl_position/2 inline, the arrival number as rtl_next_seq/1 takes it: this runs for
+        # every instance)
         replay = V(self.fresh("Replay"))
         insert = C("rtl_policy_insert", Atom(step.name), V("_") if key is None else list_term(key), position, at)
         return conj([C("nb_getval", Atom("rtl_replay_position"), replay),
-                     C(";", C("->", C("==", replay, Atom("none")), conj([C("rtl_next_seq", position), body])),
+                     C(";", C("->", C("==", replay, Atom("none")), conj([C("flag", Atom("rtl_processing_seq"), position, C("+", position, Number(1))), body])),
                        conj([C("=", position, replay), insert]))])
 
     def policy_facts(self, step: Step, key: List[Var], lefts: Term, rights: Term, matched: Optional[Term],
@@ -572,7 +580,7 @@ class _RuleGenerator:
         if self.policy == "unrestricted":
             return None
         args = list(lefts.args) + self.partner_only_args(lefts, rights) + [s, e]
-        if self.key_of(step) and any(other.op == "or" for other in self.rule.steps):
+        if any(v.name in self.unbound for v in self.key_of(step)):
             # a partial match from one branch of an `or` may leave a key variable unbound: it
             # pairs with every key, and the join binds it; the record keeps each side's key as
             # it was stored, to restore it (rtl_policy.pl)
@@ -595,7 +603,7 @@ class _RuleGenerator:
         `or`, partial matches from one branch leave the other branch's variables unbound, so the
         stored instance taken is the one with the same unbound variables (rtl_take_instance/2),
         not any that unifies with it."""
-        if not any(other.op == "or" for other in self.rule.steps):
+        if not self.unbound:
             return self.if_stored(step, stored, then)
         return C(";", C("->", C("rtl_take_instance", stored, C("own", *own)), then), Atom("true"))
 
