@@ -13,8 +13,8 @@
             rtl_too_late_text/4,        % +End, +Retracted, +Derived, -Text
             rtl_warning/1,              % +Text
             rtl_take_warnings/1,        % -Texts
-            rtl_drop_twins/1,           % :Stored
             rtl_next_seq/1,             % -Seq
+            rtl_take_instance/2,        % :Stored, +Own
             rtl_aggregate_values/3,     % +Items, -Acc, -Values
             rtl_aggregate_redo/5        % +Items, +Removed, -Acc, -Retracts, -Adds
           ]).
@@ -61,7 +61,7 @@ record, and deleting an A or a P replays the P's of the affected accumulators
 (rtl_aggregate_values/3, rtl_aggregate_redo/5).
 */
 
-:- meta_predicate rtl_dry_run(0, -, -), rtl_drop_twins(:).
+:- meta_predicate rtl_dry_run(0, -, -), rtl_take_instance(:, +).
 
 :- dynamic warning_text/1.
 
@@ -325,27 +325,30 @@ rtl_take_warnings(Texts) :-
     ;   Texts = []
     ).
 
-%!  rtl_drop_twins(:Stored) is det.
+%!  rtl_take_instance(:Stored, +Own) is semidet.
 %
-%   Under `recent`, a partial match about to wait replaces its waiting twins: the stored
-%   matches (live or kept) of the same events at other times (the last three arguments of a
-%   stored match are its position, start and end). Called by compiled rules when
-%   Stored is not ground (a partial match from one branch of an `or`, whose other branch's
-%   variables are unbound): a twin is then a variant of it, not anything that unifies.
+%   Remove one stored instance (live or kept) of the events Own (a term of the instance's
+%   own variables, as they appear in Stored), in a rule where a partial match from one branch
+%   of an `or` leaves the other branch's variables unbound: the instance taken has the same
+%   unbound variables, not merely one that unifies with it (either way). Fails if there is
+%   none.
 
-rtl_drop_twins(M:Stored) :-
+rtl_take_instance(M:Stored, Own) :-
     Stored =.. [Name|Args],
-    append(Key, [_, _, _], Args),               % position, start, end (rtl_policy.pl)
     (   program_fact(M, ele_kept_store(Name, kept(KeptA, KeptB), _))
     ->  Names = [Name, KeptA, KeptB]
     ;   Names = [Name]
     ),
-    copy_term(Key, Pattern),
-    append(Pattern, [_, _, _], PatternArgs),
-    forall(member(N, Names),
-           (   Head =.. [N|PatternArgs],
-               forall(( clause(M:Head, true, Ref), Pattern =@= Key ), erase(Ref))
-           )).
+    member(N, Names),
+    Head =.. [N|Args],
+    copy_term(Own-Head, _-Pattern),
+    clause(M:Pattern, true, Ref),
+    copy_term(Own-Head, Found-Fresh),
+    clause(M:Fresh, true, Ref),
+    Found =@= Own,
+    !,
+    erase(Ref),
+    Head = Fresh.                               % (binds what else Stored records: a number)
 
 %!  rtl_next_seq(-Seq:integer) is det.
 %

@@ -2,6 +2,8 @@
           [ rtl_position/2,             % -Position, -Mode
             rtl_policy_insert/4,        % +Step, ?Key, +Position, :Arrival
             rtl_policy_delete/4,        % +Step, +Side, ?Key, :Stored
+            rtl_policy_drop_twins/2,    % +Step, :Stored
+            rtl_policy_take/3,          % +Step, :Stored, -Key
             rtl_policy_positioned/2     % +Module, +StoreName
           ]).
 
@@ -15,10 +17,10 @@ taken back, the partner it consumed waits again, and every later decision of the
 same join key may change (the freed partner can pair with a later instance, which then leaves
 another one waiting, ...).
 
-Every instance a policy step stores or records carries its *position*: the number of the input
-event whose processing brought it (the `events` counter; rtl_position/2, which compiled code
-reads inline). Instances of one key
-arrive in position order, so the step's stores and records are its log:
+Every instance a policy step stores or records carries its *position*: its arrival number
+(rtl_next_seq/1, one counter for every step, taken by compiled code inline; rtl_position/2).
+Instances arrive in position order, also when one input event reaches a step several times
+(`a(X) seq a(Y)`, or through two paths), so the step's stores and records are its log:
 
   - the instances still waiting (the live store and, for a windowed step, its kept
     generations), each with its position;
@@ -30,12 +32,21 @@ arrive in position order, so the step's stores and records are its log:
 Rewinding a step for a key to a position Min takes back every match made at Min or later
 (its result is retracted), lets the instances that arrived before Min and were consumed or
 replaced at Min or later wait again (in position order), and removes the instances that
-arrived at Min or later; they are then replayed in position order (left before right at equal
-positions, the order of the triggers), each with its own position. A deletion rewinds to the
-deleted instance's position and replays the others. A replay passes its results on with the
+arrived at Min or later; they are then replayed in position order, each with its own
+position. A deletion rewinds to the deleted instance's position and replays the others. A replay passes its results on with the
 position of the instance replayed (rtl_replay_position), so a later policy step that receives
 such a result receives it "in the past" and rewinds itself to that position before taking it
 (rtl_policy_insert/4): steps of one rule and rules fed by derived events stay exact together.
+A result taken back reaches the next policy step with the position of its match
+(rtl_retract_position): that step deletes the instance the match passed on, not an identical
+one (the same events at the same times) that arrived otherwise.
+
+Instances are told apart as variants, not by unification: a partial match from one branch of
+an `or` leaves the other branch's variables unbound (and, under a policy, carries the branch it
+came through, so `a(1) or b(1)` are two different partial matches). When such a variable is a
+join key, the instance pairs with every key: the step is rewound for every key, and a match
+record keeps each side's key as it was stored (rtl_policy_take/3), so a freed partner waits
+again as it was.
 A blocker of a policy negation (`not(N).[L, R]`) blocks the pairs made after it arrived; its
 deletion (or its arrival in the past) rewinds every key of the step.
 
@@ -51,28 +62,32 @@ The compiled program describes each policy step by facts of `<step>_policy/1`:
   - `blocker(Position, Live, Kept)`: the blocker store of a negation.
 
 The cost falls on deletions and on results passed on by a replay; processing an input event
-only reads its position. What is exact: within the retraction horizon (rtl_horizon.pl), when
-each input event reaches a step through at most one side; an event that reaches one step
-several times at the same position (`a(X) seq a(Y)`, or through two paths) is replayed in the
-order left, right, which is the order of its triggers but not necessarily the order of the
-results it derived on the way.
+only takes an arrival number. What is exact: within the retraction horizon (rtl_horizon.pl),
+the output nets to that of a run in which the deleted event never arrived; of several arrivals
+of the same input event, a deletion takes back the latest. The limit: a rule without a policy
+does not record when it made a result, so a policy rule fed by identical derived events of such
+a rule (the same event over the same interval from different input events) deletes the latest
+arrival of the one taken back, and takes a result derived again by a deletion there (a blocker
+of its negation deleted) as arriving then.
 */
 
 :- use_module(library(lists)).
 :- use_module(library(pairs)).
+:- use_module(rtl_horizon, [rtl_next_seq/1, rtl_kept_generation/1]).
 
-:- meta_predicate rtl_policy_insert(+, ?, +, 0), rtl_policy_delete(+, +, ?, :).
+:- meta_predicate rtl_policy_insert(+, ?, +, 0), rtl_policy_delete(+, +, ?, :),
+                  rtl_policy_drop_twins(+, :), rtl_policy_take(+, :, -).
 
 %!  rtl_position(-Position:integer, -Mode) is det.
 %
-%   The position of the instance a policy step is receiving: the number of the input event
-%   being processed (Mode `now`), or, inside a replay, the position of the instance replayed
-%   (Mode `replay`: the instance comes from the past).
+%   The position of the instance a policy step is receiving: a new arrival number (Mode
+%   `now`), or, inside a replay, the position of the instance replayed (Mode `replay`: the
+%   instance comes from the past).
 
 rtl_position(Position, Mode) :-
     nb_getval(rtl_replay_position, R),          % set by rtl_reset/0
     (   R == none
-    ->  nb_getval(events, Position), Mode = now
+    ->  rtl_next_seq(Position), Mode = now
     ;   Position = R, Mode = replay
     ).
 
@@ -91,29 +106,32 @@ rtl_policy_insert(Step, Key, Position, M:Arrival) :-
 %!  rtl_policy_delete(+Step, +Side, ?Key, :Stored) is det.
 %
 %   Delete an instance of Step (Stored, a term of its store for Side, `left`, `right` or
-%   `negated`, with its position unbound) as if it had never arrived. The latest arrival of
-%   the instance is deleted; an instance that is not known (never added, or forgotten after
-%   the retraction horizon) changes nothing.
+%   `negated`, with its position unbound) as if it had never arrived. Of several arrivals of
+%   the same instance (the same events at the same times, told apart by their positions) the
+%   one deleted is the one the deletion comes from: when a match of an earlier policy step
+%   is taken back, the instance that match passed on (the first that arrived at or after the
+%   match was made); else the latest arrival (the deletion of an input event takes back its
+%   latest addition). An instance that is not known (never added, or forgotten after the
+%   retraction horizon) changes nothing.
 
 rtl_policy_delete(Step, negated, _, M:Stored) :-
     !,
-    policy_info(M, Step, blocker(Position, Stored, Kept)),
-    (   aggregate_all(max(Position), ( member(T, [Stored|Kept]), clause(M:T, true) ), Latest)
-    ->  Position = Latest,
-        once(( member(T, [Stored|Kept]), clause(M:T, true, Ref) )),
+    (   findall(P-Ref, ( blocker_item(M, Step, Found, P, Ref), same_instance(Found, Stored) ), Items),
+        pairs_keys(Items, Ps),
+        chosen(Ps, Chosen)
+    ->  memberchk(Chosen-Ref, Items),
         erase(Ref),
-        Min is Latest + 1,
+        Min is Chosen + 1,
         rewind(M, Step, _AnyKey, Min, Replays),
         replay(M, Replays)
     ;   true
     ).
 rtl_policy_delete(Step, Side, Key, M:Stored) :-
-    (   aggregate_all(max(P), known_position(M, Step, Side, Key, Stored, P), Latest)
-    ->  copy_term(Stored, Deleted),
-        policy_info(M, Step, entry(Side, _, Latest, Deleted, _, _)),
-        rewind(M, Step, Key, Latest, Replays0),
+    (   findall(P, ( known(M, Step, Side, Key, Found, P), same_instance(Found, Stored) ), Ps),
+        chosen(Ps, Chosen)
+    ->  rewind(M, Step, Key, Chosen, Replays0),
         side_index(Side, I),
-        (   select(Latest-I-(D-_), Replays0, Replays), D =@= Deleted
+        (   select(Chosen-I-(D-_), Replays0, Replays), same_instance(D, Stored)
         ->  true
         ;   Replays = Replays0
         ),
@@ -121,18 +139,70 @@ rtl_policy_delete(Step, Side, Key, M:Stored) :-
     ;   true
     ).
 
-% The positions at which an instance like Stored arrived: waiting, consumed in a match, or
-% replaced by a twin.
-known_position(M, Step, Side, Key, Stored0, P) :-
-    copy_term(Key-Stored0, Key1-Stored),
-    policy_info(M, Step, entry(Side, Key1, P, Stored, Kept, _)),
-    (   member(T, [Stored|Kept]), clause(M:T, true)
-    ;   policy_info(M, Step, match(Key1, Gens, PL, PR, _, L, R)),
-        (   Side == left -> L = Stored, P = PL ; R = Stored, P = PR ),
-        member(G, Gens), clause(M:G, true)
-    ;   policy_info(M, Step, dropped(Gens, Stored, _)),
-        member(G, Gens), clause(M:G, true)
+%   Of the positions of the known arrivals of an instance, the one a deletion takes (see
+%   rtl_policy_delete/4). rtl_retract_position is set while a match is taken back.
+chosen(Ps, Chosen) :-
+    Ps \== [],
+    (   nb_current(rtl_retract_position, From), From \== none,
+        include(=<(From), Ps, After), After \== []
+    ->  min_list(After, Chosen)
+    ;   max_list(Ps, Chosen)
     ).
+
+%   same_instance(+A, +B): two stored instances of the same events at the same times (their
+%   positions aside; a partial match from one branch of an `or` has the other branch's
+%   variables unbound, so this is a variant check, not unification).
+same_instance(A, B) :-
+    A =.. [_|As],
+    B =.. [_|Bs],
+    append(KA, [_, SA, EA], As),
+    append(KB, [_, SB, EB], Bs),
+    KA-SA-EA =@= KB-SB-EB.
+
+% The arrivals of Step for Side with Key, as stored, at Position: waiting, consumed in a
+% match, or replaced by a twin.
+known(M, Step, Side, Key, Found, Position) :-
+    (   waiting_item(M, Step, Side, Key, Found, Position, _)
+    ;   match_item(M, Step, Key, m(_, PL, PR, _, L, R)),
+        (   Side == left -> Found = L, Position = PL ; Found = R, Position = PR )
+    ;   dropped_item(M, Step, Side, Key, Found, Position, _, _)
+    ).
+
+%   The items of a step, each fetched twice: by its key (indexed), then as stored (a stored
+%   instance may have variables where Key has values).
+waiting_item(M, Step, Side, Key, Found, Position, Ref) :-
+    policy_info(M, Step, entry(Side, Key, _, Live, Kept, _)),
+    nth0(I, [Live|Kept], T),
+    clause(M:T, true, Ref),
+    policy_info(M, Step, entry(Side, _, Position, Found, Kept1, _)),
+    nth0(I, [Found|Kept1], T1),
+    clause(M:T1, true, Ref).
+
+match_item(M, Step, Key, m(Ref, PL, PR, Retract, L, R)) :-
+    policy_info(M, Step, match(Key, Gens, _, _, _, _, _)),
+    nth0(I, Gens, G),
+    clause(M:G, true, Ref),
+    policy_info(M, Step, match(_, Gens1, PL, PR, Retract, L, R)),
+    nth0(I, Gens1, G1),
+    clause(M:G1, true, Ref).
+
+dropped_item(M, Step, Side, Key, Found, Position, By, Ref) :-
+    policy_info(M, Step, entry(Side, Key, _, Stored, _, _)),
+    policy_info(M, Step, dropped(Gens, Stored, _)),
+    nth0(I, Gens, G),
+    clause(M:G, true, Ref),
+    policy_info(M, Step, entry(Side, _, Position, Found, _, _)),
+    policy_info(M, Step, dropped(Gens1, Found, By)),
+    nth0(I, Gens1, G1),
+    clause(M:G1, true, Ref).
+
+blocker_item(M, Step, Found, Position, Ref) :-
+    policy_info(M, Step, blocker(_, Stored, Kept)),
+    nth0(I, [Stored|Kept], T),
+    clause(M:T, true, Ref),
+    policy_info(M, Step, blocker(Position, Found, Kept1)),
+    nth0(I, [Found|Kept1], T1),
+    clause(M:T1, true, Ref).
 
 side_index(left, 0).
 side_index(right, 1).
@@ -142,31 +212,25 @@ side_index(right, 1).
 %   Undo what Step did for Key from position Min on (see the module header). Replays are the
 %   instances to process again, `Position-SideIndex-(Stored-Arrival)`, in order.
 rewind(M, Step, Key, Min, Replays) :-
-    findall(Made-m(Ref, PL, PR, Retract, L, R),
-            ( policy_info(M, Step, match(Key, Gens, PL, PR, Retract, L, R)),
-              member(G, Gens),
-              clause(M:G, true, Ref),
+    findall(Made-Item,
+            ( match_item(M, Step, Key, Item),
+              Item = m(_, PL, PR, _, _, _),
               Made is max(PL, PR),
               Made >= Min ),
             Matches0),
     keysort(Matches0, Ascending),
     reverse(Ascending, Matches),                    % the latest result is taken back first
     forall(member(_-m(Ref, _, _, _, _, _), Matches), erase(Ref)),
-    forall(member(_-m(_, _, _, Retract, _, _), Matches), ignore(M:Retract)),
+    forall(member(Made-m(_, _, _, Retract, _, _), Matches), taken_back(Made, M:Retract)),
     findall(Item, ( member(_-m(_, PL, PR, _, L, R), Matches),
                     ( Item = left-PL-L ; Item = right-PR-R ) ), Consumed),
     findall(Side-P-Stored,
-            ( policy_info(M, Step, dropped(Gens, Stored, By)),
-              member(G, Gens),
-              clause(M:G, true, Ref),
+            ( dropped_item(M, Step, Side, Key, Stored, P, By, Ref),
               By >= Min,
-              policy_info(M, Step, entry(Side, Key, P, Stored, _, _)),
               erase(Ref) ),
             Dropped),
-    findall(Side-P-Live,
-            ( policy_info(M, Step, entry(Side, Key, P, Live, Kept, _)),
-              member(T, [Live|Kept]),
-              clause(M:T, true, Ref),
+    findall(Side-P-Stored,
+            ( waiting_item(M, Step, Side, Key, Stored, P, Ref),
               P >= Min,
               erase(Ref) ),
             Waiting),
@@ -182,14 +246,23 @@ rewind(M, Step, Key, Min, Replays) :-
 
 later(Min, _-P-_) :- P >= Min.
 
+%   Take back the result of a match made at Made: a policy step it reaches deletes the
+%   instance that match passed on (rtl_policy_delete/4).
+taken_back(Made, Goal) :-
+    (   nb_current(rtl_retract_position, Old) -> true ; Old = none ),
+    setup_call_cleanup(nb_setval(rtl_retract_position, Made),
+                       ignore(Goal),
+                       nb_setval(rtl_retract_position, Old)).
+
 %   Instances that arrived before the rewind point wait again: each side's live store for
 %   Key is rebuilt in position order (newest first under `recent`, oldest first else).
 restore(_, _, _, []) :- !.
 restore(M, Step, Key, Instances) :-
     policy_info(M, Step, order(Order)),
     forall(( member(Side, [left, right]), memberchk(Side-_-_, Instances) ),
-           (   policy_info(M, Step, entry(Side, Key, _, Live, _, _)),
-               findall(P-Live, ( clause(M:Live, true, Ref), entry_position(M, Step, Side, Live, P),
+           (   findall(P-Live, ( waiting_item(M, Step, Side, Key, Live, P, Ref),
+                                 policy_info(M, Step, entry(Side, _, _, Live0, _, _)),
+                                 clause(M:Live0, true, Ref),  % the live store, not a kept one
                                  erase(Ref) ),
                        Present),
                findall(P-S, member(Side-P-S, Instances), Back),
@@ -202,18 +275,68 @@ restore(M, Step, Key, Instances) :-
                )
            )).
 
-entry_position(M, Step, Side, Live, P) :-
-    policy_info(M, Step, entry(Side, _, P, Live, _, _)).
-
 replay(M, Replays) :-
     forall(member(P-_-(_-Arrival), Replays), with_position(P, M:Arrival)).
 
 %   Process Goal as an instance arriving at Position: what it passes on comes from there.
 with_position(Position, Goal) :-
     nb_getval(rtl_replay_position, Old),
-    setup_call_cleanup(nb_setval(rtl_replay_position, Position),
+    (   nb_current(rtl_retract_position, OldFrom) -> true ; OldFrom = none ),
+    setup_call_cleanup(( nb_setval(rtl_replay_position, Position),
+                         nb_setval(rtl_retract_position, none) ),
                        ignore(Goal),
-                       nb_setval(rtl_replay_position, Old)).
+                       ( nb_setval(rtl_replay_position, Old),
+                         nb_setval(rtl_retract_position, OldFrom) )).
+
+%!  rtl_policy_drop_twins(+Step, :Stored) is det.
+%
+%   Under `recent`, a partial match about to wait replaces its waiting twins: the stored
+%   matches (live or kept) of the same events at other times, recorded as replaced by the
+%   arrival at Stored's position. Called by compiled rules when Stored is not ground (a
+%   partial match from one branch of an `or`, whose other branch's variables are unbound):
+%   a twin is then a variant of it, not anything that unifies (ground twins are replaced by
+%   the compiled code itself).
+
+rtl_policy_drop_twins(Step, M:Stored) :-
+    policy_info(M, Step, entry(Side, Key0, By, Stored, _, _)),
+    !,
+    copy_term(Key0, Key),                       % (for the index: Stored keeps its variables)
+    Stored =.. [_|Args],
+    append(Events, [_, _, _], Args),
+    forall(( waiting_item(M, Step, Side, Key, Twin, _, Ref),
+             Twin =.. [_|TwinArgs],
+             append(TwinEvents, [_, _, _], TwinArgs),
+             TwinEvents =@= Events ),
+           (   erase(Ref),
+               policy_info(M, Step, dropped([GenA, GenB], Twin, By)),
+               (   rtl_kept_generation(a) -> assertz(M:GenA) ; assertz(M:GenB) )
+           )).
+rtl_policy_drop_twins(_, _).
+
+%!  rtl_policy_take(+Step, :Stored, -Key:list) is det.
+%
+%   Consume the waiting partner Stored (live or kept) of a step whose join key may be
+%   unbound in a partial match, and give its key as it was stored: a partner that pairs with
+%   every key does so again when it is restored (rtl_policy.pl records it with the match).
+
+rtl_policy_take(Step, M:Partner, Key) :-
+    functor(Partner, Name, Arity),
+    policy_info(M, Step, entry(_, Key0, _, Stored, Kept, _)),
+    functor(Stored, Name, Arity),
+    !,
+    Partner =.. [_|Args],
+    member(T0, [Stored|Kept]),
+    functor(T0, StoreName, Arity),
+    T =.. [StoreName|Args],
+    clause(M:T, true, Ref),
+    !,
+    functor(Fresh, StoreName, Arity),
+    clause(M:Fresh, true, Ref),
+    erase(Ref),
+    Fresh =.. [_|FreshArgs],
+    length(Key0, N),
+    length(Key, N),
+    append(Key, _, FreshArgs).
 
 %!  rtl_policy_positioned(+Module, +StoreName) is semidet.
 %

@@ -117,12 +117,14 @@ builtin(rule, rtl_ele:rtl_detected(_), []).
 builtin(rule, rtl_horizon:rtl_late(_), []).                % deletions and late events
 builtin(rule, rtl_horizon:rtl_kept_generation(_), []).
 builtin(rule, rtl_horizon:rtl_next_seq(_), []).
+builtin(rule, rtl_horizon:rtl_take_instance(Stored, _), [retract(Stored)]).   % from the rule's store
 builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
 builtin(rule, rtl_horizon:rtl_aggregate_redo(_, _, _, _, _), []).
-builtin(rule, rtl_horizon:rtl_drop_twins(Stored), [retract(Stored)]).   % retracts from the rule's store
 builtin(rule, rtl_policy:rtl_position(_, _), []).                      % consumption policies
 builtin(rule, rtl_policy:rtl_policy_insert(_, _, _, Goal), [Goal]).
 builtin(rule, rtl_policy:rtl_policy_delete(_, _, _, Stored), [retract(Stored)]).
+builtin(rule, rtl_policy:rtl_policy_drop_twins(_, Stored), [retract(Stored)]).
+builtin(rule, rtl_policy:rtl_policy_take(_, Stored, _), [retract(Stored)]).
 builtin(rule, rtl_ele:rtl_underived(_, _, _), []).
 builtin(rule, rtl_timers:rtl_timer_add(_, _, Goal), [Goal]).   % absences and alarms
 builtin(rule, rtl_timers:rtl_absence_wait(_, Goal), [Goal]).
@@ -289,6 +291,8 @@ walk(G, M, S, V0, V) :-
     arg(1, G, Clause),
     check_db(Clause, M, G, S),
     V = V0.
+walk(flag(Key, Old, New), _, st(rule(_, _, _), _), V, V) :-
+    Key == rtl_processing_seq, var(Old), New == Old + 1, !.    % a policy step's arrival number
 walk(G, _, S, _, _) :-
     forbidden(G), !,
     refuse(S, G, not_allowed).
@@ -462,6 +466,8 @@ own_step(_, _).
 
 policy_step(rtl_policy_insert(Step, _, _, _), Step).
 policy_step(rtl_policy_delete(Step, _, _, _), Step).
+policy_step(rtl_policy_drop_twins(Step, _), Step).
+policy_step(rtl_policy_take(Step, _, _), Step).
 
 %   A predicate of the program (or of `user`): check its clauses, for the most general call
 %   first; if that needs more instantiation (a clause calls an argument), for this call.

@@ -452,7 +452,7 @@ change(retract, Kind, What) :-
     ->  What = ignore
     ;   in_ancestor(rtl_ele:rtl_collect_garbage/0)          % the periodic sweep
     ->  ( Kind == live -> What = expired ; What = dropped )
-    ;   in_ancestor(rtl_horizon:rtl_drop_twins/1)
+    ;   in_ancestor(rtl_policy:rtl_policy_drop_twins/2)
     ->  What = replaced
     ;   nb_getval(rtl_trace_phase, retract)
     ->  What = retracted

@@ -20,8 +20,8 @@ result back when a blocking event arrives late; deleting the blocker derives it 
 
 Under the `recent` and `chronological` consumption policies (ETALIS), an arriving event
 joins with the newest (or oldest) waiting partner only, and both are consumed; the match is
-recorded (`e_matched`), and every instance carries its position (the input event that brought
-it), so that deleting an event rewinds the step and replays its later arrivals
+recorded (`e_matched`), and every instance carries its position (its arrival number), so that
+deleting an event rewinds the step and replays its later arrivals
 (prolog_runtime/rtl_policy.pl): the output is that of a run without the deleted event.
 
 Deletions and late events (prolog_runtime/rtl_horizon.pl): the runtime moves the partial
@@ -166,6 +166,10 @@ class _RuleGenerator:
         self.records: List[tuple] = []
         self.kept: List[tuple] = []
         self.consumers: Dict[str, str] = {}
+        # policy steps whose join key may be unbound in a partial match (a rule with `or`):
+        # step name -> the variables recording each side's key as it was before the join
+        self.loose: Dict[str, Tuple[Var, Var]] = {}
+        self.branches: Dict[str, Var] = {}      # `or` step name -> its branch variable
 
     def t(self, base: str) -> Var:
         return V(self.time_names[base])
@@ -184,6 +188,21 @@ class _RuleGenerator:
         return target, [C("is", target, self.renamed(expression))]
 
     def generate(self) -> GeneratedRule:
+        # the variables a partial match may leave unbound: those of one branch of an `or` only
+        self.unbound: Set[str] = set()
+        for step in self.rule.steps:
+            if step.op == "or":
+                left_names = {v.name for v in operand_vars(step.left)}
+                right_names = {v.name for v in operand_vars(step.right)}
+                self.unbound |= left_names ^ right_names
+        if self.policy in ("recent", "chronological"):
+            # Under a consumption policy a partial match carries the branch of each `or` it
+            # came through: `a(X) or b(X)` makes different partial matches of a(1) and b(1)
+            # (no twins of each other under `recent`, and a deletion takes the right one).
+            for step in self.rule.steps:
+                if step.op == "or" and not step.derives_head:
+                    self.branches[step.name] = V(self.fresh("Branch"))
+                    step.output = Compound(step.output.name, step.output.args + (self.branches[step.name],))
         for step in self.rule.steps:
             for side, operand in (("left", step.left), ("right", step.right), ("negated", step.negated)):
                 if operand is not None and operand.step is not None:
@@ -336,8 +355,10 @@ class _RuleGenerator:
             params = operand_vars(operand)
             window = self.window_check(step, s1, e1)
             for suffix, retract in (("", False), ("_retract", True)):
-                self.clauses.append(clause(C(handler + suffix, *params, s1, e1),
-                                           [window, self.output(step, s1, e1, retract)]))
+                output = self.output(step, s1, e1, retract)
+                if step.name in self.branches:
+                    output = substitute(output, {self.branches[step.name].name: Atom(side)})
+                self.clauses.append(clause(C(handler + suffix, *params, s1, e1), [window, output]))
 
     def join_clauses(self, step: Step) -> None:
         if self.first:
@@ -388,7 +409,13 @@ class _RuleGenerator:
         paired = self.record(step, "first", key + left_other + [lid, s1, e1] + right_other + [s2, e2],
                              rotated=step.window is not None)
 
-        def with_right(r_other: List[Term], rs: Term, re_: Term):
+        # In a rule with `or`, a partial match may leave a key variable unbound: an L that pairs
+        # with every key. Its partners are then ranked with their key too, its pairing record
+        # is found by its number (whatever key the pairing bound), and it pairs again in the
+        # form it was stored in.
+        loose = any(v.name in self.unbound for v in key)
+
+        def with_right(r_key: List[Term], r_other: List[Term], rs: Term, re_: Term):
             """The goals and interval of a match of the L with right instance (r_other, rs, re_)."""
             names = {"S1": s1, "E1": e1, "S2": rs, "E2": re_}
             goals = [substitute(g, names) for g in relation]
@@ -397,18 +424,20 @@ class _RuleGenerator:
             s_, e_ = V(self.fresh("S")), V(self.fresh("E"))
             bounds = [C("is", s_, start), C("is", e_, end)]
             window = self.window_check(step, s_, e_)
-            rank = C("-", C("-", rs, re_), C("r", *r_other))
+            rank = C("-", C("-", rs, re_), C("r", *(r_key + r_other)))
             return goals, bounds + ([window] if window is not None else []), s_, e_, rank
 
         def variant(tag: str):
             """The right instance's terms with its variables renamed apart (`tag` "" keeps them)."""
+            renamed = right_other + [s2, e2] + (key if tag == "P" and loose else [])
             if tag:
-                names = {v.name: V(self.fresh(v.name + tag)) for v in right_other + [s2, e2]}
+                names = {v.name: V(self.fresh(v.name + tag)) for v in renamed}
                 r_other = [names[v.name] for v in right_other]
                 rs, re_ = names[s2.name], names[e2.name]
             else:
                 names, r_other, rs, re_ = {}, right_other, s2, e2
-            goals_, bounds_, s_, e_, rank_ = with_right(r_other, rs, re_)
+            r_key = [names.get(v.name, v) for v in key] if loose else []
+            goals_, bounds_, s_, e_, rank_ = with_right(r_key, r_other, rs, re_)
             store = substitute(rights, names)
             pairing = substitute(paired, names)
             out = [a if not isinstance(a, Var) else names.get(a.name, a) for a in step.output.args]
@@ -429,8 +458,9 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler, *left_vars, s1, e1), [C("rtl_next_seq", lid), C("assertz", lefts),
                                                                      pair_best(e1)]))
         self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
-            self.if_stored(step, lefts, C(";", C("->", self.record_take(paired), conj(own["bounds"] + [own["retract"]])),
-                                          Atom("true")))]))
+            self.if_own_stored(step, lefts, left_vars + [s1, e1],
+                               C(";", C("->", self.record_take(paired), conj(own["bounds"] + [own["retract"]])),
+                                 Atom("true")))]))
         # a right instance: the L's it matches take it if it comes before their partner
         p_ = variant("P")
         take_over = conj([C("@<", own["rank"], p_["rank"]), self.record_take(p_["paired"])] + p_["bounds"]
@@ -443,13 +473,19 @@ class _RuleGenerator:
               C(";", C("->", self.record_lookup(p_["paired"]), C(";", C("->", take_over, Atom("true")), Atom("true"))),
                 conj([self.record_add(paired), own["add"]])))]))
         # deleting a right instance: the L's paired with it take their next one
+        again = pair_best(e1)
+        if loose:
+            # (the L as it is stored, numbered LId: the pairing bound its key)
+            again = C(f"{step.name}_left_again", lid)
+            stored_left = lefts if step.window is None else C(";", lefts, self.kept_lookup(lefts))
+            self.clauses.append(clause(again, [stored_left, pair_best(e1)]))
         self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
-            self.if_stored(step, rights, C("forall", self.record_lookup(paired), conj(
-                [self.record_take(paired)] + own["bounds"] + [own["retract"], pair_best(e1)])))]))
+            self.if_own_stored(step, rights, right_vars + [s2, e2], C("forall", self.record_lookup(paired), conj(
+                [self.record_take(paired)] + own["bounds"] + [own["retract"], again])))]))
 
     def positions(self) -> Tuple[List[Var], List[Var]]:
         """Under a consumption policy, the position arguments of the left and right stores
-        (prolog_runtime/rtl_policy.pl): the input event that brought each instance."""
+        (prolog_runtime/rtl_policy.pl): the arrival number of each instance."""
         if self.policy == "unrestricted":
             return [], []
         return [V(self.fresh("LPos"))], [V(self.fresh("RPos"))]
@@ -465,7 +501,8 @@ class _RuleGenerator:
         if matched is None:
             self.clauses.append(clause(head, [C("forall", found, self.output(step, s, e)), C("assertz", own_store)]))
             self.clauses.append(clause(retract_head, [
-                self.if_stored(step, own_store, C("forall", found, self.output(step, s, e, retract=True)))]))
+                self.if_own_stored(step, own_store, own_vars + [os_, oe],
+                                   C("forall", found, self.output(step, s, e, retract=True)))]))
             return
         # A partner that fails the step's conditions is not a match: it is neither chosen nor
         # consumed, as when the condition is pushed onto an event (the output checks them again).
@@ -473,20 +510,23 @@ class _RuleGenerator:
         position = own_store.args[-3]
         at = C(handler + "_at", position, *own_vars, os_, oe)
         body = self.consuming_join(step, selected, partner_store, own_store, matched, self.output(step, s, e))
-        self.clauses.append(clause(head, [self.positioned(step, key, position, at, body)]))
+        runtime_key = None if step.name in self.loose else key
+        self.clauses.append(clause(head, [self.positioned(step, runtime_key, position, at, body)]))
         self.clauses.append(clause(at, [body]))
         self.clauses.append(clause(retract_head, [
-            C("rtl_policy_delete", Atom(step.name), Atom(side), list_term(key), own_store)]))
+            C("rtl_policy_delete", Atom(step.name), Atom(side),
+              V("_") if runtime_key is None else list_term(key), own_store)]))
 
     def positioned(self, step: Step, key: Optional[List[Var]], position: Var, at: Term, body: Term) -> Term:
         """Process an instance at its position (`body`, also the clause of `at`): now, or,
         when it comes from a replay (its position is in the past), rewinding the step first
         (rtl_policy_insert/4)."""
-        # (rtl_position/2 inline: this runs for every instance)
+        # (rtl_position/2 inline, the arrival number as rtl_next_seq/1 takes it: this runs for
+        # every instance)
         replay = V(self.fresh("Replay"))
         insert = C("rtl_policy_insert", Atom(step.name), V("_") if key is None else list_term(key), position, at)
         return conj([C("nb_getval", Atom("rtl_replay_position"), replay),
-                     C(";", C("->", C("==", replay, Atom("none")), conj([C("nb_getval", Atom("events"), position), body])),
+                     C(";", C("->", C("==", replay, Atom("none")), conj([C("flag", Atom("rtl_processing_seq"), position, C("+", position, Number(1))), body])),
                        conj([C("=", position, replay), insert]))])
 
     def policy_facts(self, step: Step, key: List[Var], lefts: Term, rights: Term, matched: Optional[Term],
@@ -502,9 +542,20 @@ class _RuleGenerator:
             at = C(f"{step.name}_{side}_at", stored.args[-3], *own, stored.args[-2], stored.args[-1])
             self.clauses.append(C(info, C("entry", Atom(side), list_term(key), stored.args[-3], stored,
                                           list_term(kept), at)))
-        self.clauses.append(C(info, C("match", list_term(key), list_term(self.generations(matched)),
+        left_form, right_form, record = lefts, rights, matched
+        if step.name in self.loose:
+            names = {}
+            for var, form in zip(self.loose[step.name], (lefts, rights)):
+                kept_key = [V(self.fresh("K")) for _ in key]
+                names[var.name] = list_term(kept_key)
+                if form is lefts:
+                    left_form = C(form.name, *kept_key, *form.args[len(key):])
+                else:
+                    right_form = C(form.name, *kept_key, *form.args[len(key):])
+            record = substitute(matched, names)
+        self.clauses.append(C(info, C("match", list_term(key), list_term(self.generations(record)),
                                       lefts.args[-3], rights.args[-3], self.output(step, s, e, retract=True),
-                                      lefts, rights)))
+                                      left_form, right_form)))
         if self.policy == "recent":
             for stored in (lefts, rights):
                 dropped = self.dropped_record(step, stored)
@@ -529,13 +580,32 @@ class _RuleGenerator:
         if self.policy == "unrestricted":
             return None
         args = list(lefts.args) + self.partner_only_args(lefts, rights) + [s, e]
+        if any(v.name in self.unbound for v in self.key_of(step)):
+            # a partial match from one branch of an `or` may leave a key variable unbound: it
+            # pairs with every key, and the join binds it; the record keeps each side's key as
+            # it was stored, to restore it (rtl_policy.pl)
+            self.loose[step.name] = (V(self.fresh("LKey")), V(self.fresh("RKey")))
+            args += list(self.loose[step.name])
         return self.record(step, "matched", args, rotated=True)
+
+    def key_of(self, step: Step) -> List[Var]:
+        key, _ = _split(operand_vars(step.left), operand_vars(step.right))
+        return key
 
     @staticmethod
     def partner_only_args(lefts: Term, rights: Term) -> List[Term]:
         """The arguments of `rights` that `lefts` does not have already (the join key)."""
         seen = {a.name for a in lefts.args if isinstance(a, Var)}
         return [a for a in rights.args if not (isinstance(a, Var) and a.name in seen)]
+
+    def if_own_stored(self, step: Step, stored: Term, own: List[Term], then: Term) -> Term:
+        """if_stored for the instance of the events whose variables are `own`: in a rule with
+        `or`, partial matches from one branch leave the other branch's variables unbound, so the
+        stored instance taken is the one with the same unbound variables (rtl_take_instance/2),
+        not any that unifies with it."""
+        if not self.unbound:
+            return self.if_stored(step, stored, then)
+        return C(";", C("->", C("rtl_take_instance", stored, C("own", *own)), then), Atom("true"))
 
     def if_stored(self, step: Step, stored: Term, then: Term) -> Term:
         """Delete one stored instance and, only if there was one, take back what it made: a
@@ -561,8 +631,16 @@ class _RuleGenerator:
             stores = [twin] + (self.kept_of(twin) if step.window is not None else [])
             # (one at most: every instance that waits replaces its twins)
             drop_all = conj([C(";", C("->", C("retract", t), self.record_add(dropped)), Atom("true")) for t in stores])
-            drop = C(";", C("->", C("ground", own), drop_all), C("rtl_drop_twins", own))
+            drop = C(";", C("->", C("ground", own), drop_all), C("rtl_policy_drop_twins", Atom(step.name), own))
             wait = C(",", drop, wait)
+        if step.name in self.loose:
+            key = self.key_of(step)
+            own_key, partner_key = self.loose[step.name]
+            if own.name.endswith("_rights"):
+                partner_key, own_key = own_key, partner_key
+            consume = conj([C("rtl_policy_take", Atom(step.name), partner, partner_key), self.record_add(matched),
+                            output])
+            return conj([C("copy_term", list_term(key), own_key), C(";", C("->", C("once", found), consume), wait)])
         consume = conj([self.take(step, partner), self.record_add(matched), output])
         return C(";", C("->", C("once", found), consume), wait)
 
