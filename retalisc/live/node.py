@@ -99,6 +99,10 @@ class Transport:
     wire = "cdr"
     name = "transport"
     attaches_seq = False     # publish(..., seq=N) carries the output number with the message itself
+    # `flush` makes sure what was published is not lost with the process; when it cannot
+    # (Zenoh), a node with --state keeps the outputs of the last moments in its snapshots and
+    # publishes them again on restart (state.py, "the tail")
+    flush_delivers = True
 
     def start(self, node: "LiveNode") -> None:
         raise NotImplementedError
@@ -431,6 +435,8 @@ class LiveNode:
 
     def _send(self, topic: str, msgtype: str, data: bytes, how: str, seq: int) -> None:
         """Publish a message with its output number `seq` (see the module's docstring)."""
+        if self.state is not None and not self.transport.flush_delivers:
+            self.state.published(seq, topic, msgtype, data, how)
         if how == "header":          # ROS 1: header.seq is the first 4 bytes of the message
             self.transport.publish(topic, msgtype, struct.pack("<I", seq & 0xFFFFFFFF) + data[4:])
         elif how == "attachment":

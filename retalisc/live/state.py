@@ -16,12 +16,22 @@ never stopped over the same input; what leaves the process (published topics) is
 at-least-once: what was produced after the snapshot is published again, with the output
 number it had (node.py), so a subscriber drops the repeats. The output topics are advertised
 before the replay, so subscribers can connect before it publishes.
+
+A snapshot never counts as published an output that a crash loses inside the process: ROS 1
+publishes synchronously and DDS waits for the readers' acknowledgements before it (the
+transport's `flush`). Zenoh offers no such wait, so for a transport whose `flush` does not
+deliver, the node keeps "the tail": the messages it published during the last TAIL_SECONDS
+(at most TAIL_MESSAGES of them; output number, topic, type, bytes, wall-clock time; the
+attachment is made again from the number), a snapshot stores it, and a restart publishes it
+again, with the same numbers, before it replays the journal. This assumes the middleware
+delivers a message within TAIL_SECONDS of its publication.
 """
 from __future__ import annotations
 
 import base64
 import json
 import time
+from collections import deque
 from pathlib import Path
 from typing import Callable, Optional, Union
 
@@ -30,6 +40,8 @@ from ..driver.recovery import (DEFAULT_SNAPSHOT_EVENTS, DEFAULT_SNAPSHOT_SECONDS
 
 RECONNECT_SECONDS = 2.0     # how long a restart waits for the subscribers of its outputs
 FLUSH_SECONDS = 1.0         # how long a snapshot waits for what was published to be handed over
+TAIL_SECONDS = 1.0          # without such a wait: the last seconds of publications a snapshot keeps
+TAIL_MESSAGES = 4096        # and at most that many of them
 
 # the service requests that change the state: journaled and replayed
 STATEFUL_CALLS = ("_add_output", "_delete_output", "_add_memory", "_delete_memory", "_add_input", "_delete_input")
@@ -83,6 +95,9 @@ class LiveState:
         self.restored = None
         self.replayed = (0, 0)           # events, service requests
         self.ready = False               # recovered: snapshots may be written
+        # (wall time, output number, topic, type, bytes, how numbered) of the last publications
+        self.tail: deque = deque(maxlen=TAIL_MESSAGES)
+        self.republished = 0             # messages of the restored tail published again
 
     # ---- start: restore and replay (called by LiveNode.start before live input is taken) -------
 
@@ -113,8 +128,13 @@ class LiveState:
         for spec in node.config.publish:         # before the replay publishes on them
             if spec.name not in node.output_types:
                 node._advertise(spec.name, spec.msgtype)
-        if any(path.stat().st_size for number, path in self.journal.segments() if number >= restored["number"]):
+        tail = saved.get("tail", [])
+        if tail or any(path.stat().st_size for number, path in self.journal.segments()
+                       if number >= restored["number"]):
             self._wait_for_subscribers(node, saved.get("subscribers", {}))
+        for seq, topic, msgtype, data, how in tail:       # what the middleware may have lost
+            node._send(topic, msgtype, base64.b64decode(data), how, seq)
+        self.republished = len(tail)
         for topic, msgtype in saved.get("inputs", {}).items():
             reply = node._add_input(topic, msgtype)
             if not reply.ok:
@@ -146,11 +166,13 @@ class LiveState:
         self.replayed = (events, calls)
         self.ready = True
         self.journal.open(restored["number"])
+        tail_note = (f"; published again the {len(tail)} messages of the last {TAIL_SECONDS:g} s before the "
+                     f"snapshot (outputs {tail[0][0]} to {tail[-1][0]})" if tail else "")
         again = (f"; outputs {first_output + 1} to {node.outputs} of the run were produced (and published) again, "
                  f"with the same output numbers: "
                  f"live outputs are at-least-once" if node.outputs > first_output else "")
         self.log(f"retalisc: restored snapshot {restored['number']} of {self.directory.directory} and replayed "
-                 f"{events} journaled events and {calls} service requests{again}")
+                 f"{events} journaled events and {calls} service requests{tail_note}{again}")
 
     def _wait_for_subscribers(self, node, counts: dict) -> None:
         """Before the replay publishes again: wait (at most `reconnect_seconds`) until every
@@ -179,6 +201,19 @@ class LiveState:
         return record["e"], record["t"], None
 
     # ---- while live (the consumer thread) --------------------------------------------------
+
+    def published(self, seq: int, topic: str, msgtype: str, data: bytes, how: str) -> None:
+        """A message was published over a transport whose `flush` does not deliver: kept in
+        the tail (the messages of the last TAIL_SECONDS, at most TAIL_MESSAGES)."""
+        now = time.time()
+        self.tail.append((now, seq, topic, msgtype, data, how))
+        while self.tail and self.tail[0][0] < now - TAIL_SECONDS:
+            self.tail.popleft()
+
+    def _tail_records(self) -> list:
+        since = time.time() - TAIL_SECONDS
+        return [[seq, topic, msgtype, base64.b64encode(data).decode("ascii"), how]
+                for at, seq, topic, msgtype, data, how in self.tail if at >= since]
 
     def events(self, events) -> None:
         """Journal events about to be fed: (event, seconds, arrival)."""
@@ -229,7 +264,7 @@ class LiveState:
         manifest = {"live": node.transport.name,
                     "node": {"inputs": dict(node.inputs), "output_types": dict(node.output_types),
                              "learned": dict(node.learned), "outputs": node.outputs,
-                             "subscribers": _subscribers(node)}}
+                             "subscribers": _subscribers(node), "tail": self._tail_records()}}
         sink = self.raw if self.raw is not None else _NoOutput()
         if self.raw is None:
             manifest["out_bytes"] = 0

@@ -52,6 +52,7 @@ class ZenohTransport(Transport):
     wire = "cdr"
     name = "zenoh"
     attaches_seq = True
+    flush_delivers = False       # no wait until the session handed over what was put
 
     def __init__(self, listen: Sequence[str] = (), connect: Sequence[str] = ()):
         self.zenoh = require("zenoh", "retalisc zenoh")
