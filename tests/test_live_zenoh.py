@@ -84,6 +84,10 @@ def test_two_components_over_zenoh_and_a_restart(tmp_path):
     lines = [json.loads(line) for line in (tmp_path / "first.jsonl").read_text().splitlines()]
     last = sorted((tmp_path / "state").glob("snapshot-*.json"))[-1]     # some subscribers of /pos
     assert json.loads(last.read_text())["node"]["subscribers"] == {"/pos": 1}
+    # a snapshot keeps the messages of the last second (published again on restart): each as published
+    for manifest in sorted((tmp_path / "state").glob("snapshot-*.json")):
+        for seq, topic, msgtype, data, how in json.loads(manifest.read_text())["node"]["tail"]:
+            assert topic == "/pos" and how == "attachment" and lines[seq - 1]["consumer"] == "pos", manifest
     assert numbered and len(numbered) <= len(lines)
     for number, x in numbered:
         line = lines[number - 1]
