@@ -68,11 +68,12 @@ The compiled program describes each policy step by facts of `<step>_policy/1`:
 The cost falls on deletions and on results passed on by a replay; processing an input event
 only takes an arrival number. What is exact: within the retraction horizon (rtl_horizon.pl),
 the output nets to that of a run in which the deleted event never arrived; of several arrivals
-of the same input event, a deletion takes back the latest. The limit: a rule without a policy
-does not record when it made a result, so a policy rule fed by identical derived events of such
-a rule (the same event over the same interval from different input events) deletes the latest
-arrival of the one taken back, and takes a result derived again by a deletion there (a blocker
-of its negation deleted) as arriving then.
+of the same input event, a deletion takes back the latest. A rule without a policy whose results
+a policy step takes records when it made each (rtl_policy_made/6), so taking one back deletes
+the arrival it made, and one taken back by a late blocker comes back at its old position when
+the blocker is deleted. The limit: a result such a rule makes only when a blocker (or a
+`first` partner) is deleted arrives then, and such a rule does not tell apart two arrivals of
+the same input event.
 */
 
 :- use_module(library(lists)).
