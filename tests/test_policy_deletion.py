@@ -219,6 +219,16 @@ def test_a_result_taken_back_by_a_blocker_comes_back_at_its_old_position():
         {"un(1)@0-3": 1, "hc(1,0)@0-5": 1, "hc(1,0)@1-5": -1})
 
 
+def test_rules_added_at_run_time_record_the_results_a_policy_rule_takes():
+    """The same through the sandbox: a rule without a policy added with the policy rule it feeds."""
+    engine = fresh(Engine.from_source("base(X) <- a(X, _).\n", "base_made.rtl"))
+    engine.add_rules("ux(I) <- a(I, _) seq b(I, _).\n"
+                     "hr([property(consumption_policy, chronological)]) 'rule:' y(I) <- ux(I) seq c(I, _).\n")
+    engine.feed_batch([("a(1, p)", 1), ("b(1, z)", 3), ("c(1, 0)", 5), ("a(1, r)", 0), ("a(1, q)", 1)])
+    assert net_output(engine.feed_batch([("a(1, p)", 1, 1, "retract")])) == Counter(
+        {"base(1)@1-1": -1, "ux(1)@1-3": -1, "y(1)@1-5": -1, "y(1)@0-5": 1})
+
+
 # ---- a brute-force simulation of the policies ----------------------------------------------
 
 SIMULATED = {
