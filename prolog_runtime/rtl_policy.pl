@@ -4,7 +4,11 @@
             rtl_policy_delete/4,        % +Step, +Side, ?Key, :Stored
             rtl_policy_drop_twins/2,    % +Step, :Stored
             rtl_policy_take/3,          % +Step, :Stored, -Key
-            rtl_policy_positioned/2     % +Module, +StoreName
+            rtl_policy_positioned/2,    % +Module, +StoreName
+            rtl_policy_made/6,          % :MadeA, :MadeB, :WithdrawnA, :WithdrawnB, -Position, :Derive
+            rtl_policy_unmade/6,        % :MadeA, :MadeB, :WithdrawnA, :WithdrawnB, -Position, :Underive
+            rtl_policy_withdrawing/1,   % :Goal
+            rtl_policy_restoring/1      % :Goal
           ]).
 
 /** <module> Consumption policies: exact deletion by rewinding and replaying a step
@@ -64,11 +68,12 @@ The compiled program describes each policy step by facts of `<step>_policy/1`:
 The cost falls on deletions and on results passed on by a replay; processing an input event
 only takes an arrival number. What is exact: within the retraction horizon (rtl_horizon.pl),
 the output nets to that of a run in which the deleted event never arrived; of several arrivals
-of the same input event, a deletion takes back the latest. The limit: a rule without a policy
-does not record when it made a result, so a policy rule fed by identical derived events of such
-a rule (the same event over the same interval from different input events) deletes the latest
-arrival of the one taken back, and takes a result derived again by a deletion there (a blocker
-of its negation deleted) as arriving then.
+of the same input event, a deletion takes back the latest. A rule without a policy whose results
+a policy step takes records when it made each (rtl_policy_made/6), so taking one back deletes
+the arrival it made, and one taken back by a late blocker comes back at its old position when
+the blocker is deleted. The limit: a result such a rule makes only when a blocker (or a
+`first` partner) is deleted arrives then, and such a rule does not tell apart two arrivals of
+the same input event.
 */
 
 :- use_module(library(lists)).
@@ -76,7 +81,9 @@ of its negation deleted) as arriving then.
 :- use_module(rtl_horizon, [rtl_next_seq/1, rtl_kept_generation/1]).
 
 :- meta_predicate rtl_policy_insert(+, ?, +, 0), rtl_policy_delete(+, +, ?, :),
-                  rtl_policy_drop_twins(+, :), rtl_policy_take(+, :, -).
+                  rtl_policy_drop_twins(+, :), rtl_policy_take(+, :, -),
+                  rtl_policy_made(:, :, :, :, -, 0), rtl_policy_unmade(:, :, :, :, -, 0),
+                  rtl_policy_withdrawing(0), rtl_policy_restoring(0).
 
 %!  rtl_position(-Position:integer, -Mode) is det.
 %
@@ -250,9 +257,12 @@ later(Min, _-P-_) :- P >= Min.
 %   instance that match passed on (rtl_policy_delete/4).
 taken_back(Made, Goal) :-
     (   nb_current(rtl_retract_position, Old) -> true ; Old = none ),
-    setup_call_cleanup(nb_setval(rtl_retract_position, Made),
+    (   nb_current(rtl_made_mode, OldMode) -> true ; OldMode = none ),
+    setup_call_cleanup(( nb_setval(rtl_retract_position, Made),
+                         nb_setval(rtl_made_mode, none) ),
                        ignore(Goal),
-                       nb_setval(rtl_retract_position, Old)).
+                       ( nb_setval(rtl_retract_position, Old),
+                         nb_setval(rtl_made_mode, OldMode) )).
 
 %   Instances that arrived before the rewind point wait again: each side's live store for
 %   Key is rebuilt in position order (newest first under `recent`, oldest first else).
@@ -282,11 +292,14 @@ replay(M, Replays) :-
 with_position(Position, Goal) :-
     nb_getval(rtl_replay_position, Old),
     (   nb_current(rtl_retract_position, OldFrom) -> true ; OldFrom = none ),
+    (   nb_current(rtl_made_mode, OldMode) -> true ; OldMode = none ),
     setup_call_cleanup(( nb_setval(rtl_replay_position, Position),
-                         nb_setval(rtl_retract_position, none) ),
+                         nb_setval(rtl_retract_position, none),
+                         nb_setval(rtl_made_mode, none) ),
                        ignore(Goal),
                        ( nb_setval(rtl_replay_position, Old),
-                         nb_setval(rtl_retract_position, OldFrom) )).
+                         nb_setval(rtl_retract_position, OldFrom),
+                         nb_setval(rtl_made_mode, OldMode) )).
 
 %!  rtl_policy_drop_twins(+Step, :Stored) is det.
 %
@@ -337,6 +350,78 @@ rtl_policy_take(Step, M:Partner, Key) :-
     length(Key0, N),
     length(Key, N),
     append(Key, _, FreshArgs).
+
+%!  rtl_policy_made(:MadeA, :MadeB, :WithdrawnA, :WithdrawnB, -Position, :Derive) is det.
+%
+%   A rule without a policy makes a result that a policy step takes as input: record when
+%   (MadeA or MadeB, the two generations of `<step>_made`, with Position unbound: the
+%   arrival number the result takes there, or, inside a replay, the position of the
+%   instance replayed) and run Derive. A result made again while a blocker is deleted or a
+%   `first` partner is taken back (rtl_policy_restoring/1) was there before the blocker
+%   came (a record of `<step>_withdrawn`): it arrives at its old position, in the past.
+
+rtl_policy_made(MA:MadeA, MB:MadeB, WA:WithdrawnA, WB:WithdrawnB, Position, Derive) :-
+    (   nb_current(rtl_made_mode, restore),
+        findall(Position-Ref, ( clause(WA:WithdrawnA, true, Ref) ; clause(WB:WithdrawnB, true, Ref) ), Items),
+        Items \== []
+    ->  pairs_keys(Items, Ps),
+        max_list(Ps, Old),
+        memberchk(Old-Ref, Items),
+        erase(Ref),
+        Position = Old,
+        kept_assert(MA:MadeA, MB:MadeB),
+        with_position(Old, Derive)
+    ;   nb_getval(rtl_replay_position, R),
+        (   R == none -> flag(rtl_processing_seq, Position, Position) ; Position = R ),
+        kept_assert(MA:MadeA, MB:MadeB),
+        ignore(Derive)
+    ).
+
+kept_assert(MA:A, MB:B) :-
+    (   rtl_kept_generation(a) -> assertz(MA:A) ; assertz(MB:B) ).
+
+%!  rtl_policy_unmade(:MadeA, :MadeB, :WithdrawnA, :WithdrawnB, -Position, :Underive) is det.
+%
+%   Take back a result of a rule without a policy that a policy step takes as input:
+%   remove its record of when it was made (of several records of the same result, the one
+%   chosen/2 takes) and run Underive with that position, so that the policy step deletes
+%   the arrival this result made, not an identical one made from other input events. Taken
+%   back by a late blocker or a better `first` partner (rtl_policy_withdrawing/1), the
+%   record is kept as withdrawn, for the result made again when that goes. Without a record
+%   (forgotten after the retraction horizon), Underive runs as it is.
+
+rtl_policy_unmade(MA:MadeA, MB:MadeB, WA:WithdrawnA, WB:WithdrawnB, Position, Underive) :-
+    findall(Position-Ref, ( clause(MA:MadeA, true, Ref) ; clause(MB:MadeB, true, Ref) ), Items),
+    pairs_keys(Items, Ps),
+    (   chosen(Ps, Chosen)
+    ->  memberchk(Chosen-Ref, Items),
+        erase(Ref),
+        Position = Chosen,
+        (   nb_current(rtl_made_mode, withdraw)
+        ->  kept_assert(WA:WithdrawnA, WB:WithdrawnB)
+        ;   true
+        ),
+        taken_back(Chosen, Underive)
+    ;   ignore(Underive)
+    ).
+
+%!  rtl_policy_withdrawing(:Goal) is det.
+%!  rtl_policy_restoring(:Goal) is det.
+%
+%   Run Goal, which takes back results because a blocker arrived (or a better `first`
+%   partner), or makes them again because a blocker (or such a partner) was deleted.
+
+rtl_policy_withdrawing(Goal) :-
+    made_mode(withdraw, Goal).
+
+rtl_policy_restoring(Goal) :-
+    made_mode(restore, Goal).
+
+made_mode(Mode, Goal) :-
+    (   nb_current(rtl_made_mode, Old) -> true ; Old = none ),
+    setup_call_cleanup(nb_setval(rtl_made_mode, Mode),
+                       ignore(Goal),
+                       nb_setval(rtl_made_mode, Old)).
 
 %!  rtl_policy_positioned(+Module, +StoreName) is semidet.
 %

@@ -185,17 +185,48 @@ def test_a_deletion_of_an_event_that_arrived_twice_takes_back_its_latest_arrival
 
 
 def test_identical_events_of_an_unrestricted_rule_feeding_a_policy_rule():
-    """The limit: an unrestricted rule does not record when it made a result, so when it
-    takes back one of two identical results (the same event over the same interval, made from
-    different input events), the policy rule it feeds deletes the latest arrival, which need
-    not be the one taken back. Here the exact answer would be y(1)@0-5 (without a(1, p),
-    c(1, 0) takes the x(1) over [0, 3]); the deletion leaves y(1)@1-5."""
+    """An unrestricted rule takes back one of two identical results (the same event over the
+    same interval, made from different input events): the policy rule it feeds deletes the
+    arrival that result made, not the latest identical one. Without a(1, p), c(1, 0) takes the
+    x(1) over [0, 3]."""
     program = ("x(I) <- a(I, _) seq b(I, _).\n"
                "r1([property(consumption_policy, chronological)]) 'rule:' y(I) <- x(I) seq c(I, _).\n")
-    engine = fresh(Engine.from_source(program, "limit.rtl"))
+    engine = fresh(Engine.from_source(program, "identical.rtl"))
     events = [("a(1, p)", 1), ("b(1, z)", 3), ("c(1, 0)", 5), ("a(1, r)", 0), ("a(1, q)", 1)]
     assert ("add", "y(1)", 1, 5) in outputs(engine, events)
-    assert net_output(engine.feed_batch([("a(1, p)", 1, 1, "retract")])) == Counter({"x(1)@1-3": -1})
+    assert net_output(engine.feed_batch([("a(1, p)", 1, 1, "retract")])) == Counter(
+        {"x(1)@1-3": -1, "y(1)@1-5": -1, "y(1)@0-5": 1})
+    deleted = net_output(engine.feed_batch([]))
+    fresh(engine)
+    without = net_output(engine.feed_batch([e for e in events if e[0] != "a(1, p)"]))
+    fresh(engine)
+    with_deletion = net_output(engine.feed_batch(events + [("a(1, p)", 1, 1, "retract")]))
+    assert with_deletion == without and not deleted
+
+
+def test_a_result_taken_back_by_a_blocker_comes_back_at_its_old_position():
+    """A rule without a policy loses a result to a late blocker: the policy rule it feeds
+    gives its partner to another instance. When the blocker is deleted, the result arrives
+    where it first arrived (before that instance), so the policy rule pairs it again."""
+    program = ("un(I) <- not(c(I, _)).[a(I, _), b(I, _)].\n"
+               "hc([property(consumption_policy, chronological)]) 'rule:' hc(I, Y) <- un(I) seq d(I, Y).\n")
+    engine = fresh(Engine.from_source(program, "withdrawn.rtl"))
+    events = [("a(1, 1)", 0), ("b(1, 0)", 3), ("a(1, 0)", 1), ("d(1, 0)", 5)]
+    assert ("add", "hc(1,0)", 0, 5) in outputs(engine, events)
+    assert net_output(engine.feed_batch([("c(1, 0)", 0.5)])) == Counter(
+        {"un(1)@0-3": -1, "hc(1,0)@0-5": -1, "hc(1,0)@1-5": 1})
+    assert net_output(engine.feed_batch([("c(1, 0)", 0.5, 0.5, "retract")])) == Counter(
+        {"un(1)@0-3": 1, "hc(1,0)@0-5": 1, "hc(1,0)@1-5": -1})
+
+
+def test_rules_added_at_run_time_record_the_results_a_policy_rule_takes():
+    """The same through the sandbox: a rule without a policy added with the policy rule it feeds."""
+    engine = fresh(Engine.from_source("base(X) <- a(X, _).\n", "base_made.rtl"))
+    engine.add_rules("ux(I) <- a(I, _) seq b(I, _).\n"
+                     "hr([property(consumption_policy, chronological)]) 'rule:' y(I) <- ux(I) seq c(I, _).\n")
+    engine.feed_batch([("a(1, p)", 1), ("b(1, z)", 3), ("c(1, 0)", 5), ("a(1, r)", 0), ("a(1, q)", 1)])
+    assert net_output(engine.feed_batch([("a(1, p)", 1, 1, "retract")])) == Counter(
+        {"base(1)@1-1": -1, "ux(1)@1-3": -1, "y(1)@1-5": -1, "y(1)@0-5": 1})
 
 
 # ---- a brute-force simulation of the policies ----------------------------------------------
@@ -433,3 +464,60 @@ def test_hard_shapes_added_at_run_time_net_to_the_run_without_the_deleted_events
     arrival = with_duplicates(data, events)
     ops, remaining = with_deletions(data, arrival)
     assert feed(hard_added, ops) == feed(hard_added, [("add", e) for e in remaining])
+
+
+# ---- hierarchies: rules without a policy feeding policy rules -------------------------------
+
+HIERARCHY = [
+    "ux(I) <- a(I, _) seq b(I, _).",
+    "uw(I) <- (a(I, _) and c(I, _)).2.",
+    "hr([property(consumption_policy, recent)]) 'rule:' hr(I, Y) <- ux(I) seq c(I, Y).",
+    "hc([property(consumption_policy, chronological)]) 'rule:' hc(I, Y) <- ux(I) seq c(I, Y).",
+    "hw([property(consumption_policy, chronological)]) 'rule:' hw(I) <- uw(I) seq b(I, _).",
+    "hn([property(consumption_policy, chronological)]) 'rule:' hn(I) <- not(ux(I)).[a(I, _), c(I, _)].",
+]
+
+
+# a's before b's before c's: the a's make identical ux(1) over [0, 3] or [1, 3] with each b
+staged_event = st.one_of(st.tuples(st.just("a"), st.just(1), st.integers(0, 2), st.integers(0, 1), st.just(0)),
+                         st.tuples(st.just("b"), st.just(1), st.integers(0, 1), st.just(3), st.just(0)),
+                         st.tuples(st.just("c"), st.just(1), st.integers(0, 1), st.sampled_from([2, 4, 5]), st.just(0)))
+
+
+@pytest.fixture(scope="module")
+def hierarchy():
+    engine = Engine.from_source("\n".join(HIERARCHY) + "\n", "hierarchy.rtl")
+    yield engine
+    fresh(engine, "1.0")
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(st.tuples(staged_event, st.integers(0, 2)), min_size=4, max_size=10, unique_by=lambda ed: ed[0]),
+       st.data())
+def test_unrestricted_rules_feeding_policy_rules_net_to_the_run_without_the_deleted_events(hierarchy, delayed, data):
+    """Identical derived events (the same event over the same interval from different input
+    events, or from input events that arrived twice) reach the policy rules; events arrive up
+    to 2 s late; deletions come inside the retraction horizon (H = 2 + 2 s)."""
+    arrival = [e for e, _ in sorted(delayed, key=lambda ed: ed[0][3] + ed[0][4] + ed[1])]
+    ops, _ = with_deletions(data, arrival)
+    kept, clock, present = [], float("-inf"), []
+    for op, e in ops:
+        end = e[3] + e[4]
+        if op == "add":
+            clock = max(clock, end)
+            present.append(e)
+        elif end >= clock - 4:
+            del present[len(present) - 1 - present[::-1].index(e)]
+        else:
+            continue
+        kept.append((op, e))
+    assert feed(hierarchy, kept, "2") == feed(hierarchy, [("add", e) for e in present], "2")
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(staged_event, min_size=5, max_size=10, unique=True), st.data())
+def test_unrestricted_rules_feeding_policy_rules_in_any_arrival_order(hierarchy, events, data):
+    """The same without a delay bound: any arrival order."""
+    arrival = list(dict.fromkeys(events))                   # (the list is the arrival order)
+    ops, remaining = with_deletions(data, arrival)
+    assert feed(hierarchy, ops) == feed(hierarchy, [("add", e) for e in remaining])

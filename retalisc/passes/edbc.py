@@ -78,8 +78,35 @@ RULE_POLICIES = ("unrestricted", "recent", "chronological", "first")
 
 
 def run(unit: Unit) -> Unit:
-    unit.generated = [_RuleGenerator(rule, rule_policy(unit, rule)).generate() for rule in unit.rules]
+    policies = [rule_policy(unit, rule) for rule in unit.rules]
+    consumed = policy_inputs(unit.rules, policies)
+    unit.generated = [_RuleGenerator(rule, policy, provenance=policy not in ("recent", "chronological")
+                                     and signature(rule.rule.head) in consumed).generate()
+                      for rule, policy in zip(unit.rules, policies)]
     return unit
+
+
+def signature(term: Term) -> Optional[Tuple[str, int]]:
+    if isinstance(term, Compound):
+        return term.name, term.arity
+    if isinstance(term, Atom):
+        return term.name, 0
+    return None
+
+
+def policy_inputs(rules: List[BinaryRule], policies: List[str]) -> Set[Tuple[str, int]]:
+    """The events that a step under `recent` or `chronological` takes as input: a rule
+    without such a policy deriving one of them records when it made each result
+    (`_made`), so that the policy step deletes the very arrival a deletion takes back."""
+    consumed: Set[Tuple[str, int]] = set()
+    for rule, policy in zip(rules, policies):
+        if policy not in ("recent", "chronological"):
+            continue
+        for step in rule.steps:
+            for operand in (step.left, step.right, step.negated):
+                if operand is not None and operand.is_event and signature(operand.term) is not None:
+                    consumed.add(signature(operand.term))
+    return consumed
 
 
 def rule_policy(unit: Unit, rule: BinaryRule) -> str:
@@ -140,8 +167,10 @@ def _split(own: List[Var], other: List[Var]) -> Tuple[List[Var], List[Var]]:
 
 
 class _RuleGenerator:
-    def __init__(self, rule: BinaryRule, policy: str):
+    def __init__(self, rule: BinaryRule, policy: str, provenance: bool = False):
         self.rule = rule
+        # the head is an input of a policy step: record when each result was made
+        self.provenance = provenance
         # `first` selects in the joins; every other step is unrestricted
         self.first = policy == "first"
         self.policy = "unrestricted" if self.first else policy
@@ -340,7 +369,10 @@ class _RuleGenerator:
         return C("=<", C("-", e, s), Number(_number(step.window)))
 
     def output(self, step: Step, s: Var, e: Var, retract: bool = False) -> Term:
-        return C(step.name + ("_retract" if retract else ""), *step.output.args, s, e)
+        # a result recorded for a policy step also carries the intervals of its two operands
+        # (`made`): identical results of different input events are told apart
+        inner = [self.t(n) for n in ("S1", "E1", "S2", "E2")] if self.provenance and step.derives_head else []
+        return C(step.name + ("_retract" if retract else ""), *step.output.args, s, e, *inner)
 
     # ---- steps ------------------------------------------------------------------------
 
@@ -441,8 +473,9 @@ class _RuleGenerator:
             store = substitute(rights, names)
             pairing = substitute(paired, names)
             out = [a if not isinstance(a, Var) else names.get(a.name, a) for a in step.output.args]
+            inner = [names.get(v.name, v) for v in (s1, e1, s2, e2)] if self.provenance and step.derives_head else []
             return {"goals": goals_, "bounds": bounds_, "rank": rank_, "rights": store, "paired": pairing,
-                    "add": C(step.name, *out, s_, e_), "retract": C(step.name + "_retract", *out, s_, e_)}
+                    "add": C(step.name, *out, s_, e_, *inner), "retract": C(step.name + "_retract", *out, s_, e_, *inner)}
 
         def pair_best(late_end: Term) -> Term:
             """Pair the L with its first right instance, if any (variables of its own)."""
@@ -464,7 +497,7 @@ class _RuleGenerator:
         # a right instance: the L's it matches take it if it comes before their partner
         p_ = variant("P")
         take_over = conj([C("@<", own["rank"], p_["rank"]), self.record_take(p_["paired"])] + p_["bounds"]
-                         + [p_["retract"], self.record_add(paired), own["add"]])
+                         + [self.blocked(step, p_["retract"], False), self.record_add(paired), own["add"]])
         handler = f"{step.name}_right"
         self.arrival(step.right, handler, s2, e2)
         self.clauses.append(clause(C(handler, *right_vars, s2, e2), [
@@ -481,7 +514,7 @@ class _RuleGenerator:
             self.clauses.append(clause(again, [stored_left, pair_best(e1)]))
         self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
             self.if_own_stored(step, rights, right_vars + [s2, e2], C("forall", self.record_lookup(paired), conj(
-                [self.record_take(paired)] + own["bounds"] + [own["retract"], again])))]))
+                [self.record_take(paired)] + own["bounds"] + [own["retract"], self.blocked(step, again, True)])))]))
 
     def positions(self) -> Tuple[List[Var], List[Var]]:
         """Under a consumption policy, the position arguments of the left and right stores
@@ -695,9 +728,10 @@ class _RuleGenerator:
                 C("rtl_policy_delete", Atom(step.name), Atom("negated"), V("_"), negs)]))
             return
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
-            C("forall", inside, self.output(step, s1, e2, retract=True)), C("assertz", negs)]))
+            self.blocked(step, C("forall", inside, self.output(step, s1, e2, retract=True)), False),
+            C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(step, negs, C("forall", inside, self.output(step, s1, e2)))]))
+            self.if_stored(step, negs, self.blocked(step, C("forall", inside, self.output(step, s1, e2)), True))]))
 
     def forget_blockers(self, step: Step, lefts: Term, negs: Term, s1: Var, e1: Var, sn: Var, en: Var) -> None:
         """The sweep of an unwindowed `not(N).[L, R]` whose R is an event: `ele_forget_blockers(Before)`
@@ -755,9 +789,9 @@ class _RuleGenerator:
         self.arrival(step.negated, handler, sn, en)
         after = conj([self.lookup(step, lefts, en), C("<", en, s1), self.window_check(step, sn, e1), unblocked])
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
-            C("forall", after, self.output(step, s1, e1, retract=True)), C("assertz", negs)]))
+            self.blocked(step, C("forall", after, self.output(step, s1, e1, retract=True)), False), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(step, negs, C("forall", after, self.output(step, s1, e1)))]))
+            self.if_stored(step, negs, self.blocked(step, C("forall", after, self.output(step, s1, e1)), True))]))
 
     def absence_clauses(self, step: Step) -> None:
         """not(N).[L, D]: no N in the D seconds after L ends (N starts after L's end and ends by
@@ -802,9 +836,9 @@ class _RuleGenerator:
         self.arrival(step.negated, handler, sn, en)
         found = conj([self.lookup(stores, decided, en), C("<", e1, sn), C("=<", en, close), derivable])
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
-            C("forall", found, self.output(step, s1, close, retract=True)), C("assertz", negs)]))
+            self.blocked(step, C("forall", found, self.output(step, s1, close, retract=True)), False), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(stores, negs, C("forall", found, self.output(step, s1, close)))]))
+            self.if_stored(stores, negs, self.blocked(step, C("forall", found, self.output(step, s1, close)), True))]))
 
     def sliding_clauses(self, step: Step) -> None:
         """sliding(F, P, Group, D, V): the matches of P are stored by group (with the value F
@@ -943,6 +977,27 @@ class _RuleGenerator:
                            C(";", C("->", self.record_take(fired), C("rtl_underived", event, s, due)),
                              Atom("true")))])
 
+    def made(self, step: Step, head: Compound, result: Term, retract: bool) -> Term:
+        """A result that a policy step takes as input, with the record of when it was made
+        (`_made`, kept for the retraction horizon): taking it back tells the policy step
+        which of several identical arrivals to delete (rtl_policy_unmade/4)."""
+        position = V(self.time_names.setdefault("Made", self.fresh("Made")))
+        made = C(f"{step.name}_made", *head.args, position)
+        withdrawn = C(f"{step.name}_withdrawn", *head.args, position)
+        if not self.is_rotated(made):
+            self.record(step, "made", list(made.args), rotated=True)
+            self.record(step, "withdrawn", list(withdrawn.args), rotated=True)
+        return C("rtl_policy_unmade" if retract else "rtl_policy_made",
+                 *self.generations(made), *self.generations(withdrawn), position, result)
+
+    def blocked(self, step: Step, goal: Term, restore: bool) -> Term:
+        """Results taken back by a blocker (or a better `first` partner), or made again when
+        it is deleted: under a policy step that takes them as input, they are withdrawn, and
+        come back at their old position (rtl_policy_withdrawing/1, rtl_policy_restoring/1)."""
+        if not (self.provenance and step.derives_head):
+            return goal
+        return C("rtl_policy_restoring" if restore else "rtl_policy_withdrawing", goal)
+
     def fresh(self, base: str) -> str:
         """A variable name no source variable of the rule uses (and reserve it)."""
         name_ = base
@@ -970,6 +1025,8 @@ class _RuleGenerator:
                 else:
                     result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
                 detected = None if retract else C("rtl_detected", Atom(self.rule.rule_id))
+                if self.provenance and result is not None and result.name in ("rtl_derived", "rtl_underived"):
+                    result = self.made(step, head, result, retract)
                 then = conj([detected, action, result]) if (detected or action or result) else Atom("true")
             else:
                 consumer = self.consumers[step.name] + ("_retract" if retract else "")
