@@ -374,6 +374,15 @@ def test_every_shape_nets_to_the_run_without_the_deleted_events(shapes, events, 
 def test_deletions_inside_the_horizon_within_the_delay_bound(shapes, delayed, data):
     """Events arrive up to 2 s late (the delay bound); deletions come at a random later point
     and only while the event is inside the retraction horizon (H = 2 + 3 s, the largest window)."""
+    kept, present = late_arrivals_with_deletions(data, delayed, horizon=5)
+    assert feed(shapes, kept, "2") == feed(shapes, [("add", e) for e in present], "2")
+
+
+def late_arrivals_with_deletions(data, delayed, horizon):
+    """The events in the order they arrive (each late by its delay), with deletions drawn at
+    random later points; a deletion is kept only while its event ends inside the retraction
+    horizon. Returns the operations and the events present at the end (of several identical
+    ones, a deletion takes back the latest arrival)."""
     arrival = [e for e, _ in sorted(delayed, key=lambda ed: ed[0][3] + ed[0][4] + ed[1])]
     ops, _ = with_deletions(data, arrival)
     kept, clock, present = [], float("-inf"), []
@@ -382,12 +391,12 @@ def test_deletions_inside_the_horizon_within_the_delay_bound(shapes, delayed, da
         if op == "add":
             clock = max(clock, end)
             present.append(e)
-        elif end >= clock - 5:
+        elif end >= clock - horizon:
             del present[len(present) - 1 - present[::-1].index(e)]
         else:
             continue
         kept.append((op, e))
-    assert feed(shapes, kept, "2") == feed(shapes, [("add", e) for e in present], "2")
+    return kept, present
 
 
 def test_a_rule_added_at_run_time_deletes_exactly_too():
@@ -498,19 +507,7 @@ def test_unrestricted_rules_feeding_policy_rules_net_to_the_run_without_the_dele
     """Identical derived events (the same event over the same interval from different input
     events, or from input events that arrived twice) reach the policy rules; events arrive up
     to 2 s late; deletions come inside the retraction horizon (H = 2 + 2 s)."""
-    arrival = [e for e, _ in sorted(delayed, key=lambda ed: ed[0][3] + ed[0][4] + ed[1])]
-    ops, _ = with_deletions(data, arrival)
-    kept, clock, present = [], float("-inf"), []
-    for op, e in ops:
-        end = e[3] + e[4]
-        if op == "add":
-            clock = max(clock, end)
-            present.append(e)
-        elif end >= clock - 4:
-            del present[len(present) - 1 - present[::-1].index(e)]
-        else:
-            continue
-        kept.append((op, e))
+    kept, present = late_arrivals_with_deletions(data, delayed, horizon=4)
     assert feed(hierarchy, kept, "2") == feed(hierarchy, [("add", e) for e in present], "2")
 
 
