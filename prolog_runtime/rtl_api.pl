@@ -120,17 +120,25 @@ rtl_api_set_flag(NameText, ValueText, "") :-
 rtl_api_feed_events(Items, Output) :-
     must_be(list, Items),
     foldl(read_item, Items, Events, 0, _),
+    batch_output(process_events(Events, 0, Failure), Failure, Output).
+
+%   batch_output(:Goal, ?Last, -Output): run Goal, which processes events, with what program
+%   code prints going to the action output, not into the output; Output holds the output
+%   lines, the warnings (deletions outside the retraction horizon) and, when Goal bound it,
+%   the line Last.
+
+batch_output(Goal, Last, Output) :-
     rtl_output_to(buffer),
-    rtl_action_stream(Stream),              % what program code prints goes there, not into the output
+    rtl_action_stream(Stream),
     current_output(Old),
-    setup_call_cleanup(set_output(Stream), process_events(Events, 0, Failure), set_output(Old)),
+    setup_call_cleanup(set_output(Stream), Goal, set_output(Old)),
     rtl_take_output(Lines0),
-    rtl_take_warnings(Warnings),             % deletions outside the retraction horizon
+    rtl_take_warnings(Warnings),
     findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
     append(Lines0, Ws, Lines1),
-    (   var(Failure)
+    (   var(Last)
     ->  Lines = Lines1
-    ;   append(Lines1, [Failure], Lines)
+    ;   append(Lines1, [Last], Lines)
     ),
     lines_output(Lines, Output).
 
@@ -175,23 +183,15 @@ rtl_api_feed_paced_rest(Tick, Output) :-
     ).
 
 paced_output(Events, Dues, Tick, I, Output) :-
-    rtl_output_to(buffer),
-    rtl_action_stream(Stream),
-    current_output(Old),
-    setup_call_cleanup(set_output(Stream), paced(Events, Dues, Tick, I, Stop), set_output(Old)),
-    rtl_take_output(Lines0),
-    rtl_take_warnings(Warnings),
-    findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
-    append(Lines0, Ws, Lines1),
-    (   Stop == done
-    ->  Lines = Lines1
-    ;   Stop = paced(Done, Rest, RestDues)
-    ->  nb_setval(rtl_paced_rest, rest(Rest, RestDues, Done)),
-        format(string(Last), "!paced\t~w", [Done]),
-        append(Lines1, [Last], Lines)
-    ;   append(Lines1, [Stop], Lines)
-    ),
-    lines_output(Lines, Output).
+    batch_output(( paced(Events, Dues, Tick, I, Stop), paced_last(Stop, Last) ), Last, Output).
+
+% paced_last(+Stop, -Last): the last line of a paced call, if any; the events left are kept
+% for rtl_api_feed_paced_rest/2.
+paced_last(done, _) :- !.
+paced_last(paced(Done, Rest, RestDues), Last) :- !,
+    nb_setval(rtl_paced_rest, rest(Rest, RestDues, Done)),
+    format(string(Last), "!paced\t~w", [Done]).
+paced_last(Failure, Failure).
 
 % paced(+Events, +Dues, +Tick, +Index, -Stop): Stop is `done`, paced(Processed, Rest,
 % RestDues) when a group produced output and events remain, or the failure line.
