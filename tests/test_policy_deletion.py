@@ -346,12 +346,17 @@ SHAPES = [
 ]
 
 
-def shapes_program():
+def policy_program(shapes, label="", policies=(("recent", "r"), ("chronological", "c"), ("unrestricted", "u"))):
+    """Each shape once under each policy, as a rule labelled `label` + policy tag + its number."""
     rules = []
-    for policy, tag in (("recent", "r"), ("chronological", "c"), ("unrestricted", "u")):
-        for n, shape in enumerate(SHAPES):
-            rules.append(f"{tag}{n}([property(consumption_policy, {policy})]) 'rule:' " + shape.format(p=tag))
+    for policy, tag in policies:
+        for n, shape in enumerate(shapes):
+            rules.append(f"{label}{tag}{n}([property(consumption_policy, {policy})]) 'rule:' " + shape.format(p=tag))
     return "\n".join(rules) + "\n"
+
+
+def shapes_program():
+    return policy_program(SHAPES)
 
 
 @pytest.fixture(scope="module")
@@ -430,11 +435,7 @@ HARD_SHAPES = [
 
 
 def hard_program(policies=(("recent", "r"), ("chronological", "c"), ("unrestricted", "u"), ("first", "f"))):
-    rules = []
-    for policy, tag in policies:
-        for n, shape in enumerate(HARD_SHAPES):
-            rules.append(f"h{tag}{n}([property(consumption_policy, {policy})]) 'rule:' " + shape.format(p=tag))
-    return "\n".join(rules) + "\n"
+    return policy_program(HARD_SHAPES, "h", policies)
 
 
 @pytest.fixture(scope="module")
