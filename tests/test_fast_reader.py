@@ -43,10 +43,16 @@ pytestmark = pytest.mark.skipif(not LIBRARY.exists(),
 
 
 def compare(tmp_path, swipl, lines):
-    events = tmp_path / "lines.txt"
+    return run_check(tmp_path, swipl, "check", lines, CHECK)
+
+
+def run_check(tmp_path, swipl, name, lines, check):
+    """Run the Prolog comparison `check` over `lines` (one per line of its input file): it
+    prints DIFFER for a line the two roads disagree on, and ends with its two counts."""
+    events = tmp_path / f"{name}.txt"
     events.write_text("".join(line + "\n" for line in lines), encoding="utf-8")
-    script = tmp_path / "check.pl"
-    script.write_text(f":- use_module('{ROOT / 'prolog_runtime' / 'rtl_io'}').\n" + CHECK)
+    script = tmp_path / f"{name}.pl"
+    script.write_text(f":- use_module('{ROOT / 'prolog_runtime' / 'rtl_io'}').\n" + check)
     done = subprocess.run([swipl, "-g", "main", "-t", "halt", str(script), str(events)],
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
@@ -223,16 +229,7 @@ OUTPUT_TERMS = [
 
 
 def compare_output(tmp_path, swipl, texts):
-    events = tmp_path / "terms.txt"
-    events.write_text("".join(text + "\n" for text in texts), encoding="utf-8")
-    script = tmp_path / "write_check.pl"
-    script.write_text(f":- use_module('{ROOT / 'prolog_runtime' / 'rtl_io'}').\n" + WRITE_CHECK)
-    done = subprocess.run([swipl, "-g", "main", "-t", "halt", str(script), str(events)],
-                          capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
-    assert "DIFFER" not in done.stdout, done.stdout
-    last = done.stdout.strip().splitlines()[-1].split()
-    return int(last[1]), int(last[3])
+    return run_check(tmp_path, swipl, "write_check", texts, WRITE_CHECK)
 
 
 def test_output_lines_written_in_c_are_those_written_in_prolog(tmp_path, swipl):
