@@ -567,9 +567,8 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
 
     import click
 
-    from ..robot_io.bags import BagError, Recording
     from ..robot_io.messages import MessageConverter
-    from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages
+    from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages, open_recording
     from ..robot_io.ros1_terms import Ros1Terms
     from .bridge import PrologError
     from .run import detections_line
@@ -583,10 +582,8 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
                             "plain_strings": options.convention.plain_strings}, sort_keys=True)
     restored = restore_newest(directory, engine, "bag", selection, log)
     name = str(bag_path)
-    try:
-        bag = Recording(bag_path, options.typestore).__enter__()
-    except BagError as error:
-        click.echo(f"error: {error}", err=True)
+    bag = open_recording(bag_path, options)
+    if bag is None:
         return 2
     sink = open_output(out, restored)
     done = 0 if restored is None else restored["input_messages"]

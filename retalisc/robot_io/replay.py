@@ -227,6 +227,16 @@ def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional
     return start_ns, stop_ns
 
 
+def open_recording(path: str, options: BagOptions) -> Optional[Recording]:
+    """The recording at `path`, open (the caller closes it); None, with the reason on
+    standard error, when it cannot be read."""
+    try:
+        return Recording(path, options.typestore).__enter__()
+    except BagError as error:
+        click.echo(f"error: {error}", err=True)
+        return None
+
+
 def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[BagOptions] = None,
                batch_size: int = 2000, consumer_dir: Optional[str] = None, drop_pending: bool = False,
                first_output: Sequence = (), progress: Optional[bool] = None, out_bag: Optional[str] = None,
@@ -248,10 +258,8 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
 
     options = options or BagOptions()
     name = str(path)
-    try:
-        bag = Recording(path, options.typestore).__enter__()
-    except BagError as error:
-        click.echo(f"error: {error}", err=True)
+    bag = open_recording(path, options)
+    if bag is None:
         return 2
     sink, consumers, sinks = None, None, []
     try:
