@@ -177,18 +177,32 @@ def test_rate_paces_the_replay_by_the_recording_clock(nao_bags, capsys):
     assert all(s >= RATE_TICK for s in clock.sleeps)
 
 
-def test_a_longer_tick_feeds_fewer_larger_slices(nao_bags):
-    """--tick 0.05: the replay sleeps at least 50 ms at a time (what fell due meanwhile goes
-    in one call), and gives the same output as the default tick."""
+def test_each_message_is_fed_within_a_tick_of_its_due_time_with_the_fewest_wake_ups(nao_bags):
+    """--tick is a latency budget: each message is fed no earlier than it falls due and at
+    most a tick later; the replay sleeps until the first message not fed is a tick late and
+    feeds every message due by then in one call. A longer tick gives fewer, larger calls and
+    the same output."""
     runs = {}
     for tick in (RATE_TICK, 0.05):
         engine = Engine.from_source("", f"tick{int(tick * 1000)}.rtl")
         engine.set_flag("echo_input", "true")
-        clock, lines = VirtualClock(), []
+        clock, lines, fed = VirtualClock(), [], []
         engine.on_output(lambda event: lines.append(event.line))
-        assert replay_bag(engine, str(nao_bags["ros2"]), None, BagOptions(topics=["/tf"], rate=4.0, duration=1.0,
-                                                                          tick=tick), progress=False, clock=clock) == 0
-        assert all(s >= tick for s in clock.sleeps)
+        feed_batch = engine.feed_batch
+        engine.feed_batch = lambda items: fed.extend((clock.time, item[1]) for item in items) or feed_batch(items)
+        assert replay_bag(engine, str(nao_bags["ros2"]), None,
+                          BagOptions(topics=["/tf"], rate=4.0, duration=1.0, tick=tick, stamp="record"),
+                          progress=False, clock=clock) == 0
+        first = fed[0][1]
+        lateness = [at - (100.0 + (seconds - first) / 4.0) for at, seconds in fed]
+        assert all(-1e-6 <= late <= tick + 1e-6 for late in lateness), lateness
+        # the fewest wake-ups within the budget: one per run of messages within a tick of the first
+        dues = [(seconds - first) / 4.0 for _, seconds in fed]
+        greedy, deadline = 0, None
+        for due in dues:
+            if deadline is None or due > deadline + 1e-6:
+                greedy, deadline = greedy + 1, due + tick
+        assert len(clock.sleeps) == greedy, (clock.sleeps, greedy)
         runs[tick] = (clock.sleeps, lines)
     assert len(runs[0.05][0]) <= 6 < len(runs[RATE_TICK][0])
     assert runs[0.05][1] == runs[RATE_TICK][1] and runs[RATE_TICK][1]
@@ -236,6 +250,26 @@ def test_feed_paced_feeds_each_item_when_it_is_due_and_delivers_the_output_at_on
     assert [e.text for e in engine.feed_paced(items[2:], [0.0, 0.0, now + 0.12], 0.5)] == ["b(3)", "b(5)"]
     with pytest.raises(ValueError, match="due times"):
         engine.feed_paced(items, dues[:2])
+
+
+def test_feed_paced_wakes_when_the_first_item_left_is_a_tick_late():
+    """The runtime's pacing: one wake-up serves every item due within `tick` of the first
+    one left, so the three items due within 20 ms go in one group (one delivery), fed no
+    earlier than the first is a tick late; the last item waits for its own deadline."""
+    import time as clock
+
+    engine = Engine.from_source("b(X) <- a(X).\n", "paced_deadline.rtl")
+    engine.set_flag("echo_input", "false")
+    now = clock.time()
+    items = [("a(1)", 1.0), ("a(2)", 2.0), ("a(3)", 3.0), ("a(4)", 4.0)]
+    dues = [now + 0.05, now + 0.06, now + 0.07, now + 0.25]
+    tick = 0.03
+    delivered = []
+    last = engine.feed_paced(items, dues, tick, lambda out: delivered.append((clock.time(), [e.text for e in out])))
+    end = clock.time()
+    assert [texts for _, texts in delivered] == [["b(1)", "b(2)", "b(3)"]]
+    assert dues[0] + tick <= delivered[0][0] < dues[3]
+    assert [e.text for e in last] == ["b(4)"] and end >= dues[3] + tick
 
 
 def test_feed_paced_stops_at_an_item_that_fails():

@@ -372,10 +372,11 @@ class Engine:
     def feed_paced(self, events: Sequence[Sequence], dues: Sequence[float], tick: float = 0.01,
                    deliver: Optional[Callable[[List[OutputEvent]], None]] = None) -> List[OutputEvent]:
         """Process the items of `feed_batch`, each when it falls due: `dues[i]` is the
-        wall-clock time (`time.time()`) at which `events[i]` is due, in order. This thread
-        sleeps inside Prolog until the first item not processed is due (at least `tick`
-        seconds at a time), then processes every item due by then as one batch: the pacing
-        of a recording replayed at a rate, without a Python step per batch. The output is
+        wall-clock time (`time.time()`) at which `events[i]` is due, in order, and `tick`
+        the latency allowed: this thread sleeps inside Prolog until the first item not
+        processed is `tick` seconds late, then processes every item due by then as one
+        batch (the fewest wake-ups that keep each item within `tick` of its due time): the
+        pacing of a recording replayed at a rate, without a Python step per batch. The output is
         passed to `deliver(output)` as soon as a batch produced it (then the call goes on
         with the items left, which stay in the runtime: they are not passed again), and the
         output of the last batches is returned. Errors are raised as by `feed_batch`, with

@@ -17,8 +17,8 @@ _OPTIONS = [
                  help="With --bag: replay in real time times RATE (1 = as recorded; default: as fast as possible)."),
     click.option("--tick", "bag_tick", type=click.FloatRange(min=0.001, max=10.0), default=0.01, metavar="SECONDS",
                  show_default=True,
-                 help="With --bag and --rate: feed what fell due every SECONDS at least (a message is at most "
-                      "that late; longer ticks mean fewer, larger calls into the program: less CPU)."),
+                 help="With --bag and --rate: feed each message at most SECONDS after it falls due, with "
+                      "the others due by then (longer ticks mean fewer, larger calls into the program: less CPU)."),
     click.option("--start", "bag_start", type=click.FloatRange(min=0), default=0.0, metavar="SECONDS",
                  help="With --bag: skip the first SECONDS of the recording (record time)."),
     click.option("--duration", "bag_duration", type=click.FloatRange(min=0), default=None, metavar="SECONDS",

@@ -5,9 +5,9 @@ goes to the Engine in batches (`feed_batch`, one Prolog call per batch). The mes
 ROS 1 recording go as their bytes, which the runtime reads in C (ros1_terms.py), unless the
 input is also published (--out-bag, --foxglove); a message it refuses is converted here. With a rate, the
 replay follows the recording's clock (times the rate), feeding each message when it is due.
-The output is written as by `retalisc run --events`; with a rate, messages are fed in slices
-of at most 10 ms of the recording's time (--tick), so a message is at most that late (on the
-wall clock, with nothing published, the runtime paces them itself: PACED_AHEAD). Rejected messages (that cannot be
+The output is written as by `retalisc run --events`; with a rate, a message is fed at most
+--tick (10 ms) after it falls due, with the others due by then (on the wall clock, with
+nothing published, the runtime paces them itself: PACED_AHEAD). Rejected messages (that cannot be
 decoded or converted) are reported on standard error as `BAG:TOPIC#N: rejected: REASON` (N
 counts the replayed messages from 1) and skipped; a summary closes the run.
 """
@@ -33,7 +33,7 @@ class BagOptions:
 
     topics: Optional[List[str]] = None
     rate: Optional[float] = None          # None: as fast as possible
-    tick: float = 0.01                    # with a rate: the shortest sleep (RATE_TICK)
+    tick: float = 0.01                    # with a rate: the latency budget (RATE_TICK)
     start: float = 0.0                    # seconds skipped from the start of the recording
     duration: Optional[float] = None      # seconds replayed from `start`
     convention: Convention = field(default_factory=Convention)
@@ -85,17 +85,17 @@ class ReplayClock:
 
 
 RATE_TICK = 0.01
-"""With --rate, the replay sleeps at least this many seconds at a time (the default of
---tick): a message is fed at most this late, together with the others that fell due
-meanwhile (one batch). Each batch after a sleep costs more than the same work done in
-one run (caches gone cold on a busy machine): a longer tick saves CPU at the cost of that
-latency."""
+"""With --rate, a message is fed at most this many seconds after it falls due (the default
+of --tick). The replay sleeps until the first message not fed is this late and then feeds
+every message due by then in one batch: the fewest wake-ups that keep every message within
+this latency. Each wake-up costs CPU (the sleep itself, then the batch's work with caches
+gone cold on a busy machine): a longer tick saves CPU at the cost of that latency."""
 
 
 PACED_AHEAD = 0.25
 """With --rate on the wall clock, the replay reads this many seconds ahead of the clock and
-hands what it read to the runtime in one call, which sleeps until each message is due and
-feeds it then (Engine.feed_paced); the call returns early when output is produced, so the
+hands what it read to the runtime in one call, which sleeps and feeds each message at most
+--tick after it falls due (Engine.feed_paced); the call returns early when output is produced, so the
 output is written as soon as it is produced. The latency is that of --tick. A longer pause
 in the recording is waited out here, so that the runtime never sleeps much longer than
 this (an interrupt is seen when the call returns)."""
@@ -164,8 +164,8 @@ def feed_messages(engine, bag: Recording, converter: MessageConverter, record_st
                   tick: float = RATE_TICK) -> None:
     """Feeds `batch`, a list of (event, seconds, (topic, number, record)), writing what it
     produces with `write` to `sink`. With `dues` (the wall-clock time each message falls
-    due), each message is fed when it is due (`Engine.feed_paced`, sleeping at least `tick`
-    at a time) and the output is written and flushed as it is produced. A message whose processing fails is reported on standard
+    due), each message is fed at most `tick` after it is due (`Engine.feed_paced`) and the
+    output is written and flushed as it is produced. A message whose processing fails is reported on standard
     error as `NAME:TOPIC#N: error: ...`, counted in `stats.failed`, and the batch goes on after
     it; a message whose bytes the runtime refuses is converted as text instead
     (`message_event`), or goes to `report(topic, number, reason)` and `stats.rejected` when
@@ -325,12 +325,23 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                           if publisher is None and hasattr(engine, "ros1_schema") else None)
 
             def feed(batch, dues=None) -> None:
-                if publisher is not None:
+                if publisher is not None:               # the input messages as they are fed
+                    for _, _, (topic, _, record) in batch:
+                        message = publisher.input(topic, record.msgtype, record.time_ns, record.msg)
+                        for target in sinks:
+                            target.write(message)
                     publisher.fed([(text, seconds) for text, seconds, _ in batch])
                 feed_messages(engine, bag, converter, options.stamp == "record", batch, write, sink, stats, name,
                               report, dues, options.tick)
 
             dues: List[float] = []
+            deadline = 0.0                      # with a rate: when the batch's first message is a tick late
+
+            def wait_for(deadline: float) -> None:
+                wait = deadline - clock.now()
+                if wait > 0:
+                    clock.sleep(wait)
+
             for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms):
                 record_ns = record.time_ns
                 if paced:
@@ -343,21 +354,20 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                         clock.sleep(gap)
                     dues.append(due)
                 elif options.rate is not None:
+                    # the batch waits until its first message is a tick late and takes every
+                    # message due by then (the fewest wake-ups within that latency)
                     due = began + (record_ns - first_ns) / 1e9 / options.rate
-                    wait = due - clock.now()
-                    if wait > 0:
-                        if batch:
-                            feed(batch)
-                            batch = []
-                            sink.flush()
-                        # sleep at least one tick: what fell due meanwhile goes in one batch
-                        clock.sleep(max(wait, options.tick))
-                if publisher is not None:
-                    message = publisher.input(record.topic, record.msgtype, record_ns, record.msg)
-                    for target in sinks:
-                        target.write(message)
+                    if batch and due > deadline:
+                        wait_for(deadline)
+                        feed(batch)
+                        batch = []
+                        sink.flush()
+                    if not batch:
+                        deadline = due + options.tick
                 batch.append((text, seconds, (record.topic, stats.messages, record)))
                 if len(batch) >= batch_size and not paced:
+                    if options.rate is not None:
+                        wait_for(deadline)
                     feed(batch)
                     batch = []
                 done_ms = (record_ns - first_ns) // 1_000_000
@@ -365,6 +375,8 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                     bar.update(done_ms - shown_ms)
                     shown_ms = done_ms
             if batch:
+                if options.rate is not None and not paced:
+                    wait_for(deadline)
                 feed(batch, dues if paced else None)
             if publisher is not None:
                 publisher.fed([])
