@@ -48,4 +48,8 @@ def test_fig_5_2_quick(tmp_path):
     result = json.loads((tmp_path / "nao.json").read_text())
     assert result["app_fast"]["events"] > 3000          # about 1,900 transforms/s were split
     assert result["app_realtime"]["series"]
+    # every world pose written in real time, none before the messages it needs fell due
+    latency = result["app_realtime"]["latency"]
+    assert latency["count"] >= 5 and latency["min"] >= 0, latency
+    assert any(line.startswith("  Fig 5.2 output latency, --tick 0.01:") for line in proc.stdout.splitlines())
     assert (tmp_path / "nao_application.png").exists()
