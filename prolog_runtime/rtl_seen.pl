@@ -41,7 +41,7 @@ rtl_seen_add(Event, Start, End) :-
     Size is Size0 + 1,
     (   Size >= 1024
     ->  close_generation(Name, End)
-    ;   nb_setval(rtl_seen_size, Size)
+    ;   nb_linkval(rtl_seen_size, Size)             % (a number: no copy needed)
     ).
 
 %!  rtl_seen_add_atomic(+Items:list) is det.
@@ -60,7 +60,7 @@ rtl_seen_add_atomic(Items) :-
     Size is Size0 + Count,
     (   Size >= 1024
     ->  close_generation(Name, Latest)
-    ;   nb_setval(rtl_seen_size, Size)
+    ;   nb_linkval(rtl_seen_size, Size)             % (a number: no copy needed)
     ).
 
 items_latest([], N, N, Latest, Latest).
