@@ -245,6 +245,36 @@ def test_random_output_lines_are_written_the_same(tmp_path, swipl, texts):
     compare_output(tmp_path, swipl, texts)
 
 
+# Terms the C writer writes itself, without the Prolog writer (identifiers, integers, floats,
+# lists, compounds of arity other than 1 and 2), among the shapes next to them that it leaves
+# to the Prolog writer: operator names, quoted atoms, arity 1 and 2, strings, big integers.
+PLAIN_NAMES = st.sampled_from(["a", "p1", "pose", "mod", "is", "dynamic", "xor", "r_2", "aB9", "[]", "'[]'",
+                               "'A'", "'a b'", "-", "'é'", "{}"])
+PLAIN_NUMBERS = st.one_of(st.integers(-10**20, 10**20).map(str),
+                          st.floats(allow_nan=False, allow_infinity=False, width=64).map(repr).map(
+                              lambda text: text if "." in text or "e" in text else text + ".0"),
+                          st.sampled_from(["-0.0", "1.0e300", "-3", "0", "\"s\""]))
+
+
+def plain_terms(depth):
+    if depth == 0:
+        return st.one_of(PLAIN_NAMES, PLAIN_NUMBERS)
+    sub = plain_terms(depth - 1)
+    return st.one_of(
+        PLAIN_NAMES, PLAIN_NUMBERS,
+        st.builds(lambda f, args: f + "(" + ",".join(args) + ")", PLAIN_NAMES,
+                  st.lists(sub, min_size=1, max_size=5)),
+        st.builds(lambda items, tail: "[" + ",".join(items) + (("|" + tail) if tail and items else "") + "]",
+                  st.lists(sub, max_size=4), st.one_of(st.just(""), sub)),
+    )
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(plain_terms(3), min_size=10, max_size=30))
+def test_plain_output_terms_are_written_as_writeq_writes_them(tmp_path, swipl, texts):
+    compare_output(tmp_path, swipl, texts)
+
+
 # ---- the line loop: blocks of plain event lines against every line read in Prolog --------------
 # The C reader hands the line loop blocks of lines; a run of plain event lines (a time "t" only)
 # is remembered for retractions in one call (rtl_seen_add_atomic/1). Without the C reader every
