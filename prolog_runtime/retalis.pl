@@ -269,7 +269,24 @@ run_stream(In, Name) :-
     stream_options(Options),
     read_line_to_string(In, Line0),
     without_bom(Line0, Line),
-    with_action_output(run_lines(Line, In, Name, 1, Options)).
+    with_output_buffer(In, with_action_output(run_lines(Line, In, Name, 1, Options))).
+
+%   with_output_buffer(+In, :Goal): run Goal, which reads In, with standard output fully
+%   buffered when In is a regular file: SWI-Prolog buffers user_output by line, which costs a
+%   write(2) per output line. A live input (a pipe, a socket, a terminal) keeps the line
+%   buffer, so that its output leaves as it is produced. The output is flushed afterwards,
+%   and before anything is written to standard error (print_outcome/3, print_warnings/2).
+
+with_output_buffer(In, Goal) :-
+    (   stream_property(In, file_name(File)),
+        exists_file(File),                      % a regular file (not a FIFO or a device)
+        stream_property(user_output, buffer(Old)),
+        Old \== full
+    ->  setup_call_cleanup(set_stream(user_output, buffer(full)),
+                           Goal,
+                           ( flush_output(user_output), set_stream(user_output, buffer(Old)) ))
+    ;   call(Goal)
+    ).
 
 stream_options(Options) :-
     (   nb_current(rtl_stream_options, Options0), Options0 \== []
@@ -306,19 +323,47 @@ run_buffered(In, Name, N0, Options, N) :-
         run_buffered(In, Name, N1, Options, N)
     ).
 
+%   A run of event lines with a time "t" only (items a(Event, T)) is remembered for
+%   retractions in one call (rtl_seen_add_atomic/1), then processed event by event.
+
 run_items([], _, _, N, _, N).
 run_items([Item|Items], In, Name, N0, Options, N) :-
-    (   Item = a(Event, T)
-    ->  rtl_process_parsed(event(add, Event, T, T), Options, Outcome)
+    (   Item = a(_, _)
+    ->  atomic_run([Item|Items], Run, Rest),
+        rtl_seen_add_atomic(Run),
+        run_atomic(Run, Rest, In, Name, N0, Options, N1)
     ;   Item = l(Line),
-        rtl_process_line(Line, Options, Outcome)
+        rtl_process_line(Line, Options, Outcome),
+        item_done(Outcome, Items, In, Name, N0, Options),
+        N1 is N0 + 1,
+        Rest = Items
     ),
-    (   Outcome == ok, Items \== []            % (the last one may flush the output)
-    ->  print_warnings(Name, N0)
-    ;   line_done(Outcome, In, Name, N0, Options)
-    ),
+    run_items(Rest, In, Name, N1, Options, N).
+
+atomic_run([Item|Items], Run, Rest) :-
+    (   Item = a(_, _)
+    ->  Run = [Item|Run1],
+        atomic_run(Items, Run1, Rest)
+    ;   Run = [],
+        Rest = [Item|Items]
+    ).
+atomic_run([], [], []).
+
+run_atomic([], _, _, _, N, _, N).
+run_atomic([a(Event, T)|Run], Rest, In, Name, N0, Options, N) :-
+    run_event(add, Event, T, T, Outcome),
+    count_outcome(Outcome),
+    (   Run == [] -> Items = Rest ; Items = Run ),
+    item_done(Outcome, Items, In, Name, N0, Options),
     N1 is N0 + 1,
-    run_items(Items, In, Name, N1, Options, N).
+    run_atomic(Run, Rest, In, Name, N1, Options, N).
+
+% The last item of a block may flush the output.
+item_done(Outcome, Items, In, Name, N, Options) :-
+    (   Outcome == ok, Items \== []
+    ->  print_warnings(Name, N)
+    ;   line_done(Outcome, In, Name, N, Options)
+    ).
 
 %   flush_if_idle(+In): on a live input (standard input: a pipe, a socket, a terminal), write
 %   the output produced so far as soon as no more input is waiting, so that each event's
@@ -346,6 +391,7 @@ print_warnings(Name, N) :-
     rtl_take_warnings(Warnings),
     Warnings \== [],
     !,
+    flush_output(user_output),
     forall(member(W, Warnings),
            (   Name == (-)
            ->  format(user_error, "warning: ~s~n", [W])

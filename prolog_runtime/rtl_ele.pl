@@ -245,13 +245,17 @@ rtl_clock(Clock) :-
 %!  rtl_event(+Event, +Start:number, +End:number) is det.
 %
 %   Process one input event: derive everything it completes, deliver the results.
+%
+%   The clock, the counters and the other numbers kept in global variables on every event
+%   are set with nb_linkval/2: for a number it is nb_setval/2 without the copy (nb_setval/2
+%   is duplicate_term/2 and nb_linkval/2, and the link survives backtracking as the copy does).
 
 rtl_event(Event, Start, End) :-
     (   End > Start -> note_duration(Start, End) ; true ),
     note_start(Start),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
-    ->  nb_setval(rtl_clock, End),
+    ->  nb_linkval(rtl_clock, End),
         (   nb_current(rtl_next_timer, Due), Due < End      % a timer due before the event
         ->  rtl_timers_run(before)
         ;   true
@@ -260,7 +264,7 @@ rtl_event(Event, Start, End) :-
     ),
     nb_getval(events, N0),
     N is N0 + 1,
-    nb_setval(events, N),
+    nb_linkval(events, N),
     (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
@@ -280,7 +284,7 @@ note_duration(Start, End) :-
         nb_getval(rtl_longest_event, Longest),
         End - Start > Longest
     ->  Duration is End - Start,
-        nb_setval(rtl_longest_event, Duration)
+        nb_linkval(rtl_longest_event, Duration)
     ;   true
     ).
 
@@ -302,7 +306,7 @@ rtl_started_after(Time) :-
 % The latest start, when known (it is not after a restore from a snapshot without it).
 note_start(Start) :-
     (   nb_current(rtl_latest_start, Latest), Start > Latest
-    ->  nb_setval(rtl_latest_start, Start)
+    ->  nb_linkval(rtl_latest_start, Start)
     ;   true
     ).
 
@@ -505,7 +509,7 @@ counter(timers_refused).
 rtl_count(Name) :-
     nb_getval(Name, N0),
     N is N0 + 1,
-    nb_setval(Name, N).
+    nb_linkval(Name, N).
 
 %!  rtl_detected(+Rule:atom) is det.
 %
@@ -516,7 +520,7 @@ rtl_count(Name) :-
 rtl_detected(Rule) :-
     atom_concat('rtl_detected ', Rule, Key),
     (   nb_current(Key, N0) -> N is N0 + 1 ; N = 1 ),
-    nb_setval(Key, N).
+    nb_linkval(Key, N).
 
 %!  rtl_detections(-Pairs:list(pair)) is det.
 %

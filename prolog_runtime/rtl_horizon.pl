@@ -352,10 +352,15 @@ rtl_take_instance(M:Stored, Own) :-
 
 %!  rtl_next_seq(-Seq:integer) is det.
 %
-%   The next processing sequence number (aggregates follow the processing order).
+%   The next processing sequence number (aggregates follow the processing order; a policy
+%   step numbers its instances with it). Kept in the global variable `rtl_processing_seq`
+%   with the rest of the runtime's state (flag/3 costs five times as much: it is called for
+%   every instance a policy step stores).
 
 rtl_next_seq(Seq) :-
-    flag(rtl_processing_seq, Seq, Seq + 1).
+    (   nb_current(rtl_processing_seq, Seq) -> true ; Seq = 0 ),
+    Next is Seq + 1,
+    nb_linkval(rtl_processing_seq, Next).        % (a number: nb_setval/2 without the copy)
 
 %!  rtl_aggregate_values(+Items, -Acc, -Values) is det.
 %

@@ -22,7 +22,7 @@ same join key may change (the freed partner can pair with a later instance, whic
 another one waiting, ...).
 
 Every instance a policy step stores or records carries its *position*: its arrival number
-(rtl_next_seq/1, one counter for every step, taken by compiled code inline; rtl_position/2).
+(rtl_next_seq/1, one counter for every step, called by compiled code; rtl_position/2).
 Instances arrive in position order, also when one input event reaches a step several times
 (`a(X) seq a(Y)`, or through two paths), so the step's stores and records are its log:
 
@@ -372,7 +372,12 @@ rtl_policy_made(MA:MadeA, MB:MadeB, WA:WithdrawnA, WB:WithdrawnB, Position, Deri
         kept_assert(MA:MadeA, MB:MadeB),
         with_position(Old, Derive)
     ;   nb_getval(rtl_replay_position, R),
-        (   R == none -> flag(rtl_processing_seq, Position, Position) ; Position = R ),
+        (   R \== none
+        ->  Position = R
+        ;   nb_current(rtl_processing_seq, Position)     % the next arrival number (rtl_next_seq/1)
+        ->  true
+        ;   Position = 0
+        ),
         kept_assert(MA:MadeA, MB:MadeB),
         ignore(Derive)
     ).

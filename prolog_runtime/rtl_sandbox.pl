@@ -295,8 +295,6 @@ walk(G, M, S, V0, V) :-
     arg(1, G, Clause),
     check_db(Clause, M, G, S),
     V = V0.
-walk(flag(Key, Old, New), _, st(rule(_, _, _), _), V, V) :-
-    Key == rtl_processing_seq, var(Old), New == Old + 1, !.    % a policy step's arrival number
 walk(G, _, S, _, _) :-
     forbidden(G), !,
     refuse(S, G, not_allowed).

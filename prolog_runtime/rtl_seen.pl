@@ -1,5 +1,6 @@
 :- module(rtl_seen,
           [ rtl_seen_add/3,             % +Event, +Start, +End
+            rtl_seen_add_atomic/1,      % +Items
             rtl_seen_take/3,            % +Event, +Start, +End
             rtl_seen_horizon/1,         % -Time
             rtl_seen_count/1            % -Count
@@ -19,6 +20,7 @@ Memory is proportional to the event rate times `max_delay + window` (plus a few 
 events), as for the partial matches (docs/runtime.md).
 */
 
+:- use_module(library(lists)).
 :- use_module(rtl_ele).
 
 :- dynamic generation/2.        % generation(Module, End): its events are Module:seen(Event, Start, End0)
@@ -26,19 +28,56 @@ events), as for the partial matches (docs/runtime.md).
 
 %!  rtl_seen_add(+Event, +Start, +End) is det.
 %
-%   Remember one input event. Events are remembered in generations of 1,024 input events,
-%   each in a module of its own (`rtl_seen_<N>:seen/3`); when a generation is closed, the generations
-%   whose events all end before the horizon are dropped whole (this runs for every input
-%   event: erasing events one by one would cost more than remembering them).
+%   Remember one input event. Events are remembered in generations of about 1,024 input
+%   events, each in a module of its own (`rtl_seen_<N>:seen/3` and `seen_atomic/1`); when a
+%   generation is closed, the generations whose events all end before the horizon are
+%   dropped whole (this runs for every input event: erasing events one by one would cost
+%   more than remembering them).
 
 rtl_seen_add(Event, Start, End) :-
+    open_generation_name(Name),
+    assertz(Name:seen(Event, Start, End)),
+    generation_size(Size0),
+    Size is Size0 + 1,
+    (   Size >= 1024
+    ->  close_generation(Name, End)
+    ;   nb_linkval(rtl_seen_size, Size)             % (a number: no copy needed)
+    ).
+
+%!  rtl_seen_add_atomic(+Items:list) is det.
+%
+%   Remember the input events of Items, each `a(Event, T)`: Event at the one time T (the
+%   items of rtl_buffered_lines/3, in order), as rtl_seen_add(Event, T, T) for each, in one
+%   clause (`seen_atomic(Items)`): a block of lines read at once costs one assertz/1, not
+%   one per line.
+
+rtl_seen_add_atomic([]) :- !.
+rtl_seen_add_atomic(Items) :-
+    open_generation_name(Name),
+    assertz(Name:seen_atomic(Items)),
+    items_latest(Items, 0, Count, -inf, Latest),
+    generation_size(Size0),
+    Size is Size0 + Count,
+    (   Size >= 1024
+    ->  close_generation(Name, Latest)
+    ;   nb_linkval(rtl_seen_size, Size)             % (a number: no copy needed)
+    ).
+
+items_latest([], N, N, Latest, Latest).
+items_latest([a(_, T)|Items], N0, N, Latest0, Latest) :-
+    N1 is N0 + 1,
+    (   T > Latest0 -> Latest1 = T ; Latest1 = Latest0 ),
+    items_latest(Items, N1, N, Latest1, Latest).
+
+% (A snapshot of an older runtime has no size: its generation counts as empty.)
+generation_size(Size) :-
+    (   nb_current(rtl_seen_size, Size) -> true ; Size = 0 ).
+
+open_generation_name(Name) :-
     (   nb_current(rtl_seen_generation, Name), Name \== []
     ->  true
     ;   open_generation(Name)
-    ),
-    assertz(Name:seen(Event, Start, End)),
-    nb_getval(events, N),                       % rtl_ele's count of input events
-    (   N /\ 1023 =:= 1023 -> close_generation(Name, End) ; true ).
+    ).
 
 %!  rtl_seen_take(+Event, +Start, +End) is semidet.
 %
@@ -48,10 +87,22 @@ rtl_seen_take(Event, Start, End) :-
     (   nb_current(rtl_seen_generation, Name), Name \== []
     ;   generation(Name, _)
     ),
+    generation_take(Name, Event, Start, End),
+    !.
+
+generation_take(Name, Event, Start, End) :-
     clause(Name:seen(Event, Start0, End0), true, Ref),
     Start0 =:= Start, End0 =:= End,
     !,
     erase(Ref).
+generation_take(Name, Event, Start, End) :-
+    Start =:= End,
+    clause(Name:seen_atomic(Items), true, Ref),
+    select(a(Event, T), Items, Rest),
+    T =:= End,
+    !,
+    erase(Ref),
+    (   Rest == [] -> true ; assertz(Name:seen_atomic(Rest)) ).
 
 % The modules of dropped generations are used again (modules are never deleted).
 open_generation(Name) :-
@@ -60,16 +111,18 @@ open_generation(Name) :-
     ;   flag(rtl_seen_generations, G, G + 1),
         format(atom(Name), 'rtl_seen_~d', [G])
     ),
-    dynamic(Name:seen/3),
+    dynamic([Name:seen/3, Name:seen_atomic/1]),
+    nb_setval(rtl_seen_size, 0),
     nb_setval(rtl_seen_generation, Name).
 
-% Every event of the generation ends at the latest at the clock or at End (the last one,
-% not processed yet).
+% Every event of the generation ends at the latest at the clock or at End (the latest of
+% those just added, not processed yet).
 close_generation(Name, End) :-
     rtl_clock(Clock),
     GenerationEnd is max(Clock, End),
     assertz(generation(Name, GenerationEnd)),
     nb_setval(rtl_seen_generation, []),
+    nb_setval(rtl_seen_size, 0),
     rtl_seen_horizon(Horizon),
     forall(( generation(Old, OldEnd), OldEnd < Horizon ),
            drop_generation(Old)).
@@ -77,6 +130,7 @@ close_generation(Name, End) :-
 drop_generation(Name) :-
     retractall(generation(Name, _)),
     retractall(Name:seen(_, _, _)),
+    retractall(Name:seen_atomic(_)),
     assertz(free_generation(Name)).
 
 %!  rtl_seen_count(-Count) is det.
@@ -86,7 +140,11 @@ drop_generation(Name) :-
 rtl_seen_count(Count) :-
     findall(Name, ( nb_current(rtl_seen_generation, Name), Name \== [] ; generation(Name, _) ), Names),
     aggregate_all(sum(N), ( member(Name, Names),
-                            predicate_property(Name:seen(_, _, _), number_of_clauses(N)) ), Count).
+                            predicate_property(Name:seen(_, _, _), number_of_clauses(N)) ), Singles),
+    aggregate_all(sum(N), ( member(Name, Names),
+                            Name:seen_atomic(Items),
+                            length(Items, N) ), Atomic),
+    Count is Singles + Atomic.
 
 %!  rtl_seen_horizon(-Time) is det.
 %
@@ -110,6 +168,7 @@ rtl_ele:clear_hook :-
     forall(generation(Name, _), drop_generation(Name)),
     (   nb_current(rtl_seen_generation, Name), Name \== []
     ->  retractall(Name:seen(_, _, _)),
+        retractall(Name:seen_atomic(_)),
         assertz(free_generation(Name))
     ;   true
     ),

@@ -243,3 +243,139 @@ def test_output_lines_written_in_c_are_those_written_in_prolog(tmp_path, swipl):
 @given(st.lists(terms(3), min_size=10, max_size=30))
 def test_random_output_lines_are_written_the_same(tmp_path, swipl, texts):
     compare_output(tmp_path, swipl, texts)
+
+
+# Terms the C writer writes itself, without the Prolog writer (identifiers, integers, floats,
+# lists, compounds of arity other than 1 and 2), among the shapes next to them that it leaves
+# to the Prolog writer: operator names, quoted atoms, arity 1 and 2, strings, big integers.
+PLAIN_NAMES = st.sampled_from(["a", "p1", "pose", "mod", "is", "dynamic", "xor", "r_2", "aB9", "[]", "'[]'",
+                               "'A'", "'a b'", "-", "'é'", "{}"])
+PLAIN_NUMBERS = st.one_of(st.integers(-10**20, 10**20).map(str),
+                          st.floats(allow_nan=False, allow_infinity=False, width=64).map(repr).map(
+                              lambda text: text if "." in text or "e" in text else text + ".0"),
+                          st.sampled_from(["-0.0", "1.0e300", "-3", "0", "\"s\""]))
+
+
+def plain_terms(depth):
+    if depth == 0:
+        return st.one_of(PLAIN_NAMES, PLAIN_NUMBERS)
+    sub = plain_terms(depth - 1)
+    return st.one_of(
+        PLAIN_NAMES, PLAIN_NUMBERS,
+        st.builds(lambda f, args: f + "(" + ",".join(args) + ")", PLAIN_NAMES,
+                  st.lists(sub, min_size=1, max_size=5)),
+        st.builds(lambda items, tail: "[" + ",".join(items) + (("|" + tail) if tail and items else "") + "]",
+                  st.lists(sub, max_size=4), st.one_of(st.just(""), sub)),
+    )
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(plain_terms(3), min_size=10, max_size=30))
+def test_plain_output_terms_are_written_as_writeq_writes_them(tmp_path, swipl, texts):
+    compare_output(tmp_path, swipl, texts)
+
+
+# ---- the line loop: blocks of plain event lines against every line read in Prolog --------------
+# The C reader hands the line loop blocks of lines; a run of plain event lines (a time "t" only)
+# is remembered for retractions in one call (rtl_seen_add_atomic/1). Without the C reader every
+# line takes the Prolog road, one at a time: the oracle. Retractions of events added in a block,
+# added twice, never added, and lines that fail or are rejected between them.
+
+LOOP_PROGRAM = """\
+:- set_etalis_flag(event_consumption_policy, recent).
+pair(I, X, Y) <- a(I, X) seq b(I, Y).
+both(I) <- (a(I, _) and c(I)).5.
+big(I, Y) <- b(I, Y) where Y > 2.
+"""
+
+
+@pytest.fixture(scope="module")
+def loop_setup(tmp_path_factory):
+    import shutil
+    from retalisc.compiler import compile_source
+
+    work = tmp_path_factory.mktemp("line_loop")
+    runtime = work / "runtime"
+    shutil.copytree(ROOT / "prolog_runtime", runtime, ignore=shutil.ignore_patterns("foreign", "tests"))
+    program = work / "p.pl"
+    program.write_text(compile_source(LOOP_PROGRAM, "p.rtl", output_name="p.pl").prolog)
+    return work, runtime, program
+
+
+def loop_runs(swipl, setup, lines):
+    import os
+    work, runtime, program = setup
+    events = work / "events.jsonl"
+    events.write_text("".join(line + "\n" for line in lines))
+    runs = {}
+    for name, env in (("c", {}), ("prolog", {"RETALIS_RUNTIME": str(runtime)})):
+        done = subprocess.run([swipl, str(program), "--max-delay=2", str(events)], capture_output=True, text=True,
+                              timeout=60, env={**os.environ, **env})
+        assert done.returncode == 0, done.stderr
+        stderr = done.stderr.splitlines()
+        summary = stderr[-1].rsplit(",", 1)[0]          # (without the time)
+        runs[name] = (done.stdout, stderr[:-1], summary)
+    return runs
+
+
+@st.composite
+def loop_streams(draw):
+    lines, added, t = [], [], 0
+    for _ in range(draw(st.integers(1, 60))):
+        kind = draw(st.sampled_from(["add"] * 6 + ["retract", "retract_never", "interval", "bad", "twice"]))
+        t += draw(st.integers(0, 2))
+        event = f"{draw(st.sampled_from('abc'))}({draw(st.integers(1, 3))}"
+        event += ")" if event[0] == "c" else f", {draw(st.sampled_from(['1', '5', 'foo']))})"
+        if kind in ("add", "twice"):
+            lines.append(json.dumps({"event": event, "t": t}))
+            added.append((event, t))
+            if kind == "twice":
+                lines.append(json.dumps({"event": event, "t": t}))
+        elif kind == "retract" and added:
+            old, when = draw(st.sampled_from(added))
+            lines.append(json.dumps({"event": old, "t": when, "op": "retract"}))
+        elif kind == "retract_never":
+            lines.append(json.dumps({"event": event, "t": t + 100, "op": "retract"}))
+        elif kind == "interval":
+            lines.append(json.dumps({"event": event, "start": max(t - 1, 0), "end": t}))
+        else:
+            lines.append("not json")
+    return lines
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(lines=loop_streams())
+def test_the_line_loop_gives_the_same_run_with_and_without_the_c_reader(swipl, loop_setup, lines):
+    runs = loop_runs(swipl, loop_setup, lines)
+    assert runs["c"] == runs["prolog"]
+
+
+def test_retractions_of_events_added_in_one_block_are_checked(swipl, loop_setup):
+    lines = [json.dumps({"event": f"a(1, {k})", "t": k}) for k in range(1, 400)]
+    lines += [json.dumps({"event": "a(1, 7)", "t": 7, "op": "retract"}),       # too old to check: too late
+              json.dumps({"event": "a(1, 398)", "t": 398, "op": "retract"}),   # added
+              json.dumps({"event": "a(1, 398)", "t": 398, "op": "retract"}),   # retracted already
+              json.dumps({"event": "a(1, 399)", "t": 398, "op": "retract"})]   # never added with that time
+    runs = loop_runs(swipl, loop_setup, lines)
+    assert runs["c"] == runs["prolog"]
+    stdout, stderr, summary = runs["c"]
+    assert [line.split(": ")[1] for line in stderr] == ["warning", "rejected", "rejected"]
+    assert [line.split(": ")[0].rsplit(":", 1)[1] for line in stderr] == ["400", "402", "403"]
+    assert "retraction of a(1,398) [398, 398], which was not added" in stderr[1]
+    assert "retraction of a(1,399) [398, 398], which was not added" in stderr[2]
+    assert "2 rejected, 1 retracted, 1 too late to retract" in summary
+
+
+def test_output_on_a_regular_file_comes_before_the_message_of_a_later_line(swipl, loop_setup):
+    import os
+    work, _, program = loop_setup
+    events = work / "ordered.jsonl"
+    events.write_text("".join(json.dumps({"event": f"b(1, {k})", "t": k}) + "\n" for k in range(3, 6))
+                      + "not json\n" + json.dumps({"event": "b(1, 9)", "t": 9}) + "\n")
+    done = subprocess.run([swipl, str(program), str(events)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          text=True, timeout=60, env=dict(os.environ))
+    lines = done.stdout.splitlines()
+    rejected = next(i for i, line in enumerate(lines) if "rejected" in line and ":4:" in line)
+    assert [line for line in lines[:rejected] if line.startswith("{")] == \
+        [f'{{"event": "big(1,{k})", "start": {k}, "end": {k}}}' for k in range(3, 6)]
+    assert lines[rejected + 1] == '{"event": "big(1,9)", "start": 9, "end": 9}'

@@ -33,6 +33,26 @@ def _abn_stream(n, seed):
     return out
 
 
+RECENT_SEQ = ":- set_etalis_flag(event_consumption_policy, recent).\nc(X, Y) <- (a(X, Y) seq b(X)).3.\n"
+
+
+def _policy_stream(n, seed):
+    """Events of a policy step and deletions of some of them: a deletion rewinds the step to
+    the arrival number of the deleted instance (rtl_next_seq/1), which the snapshot keeps."""
+    rng = random.Random(seed)
+    t, out, added = 0.0, [], []
+    for _ in range(n):
+        t = round(t + rng.choice([0.1, 0.5, 1.0]), 1)
+        if added and rng.random() < 0.15:
+            event, when = added.pop(rng.randrange(len(added)))
+            out.append((event, when, when, "retract"))
+        else:
+            event = f"a({rng.randint(0, 2)}, {rng.randint(0, 3)})" if rng.random() < 0.6 else f"b({rng.randint(0, 2)})"
+            added.append((event, t))
+            out.append((event, t))
+    return out
+
+
 def _slr_stream(n, seed):
     rng = random.Random(seed)
     t, out = 0.0, []
@@ -63,6 +83,7 @@ CASES = {
     "negation": (NEGATION, _abn_stream(160, 2)),
     "slr_prev_next": (SLR, _slr_stream(160, 3)),
     "synchronized": (SYNC, _sync_stream(120, 4)),
+    "policy_deletions": (RECENT_SEQ, _policy_stream(160, 5)),
 }
 
 

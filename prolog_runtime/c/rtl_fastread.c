@@ -28,7 +28,8 @@
 
         {"event": "p(1,'A b')", "start": 12, "end": 12.5}
 
-    the term written as writeq/1 writes it (UTF-8), escaped as the inside of a JSON string
+    the term written as writeq/1 writes it (UTF-8; a plain term, such as the one above, by
+    this file itself, any other by PL_write_term()), escaped as the inside of a JSON string
     the way rtl_json_string_escape/2 escapes; it fails when Start or End is not a finite
     number (rtl_io.pl writes those). rtl_fast_write_event(+Stream, +Event, +Start, +End)
     writes that line and a newline to a UTF-8 stream.
@@ -563,23 +564,90 @@ static int json_time_text(buffer *b, term_t t)
   return ok;
 }
 
+/* A plain term, written here as writeq/1 writes it, without a stream: integers that fit 64
+   bits, finite floats (written by write/1), atoms that are identifiers (a lowercase ASCII
+   letter, then letters, digits and _: never quoted, and written as they are in any position,
+   operators included), [], proper and partial lists of plain terms, and compound terms whose
+   name is such an identifier and whose arity is not 1 or 2 (no operator has another arity,
+   so writeq/1 writes them as name(Arg,...), without spaces). Fails for any other term, which
+   PL_write_term() then writes. Nothing it writes needs escaping in a JSON string. */
+static int plain_atom(atom_t a, buffer *b)
+{ size_t len;
+  const char *s = PL_atom_nchars(a, &len);
+  if ( !s || len == 0 || !is_lower(s[0]) ) return FALSE;
+  for (size_t i = 1; i < len; i++)
+    if ( !is_alnum(s[i]) ) return FALSE;
+  return buf_add(b, s, len);
+}
+
+static int plain_term(buffer *b, term_t t, int depth)
+{ int64_t i;
+  atom_t name;
+  size_t arity;
+
+  if ( depth > MAX_NESTING ) return FALSE;
+  switch ( PL_term_type(t) )
+  { case PL_INTEGER:
+    { char num[32];
+      if ( !PL_get_int64(t, &i) ) return FALSE;     /* a big integer */
+      int n = snprintf(num, sizeof(num), "%lld", (long long)i);
+      return buf_add(b, num, (size_t)n);
+    }
+    case PL_FLOAT:
+      return json_time_text(b, t);                  /* finite floats only */
+    case PL_ATOM:
+      return PL_get_atom(t, &name) && plain_atom(name, b);
+    case PL_NIL:
+      return buf_add(b, "[]", 2);
+    case PL_LIST_PAIR:
+    { term_t head = PL_new_term_ref(), tail = PL_copy_term_ref(t);
+      if ( !buf_add(b, "[", 1) ) return FALSE;
+      for (int first = TRUE; PL_get_list(tail, head, tail); first = FALSE)
+      { if ( (!first && !buf_add(b, ",", 1)) || !plain_term(b, head, depth + 1) ) return FALSE;
+      }
+      if ( !PL_get_nil(tail) && (!buf_add(b, "|", 1) || !plain_term(b, tail, depth + 1)) )
+        return FALSE;
+      return buf_add(b, "]", 1);
+    }
+    case PL_TERM:
+    { if ( !PL_get_name_arity(t, &name, &arity) || arity == 1 || arity == 2 ) return FALSE;
+      if ( !plain_atom(name, b) || !buf_add(b, "(", 1) ) return FALSE;
+      term_t arg = PL_new_term_ref();
+      for (size_t k = 1; k <= arity; k++)
+      { if ( !PL_get_arg(k, t, arg) || (k > 1 && !buf_add(b, ",", 1)) || !plain_term(b, arg, depth + 1) )
+          return FALSE;
+      }
+      return buf_add(b, ")", 1);
+    }
+    default:
+      return FALSE;
+  }
+}
+
 /* The output line of the event into b (UTF-8, without a newline). */
 static int event_json(buffer *b, term_t event, term_t start, term_t end)
 { char *text;
   size_t len;
   int ok;
 
-  if ( !written(event, PL_WRT_QUOTED|PL_WRT_NUMBERVARS|PL_WRT_CHARESCAPES, &text, &len) )
-    return FALSE;
-  ok = buf_text(b, "{\"event\": \"") &&
-       json_escaped(b, text, len) &&
-       buf_text(b, "\", \"start\": ") &&
-       json_time_text(b, start) &&
-       buf_text(b, ", \"end\": ") &&
-       json_time_text(b, end) &&
-       buf_text(b, "}");
-  free(text);
-  return ok;
+  if ( !buf_text(b, "{\"event\": \"") ) return FALSE;
+  size_t mark = b->len;
+  fid_t fid = PL_open_foreign_frame();
+  int plain = plain_term(b, event, 0);
+  PL_discard_foreign_frame(fid);
+  if ( !plain )
+  { b->len = mark;
+    if ( !written(event, PL_WRT_QUOTED|PL_WRT_NUMBERVARS|PL_WRT_CHARESCAPES, &text, &len) )
+      return FALSE;
+    ok = json_escaped(b, text, len);
+    free(text);
+    if ( !ok ) return FALSE;
+  }
+  return buf_text(b, "\", \"start\": ") &&
+         json_time_text(b, start) &&
+         buf_text(b, ", \"end\": ") &&
+         json_time_text(b, end) &&
+         buf_text(b, "}");
 }
 
 static foreign_t

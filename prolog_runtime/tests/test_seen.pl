@@ -61,6 +61,74 @@ test(agrees_with_a_list_model, [setup(setup)]) :-
     numlist(1, 3000, Ticks),
     foldl(model_step, Ticks, [], _).
 
+% The same model with most events added in blocks (rtl_seen_add_atomic/1, as the line loop
+% adds a block of lines read at once) of random length, 200 events a second (a generation
+% spans less than the horizon), some with an event twice; single adds and retractions of
+% random recent keys come between the blocks.
+test(blocks_agree_with_a_list_model, [setup(setup)]) :-
+    set_random(seed(7)),
+    block_steps(1, [], _).
+
+block_steps(T, Model, Model) :-
+    T > 200,
+    !.
+block_steps(T, Model0, Model) :-
+    random_between(1, 4, Choice),
+    (   Choice == 1
+    ->  retraction_step(T, Model0, Model1),
+        T1 = T
+    ;   Choice == 2
+    ->  random_between(0, 4, K),
+        add(k(K), T),
+        Model1 = [k(K)-T|Model0],
+        T1 is T + 1
+    ;   random_between(1, 600, Length),                % 200 events a second
+        findall(a(k(K), Time), ( between(1, Length, I), Time is T + I // 200, random_between(0, 4, K) ),
+                Items0),
+        T1 is T + Length // 200 + 1,
+        (   Items0 = [Twin|_], random_between(1, 3, 1)
+        ->  append(Items0, [Twin], Items)            % the first event once more, at its time
+        ;   Items = Items0
+        ),
+        rtl_seen_add_atomic(Items),
+        forall(member(a(E, Time), Items), rtl_event(E, Time, Time)),
+        findall(E-Time, member(a(E, Time), Items), Added),
+        reverse(Added, Newest),
+        append(Newest, Model0, Model1)
+    ),
+    block_steps(T1, Model1, Model).
+
+retraction_step(T, Model0, Model) :-
+    random_between(0, 4, K),
+    random_between(1, 15, Back),
+    Time is T - Back,
+    rtl_seen_horizon(H),
+    (   Time >= H
+    ->  (   selectchk(k(K)-Time, Model0, Model)
+        ->  assertion(rtl_seen_take(k(K), Time, Time))
+        ;   assertion(\+ rtl_seen_take(k(K), Time, Time)),
+            Model = Model0
+        )
+    ;   Model = Model0
+    ).
+
+test(blocks_are_counted_and_bounded, [setup(setup)]) :-
+    forall(between(0, 99, B),
+           ( First is B * 60 + 1, Last is First + 59,
+             findall(a(e(I), I), between(First, Last, I), Items),
+             rtl_seen_add_atomic(Items),
+             forall(member(a(E, T), Items), rtl_event(E, T, T)) )),
+    rtl_seen_count(N),
+    rtl_seen_horizon(H),
+    assertion(H =:= 6000 - 1 - 10),
+    assertion(N >= 11),
+    assertion(N =< 11 + 2 * 1024 + 60),
+    assertion(rtl_seen_take(e(5995), 5995, 5995)),
+    assertion(\+ rtl_seen_take(e(5995), 5995, 5995)),
+    assertion(\+ rtl_seen_take(e(5995), 5995, 5996)),
+    rtl_seen_count(N1),
+    assertion(N1 =:= N - 1).
+
 model_step(T, Model0, Model) :-
     random_between(0, 4, K),
     (   random_between(1, 5, 1)
