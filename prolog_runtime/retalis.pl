@@ -102,6 +102,8 @@ run_declaration(Program, Goal) :-
 %   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
 %   usage errors.
 %   `--retraction-horizon=SECONDS` (or `inf`) keeps deletions exact that long.
+%   `--detections=L1,L2,...` writes the detections per rule before the summary, the rules
+%   labelled L1, L2, ... first (`retalisc run` hands its runs over with it).
 
 rtl_main :-
     current_prolog_flag(retalis_embedded, true),
@@ -155,9 +157,31 @@ main_finish(Status) :-
     get_time(T1),
     nb_getval(rtl_run_started, T0),
     Seconds is T1 - T0,
+    print_detections,
     rtl_summary(Seconds, Summary),
     format(user_error, "~s~n", [Summary]),
     rtl_exit(Status).
+
+%   print_detections: with --detections=LABELS, the line `retalis: detections per rule: r1 3,
+%   r2 0` before the summary, as `retalisc run` writes it: the rules LABELS (the program's,
+%   in program order) with their counts, 0 included, then the other rules that detected
+%   something (added by control lines), in the order of their labels; no line when there
+%   are none.
+
+print_detections :-
+    nb_current(rtl_detection_labels, Labels),
+    !,
+    rtl_detections(Counted),
+    findall(Label-N, ( member(Label, Labels), ( memberchk(Label-N, Counted) -> true ; N = 0 ) ), Listed),
+    findall(Rule-N, ( member(Rule-N, Counted), \+ memberchk(Rule, Labels) ), Added),
+    append(Listed, Added, Counts),
+    (   Counts == []
+    ->  true
+    ;   findall(Part, ( member(Rule-N, Counts), format(string(Part), "~w ~D", [Rule, N]) ), Parts),
+        atomic_list_concat(Parts, ', ', Text),
+        format(user_error, "retalis: detections per rule: ~w~n", [Text])
+    ).
+print_detections.
 
 main_args([], []).
 main_args([Arg|Args], Files) :-
@@ -191,6 +215,12 @@ main_args([Arg|Args], Files) :-
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
+    ;   atom_concat('--detections=', Text, Arg)
+    ->  (   Text == ''
+        ->  Labels = []
+        ;   atomic_list_concat(Labels, ',', Text)
+        ),
+        nb_setval(rtl_detection_labels, Labels), Files = Rest
     ;   atom_concat('--retraction-horizon=', H, Arg)
     ->  ( H == inf -> Horizon = inf ; atom_number(H, Horizon), Horizon >= 0 ),
         rtl_set_flag(retraction_horizon, Horizon), Files = Rest
@@ -214,7 +244,7 @@ usage_error(Formal) :-
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.

@@ -31,7 +31,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
-from ..compiler import CompileResult, compile_file, compile_source, module_name
+from ..compiler import CompileResult, compile_file, compile_source, unique_module_name
 from .bridge import Bridge, PrologError
 from .values import Term, Time, Value, Variable, parse_term, time_value
 
@@ -43,15 +43,12 @@ __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", 
 
 Number = Union[int, float]
 
-_loaded_modules = itertools.count(1)
 _python_queries = itertools.count(1)
 
 _API = "rtl_api"        # prolog_runtime/rtl_api.pl: the predicates an Engine calls
 
 
-def _unique_module(program_name: str) -> str:
-    """A module name for the program no other program of this process has."""
-    return f"{module_name(program_name)}_{next(_loaded_modules)}"
+_unique_module = unique_module_name
 
 
 @dataclass(frozen=True)

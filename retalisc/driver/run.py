@@ -14,9 +14,10 @@ import stat
 import sys
 import threading
 import time
-from typing import IO, Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import IO, TYPE_CHECKING, Dict, Iterator, List, Optional, Sequence, Tuple
 
-from .engine import Engine
+if TYPE_CHECKING:
+    from .engine import Engine
 
 PROGRESS_THRESHOLD = 5_000_000     # bytes of input before a progress display is worth it
 
