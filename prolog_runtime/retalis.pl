@@ -19,6 +19,7 @@
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
+:- use_module(rtl_lines, [rtl_read_line/2, rtl_split_lines/2, rtl_utf8_line/2]).
 :- reexport(rtl_time).
 :- reexport(rtl_raise).
 :- reexport(rtl_subscriptions).
@@ -254,10 +255,10 @@ usage_error(Formal) :-
 %   `rtl_stop(1)` when the run must end (`--strict`, `halt` in program code).
 
 rtl_run_jsonl_file(-) :- !,
-    set_stream(user_input, encoding(utf8)),
+    set_stream(user_input, encoding(iso_latin_1)),
     run_stream(user_input, '<stdin>').
 rtl_run_jsonl_file(File) :-
-    setup_call_cleanup(open(File, read, In, [encoding(utf8)]),
+    setup_call_cleanup(open(File, read, In, [encoding(iso_latin_1)]),
                        run_stream(In, File),
                        close(In)).
 
@@ -295,11 +296,15 @@ rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
           rtl_output_to(buffer),
           nb_setval(rtl_stream_options, []) )).
 
+% The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
+% rtl_read_line/2, as the Python driver's loops have the runtime cut and decode theirs
+% (rtl_lines.pl, docs/runtime.md, "Event input").
 run_stream(In, Name) :-
     stream_options(Options),
-    read_line_to_string(In, Line0),
+    rtl_read_line(In, Line0),
     without_bom(Line0, Line),
     with_action_output(run_lines(Line, In, Name, 1, Options)).
+
 
 stream_options(Options) :-
     (   nb_current(rtl_stream_options, Options0), Options0 \== []
@@ -315,7 +320,7 @@ run_lines(Line, In, Name, N, Options) :-
     line_done(Outcome, In, Name, N, Options),
     N1 is N + 1,
     run_buffered(In, Name, N1, Options, N2),
-    read_line_to_string(In, Next),
+    rtl_read_line(In, Next),
     run_lines(Next, In, Name, N2, Options).
 
 line_done(Outcome, In, Name, N, Options) :-
@@ -541,7 +546,10 @@ end_of_input(Mode, Report) :-
 %   newline; a line that is not processed shows up as `!N<TAB>Kind<TAB>Reason` with its
 %   line number N and Kind `rejected`, `error` or `halt`. Options: `allow_control(Bool)`
 %   (obey control lines; default false), `strict(Bool)` (stop at the first line that is
-%   not processed). Processing also stops after a halt. Everything output by the lines
+%   not processed), `bytes(true)` (Text holds the bytes of the lines, codes 0..255, each
+%   decoded here as UTF-8 and rejected when it is not: rtl_lines.pl). Processing also
+%   stops after a halt. The first line of the input (FirstLineNo 1) loses a leading byte
+%   order mark. Everything output by the lines
 %   processed is in Output, once. A warning about line N (a deletion outside the retraction
 %   horizon) shows up as `?N<TAB>Text`.
 
@@ -550,10 +558,14 @@ rtl_feed_lines(Text, First, Output) :-
 
 rtl_feed_lines(Text, First, Options, Output) :-
     rtl_output_to(buffer),
-    split_string(Text, "\n", "", Lines0),
-    (   First =:= 1, Lines0 = [L0|Ls]
+    rtl_split_lines(Text, Lines0),
+    (   memberchk(bytes(true), Options)
+    ->  maplist(rtl_utf8_line, Lines0, Lines1)
+    ;   Lines1 = Lines0
+    ),
+    (   First =:= 1, Lines1 = [L0|Ls]
     ->  without_bom(L0, L1), Lines = [L1|Ls]
-    ;   Lines = Lines0
+    ;   Lines = Lines1
     ),
     with_action_output(feed_lines(Lines, First, Options, Rejections)),
     rtl_take_output(Out),

@@ -331,12 +331,20 @@ def _print_warnings(compiled) -> None:
 
 def _runs_in_runtime_loop(events, out, consumer_dir, progress, heartbeat) -> bool:
     """Whether, in the `retalisc` program itself, the events go through the runtime's own
-    loop (`in_prolog_loop`), which `swipl` runs as well."""
+    loop (`in_prolog_loop`), which `swipl` runs as well, writing to this process's own
+    standard output and error (not to streams another program put in their place)."""
     from .. import cli
     from ..driver.run import in_prolog_loop
 
-    return cli.COMMAND_LINE_PROCESS and events is not None and in_prolog_loop(events, out, consumer_dir, progress,
-                                                                              heartbeat)
+    return (cli.COMMAND_LINE_PROCESS and events is not None and _process_streams()
+            and in_prolog_loop(events, out, consumer_dir, progress, heartbeat))
+
+
+def _process_streams() -> bool:
+    try:
+        return sys.stdout.fileno() == 1 and sys.stderr.fileno() == 2
+    except (AttributeError, OSError, ValueError):
+        return False
 
 
 def _hand_over_to_swipl(compiled, events: str, **options) -> None:
