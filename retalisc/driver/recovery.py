@@ -234,7 +234,7 @@ class EventJournal:
         return sorted(found)
 
     def replay(self, first: int):
-        """The complete lines of the segments from snapshot `first` on, in order; a line cut by
+        """The complete lines (bytes) of the segments from snapshot `first` on, in order; a line cut by
         a crash (the end of a segment without a newline) is removed from its file."""
         lines = []
         for number, path in self.segments():
@@ -256,6 +256,7 @@ class EventJournal:
         fsync_directory(self.directory)
 
     def append(self, lines) -> None:
+        """Journal `lines` (bytes, without their newlines)."""
         if self.stream is None:          # no snapshot could be written yet: nothing to replay from
             return
         self.stream.write(b"".join(line + b"\n" for line in lines))
