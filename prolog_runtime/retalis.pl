@@ -128,8 +128,21 @@ rtl_main :-
     ),
     catch(main_run(Files, Status),
           Error,
-          ( error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
+          ( output_gone(Error)
+          ->  output_gone_exit
+          ;   error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
     main_finish(Status).
+
+%   output_gone(+Error): writing standard output failed because its reader went away
+%   (`swipl OUT.pl FILE | head`). The run then ends at once with status 1, printing
+%   nothing more (no summary), as `retalisc run` does when Python writes the output.
+
+output_gone(error(io_error(write, user_output), context(_, 'Broken pipe'))).
+
+output_gone_exit :-
+    rtl_close_consumer_files,
+    rtl_close_action_output,
+    rtl_exit(1).
 
 main_run(Files, Status) :-
     catch(( startup_events,
@@ -280,6 +293,7 @@ rtl_run_standard_input(AllowControl, Strict, Outcome) :-
 %   As rtl_run_standard_input/3, for the event file File (`-`: standard input): the loop
 %   of `swipl PROGRAM.pl FILE`, for `retalisc run --events FILE` in the retalisc program
 %   itself. Lines not processed and warnings go to standard error as `FILE:N: ...`.
+%   Outcome is `output gone` when standard output's reader went away (output_gone/1).
 
 rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     atom_string(File, File0),
@@ -291,10 +305,15 @@ rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     setup_call_cleanup(
         ( nb_setval(rtl_stream_options, [allow_control(AllowControl), strict(Strict)]),
           rtl_output_to(print) ),
-        catch(( rtl_run_jsonl_file(File), Outcome = "done" ), rtl_stop(_), Outcome = "stopped"),
-        ( flush_output(user_output),
-          rtl_output_to(buffer),
+        catch(( rtl_run_jsonl_file(File), flush_output(user_output), Outcome = "done" ),
+              Stop,
+              run_stopped(Stop, Outcome)),
+        ( rtl_output_to(buffer),
           nb_setval(rtl_stream_options, []) )).
+
+run_stopped(rtl_stop(_), "stopped") :- !.
+run_stopped(Error, "output gone") :- output_gone(Error), !.
+run_stopped(Error, _) :- throw(Error).
 
 % The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
 % rtl_read_line/2, as the Python driver's loops have the runtime cut and decode theirs

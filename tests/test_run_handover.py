@@ -177,3 +177,20 @@ def test_the_program_file_is_checked_like_an_entry(tmp_path):
         assert cache.program_file("k", CompiledProgram("other", "m", [], [])) is None
     finally:
         (tmp_path / "cache").chmod(0o700)
+
+
+@pytest.mark.parametrize("handover", [True, False], ids=["swipl", "python"])
+def test_a_reader_that_goes_away_ends_the_run_quietly(tmp_path, handover):
+    """`retalisc run ... | head -1`: status 1 and nothing on standard error, on both roads."""
+    program, events = PAIRS, jsonl(*((f"a({n})", n) for n in range(20000)))
+    run(tmp_path, program, events, [], handover=handover)                # fills the cache
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "RETALISC_CACHE_DIR": str(tmp_path / "cache"),
+           "RETALISC_NO_CACHE": "0" if handover else "1"}
+    process = subprocess.Popen([sys.executable, "-m", "retalisc", "run", str(tmp_path / "p.rtl"), "--events",
+                                str(tmp_path / "events.jsonl"), "--echo-input"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    assert process.stdout.readline().startswith(b'{"event": "a(0)"')
+    process.stdout.close()
+    stderr = process.stderr.read()
+    assert process.wait(timeout=120) == 1
+    assert stderr == b""

@@ -2,6 +2,7 @@
 output and the same rejection messages as `swipl PROGRAM.pl FILE`."""
 from __future__ import annotations
 
+import errno
 import gc
 import io
 import itertools
@@ -227,8 +228,11 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         if stdin_in_prolog and in_prolog_loop(events, out, consumer_dir, progress, heartbeat):
             batches = iter(())
             sink.flush()
-            if engine.bridge.apply("retalis", "rtl_run_event_file", events, "true" if allow_control else "false",
-                                   "true" if strict else "false") == "stopped":
+            outcome = engine.bridge.apply("retalis", "rtl_run_event_file", events,
+                                          "true" if allow_control else "false", "true" if strict else "false")
+            if outcome == "output gone":          # the reader of standard output went away
+                raise BrokenPipeError(errno.EPIPE, os.strerror(errno.EPIPE))
+            if outcome == "stopped":
                 raise RunStopped()
         elif heartbeat is not None:
             batches = _heartbeat_batches(source, batch_size, heartbeat)
