@@ -33,8 +33,8 @@ def explain_command(program: str, event: Optional[str], events: str, why_not: Op
     each part of its pattern, outermost first, and the part where matching stops (the
     condition, relation or window that rejected what its operands matched, or an event that
     never came)."""
-    from ..driver.bridge import PrologError
     from ..compiler import unique_module_name
+    from ..driver.bridge import PrologError
     from ..driver.explain import Explainer
 
     if (event is None) == (why_not is None):
