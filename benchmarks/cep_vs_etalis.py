@@ -14,7 +14,8 @@ Paths, CPU seconds (so that other jobs on the machine count less), median of --r
   etalis   ETALIS (benchmarks/etalis_bench.pl), events already in memory
   engine   retalisc's compiled program, events already in memory
   swipl    `swipl P.pl EVENTS.jsonl`: reading JSON Lines, processing, writing output
-  run      `retalisc run P.rtl --events EVENTS.jsonl` (Python start-up and compilation included)
+  run      `retalisc run P.rtl --events EVENTS.jsonl` (Python start-up and the compile cache included;
+           from the second run on, the program comes from the cache and the run is handed over to swipl)
 
 Targets: swipl >= 10x ETALIS on P1-P5; P1 >= 100k events/s and P0 >= 300k events/s on swipl;
 run within 1.3x of swipl. ETALIS is looked for in ../shared/peers/etalis or --etalis DIR; when

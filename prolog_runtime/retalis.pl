@@ -19,6 +19,7 @@
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
+:- use_module(rtl_lines, [rtl_read_line/2, rtl_split_lines/2, rtl_utf8_line/2]).
 :- reexport(rtl_time).
 :- reexport(rtl_raise).
 :- reexport(rtl_subscriptions).
@@ -102,6 +103,8 @@ run_declaration(Program, Goal) :-
 %   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
 %   usage errors.
 %   `--retraction-horizon=SECONDS` (or `inf`) keeps deletions exact that long.
+%   `--detections=L1,L2,...` writes the detections per rule before the summary, the rules
+%   labelled L1, L2, ... first (`retalisc run` hands its runs over with it).
 
 rtl_main :-
     current_prolog_flag(retalis_embedded, true),
@@ -125,8 +128,21 @@ rtl_main :-
     ),
     catch(main_run(Files, Status),
           Error,
-          ( error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
+          ( output_gone(Error)
+          ->  output_gone_exit
+          ;   error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
     main_finish(Status).
+
+%   output_gone(+Error): writing standard output failed because its reader went away
+%   (`swipl OUT.pl FILE | head`). The run then ends at once with status 1, printing
+%   nothing more (no summary), as `retalisc run` does when Python writes the output.
+
+output_gone(error(io_error(write, user_output), context(_, 'Broken pipe'))).
+
+output_gone_exit :-
+    rtl_close_consumer_files,
+    rtl_close_action_output,
+    rtl_exit(1).
 
 main_run(Files, Status) :-
     catch(( startup_events,
@@ -155,9 +171,31 @@ main_finish(Status) :-
     get_time(T1),
     nb_getval(rtl_run_started, T0),
     Seconds is T1 - T0,
+    print_detections,
     rtl_summary(Seconds, Summary),
     format(user_error, "~s~n", [Summary]),
     rtl_exit(Status).
+
+%   print_detections: with --detections=LABELS, the line `retalis: detections per rule: r1 3,
+%   r2 0` before the summary, as `retalisc run` writes it: the rules LABELS (the program's,
+%   in program order) with their counts, 0 included, then the other rules that detected
+%   something (added by control lines), in the order of their labels; no line when there
+%   are none.
+
+print_detections :-
+    nb_current(rtl_detection_labels, Labels),
+    !,
+    rtl_detections(Counted),
+    findall(Label-N, ( member(Label, Labels), ( memberchk(Label-N, Counted) -> true ; N = 0 ) ), Listed),
+    findall(Rule-N, ( member(Rule-N, Counted), \+ memberchk(Rule, Labels) ), Added),
+    append(Listed, Added, Counts),
+    (   Counts == []
+    ->  true
+    ;   findall(Part, ( member(Rule-N, Counts), format(string(Part), "~w ~D", [Rule, N]) ), Parts),
+        atomic_list_concat(Parts, ', ', Text),
+        format(user_error, "retalis: detections per rule: ~w~n", [Text])
+    ).
+print_detections.
 
 main_args([], []).
 main_args([Arg|Args], Files) :-
@@ -191,6 +229,12 @@ main_args([Arg|Args], Files) :-
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
+    ;   atom_concat('--detections=', Text, Arg)
+    ->  (   Text == ''
+        ->  Labels = []
+        ;   atomic_list_concat(Labels, ',', Text)
+        ),
+        nb_setval(rtl_detection_labels, Labels), Files = Rest
     ;   atom_concat('--retraction-horizon=', H, Arg)
     ->  ( H == inf -> Horizon = inf ; atom_number(H, Horizon), Horizon >= 0 ),
         rtl_set_flag(retraction_horizon, Horizon), Files = Rest
@@ -214,7 +258,7 @@ usage_error(Formal) :-
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -224,10 +268,10 @@ usage_error(Formal) :-
 %   `rtl_stop(1)` when the run must end (`--strict`, `halt` in program code).
 
 rtl_run_jsonl_file(-) :- !,
-    set_stream(user_input, encoding(utf8)),
+    set_stream(user_input, encoding(iso_latin_1)),
     run_stream(user_input, '<stdin>').
 rtl_run_jsonl_file(File) :-
-    setup_call_cleanup(open(File, read, In, [encoding(utf8)]),
+    setup_call_cleanup(open(File, read, In, [encoding(iso_latin_1)]),
                        run_stream(In, File),
                        close(In)).
 
@@ -249,6 +293,7 @@ rtl_run_standard_input(AllowControl, Strict, Outcome) :-
 %   As rtl_run_standard_input/3, for the event file File (`-`: standard input): the loop
 %   of `swipl PROGRAM.pl FILE`, for `retalisc run --events FILE` in the retalisc program
 %   itself. Lines not processed and warnings go to standard error as `FILE:N: ...`.
+%   Outcome is `output gone` when standard output's reader went away (output_gone/1).
 
 rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     atom_string(File, File0),
@@ -260,14 +305,22 @@ rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     setup_call_cleanup(
         ( nb_setval(rtl_stream_options, [allow_control(AllowControl), strict(Strict)]),
           rtl_output_to(print) ),
-        catch(( rtl_run_jsonl_file(File), Outcome = "done" ), rtl_stop(_), Outcome = "stopped"),
-        ( flush_output(user_output),
-          rtl_output_to(buffer),
+        catch(( rtl_run_jsonl_file(File), flush_output(user_output), Outcome = "done" ),
+              Stop,
+              run_stopped(Stop, Outcome)),
+        ( rtl_output_to(buffer),
           nb_setval(rtl_stream_options, []) )).
 
+run_stopped(rtl_stop(_), "stopped") :- !.
+run_stopped(Error, "output gone") :- output_gone(Error), !.
+run_stopped(Error, _) :- throw(Error).
+
+% The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
+% rtl_read_line/2, as the Python driver's loops have the runtime cut and decode theirs
+% (rtl_lines.pl, docs/runtime.md, "Event input").
 run_stream(In, Name) :-
     stream_options(Options),
-    read_line_to_string(In, Line0),
+    rtl_read_line(In, Line0),
     without_bom(Line0, Line),
     with_output_buffer(In, with_action_output(run_lines(Line, In, Name, 1, Options))).
 
@@ -288,6 +341,7 @@ with_output_buffer(In, Goal) :-
     ;   call(Goal)
     ).
 
+
 stream_options(Options) :-
     (   nb_current(rtl_stream_options, Options0), Options0 \== []
     ->  Options = Options0
@@ -302,7 +356,7 @@ run_lines(Line, In, Name, N, Options) :-
     line_done(Outcome, In, Name, N, Options),
     N1 is N + 1,
     run_buffered(In, Name, N1, Options, N2),
-    read_line_to_string(In, Next),
+    rtl_read_line(In, Next),
     run_lines(Next, In, Name, N2, Options).
 
 line_done(Outcome, In, Name, N, Options) :-
@@ -557,7 +611,10 @@ end_of_input(Mode, Report) :-
 %   newline; a line that is not processed shows up as `!N<TAB>Kind<TAB>Reason` with its
 %   line number N and Kind `rejected`, `error` or `halt`. Options: `allow_control(Bool)`
 %   (obey control lines; default false), `strict(Bool)` (stop at the first line that is
-%   not processed). Processing also stops after a halt. Everything output by the lines
+%   not processed), `bytes(true)` (Text holds the bytes of the lines, codes 0..255, each
+%   decoded here as UTF-8 and rejected when it is not: rtl_lines.pl). Processing also
+%   stops after a halt. The first line of the input (FirstLineNo 1) loses a leading byte
+%   order mark. Everything output by the lines
 %   processed is in Output, once. A warning about line N (a deletion outside the retraction
 %   horizon) shows up as `?N<TAB>Text`.
 
@@ -566,10 +623,14 @@ rtl_feed_lines(Text, First, Output) :-
 
 rtl_feed_lines(Text, First, Options, Output) :-
     rtl_output_to(buffer),
-    split_string(Text, "\n", "", Lines0),
-    (   First =:= 1, Lines0 = [L0|Ls]
+    rtl_split_lines(Text, Lines0),
+    (   memberchk(bytes(true), Options)
+    ->  maplist(rtl_utf8_line, Lines0, Lines1)
+    ;   Lines1 = Lines0
+    ),
+    (   First =:= 1, Lines1 = [L0|Ls]
     ->  without_bom(L0, L1), Lines = [L1|Ls]
-    ;   Lines = Lines0
+    ;   Lines = Lines1
     ),
     with_action_output(feed_lines(Lines, First, Options, Rejections)),
     rtl_take_output(Out),

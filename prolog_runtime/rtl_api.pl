@@ -8,6 +8,7 @@
             rtl_api_feed_paced_rest/2,  % +Tick, -Output
             rtl_api_ros1_schema/2,      % +SchemaText, -Handle
             rtl_api_feed_lines/5,       % +Text, +FirstLineNo, +AllowControl, +Strict, -Output
+            rtl_api_feed_byte_lines/5,  % +Bytes, +FirstLineNo, +AllowControl, +Strict, -Output
             rtl_api_set_action_output/2, % +Path, -Out
             rtl_api_fresh_rule_prefix/2,% +Module, -Prefix
             rtl_api_install_rules/3,    % +Module, +ClausesText, -Ids
@@ -321,6 +322,18 @@ rtl_api_feed_lines(Text, First, AllowControl0, Strict0, Output) :-
     api_boolean(AllowControl0, AllowControl),
     api_boolean(Strict0, Strict),
     rtl_feed_lines(Text, First, [allow_control(AllowControl), strict(Strict)], Output).
+
+%!  rtl_api_feed_byte_lines(+Bytes:string, +FirstLineNo:integer, +AllowControl:text, +Strict:text, -Output:string) is det.
+%
+%   rtl_api_feed_lines/5 for lines given as their bytes (a string of codes 0..255): each is
+%   decoded as UTF-8, and rejected when it is not UTF-8 text (rtl_feed_lines/4, `bytes(true)`).
+
+rtl_api_feed_byte_lines(Bytes, First, AllowControl0, Strict0, Output) :-
+    must_be(string, Bytes),
+    must_be(integer, First),
+    api_boolean(AllowControl0, AllowControl),
+    api_boolean(Strict0, Strict),
+    rtl_feed_lines(Bytes, First, [allow_control(AllowControl), strict(Strict), bytes(true)], Output).
 
 api_boolean(Text, Boolean) :-
     atom_string(Boolean, Text),

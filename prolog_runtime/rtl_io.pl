@@ -28,6 +28,7 @@ also names the reason of a rejection. Without the C reader, every line takes the
 */
 
 :- use_module(rtl_time).
+:- use_module(rtl_lines, [rtl_nul_problem/2]).
 
 :- dynamic fast_reader/0, fast_writer/0.
 
@@ -80,7 +81,9 @@ rtl_use_fast_reader(false) :-
 %   `rule(add, RuleText)` or `rule(delete, Label)` for the control lines
 %   `{"op": "add_rule", "rule": TEXT}` and `{"op": "delete_rule", "rule": LABEL}`,
 %   `clock(Time)` for a clock line `{"op": "clock", "t": T}` (a heartbeat), or
-%   `error(Reason)` with Reason a string saying what is wrong with the line.
+%   `error(Reason)` with Reason a string saying what is wrong with the line (one holding a
+%   NUL byte is). Line may also be `not_text(Reason)`, a line that is not UTF-8 text
+%   (rtl_lines.pl), which is `error(Reason)`.
 %
 %   The line must be one JSON object and nothing else; the event a ground term and nothing
 %   else (a final full stop is allowed), nested at most MaxDepth levels deep (default
@@ -90,6 +93,8 @@ rtl_use_fast_reader(false) :-
 rtl_parse_event_line(Line, Parsed) :-
     rtl_parse_event_line(Line, 1000, Parsed).
 
+rtl_parse_event_line(not_text(Reason), _, Parsed) :- !,
+    Parsed = error(Reason).
 rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     fast_reader,
     rtl_fast_event_line(Line, MaxDepth, Event, T, S, E, Op),
@@ -107,7 +112,9 @@ rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     ->  Depth = MaxDepth
     ;   Depth = short
     ),
-    (   blank_line(Line)
+    (   rtl_nul_problem(Line, Reason)          % first: split_string/4 takes NUL for layout
+    ->  Parsed = error(Reason)
+    ;   blank_line(Line)
     ->  Parsed = blank
     ;   Depth \== short, too_deep_text(Line, MaxDepth)
     ->  depth_reason(MaxDepth, Reason),

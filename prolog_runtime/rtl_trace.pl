@@ -2,6 +2,7 @@
           [ rtl_trace_start/1,          % -Out
             rtl_trace_stop/1,           % -Out
             rtl_trace_feed_line/3,      % +Text, +LineNo, -Output
+            rtl_trace_feed_byte_line/3, % +Bytes, +LineNo, -Output
             rtl_trace_explain/4,        % +RulesText, +TargetText, +Limit, -Text
             rtl_trace_why_not/3,        % +RulesText, +PatternText, -Text
             rtl_trace_rules/2,          % +Specs, -Out
@@ -48,7 +49,7 @@ Conditions run in the program module.
 :- use_module(rtl_ele).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_policy, [rtl_policy_positioned/2]).
-:- use_module(retalis, [rtl_feed_lines/3]).
+:- use_module(retalis, [rtl_feed_lines/3, rtl_feed_lines/4]).
 
 :- dynamic logged/6.            % logged(Seq, Line, Kind, Event, Start, End); Kind input or derived
 
@@ -75,6 +76,15 @@ rtl_trace_stop("") :-
 rtl_trace_feed_line(Text, Line, Output) :-
     nb_setval(rtl_trace_line, Line),
     rtl_feed_lines(Text, Line, Output).
+
+%!  rtl_trace_feed_byte_line(+Bytes, +LineNo, -Output) is det.
+%
+%   rtl_trace_feed_line/3 for a line given as its bytes (codes 0..255), decoded as UTF-8
+%   and rejected when it is not (rtl_feed_lines/4, `bytes(true)`).
+
+rtl_trace_feed_byte_line(Bytes, Line, Output) :-
+    nb_setval(rtl_trace_line, Line),
+    rtl_feed_lines(Bytes, Line, [bytes(true)], Output).
 
 log_event(Event, Start, End, add) :- !,
     nb_getval(rtl_trace_seq, Seq0),

@@ -65,6 +65,8 @@ class CompiledProgram:
     rules: List[str]
     warnings: List[str]
     included: List[List[str]] = field(default_factory=list)
+    #: The Prolog text as a file of the cache (`cached_compile(..., as_file=True)`), or None.
+    file: Optional[Path] = field(default=None, compare=False)
 
     @classmethod
     def of(cls, result) -> "CompiledProgram":
@@ -197,6 +199,34 @@ class CompileCache:
             return False
         return True
 
+    def program_file(self, key: str, program: CompiledProgram) -> Optional[Path]:
+        """The Prolog text of the entry `key` as a file next to it, `KEY.pl`, for `swipl` to
+        load (retalisc/driver/swipl_handover.py): used when it is private (as an entry) and
+        holds exactly that text, else written anew (atomically). None when it cannot be."""
+        path = self.directory / f"{key}.pl"
+        data = program.prolog.encode("utf-8")
+        try:
+            if _private(path):
+                with open(path, "rb") as stream:
+                    if stream.read() == data:
+                        return path
+        except OSError:
+            pass
+        try:
+            if not _private(self.directory, directory=True):
+                return None
+            handle, temporary = tempfile.mkstemp(prefix=".program-", suffix=".pl", dir=self.directory)
+            try:
+                with os.fdopen(handle, "wb") as stream:
+                    stream.write(data)
+                os.replace(temporary, path)
+            except BaseException:
+                os.unlink(temporary)
+                raise
+        except OSError:
+            return None
+        return path
+
     def _prune(self) -> None:
         entries = []
         for path in self.directory.glob("*.json"):
@@ -206,10 +236,11 @@ class CompileCache:
                 continue
         if len(entries) > MAX_ENTRIES:
             for _, path in sorted(entries)[:len(entries) - MAX_ENTRIES]:
-                try:
-                    path.unlink()
-                except OSError:
-                    pass
+                for old in (path, path.with_suffix(".pl")):
+                    try:
+                        old.unlink()
+                    except OSError:
+                        pass
 
 
 def _private(path: Path, directory: bool = False) -> bool:
@@ -229,11 +260,12 @@ def _strings(value) -> bool:
 
 
 def cached_compile(program: str, module: str, compile, output_name: str = "PROGRAM.pl",
-                   use_cache: bool = True, found=None) -> CompiledProgram:
+                   use_cache: bool = True, found=None, as_file: bool = False) -> CompiledProgram:
     """The compiled program of the file `program`: from the cache when it holds it (`found`
     is called with it first: the warnings are printed there), else `compile()` (a
     `CompileResult`), stored for the next time when the file did not change meanwhile. Only
-    regular files are cached."""
+    regular files are cached. With `as_file`, the entry's Prolog text is also kept as a file
+    of the cache, named by the result's `file` (None when the entry is not in the cache)."""
     directory = cache_dir() if use_cache and enabled() else None
     source = key = None
     if directory is not None:
@@ -249,6 +281,8 @@ def cached_compile(program: str, module: str, compile, output_name: str = "PROGR
         if hit is not None:
             if found is not None:
                 found(hit)
+            if as_file:
+                hit.file = cache.program_file(key, hit)
             return hit
     compiled = CompiledProgram.of(compile())
     if cache is not None:
@@ -256,6 +290,6 @@ def cached_compile(program: str, module: str, compile, output_name: str = "PROGR
             unchanged = Path(program).read_bytes() == source
         except OSError:
             unchanged = False
-        if unchanged:
-            cache.store(key, compiled)
+        if unchanged and cache.store(key, compiled) and as_file:
+            compiled.file = cache.program_file(key, compiled)
     return compiled

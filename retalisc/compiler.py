@@ -12,6 +12,7 @@ does not load them.
 """
 from __future__ import annotations
 
+import itertools
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,6 +54,14 @@ def __getattr__(name: str):
 def module_name(path: str) -> str:
     stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(path).stem) or "program"
     return f"rtl_prog_{stem}"
+
+
+_loaded_modules = itertools.count(1)
+
+
+def unique_module_name(program_name: str) -> str:
+    """A module name for the program no other program of this process has."""
+    return f"{module_name(program_name)}_{next(_loaded_modules)}"
 
 
 def compile_source(text: str, file: str, output_name: str = "PROGRAM.pl", dump_after: Optional[str] = None,

@@ -91,6 +91,21 @@ def test_why_not_with_no_rule_and_with_a_detection(files):
     assert "every part matches" in out
 
 
+def test_explain_reads_lines_as_run_does(files):
+    """The same line numbers and reasons as `retalisc run`, whatever the bytes: a mark, CRLF,
+    a lone carriage return, a line that is not UTF-8, a NUL."""
+    data = (b"\xef\xbb\xbf" + EVENTS.encode().replace(b"\n", b"\r\n", 2).replace(b'"t": 20', b'"t":\r20')
+            + b'{"event": "smoke(\xff)", "t": 33}\n{"event": "smoke(k3)",\x00 "t": 34}\nnot json\n')
+    (files / "events.jsonl").write_bytes(data)
+    code, out, err = explain(files, "big(X)")
+    assert code == 0 and "big(k1)" in out
+    runner = CliRunner().invoke(main, ["run", str(files / "house.rtl"), "--events", str(files / "events.jsonl")])
+    rejected = [line for line in runner.stderr.splitlines() if ": rejected: " in line]
+    assert err.splitlines() == rejected
+    assert [line.split(":", 2)[1] for line in rejected] == ["8", "9", "10"]
+    assert "not UTF-8 text (byte 0xFF at column 18)" in rejected[0] and "a NUL byte" in rejected[1]
+
+
 def test_explain_usage_errors(files):
     code, _, err = explain(files)
     assert code == 2 and "give an EVENT" in err
@@ -105,12 +120,13 @@ def test_live_batches_hold_only_what_is_waiting():
     read, write = os.pipe()
     batches = _live_batches(read, batch_size=3)
     os.write(write, "\ufeff{a}\n{b}\n{c".encode())
-    assert next(batches) == (1, ["{a}", "{b}"], 11)         # bytes read (the mark too); the partial line waits
+    # the lines as read (the runtime drops the mark); bytes read, the mark too; the partial line waits
+    assert next(batches) == (1, ["\ufeff{a}".encode(), b"{b}"], 11)
     os.write(write, b"}\n{d}\n{e}\n{f}\n")
-    assert next(batches) == (3, ["{c}", "{d}", "{e}"], 12)   # at most batch_size lines
+    assert next(batches) == (3, [b"{c}", b"{d}", b"{e}"], 12)   # at most batch_size lines
     os.write(write, b"{g}")
     os.close(write)
-    assert list(batches) == [(6, ["{f}", "{g}"], 7)]                 # the last line needs no newline
+    assert list(batches) == [(6, [b"{f}", b"{g}"], 7)]                 # the last line needs no newline
     os.close(read)
 
 

@@ -57,15 +57,15 @@ def test_the_common_line_is_taken_by_the_fast_path():
 @given(st.lists(st.text(alphabet=st.sampled_from(list("ab \r{}é\ufeff")), max_size=5), max_size=30),
        st.booleans(), st.integers(1, 7))
 def test_batches_hold_every_line_once_in_order(lines, final_newline, size):
-    text = "\n".join(lines) + ("\n" if final_newline and lines else "")
-    batches = list(_batches(io.StringIO(text), size))
-    expected = text.split("\n")
-    if expected[-1] == "":
+    text = ("\n".join(lines) + ("\n" if final_newline and lines else "")).encode("utf-8")
+    batches = list(_batches(io.BytesIO(text), size))
+    expected = text.split(b"\n")
+    if expected[-1] == b"":
         expected.pop()
     assert [line for _, batch, _ in batches for line in batch] == expected
     assert all(len(batch) == size for _, batch, _ in batches[:-1])
     assert [first for first, _, _ in batches] == [1 + size * k for k in range(len(batches))]
-    assert sum(n for _, _, n in batches) == len(text.encode("utf-8"))
+    assert sum(n for _, _, n in batches) == len(text)
 
 
 # ---- the `seq` skip (rtl_started_after/1) ------------------------------------------------

@@ -28,12 +28,12 @@ def test_live_reader_reads_lines_one_by_one_without_select(monkeypatch):
     batches = run._live_batches(read, batch_size=2)
     for number in range(1, 4):                          # one line at a time, as a sensor sends them
         os.write(write, f'{{"n": {number}}}\n'.encode())
-        assert next(batches) == (number, [f'{{"n": {number}}}'], 9)
+        assert next(batches) == (number, [f'{{"n": {number}}}'.encode()], 9)
     assert looked == []
     os.write(write, b"{a}\n{b}\n{c}\n")                # more than a batch waiting: the rest waits
-    assert next(batches) == (4, ["{a}", "{b}"], 8)      # for a look at what arrived since
+    assert next(batches) == (4, [b"{a}", b"{b}"], 8)      # for a look at what arrived since
     os.write(write, b"{d}\n")
-    assert next(batches) == (6, ["{c}", "{d}"], 8)
+    assert next(batches) == (6, [b"{c}", b"{d}"], 8)
     assert len(looked) == 1
     os.close(write)
     assert list(batches) == []

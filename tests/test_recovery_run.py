@@ -304,7 +304,7 @@ def test_stdin_lines_journaled_before_a_crash_are_not_lost(setup, tmp_path, monk
     assert calls[-1] == 801 and _snapshot_numbers(state) == [1, 2]     # at lines 1, 301 and 601
     journal = recovery.EventJournal(recovery.StateDir(state))
     assert [number for number, _ in journal.segments()] == [1, 2]      # after the snapshots kept
-    assert journal.replay(2) == [line.decode().rstrip("\n") for line in lines[600:900]]  # batches 7-9
+    assert journal.replay(2) == [line.rstrip(b"\n") for line in lines[600:900]]  # batches 7-9
     # started again, with standard input going on after what was read: nothing lost, nothing twice
     _stdin_from(monkeypatch, tmp_path, b"".join(lines[900:]))
     log = io.StringIO()

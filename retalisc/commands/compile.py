@@ -217,9 +217,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
       retalisc run fire_alarm.rtl --events events.jsonl --strict --action-output actions.log
     """
     from ..compile_cache import CompiledProgram, cached_compile
-    from ..driver.bridge import PrologError
-    from ..driver.engine import Engine, _unique_module
-    from ..driver.run import run_event_file, set_action_output
+    from ..compiler import unique_module_name
 
     if (events is None) == (bag["bag"] is None):
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
@@ -241,15 +239,27 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         output_directory(state, "--state")
     steps = _max_steps(max_steps)
     timers = _max_steps(max_timers, DEFAULT_MAX_TIMERS, "--max-timers")
-    module = _unique_module(program)            # a second run in one process loads anew
+    module = unique_module_name(program)        # a second run in one process loads anew
+    handover = (bag["bag"] is None and state is None and not (subscriptions or memories or queries or traces)
+                and late_file is None and action_output is None and _runs_in_runtime_loop(events, out, consumer_dir,
+                                                                                           progress, heartbeat))
     if traces or late_file:                     # these need the compiled unit itself
         result = compile_or_exit(program, module=module)
         compiled = CompiledProgram.of(result)
     else:
         compiled = cached_compile(program, module, lambda: compile_or_exit(program, module=module),
-                                  use_cache=not no_cache, found=_print_warnings)
+                                  use_cache=not no_cache, found=_print_warnings, as_file=handover)
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
+    if handover and compiled.file is not None:
+        _hand_over_to_swipl(compiled, events, echo_input=echo_input, max_delay=max_delay,
+                            retraction_horizon=retraction_horizon, max_steps=steps, max_timers=timers,
+                            drop_pending=drop_pending, flush_timers=flush_timers, allow_control=allow_control,
+                            strict=strict)
+    from ..driver.bridge import PrologError
+    from ..driver.engine import Engine
+    from ..driver.run import run_event_file, set_action_output
+
     in_this_thread = _calls_in_this_thread()
     engine = Engine.from_prolog(compiled.prolog, compiled.module, compiled.rules)
     if echo_input:
@@ -317,6 +327,35 @@ def _print_warnings(compiled) -> None:
     """The warnings of a program taken from the compile cache, printed as its compilation does."""
     for warning in compiled.warnings:
         click.echo(warning, err=True)
+
+
+def _runs_in_runtime_loop(events, out, consumer_dir, progress, heartbeat) -> bool:
+    """Whether, in the `retalisc` program itself, the events go through the runtime's own
+    loop (`in_prolog_loop`), which `swipl` runs as well, writing to this process's own
+    standard output and error (not to streams another program put in their place)."""
+    from .. import cli
+    from ..driver.run import in_prolog_loop
+
+    return (cli.COMMAND_LINE_PROCESS and events is not None and _process_streams()
+            and in_prolog_loop(events, out, consumer_dir, progress, heartbeat))
+
+
+def _process_streams() -> bool:
+    try:
+        return sys.stdout.fileno() == 1 and sys.stderr.fileno() == 2
+    except (AttributeError, OSError, ValueError):
+        return False
+
+
+def _hand_over_to_swipl(compiled, events: str, **options) -> None:
+    """Replace this process by `swipl` on the cached program file, when its command line can
+    say the run (retalisc/driver/swipl_handover.py); returns when it cannot."""
+    from ..driver.swipl_handover import hand_over, swipl_arguments, swipl_command
+
+    arguments = swipl_arguments(events, compiled.rules, **options)
+    command = swipl_command(str(compiled.file), arguments) if arguments is not None else None
+    if command is not None:
+        hand_over(command)
 
 
 def _calls_in_this_thread() -> bool:

@@ -33,13 +33,13 @@ def explain_command(program: str, event: Optional[str], events: str, why_not: Op
     each part of its pattern, outermost first, and the part where matching stops (the
     condition, relation or window that rejected what its operands matched, or an event that
     never came)."""
+    from ..compiler import unique_module_name
     from ..driver.bridge import PrologError
-    from ..driver.engine import _unique_module
     from ..driver.explain import Explainer
 
     if (event is None) == (why_not is None):
         raise click.UsageError("give an EVENT to explain or --why-not PATTERN (one of them)")
-    result = compile_or_exit(program, module=_unique_module(program))
+    result = compile_or_exit(program, module=unique_module_name(program))
     explainer = Explainer(result)
     if max_delay is not None:
         explainer.engine.set_flag("max_delay", repr(max_delay))

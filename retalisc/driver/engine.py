@@ -31,7 +31,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
-from ..compiler import CompileResult, compile_file, compile_source, module_name
+from ..compiler import CompileResult, compile_file, compile_source, unique_module_name
 from .bridge import Bridge, PrologError
 from .values import Term, Time, Value, Variable, parse_term, time_value
 
@@ -43,15 +43,12 @@ __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", 
 
 Number = Union[int, float]
 
-_loaded_modules = itertools.count(1)
 _python_queries = itertools.count(1)
 
 _API = "rtl_api"        # prolog_runtime/rtl_api.pl: the predicates an Engine calls
 
 
-def _unique_module(program_name: str) -> str:
-    """A module name for the program no other program of this process has."""
-    return f"{module_name(program_name)}_{next(_loaded_modules)}"
+_unique_module = unique_module_name
 
 
 @dataclass(frozen=True)
@@ -462,18 +459,21 @@ class Engine:
         _ROS1_SCHEMAS[schema] = handle
         return handle
 
-    def feed_lines(self, text: str, first_line: int = 1, *, allow_control: bool = False,
+    def feed_lines(self, text: Union[str, bytes], first_line: int = 1, *, allow_control: bool = False,
                    strict: bool = False) -> Tuple[List[OutputEvent], List[Rejection]]:
         """Process event JSON Lines (docs/runtime.md, "Event input") exactly as `swipl PROGRAM.pl FILE` does;
-        return the output and the lines not processed, with their reasons. Control lines
+        return the output and the lines not processed, with their reasons. `text` is the
+        lines joined by newlines, or their bytes: each line is then decoded as UTF-8, and one
+        that is not UTF-8 text is rejected. Control lines
         (`add_rule`, `delete_rule`) are refused unless `allow_control`. An event whose
         processing raises is reported (kind "error") and the lines after it are processed;
         with `strict`, processing stops at the first line not processed, as it does after a
         halt (kind "halt"). The output of every line processed is returned, once."""
         if isinstance(first_line, bool) or not isinstance(first_line, int):
             raise TypeError(f"first_line must be an int, not {first_line!r}")
+        feed = "rtl_api_feed_byte_lines" if isinstance(text, bytes) else "rtl_api_feed_lines"
         with self._lock:
-            output = self._call("rtl_api_feed_lines", _text(text, "event lines"), first_line,
+            output = self._call(feed, text if isinstance(text, bytes) else _text(text, "event lines"), first_line,
                                 "true" if allow_control else "false", "true" if strict else "false")
             rejections = []
             lines = []

@@ -17,6 +17,7 @@ from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, 
                                 Window)
 from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
 from .engine import Engine, OutputEvent, Rejection
+from .event_lines import batch_payload
 
 def _fresh(counter: List[int], what: str) -> Var:
     counter[0] += 1
@@ -77,9 +78,11 @@ class Explainer:
         bridge = self.engine.bridge
         bridge.apply("rtl_trace", "rtl_trace_start")
         try:
-            with open(events, encoding="utf-8-sig", errors="replace") as source:
-                for number, line in enumerate(source, start=1):
-                    output = bridge.apply("rtl_trace", "rtl_trace_feed_line", line, number)
+            with open(events, "rb") as source:         # lines read as `retalisc run` reads them
+                for number, raw in enumerate(source, start=1):
+                    line = batch_payload([raw[:-1] if raw.endswith(b"\n") else raw])
+                    feed = "rtl_trace_feed_byte_line" if isinstance(line, bytes) else "rtl_trace_feed_line"
+                    output = bridge.apply("rtl_trace", feed, line, number)
                     for text in output.splitlines():
                         if text.startswith("!"):
                             line_no, _, rest = text[1:].partition("\t")

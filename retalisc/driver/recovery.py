@@ -12,7 +12,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import re
 from functools import lru_cache
 from pathlib import Path
 from typing import Optional, Union
@@ -78,7 +77,6 @@ def file_sha256(path: Union[str, Path]) -> str:
 
 DEFAULT_SNAPSHOT_EVENTS = 200_000   # input lines between two snapshots
 DEFAULT_SNAPSHOT_SECONDS = 60.0     # or seconds of processing, whichever comes first
-_NEWLINE = re.compile(r"\r\n|\r|\n")
 KEEP_SNAPSHOTS = 2                  # the newest complete ones; older ones are deleted
 
 
@@ -199,23 +197,16 @@ class StateDir:
 
 def _binary_batches(stream, offset: int, first_line: int, batch_size: int):
     """(first line number, lines, bytes of the batch, byte offset after it) from `offset` of a
-    file opened in binary; decoded as `retalisc run` reads (UTF-8, a leading BOM dropped,
-    undecodable bytes replaced)."""
+    file opened in binary; the lines as bytes without their newlines, made text as `retalisc
+    run` makes them (`event_lines.batch_payload`)."""
     stream.seek(offset)
     position, number = offset, first_line
     batch, start, size = [], first_line, 0
     for raw in stream:
         position += len(raw)
         size += len(raw)
-        text = raw.decode("utf-8", errors="replace")
-        if position == len(raw) and text.startswith("\ufeff"):
-            text = text[1:]
-        pieces = _NEWLINE.split(text)            # universal newlines, as the text mode of `run`
-        if text.endswith(("\n", "\r")):
-            pieces.pop()
-        for piece in pieces:
-            batch.append(piece)
-            number += 1
+        batch.append(raw[:-1] if raw.endswith(b"\n") else raw)
+        number += 1
         if len(batch) >= batch_size:
             yield start, batch, size, position
             batch, start, size = [], number, 0
@@ -243,7 +234,7 @@ class EventJournal:
         return sorted(found)
 
     def replay(self, first: int):
-        """The complete lines of the segments from snapshot `first` on, in order; a line cut by
+        """The complete lines (bytes) of the segments from snapshot `first` on, in order; a line cut by
         a crash (the end of a segment without a newline) is removed from its file."""
         lines = []
         for number, path in self.segments():
@@ -254,7 +245,7 @@ class EventJournal:
             if len(complete) != len(data):
                 with open(path, "r+b") as stream:
                     stream.truncate(len(complete))
-            lines += complete.decode("utf-8", errors="replace").split("\n")[:-1]
+            lines += complete.split(b"\n")[:-1]
         return lines
 
     def open(self, number: int) -> None:
@@ -265,9 +256,10 @@ class EventJournal:
         fsync_directory(self.directory)
 
     def append(self, lines) -> None:
+        """Journal `lines` (bytes, without their newlines)."""
         if self.stream is None:          # no snapshot could be written yet: nothing to replay from
             return
-        self.stream.write("".join(line + "\n" for line in lines).encode("utf-8"))
+        self.stream.write(b"".join(line + b"\n" for line in lines))
         self.stream.flush()
 
     def sync(self) -> None:
@@ -373,6 +365,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     import time
 
     from .bridge import PrologError
+    from .event_lines import batch_payload
     from .run import Progress, RunStopped, end_the_input, print_summary
 
     log = log or sys.stderr
@@ -430,7 +423,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             snapshot(offset, line)
         since_events, since_time = 0, time.monotonic()
         for first, lines, size, position in batches:
-            produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
+            produced, rejected = engine.feed_lines(batch_payload(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
             messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")

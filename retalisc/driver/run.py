@@ -2,7 +2,7 @@
 output and the same rejection messages as `swipl PROGRAM.pl FILE`."""
 from __future__ import annotations
 
-import codecs
+import errno
 import gc
 import io
 import itertools
@@ -14,26 +14,26 @@ import stat
 import sys
 import threading
 import time
-from typing import IO, Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import IO, TYPE_CHECKING, Dict, Iterator, List, Optional, Sequence, Tuple
 
-from .engine import Engine
+from .event_lines import batch_payload, split_lines
+
+if TYPE_CHECKING:
+    from .engine import Engine
 
 PROGRESS_THRESHOLD = 5_000_000     # bytes of input before a progress display is worth it
 
 
-def _batches(stream: IO[str], batch_size: int) -> Iterator[Tuple[int, List[str], int]]:
-    """(first line number, lines, bytes read) per batch."""
+def _batches(stream: IO[bytes], batch_size: int) -> Iterator[Tuple[int, List[bytes], int]]:
+    """(first line number, lines, bytes read) per batch of a file read as bytes; the lines
+    without their newlines (`event_lines.batch_payload` makes them the runtime's text)."""
     first = 1
     while True:
         batch = list(itertools.islice(stream, batch_size))
         if not batch:
             return
-        text = "".join(batch)
-        size = len(text) if text.isascii() else len(text.encode("utf-8"))
-        lines = text.split("\n")           # each line read ends with its one newline, the last maybe not
-        if text.endswith("\n"):
-            lines.pop()
-        yield first, lines, size
+        data = b"".join(batch)
+        yield first, split_lines(data), len(data)
         first += len(batch)
 
 
@@ -49,7 +49,7 @@ def _is_live(events: str, source: IO[str]) -> bool:
     return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode) or stat.S_ISCHR(mode)
 
 
-def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[str], int]]:
+def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[bytes], int]]:
     """(first line number, lines, bytes read) per batch of a live input: the complete lines
     that have arrived, as soon as they are there. A blocking read returns everything that
     is waiting, so a batch holds more than one line only while input was already waiting (at
@@ -59,7 +59,7 @@ def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[str], in
     pending = b""
     lines: List[bytes] = []
     first = 1
-    started = at_end = unterminated = False
+    at_end = unterminated = False
     while True:
         while not at_end and len(lines) < batch_size:
             if lines and not select.select([fd], [], [], 0)[0]:
@@ -80,21 +80,17 @@ def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[str], in
         if not lines:
             return
         part, lines = lines[:batch_size], lines[batch_size:]
-        texts = [line.decode("utf-8", errors="replace") for line in part]
-        if not started:
-            texts[0] = texts[0].lstrip("\ufeff")
-            started = True
         size = sum(len(line) for line in part) + len(part) - (1 if unterminated and not lines else 0)
-        yield first, texts, size
+        yield first, part, size
         first += len(part)
 
 
-def _heartbeat_batches(stream: IO[str], batch_size: int, heartbeat: float
-                  ) -> Iterator[Tuple[int, List[str], int]]:
+def _heartbeat_batches(stream: IO[bytes], batch_size: int, heartbeat: float
+                       ) -> Iterator[Tuple[int, List[bytes], int]]:
     """As `_batches`, for a live source: a batch is what has arrived when the reader catches
     up (not `batch_size` lines), and a batch with no lines (first line number 0) comes every
     `heartbeat` seconds while nothing arrives. A thread reads the lines."""
-    lines: "queue.Queue[Optional[str]]" = queue.Queue()
+    lines: "queue.Queue[Optional[bytes]]" = queue.Queue()
 
     def read():
         try:
@@ -111,14 +107,14 @@ def _heartbeat_batches(stream: IO[str], batch_size: int, heartbeat: float
         except queue.Empty:
             yield 0, [], 0
             continue
-        batch: List[str] = []
+        batch: List[bytes] = []
         size = 0
         while True:
             if item is None:
                 ended = True
                 break
-            batch.append(item.rstrip("\n"))
-            size += len(item.encode("utf-8"))
+            batch.append(item[:-1] if item.endswith(b"\n") else item)
+            size += len(item)
             if len(batch) >= batch_size:
                 break
             try:
@@ -194,10 +190,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     exit status."""
     started = time.perf_counter()
     name = "<stdin>" if events == "-" else events
-    if events == "-":
-        source = io.TextIOWrapper(sys.stdin.buffer, encoding="utf-8-sig", errors="replace")
-    else:
-        source = open(events, encoding="utf-8-sig", errors="replace")
+    source = sys.stdin.buffer if events == "-" else open(events, "rb")
     sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
     total = os.path.getsize(events) if events != "-" else None
     consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
@@ -235,8 +228,11 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         if stdin_in_prolog and in_prolog_loop(events, out, consumer_dir, progress, heartbeat):
             batches = iter(())
             sink.flush()
-            if engine.bridge.apply("retalis", "rtl_run_event_file", events, "true" if allow_control else "false",
-                                   "true" if strict else "false") == "stopped":
+            outcome = engine.bridge.apply("retalis", "rtl_run_event_file", events,
+                                          "true" if allow_control else "false", "true" if strict else "false")
+            if outcome == "output gone":          # the reader of standard output went away
+                raise BrokenPipeError(errno.EPIPE, os.strerror(errno.EPIPE))
+            if outcome == "stopped":
                 raise RunStopped()
         elif heartbeat is not None:
             batches = _heartbeat_batches(source, batch_size, heartbeat)
@@ -251,7 +247,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                     write(engine.advance_clock(target))
                     sink.flush()
                 continue
-            produced, rejected = engine.feed_lines("\n".join(lines), first, allow_control=allow_control,
+            produced, rejected = engine.feed_lines(batch_payload(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)                     # live: written at once, as it is processed
             messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")
@@ -276,9 +272,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             frozen()
         display.close()
         sink.flush()
-        if events == "-":
-            source.detach()
-        else:
+        if events != "-":
             source.close()
         if sink is not sys.stdout:
             sink.close()
@@ -298,44 +292,21 @@ def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str],
     """Whether a run reads its input in the runtime's loop (that of `swipl PROGRAM.pl FILE`,
     prolog_runtime/retalis.pl, rtl_run_event_file/4): standard input or a regular file, to
     standard output, without --consumer-dir, --heartbeat or a progress line (forced with
-    --progress, or possible on a terminal), whose work Python does per batch. A file is
-    read there only when both loops see the same lines in it (`plain_text_file`)."""
+    --progress, or possible on a terminal), whose work Python does per batch. Both loops
+    read the same lines from any bytes (`event_lines`)."""
     if out != "-" or consumer_dir is not None or heartbeat is not None or progress:
         return False
-    if events != "-" and not plain_text_file(events):
+    if events != "-" and not _regular_file(events):
         return False
     isatty = getattr(sys.stderr, "isatty", None)
     return progress is False or not (isatty and isatty()) or (
         events != "-" and os.path.getsize(events) <= PROGRESS_THRESHOLD)
 
 
-def plain_text_file(path: str, chunk_size: int = 1 << 20) -> bool:
-    """Whether `path` is a regular file of UTF-8 text whose line ends are all `\n` or
-    `\r\n`: the lines Python reads from it (universal newlines, undecodable bytes replaced)
-    are then the lines the runtime reads. Reads the file once, in chunks."""
+def _regular_file(path: str) -> bool:
     try:
-        if not stat.S_ISREG(os.stat(path).st_mode):
-            return False
-        decoder = codecs.getincrementaldecoder("utf-8")()
-        carriage_return = False             # the previous chunk ended with \r
-        with open(path, "rb") as stream:
-            while True:
-                chunk = stream.read(chunk_size)
-                if not chunk:
-                    decoder.decode(b"", final=True)
-                    return not carriage_return
-                if carriage_return and not chunk.startswith(b"\n"):
-                    return False
-                if not chunk.isascii() or decoder.getstate()[0]:
-                    decoder.decode(chunk)
-                returns = chunk.count(b"\r")
-                if returns:
-                    carriage_return = chunk.endswith(b"\r")
-                    if returns - carriage_return != chunk.count(b"\r\n"):
-                        return False
-                else:
-                    carriage_return = False
-    except (OSError, UnicodeDecodeError):
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except OSError:
         return False
 
 

@@ -229,12 +229,12 @@ class LiveState:
                                          "ns": arrival_ns}))
             else:
                 lines.append(json.dumps({"e": event, "t": seconds}))
-        self.journal.append(lines)
+        self.journal.append([line.encode("ascii") for line in lines])      # (json.dumps writes ASCII)
         self.journaled = True
 
     def call(self, name: str, args, now: float) -> None:
         if not self.replaying:
-            self.journal.append([json.dumps({"c": name, "a": list(args), "now": now})])
+            self.journal.append([json.dumps({"c": name, "a": list(args), "now": now}).encode("ascii")])
             self.journaled = True
 
     def idle_timeout(self) -> Optional[float]:

@@ -1,0 +1,79 @@
+"""Handing `retalisc run` over to `swipl`: when a run needs nothing from Python while the
+events stream (a plain event file or standard input, the output on standard output, no
+option that Python serves), the `retalisc` program replaces itself (`os.execv`) by
+`swipl PROGRAM.pl OPTIONS EVENTS` on the compiled program kept in the compile cache. The
+runtime's own loop then reads, processes and writes everything, with the start-up of
+`swipl` alone instead of that of Python, its Prolog bridge and the runtime embedded in it.
+What the run prints (standard output, the messages and the summary on standard error, the
+exit status) is what the Python driver prints for the same run, which reads such input in
+the same loop (`in_prolog_loop`).
+"""
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import sys
+from typing import List, Optional
+
+#: Rule labels passed in `--detections=L1,L2`: names (what the compiler makes of a label).
+_LABEL = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
+
+
+def swipl_arguments(events: str, rules: List[str], echo_input: bool = False, max_delay: Optional[float] = None,
+                    retraction_horizon: Optional[float] = None, max_steps="1000000", max_timers="100000",
+                    drop_pending: bool = False, flush_timers: bool = False, allow_control: bool = False,
+                    strict: bool = False) -> Optional[List[str]]:
+    """The arguments after `swipl PROGRAM.pl` that run as `retalisc run` does with these
+    options (prolog_runtime/retalis.pl, rtl_main/0), or None when the runtime's command line
+    cannot say them: an events file name the runtime would read as an option, or not UTF-8,
+    or a rule label that is not a name."""
+    if events != "-" and events.startswith("-"):
+        return None
+    try:
+        events.encode("utf-8")
+    except UnicodeEncodeError:
+        return None
+    if not all(_LABEL.match(rule) for rule in rules):
+        return None
+    arguments = []
+    if echo_input:
+        arguments.append("--echo-input")
+    if max_delay is not None:
+        arguments.append(f"--max-delay={max_delay!r}")
+    if retraction_horizon is not None:
+        arguments.append(f"--retraction-horizon={retraction_horizon!r}")
+    arguments += [f"--max-steps={max_steps}", f"--max-timers={max_timers}"]
+    if drop_pending:
+        arguments.append("--drop-pending")
+    if flush_timers:
+        arguments.append("--flush-timers")
+    if allow_control:
+        arguments.append("--allow-control")
+    if strict:
+        arguments.append("--strict")
+    arguments.append("--detections=" + ",".join(rules))
+    return arguments + [events]
+
+
+def swipl_command(program_file: str, arguments: List[str]) -> Optional[List[str]]:
+    """The command line of the handover (the options of the embedded runtime: no packs, no
+    init file), or None when there is no `swipl` on the PATH."""
+    swipl = shutil.which("swipl")
+    if swipl is None:
+        return None
+    return [swipl, "--no-packs", "-f", "none", program_file, *arguments]
+
+
+def hand_over(command: List[str]) -> None:
+    """Replace this process by `command` (what is written so far leaves first). Returns
+    only when it cannot be started."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    try:
+        os.execv(command[0], command)
+    except OSError:
+        return
