@@ -70,11 +70,14 @@ The cost falls on deletions and on results passed on by a replay; processing an 
 only takes an arrival number. What is exact: within the retraction horizon (rtl_horizon.pl),
 the output nets to that of a run in which the deleted event never arrived; of several arrivals
 of the same input event, a deletion takes back the latest. A rule without a policy whose results
-a policy step takes records when it made each (rtl_policy_made/6), so taking one back deletes
-the arrival it made, and one taken back by a late blocker comes back at its old position when
-the blocker is deleted. The limit: a result such a rule makes only when a blocker (or a
-`first` partner) is deleted arrives then, and such a rule does not tell apart two arrivals of
-the same input event.
+a policy step takes numbers the arrivals of its input events (rtl_policy_arrival/1): its
+partial matches and results carry the numbers they were made from, so a deletion takes back
+the latest arrival and what it made (rtl_policy_take_arrival/2), taking a result back deletes
+the arrival it made in the policy step (rtl_policy_unmade/5), and a result it makes only when
+a blocker (or a `first` partner) is deleted arrives where it would have been made, when its
+last input event arrived (rtl_policy_made/5). Positions are then rational numbers: rewinding
+is to a position (`from`) or to just after one (`after`). The limit: the values an aggregate
+gives again after a deletion of a counted event arrive when the deletion is made.
 */
 
 :- use_module(library(lists)).

@@ -96,8 +96,10 @@ def signature(term: Term) -> Optional[Tuple[str, int]]:
 
 def policy_inputs(rules: List[BinaryRule], policies: List[str]) -> Set[Tuple[str, int]]:
     """The events that a step under `recent` or `chronological` takes as input: a rule
-    without such a policy deriving one of them records when it made each result
-    (`_made`), so that the policy step deletes the very arrival a deletion takes back."""
+    without such a policy deriving one of them numbers the arrivals of its input events and
+    records when it made each result (`_made`), so that the policy step deletes the very
+    arrival a deletion takes back, and receives a result made late where it would have been
+    made (rtl_policy.pl)."""
     consumed: Set[Tuple[str, int]] = set()
     for rule, policy in zip(rules, policies):
         if policy not in ("recent", "chronological"):
@@ -169,7 +171,8 @@ def _split(own: List[Var], other: List[Var]) -> Tuple[List[Var], List[Var]]:
 class _RuleGenerator:
     def __init__(self, rule: BinaryRule, policy: str, provenance: bool = False):
         self.rule = rule
-        # the head is an input of a policy step: record when each result was made
+        # the head is an input of a policy step: number the input arrivals, record when each
+        # result was made
         self.provenance = provenance
         # `first` selects in the joins; every other step is unrestricted
         self.first = policy == "first"
