@@ -263,6 +263,19 @@ def test_a_first_pair_made_again_arrives_where_its_last_input_arrived():
         {"ff(1)@0-5": 1, "ff(1)@4-5": 1, "pr(1,0)@0-6": 1})
 
 
+def test_an_absence_blocked_from_the_start_arrives_where_it_was_decided():
+    """c blocks the absence after a(1, 0) before it is decided; the one after a(1, 1) is
+    decided later, and d(1, 0) takes it. Deleting c (inside the horizon, max_delay 0 + 2 * 3 s)
+    makes the first absence where it was decided, before the second, so d(1, 0) takes it."""
+    program = ("ab(I) <- not(c(I, _)).[a(I, _), 3].\n"
+               "pab([property(consumption_policy, chronological)]) 'rule:' pab(I, Y) <- ab(I) seq d(I, Y).\n")
+    engine = fresh(Engine.from_source(program, "absence_first.rtl"), "0")
+    events = [("a(1, 0)", 0), ("c(1, 0)", 2), ("a(1, 1)", 2.5), ("d(1, 0)", 6), ("d(1, 1)", 7)]
+    with_deletion = net_output(engine.feed_batch(events + [("c(1, 0)", 2, 2, "retract")]))
+    fresh(engine, "0")
+    assert with_deletion == net_output(engine.feed_batch([e for e in events if e[0] != "c(1, 0)"])) == Counter(
+        {"ab(1)@0-3": 1, "ab(1)@2.5-5.5": 1, "pab(1,0)@0-6": 1, "pab(1,1)@2.5-7": 1})
+
 def test_the_rule_without_a_policy_deletes_the_latest_arrival_of_an_event():
     """a(1, 0) at 1 arrives twice; its deletion takes back the second arrival, so the first
     stays the first a the b pairs with, and c takes its result."""
