@@ -446,7 +446,8 @@ class _RuleGenerator:
         e, end_goals = self.interval(end_expr, self.t("E"))
         match = self.expr(relation) + start_goals + end_goals + [self.window_check(step, s, e)]
         matched = self.matched_record(step, lefts, rights, s, e)
-        sides = (("left", step.left, left_vars, al, lefts, rights), ("right", step.right, right_vars, ar, rights, lefts))
+        sides = (("left", step.left, left_vars, al, lefts, rights),
+                 ("right", step.right, right_vars, ar, rights, lefts))
         for side, operand, own_vars, own_arrivals, own_store, partner_store in sides:
             handler = f"{step.name}_{side}"
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
@@ -753,7 +754,8 @@ class _RuleGenerator:
         matched = self.matched_record(step, lefts, rights, s1, e2)
         self.forget_blockers(step, lefts, negs, s1, e1, sn, en)
         for side, operand, own_vars, own_arrivals, own_store, partner_store in (
-                ("left", step.left, left_vars, al, lefts, rights), ("right", step.right, right_vars, ar, rights, lefts)):
+                ("left", step.left, left_vars, al, lefts, rights),
+                ("right", step.right, right_vars, ar, rights, lefts)):
             handler = f"{step.name}_{side}"
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
             self.arrival(operand, handler, os_, oe, *own_arrivals)
@@ -780,7 +782,8 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
             C("forall", inside, self.output(step, s1, e2, retract=True, arrivals=arrivals)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(step, negs, self.restoring(C("forall", inside, self.output(step, s1, e2, arrivals=arrivals))))]))
+            self.if_stored(step, negs,
+                           self.restoring(C("forall", inside, self.output(step, s1, e2, arrivals=arrivals))))]))
 
     def forget_blockers(self, step: Step, lefts: Term, negs: Term, s1: Var, e1: Var, sn: Var, en: Var) -> None:
         """The sweep of an unwindowed `not(N).[L, R]` whose R is an event: `ele_forget_blockers(Before)`
@@ -832,18 +835,20 @@ class _RuleGenerator:
         self.arrival(step.left, handler, s1, e1, *al)
         derivable = conj([unblocked, self.window_check(step, s1, e1)])
         self.clauses.append(clause(C(handler, *left_vars, *al, s1, e1), [
-            C(";", C("->", derivable, self.output(step, s1, e1, arrivals=arrivals)), Atom("true")), C("assertz", lefts)]))
-        take = (lambda then: self.take_arrival(step, lefts, left_vars + [s1, e1], then)) if al else \
-            (lambda then: self.if_stored(step, lefts, then))
-        self.clauses.append(clause(C(handler + "_retract", *left_vars, *al, s1, e1), [
-            take(C(";", C("->", derivable, self.output(step, s1, e1, retract=True, arrivals=arrivals)), Atom("true")))]))
+            C(";", C("->", derivable, self.output(step, s1, e1, arrivals=arrivals)), Atom("true")),
+            C("assertz", lefts)]))
+        undo = C(";", C("->", derivable, self.output(step, s1, e1, retract=True, arrivals=arrivals)), Atom("true"))
+        taken = (self.take_arrival(step, lefts, left_vars + [s1, e1], undo) if al
+                 else self.if_stored(step, lefts, undo))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, *al, s1, e1), [taken]))
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
         after = conj([self.lookup(step, lefts, en), C("<", en, s1), self.window_check(step, sn, e1), unblocked])
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
             C("forall", after, self.output(step, s1, e1, retract=True, arrivals=arrivals)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(step, negs, self.restoring(C("forall", after, self.output(step, s1, e1, arrivals=arrivals))))]))
+            self.if_stored(step, negs,
+                           self.restoring(C("forall", after, self.output(step, s1, e1, arrivals=arrivals))))]))
 
     def absence_clauses(self, step: Step) -> None:
         """not(N).[L, D]: no N in the D seconds after L ends (N starts after L's end and ends by
