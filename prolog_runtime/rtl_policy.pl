@@ -76,8 +76,8 @@ the latest arrival and what it made (rtl_policy_take_arrival/2), taking a result
 the arrival it made in the policy step (rtl_policy_unmade/5), and a result it makes only when
 a blocker (or a `first` partner) is deleted arrives where it would have been made, when its
 last input event arrived (rtl_policy_made/5). Positions are then rational numbers: rewinding
-is to a position (`from`) or to just after one (`after`). The limit: the values an aggregate
-gives again after a deletion of a counted event arrive when the deletion is made.
+is to a position (`from`) or to just after one (`after`). The limit: the changes a sliding
+aggregate gives after a deletion arrive when the deletion is made.
 */
 
 :- use_module(library(lists)).

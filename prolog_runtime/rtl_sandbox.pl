@@ -120,6 +120,7 @@ builtin(rule, rtl_horizon:rtl_next_seq(_), []).
 builtin(rule, rtl_horizon:rtl_take_instance(Stored, _), [retract(Stored)]).   % from the rule's store
 builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
 builtin(rule, rtl_horizon:rtl_aggregate_redo(_, _, _, _, _), []).
+builtin(rule, rtl_horizon:rtl_aggregate_redo_numbered(_, _, _, _, _), []).
 builtin(rule, rtl_policy:rtl_position(_, _), []).                      % consumption policies
 builtin(rule, rtl_policy:rtl_policy_insert(_, _, _, Goal), [Goal]).
 builtin(rule, rtl_policy:rtl_policy_made(A, B, _, _, Goal), [assertz(A), assertz(B), Goal]).

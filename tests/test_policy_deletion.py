@@ -276,6 +276,19 @@ def test_an_absence_blocked_from_the_start_arrives_where_it_was_decided():
     assert with_deletion == net_output(engine.feed_batch([e for e in events if e[0] != "c(1, 0)"])) == Counter(
         {"ab(1)@0-3": 1, "ab(1)@2.5-5.5": 1, "pab(1,0)@0-6": 1, "pab(1,1)@2.5-7": 1})
 
+def test_values_an_aggregate_gives_again_arrive_where_they_were_first_given():
+    """Deleting one of two b's takes back the count 2 and gives the count 1 again where it was
+    first given, before d arrived: d takes it (recent: the newest value waiting)."""
+    program = ("ua(I, N) <- a(I, _) seq aggregate(count, b(I, _), N).\n"
+               "pa([property(consumption_policy, recent)]) 'rule:' pa(I, N, Y) <- ua(I, N) seq d(I, Y).\n")
+    events = [("a(1, 2)", 1), ("b(1, 1)", 2), ("b(1, 0)", 2), ("d(1, 0)", 6)]
+    assert nets_to_the_run_without(program, "aggregate_again.rtl", events, ("b(1, 1)", 2)) == Counter(
+        {"ua(1,0)@1-1": 1, "ua(1,1)@1-2": 1, "pa(1,1,0)@1-6": 1})
+    # of two arrivals of the same b, the deletion takes back the latest (after d)
+    events = [("a(1, 1)", 1), ("b(1, 1)", 3), ("b(1, 1)", 3), ("d(1, 2)", 6), ("b(1, 1)", 3)]
+    assert nets_to_the_run_without(program, "aggregate_twice.rtl", events, ("b(1, 1)", 3)) == Counter(
+        {"ua(1,0)@1-1": 1, "ua(1,1)@1-3": 1, "ua(1,2)@1-3": 1, "pa(1,2,2)@1-6": 1})
+
 def test_the_rule_without_a_policy_deletes_the_latest_arrival_of_an_event():
     """a(1, 0) at 1 arrives twice; its deletion takes back the second arrival, so the first
     stays the first a the b pairs with, and c takes its result."""
@@ -607,6 +620,8 @@ EXACT_HIERARCHY = [
     "p3([property(consumption_policy, chronological)]) 'rule:' p3(I, Y) <- u3(I) seq d(I, Y).",
     "uw(I) <- (a(I, _) and b(I, _)).3.",
     "pw([property(consumption_policy, recent)]) 'rule:' pw(I, Y) <- uw(I) seq c(I, Y).",
+    "ua(I, N) <- a(I, _) seq aggregate(count, b(I, _), N).",
+    "pa([property(consumption_policy, chronological)]) 'rule:' pa(I, N, Y) <- ua(I, N) seq d(I, Y).",
 ]
 
 # a's before b's before c's; d's between them (blockers) and last: identical results over

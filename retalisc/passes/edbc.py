@@ -386,14 +386,15 @@ class _RuleGenerator:
 
     def carries(self, step: Step) -> bool:
         """The step's instances carry the arrival numbers of their input events (a rule whose
-        results a policy step takes, rtl_policy.pl); an aggregate's values take an arrival
-        number when they are made (output_clauses)."""
-        return self.provenance and step.op not in ("aggregate", "sliding")
+        results a policy step takes, rtl_policy.pl); a sliding aggregate's values take an
+        arrival number when they are made (output_clauses)."""
+        return self.provenance and step.op != "sliding"
 
     def takes_arrivals(self, step: Step, side: str) -> bool:
         """The handler of `side` receives the instance's arrival numbers (an absence's result
-        takes its own when it is decided)."""
-        return self.carries(step) and side != "negated" and step.op != "absence"
+        takes its own when it is decided, an aggregate's value the numbers of its start event
+        and of the event counted)."""
+        return self.carries(step) and side != "negated" and step.op not in ("absence", "aggregate")
 
     def arrivals(self, step: Step, side: str) -> List[Var]:
         """The variable holding the arrival numbers of an instance of `side`, if it has one."""
@@ -962,12 +963,21 @@ class _RuleGenerator:
         left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
         key, left_other = _split(left_vars, right_vars)
         _, right_other = _split(right_vars, left_vars)
-        # sequence number and accumulator before the times: the last two arguments of a store are its interval
-        lefts = self.store(step, "lefts", key + left_other + [seq, acc0, s1, e1])
+        # under a policy step that takes the values: the numbers of the start event and of the
+        # event counted (rtl_policy.pl), so the values given again after a deletion arrive
+        # where they were first given, and a deletion takes the latest arrival
+        numbered = self.carries(step)
+        # sequence number and accumulator before the times: the last two arguments of a store
+        # are its interval (and numbered, the one before them its arrival number)
+        numbers = (lambda a: [a, seq]) if numbered else (lambda a: [seq, a])
+        lefts = self.store(step, "lefts", key + left_other + numbers(acc0) + [s1, e1])
         rights = self.record(step, "rights", key + right_other + [rseq, s2, e2], rotated=step.window is not None)
 
         def left_with(a: Term, kept: str = "") -> Term:
-            return C(lefts.name + kept, *key, *left_other, seq, a, s1, e1)
+            return C(lefts.name + kept, *key, *left_other, *numbers(a), s1, e1)
+
+        def take_latest(stores: List[Term]) -> Term:
+            return C("rtl_policy_take_arrival", list_term(stores), Atom("none"))
 
         window = self.window_check(step, s1, e2)
         # the R's an accumulator counted, as rtl_aggregate_values/3 items
@@ -978,15 +988,23 @@ class _RuleGenerator:
         # the value over the empty set when the start event opens the aggregate (count, sum);
         # forall/2 leaves V unbound for the values that follow
         initial = C("rtl_aggregate_initial", function, value)
+        counted_seq = V(self.fresh("CountedSeq")) if numbered else V("_")
+        start_arrival = seq if numbered else None
+        value_arrivals = C("-", seq, counted_seq) if numbered else None
         self.clauses.append(clause(C(handler, *left_vars, s1, e1), [
             C("rtl_next_seq", seq), C("assertz", left_with(Atom("none"))),
-            C("forall", initial, self.output(step, s1, e1))]))
-        values = conj([C("forall", initial, self.output(step, s1, e1, retract=True)),
+            C("forall", initial, self.output(step, s1, e1, arrivals=start_arrival))]))
+        values = conj([C("forall", initial, self.output(step, s1, e1, retract=True, arrivals=start_arrival)),
                        counted, C("rtl_aggregate_values", items, V("_"), values_),
-                       C("forall", C("member", C("-", V("_"), C("-", value, e2)), values_),
-                         self.output(step, s1, e2, retract=True))])
-        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
-            self.if_stored(step, left_with(V("_")), values)]))
+                       C("forall", C("member", C("-", counted_seq, C("-", value, e2)), values_),
+                         self.output(step, s1, e2, retract=True, arrivals=value_arrivals))])
+        if numbered:
+            stored = left_with(V("_"))
+            taken = C(";", C("->", take_latest([stored] + (self.kept_of(stored) if step.window is not None else [])),
+                             values), Atom("true"))
+        else:
+            taken = self.if_stored(step, left_with(V("_")), values)
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [taken]))
         handler = f"{step.name}_right"
         self.arrival(step.right, handler, s2, e2)
         loops = []
@@ -994,17 +1012,23 @@ class _RuleGenerator:
             # an accumulator is updated where it is stored (live or kept)
             found = conj([left_with(acc0, kept), C("<", e1, s2), window])
             update = conj([C("rtl_aggregate", function, acc0, acc, value), C("retract", left_with(acc0, kept)),
-                           C("assertz", left_with(acc, kept)), self.output(step, s1, e2)])
+                           C("assertz", left_with(acc, kept)),
+                           self.output(step, s1, e2, arrivals=C("-", seq, rseq) if numbered else None)])
             loops.append(C("forall", found, update))
-        body = loops[:1]
+        # (numbered values: the counted event's number comes before the values it gives)
+        body = [C("rtl_next_seq", rseq)] if numbered else []
+        body += loops[:1]
         if len(loops) > 1:
             body.append(C(";", C("->", C("rtl_late", e2), conj(loops[1:])), Atom("true")))
-        body += [C("rtl_next_seq", rseq), self.record_add(rights)]
+        body += ([] if numbered else [C("rtl_next_seq", rseq)]) + [self.record_add(rights)]
         self.clauses.append(clause(C(handler, *right_vars, s2, e2), body))
         redo = C(f"{step.name}_redo", *key, *left_other, seq, s1, e1, removed)
         found = conj([self.lookup(step, left_with(V("_")), e2), C("<", seq, rseq), C("<", e1, s2), window])
+        counted_taken = self.record_take(rights)
+        if numbered:
+            counted_taken = take_latest(self.generations(rights) if self.is_rotated(rights) else [rights])
         self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
-            C(";", C("->", self.record_take(rights),
+            C(";", C("->", counted_taken,
                      C("forall", found, Compound(redo.name, redo.args[:-1] + (
                          C("-", rseq, C("-", C("-", function, s2), e2)),)))), Atom("true"))]))
         # one accumulator without the deleted R: take back its values from the R on, give the new ones
@@ -1013,6 +1037,14 @@ class _RuleGenerator:
             replace = C(";", C("->", C("retract", left_with(V("_"), kept)), C("assertz", left_with(acc, kept))),
                         replace)
         replace = [replace]
+        if numbered:
+            self.clauses.append(clause(redo, [
+                counted, C("rtl_aggregate_redo_numbered", items, removed, acc, retracts, adds),
+                C("forall", C("member", C("-", counted_seq, C("-", value, e2)), retracts),
+                  self.output(step, s1, e2, retract=True, arrivals=value_arrivals)),
+                self.restoring(C("forall", C("member", C("-", counted_seq, C("-", value, e2)), adds),
+                                 self.output(step, s1, e2, arrivals=value_arrivals)))] + replace))
+            return
         self.clauses.append(clause(redo, [
             counted, C("rtl_aggregate_redo", items, removed, acc, retracts, adds),
             C("forall", C("member", C("-", value, e2), retracts), self.output(step, s1, e2, retract=True)),
@@ -1078,7 +1110,8 @@ class _RuleGenerator:
             head = self.output(step, s, e, retract, arrivals if self.carries(step) else None)
             numbered = []
             if self.provenance and not self.carries(step):
-                # (an aggregate's value arrives when it is made; its deletion takes the latest)
+                # (a sliding aggregate's value arrives when it is made; its deletion takes the
+                # latest)
                 numbered = [] if retract else [C("rtl_policy_arrival", arrivals)]
                 arrivals = V("_") if retract else arrivals
             if step.derives_head:
