@@ -16,7 +16,8 @@
             rtl_next_seq/1,             % -Seq
             rtl_take_instance/2,        % :Stored, +Own
             rtl_aggregate_values/3,     % +Items, -Acc, -Values
-            rtl_aggregate_redo/5        % +Items, +Removed, -Acc, -Retracts, -Adds
+            rtl_aggregate_redo/5,       % +Items, +Removed, -Acc, -Retracts, -Adds
+            rtl_aggregate_redo_numbered/5  % +Items, +Removed, -Acc, -Retracts, -Adds
           ]).
 
 /** <module> The retraction horizon: what the runtime keeps so that deletions are exact
@@ -60,6 +61,8 @@ every instance gets a processing sequence number (rtl_next_seq/1), each P is kep
 record, and deleting an A or a P replays the P's of the affected accumulators
 (rtl_aggregate_values/3, rtl_aggregate_redo/5).
 */
+
+:- use_module(library(pairs), [pairs_values/2]).
 
 :- meta_predicate rtl_dry_run(0, -, -), rtl_take_instance(:, +).
 
@@ -384,8 +387,18 @@ fold([Seq-(F-_-End)|Items], Acc0, Acc, [Seq-(V-End)|Values]) :-
 %   after it, each `Value-End`; Acc is the new accumulator.
 
 rtl_aggregate_redo(Items, Removed, Acc, Retracts, Adds) :-
+    rtl_aggregate_redo_numbered(Items, Removed, Acc, NumberedRetracts, NumberedAdds),
+    pairs_values(NumberedRetracts, Retracts),
+    pairs_values(NumberedAdds, Adds).
+
+%!  rtl_aggregate_redo_numbered(+Items, +Removed, -Acc, -Retracts, -Adds) is det.
+%
+%   As rtl_aggregate_redo/5, each value with the Seq of the occurrence that gave it
+%   (`Seq-(Value-End)`): for an aggregate whose values a policy step takes (rtl_policy.pl).
+
+rtl_aggregate_redo_numbered(Items, Removed, Acc, Retracts, Adds) :-
     Removed = From-_,
     rtl_aggregate_values([Removed|Items], _, Old),
     rtl_aggregate_values(Items, Acc, New),
-    findall(V-E, ( member(S-(V-E), Old), S >= From ), Retracts),
-    findall(V-E, ( member(S-(V-E), New), S > From ), Adds).
+    findall(S-(V-E), ( member(S-(V-E), Old), S >= From ), Retracts),
+    findall(S-(V-E), ( member(S-(V-E), New), S > From ), Adds).

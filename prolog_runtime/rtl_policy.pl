@@ -5,9 +5,10 @@
             rtl_policy_drop_twins/2,    % +Step, :Stored
             rtl_policy_take/3,          % +Step, :Stored, -Key
             rtl_policy_positioned/2,    % +Module, +StoreName
-            rtl_policy_made/6,          % :MadeA, :MadeB, :WithdrawnA, :WithdrawnB, -Position, :Derive
-            rtl_policy_unmade/6,        % :MadeA, :MadeB, :WithdrawnA, :WithdrawnB, -Position, :Underive
-            rtl_policy_withdrawing/1,   % :Goal
+            rtl_policy_made/5,          % :MadeA, :MadeB, +Id, -Position, :Derive
+            rtl_policy_unmade/5,        % :MadeA, :MadeB, ?Id, -Position, :Underive
+            rtl_policy_arrival/1,       % -Id
+            rtl_policy_take_arrival/2,  % :Stores, +Own
             rtl_policy_restoring/1      % :Goal
           ]).
 
@@ -69,11 +70,14 @@ The cost falls on deletions and on results passed on by a replay; processing an 
 only takes an arrival number. What is exact: within the retraction horizon (rtl_horizon.pl),
 the output nets to that of a run in which the deleted event never arrived; of several arrivals
 of the same input event, a deletion takes back the latest. A rule without a policy whose results
-a policy step takes records when it made each (rtl_policy_made/6), so taking one back deletes
-the arrival it made, and one taken back by a late blocker comes back at its old position when
-the blocker is deleted. The limit: a result such a rule makes only when a blocker (or a
-`first` partner) is deleted arrives then, and such a rule does not tell apart two arrivals of
-the same input event.
+a policy step takes numbers the arrivals of its input events (rtl_policy_arrival/1): its
+partial matches and results carry the numbers they were made from, so a deletion takes back
+the latest arrival and what it made (rtl_policy_take_arrival/2), taking a result back deletes
+the arrival it made in the policy step (rtl_policy_unmade/5), and a result it makes only when
+a blocker (or a `first` partner) is deleted arrives where it would have been made, when its
+last input event arrived (rtl_policy_made/5). Positions are then rational numbers: rewinding
+is to a position (`from`) or to just after one (`after`). The limit: the changes a sliding
+aggregate gives after a deletion arrive when the deletion is made.
 */
 
 :- use_module(library(lists)).
@@ -82,8 +86,8 @@ the same input event.
 
 :- meta_predicate rtl_policy_insert(+, ?, +, 0), rtl_policy_delete(+, +, ?, :),
                   rtl_policy_drop_twins(+, :), rtl_policy_take(+, :, -),
-                  rtl_policy_made(:, :, :, :, -, 0), rtl_policy_unmade(:, :, :, :, -, 0),
-                  rtl_policy_withdrawing(0), rtl_policy_restoring(0).
+                  rtl_policy_made(:, :, +, -, 0), rtl_policy_unmade(:, :, ?, -, 0),
+                  rtl_policy_take_arrival(:, +), rtl_policy_restoring(0).
 
 %!  rtl_position(-Position:integer, -Mode) is det.
 %
@@ -98,6 +102,11 @@ rtl_position(Position, Mode) :-
     ;   Position = R, Mode = replay
     ).
 
+%   next_arrival(-Position): the arrival number rtl_next_seq/1 gives next, without taking it.
+
+next_arrival(Position) :-
+    (   nb_current(rtl_processing_seq, Position) -> true ; Position = 0 ).
+
 %!  rtl_policy_insert(+Step, ?Key, +Position, :Arrival) is det.
 %
 %   An instance of Step arrives from the past (at Position, during a replay): rewind Step
@@ -105,8 +114,7 @@ rtl_position(Position, Mode) :-
 %   after it. An unbound Key rewinds every key (a blocker).
 
 rtl_policy_insert(Step, Key, Position, M:Arrival) :-
-    Min is Position + 1,
-    rewind(M, Step, Key, Min, Replays),
+    rewind(M, Step, Key, after(Position), Replays),
     with_position(Position, M:Arrival),
     replay(M, Replays).
 
@@ -128,15 +136,14 @@ rtl_policy_delete(Step, negated, _, M:Stored) :-
         chosen(Ps, Chosen)
     ->  memberchk(Chosen-Ref, Items),
         erase(Ref),
-        Min is Chosen + 1,
-        rewind(M, Step, _AnyKey, Min, Replays),
+        rewind(M, Step, _AnyKey, after(Chosen), Replays),
         replay(M, Replays)
     ;   true
     ).
 rtl_policy_delete(Step, Side, Key, M:Stored) :-
     (   findall(P, ( known(M, Step, Side, Key, Found, P), same_instance(Found, Stored) ), Ps),
         chosen(Ps, Chosen)
-    ->  rewind(M, Step, Key, Chosen, Replays0),
+    ->  rewind(M, Step, Key, from(Chosen), Replays0),
         side_index(Side, I),
         (   select(Chosen-I-(D-_), Replays0, Replays), same_instance(D, Stored)
         ->  true
@@ -214,16 +221,18 @@ blocker_item(M, Step, Found, Position, Ref) :-
 side_index(left, 0).
 side_index(right, 1).
 
-%   rewind(+M, +Step, ?Key, +Min, -Replays)
+%   rewind(+M, +Step, ?Key, +Bound, -Replays)
 %
-%   Undo what Step did for Key from position Min on (see the module header). Replays are the
-%   instances to process again, `Position-SideIndex-(Stored-Arrival)`, in order.
+%   Undo what Step did for Key from position Min on (Bound `from(Min)`), or after position
+%   P (`after(P)`: positions are rational numbers when results were made late,
+%   rtl_policy_made/5) (see the module header). Replays are the instances to process again,
+%   `Position-SideIndex-(Stored-Arrival)`, in order.
 rewind(M, Step, Key, Min, Replays) :-
     findall(Made-Item,
             ( match_item(M, Step, Key, Item),
               Item = m(_, PL, PR, _, _, _),
               Made is max(PL, PR),
-              Made >= Min ),
+              at_or_after(Min, Made) ),
             Matches0),
     keysort(Matches0, Ascending),
     reverse(Ascending, Matches),                    % the latest result is taken back first
@@ -233,12 +242,12 @@ rewind(M, Step, Key, Min, Replays) :-
                     ( Item = left-PL-L ; Item = right-PR-R ) ), Consumed),
     findall(Side-P-Stored,
             ( dropped_item(M, Step, Side, Key, Stored, P, By, Ref),
-              By >= Min,
+              at_or_after(Min, By),
               erase(Ref) ),
             Dropped),
     findall(Side-P-Stored,
             ( waiting_item(M, Step, Side, Key, Stored, P, Ref),
-              P >= Min,
+              at_or_after(Min, P),
               erase(Ref) ),
             Waiting),
     append([Consumed, Dropped, Waiting], Instances),
@@ -251,7 +260,10 @@ rewind(M, Step, Key, Min, Replays) :-
             Replays0),
     keysort(Replays0, Replays).
 
-later(Min, _-P-_) :- P >= Min.
+later(Min, _-P-_) :- at_or_after(Min, P).
+
+at_or_after(from(Min), P) :- P >= Min.
+at_or_after(after(Min), P) :- P > Min.
 
 %   Take back the result of a match made at Made: a policy step it reaches deletes the
 %   instance that match passed on (rtl_policy_delete/4).
@@ -351,80 +363,157 @@ rtl_policy_take(Step, M:Partner, Key) :-
     length(Key, N),
     append(Key, _, FreshArgs).
 
-%!  rtl_policy_made(:MadeA, :MadeB, :WithdrawnA, :WithdrawnB, -Position, :Derive) is det.
+%!  rtl_policy_made(:MadeA, :MadeB, +Id, -Position, :Derive) is det.
 %
 %   A rule without a policy makes a result that a policy step takes as input: record when
-%   (MadeA or MadeB, the two generations of `<step>_made`, with Position unbound: the
-%   arrival number the result takes there, or, inside a replay, the position of the
-%   instance replayed) and run Derive. A result made again while a blocker is deleted or a
-%   `first` partner is taken back (rtl_policy_restoring/1) was there before the blocker
-%   came (a record of `<step>_withdrawn`): it arrives at its old position, in the past.
+%   (MadeA or MadeB, the two generations of `<step>_made`, with Position unbound) and run
+%   Derive. Id tells the result apart from identical ones: the arrival numbers of the input
+%   events it was made from (rtl_policy_arrival/1), joined by `-` (`IdL-IdR` for a pair).
+%   Made while an input event arrives, the result takes the arrival number the policy step
+%   takes next. Made later, because a blocker of its negation or its `first` partner was
+%   deleted (rtl_policy_restoring/1), or made in a replay, it is made where it would have
+%   been made when its last input event arrived: the policy step receives it in the past
+%   (late_position/4).
 
-rtl_policy_made(MA:MadeA, MB:MadeB, WA:WithdrawnA, WB:WithdrawnB, Position, Derive) :-
-    (   nb_current(rtl_made_mode, restore),
-        findall(Position-Ref, ( clause(WA:WithdrawnA, true, Ref) ; clause(WB:WithdrawnB, true, Ref) ), Items),
-        Items \== []
-    ->  pairs_keys(Items, Ps),
-        max_list(Ps, Old),
-        memberchk(Old-Ref, Items),
-        erase(Ref),
-        Position = Old,
+rtl_policy_made(MA:MadeA, MB:MadeB, Id, Position, Derive) :-
+    nb_getval(rtl_replay_position, R),
+    (   R == none, \+ nb_current(rtl_made_mode, restore)
+    ->  next_arrival(Position),
         kept_assert(MA:MadeA, MB:MadeB),
-        with_position(Old, Derive)
-    ;   nb_getval(rtl_replay_position, R),
-        (   R \== none
+        ignore(Derive)
+    ;   nonvar(Id)
+    ->  late_position(MA:MadeA, MB:MadeB, Id, Position),
+        kept_assert(MA:MadeA, MB:MadeB),
+        with_position(Position, Derive)
+    ;   (   R \== none
         ->  Position = R
-        ;   nb_current(rtl_processing_seq, Position)     % the next arrival number (rtl_next_seq/1)
-        ->  true
-        ;   Position = 0
+        ;   next_arrival(Position)
         ),
         kept_assert(MA:MadeA, MB:MadeB),
         ignore(Derive)
     ).
 
+%   late_position(:MadeA, :MadeB, +Id, -Position)
+%
+%   The position of a result made late: among the results made when its last input event
+%   (Last) arrived, the rule made them in the order of made_key/2 (its stores are in arrival
+%   order); the position is halfway between the one made just before it (or Last) and the
+%   one made just after it (or the next whole number). Positions are then rational numbers,
+%   and results made late never share a position.
+late_position(MA:MadeA, MB:MadeB, Id, Position) :-
+    last_arrival(Id, Last),
+    made_key(Id, Key),
+    functor(MadeA, NameA, Arity),
+    functor(MadeB, NameB, Arity),
+    IdArg is Arity - 1,
+    findall(K-P,
+            ( member(MM:Name, [MA:NameA, MB:NameB]),
+              functor(Record, Name, Arity),
+              MM:Record,
+              arg(IdArg, Record, Other),
+              last_arrival(Other, Last),
+              arg(Arity, Record, P),
+              made_key(Other, K) ),
+            Made),
+    findall(P, ( member(K-P, Made), K @=< Key ), Before),
+    max_list([Last|Before], Prev),
+    Next0 is floor(Prev) + 1,
+    findall(P, ( member(K-P, Made), K @> Key, P > Prev ), After),
+    min_list([Next0|After], Next),
+    Position is (Prev + Next) rdiv 2.
+
+%   made_key(+Id, -Key): the order in which results made when the same input event arrived
+%   were made: along the steps the arrival went through, by the partners it met there, in
+%   the order they were stored.
+made_key(A-B, Key) :-
+    !,
+    last_arrival(A, LA),
+    last_arrival(B, LB),
+    made_key(A, KA),
+    made_key(B, KB),
+    (   LA >= LB -> append(KA, [KB], Key) ; append(KB, [KA], Key) ).
+made_key(Leaf, [Leaf]).
+
+last_arrival(Id, Last) :-
+    var(Id),
+    !,
+    Last = 0.
+last_arrival(A-B, Last) :-
+    !,
+    last_arrival(A, LA),
+    last_arrival(B, LB),
+    Last is max(LA, LB).
+last_arrival(Last, Last).
+
 kept_assert(MA:A, MB:B) :-
     (   rtl_kept_generation(a) -> assertz(MA:A) ; assertz(MB:B) ).
 
-%!  rtl_policy_unmade(:MadeA, :MadeB, :WithdrawnA, :WithdrawnB, -Position, :Underive) is det.
+%!  rtl_policy_unmade(:MadeA, :MadeB, ?Id, -Position, :Underive) is det.
 %
 %   Take back a result of a rule without a policy that a policy step takes as input:
-%   remove its record of when it was made (of several records of the same result, the one
-%   chosen/2 takes) and run Underive with that position, so that the policy step deletes
-%   the arrival this result made, not an identical one made from other input events. Taken
-%   back by a late blocker or a better `first` partner (rtl_policy_withdrawing/1), the
-%   record is kept as withdrawn, for the result made again when that goes. Without a record
-%   (forgotten after the retraction horizon), Underive runs as it is.
+%   remove its record of when it was made (the record of Id; of several records of the same
+%   result with Id unbound, the one chosen/2 takes) and run Underive with that position, so
+%   that the policy step deletes the arrival this result made, not an identical one made
+%   from other input events. Without a record (forgotten after the retraction horizon),
+%   Underive runs as it is.
 
-rtl_policy_unmade(MA:MadeA, MB:MadeB, WA:WithdrawnA, WB:WithdrawnB, Position, Underive) :-
+rtl_policy_unmade(MA:MadeA, MB:MadeB, _Id, Position, Underive) :-
     findall(Position-Ref, ( clause(MA:MadeA, true, Ref) ; clause(MB:MadeB, true, Ref) ), Items),
     pairs_keys(Items, Ps),
     (   chosen(Ps, Chosen)
     ->  memberchk(Chosen-Ref, Items),
         erase(Ref),
         Position = Chosen,
-        (   nb_current(rtl_made_mode, withdraw)
-        ->  kept_assert(WA:WithdrawnA, WB:WithdrawnB)
-        ;   true
-        ),
         taken_back(Chosen, Underive)
     ;   ignore(Underive)
     ).
 
-%!  rtl_policy_withdrawing(:Goal) is det.
+%!  rtl_policy_arrival(-Id:integer) is det.
+%
+%   The arrival number of an input event of a rule without a policy whose results a policy
+%   step takes (as rtl_position/2): stored with the event, it tells two arrivals of the
+%   same event apart, and places a result made later where its last input event arrived.
+
+rtl_policy_arrival(Id) :-
+    rtl_position(Id, _).
+
+%!  rtl_policy_take_arrival(:Stores, +Own) is semidet.
+%
+%   Remove one stored instance of a rule without a policy whose results a policy step takes.
+%   Stores are the step's store and its kept generations, as terms with the same arguments,
+%   the instance's Id third from the end: bound, that instance; unbound (an input event
+%   deleted), of its arrivals the one chosen/2 takes (the latest, or the one a match taken
+%   back passed on). Own is `none`, or, in a rule with `or`, a term of the instance's own
+%   variables: the instance taken has the same unbound variables (rtl_take_instance/2).
+%   Binds Id. Fails if there is none.
+
+rtl_policy_take_arrival(M:Stores, Own) :-
+    Stores = [Stored|_],
+    functor(Stored, _, Arity),
+    IdArg is Arity - 2,
+    findall(P-Ref,
+            ( member(S, Stores),
+              copy_term(Own-S, _-Pattern),
+              clause(M:Pattern, true, Ref),
+              copy_term(Own-S, Found-Fresh),
+              clause(M:Fresh, true, Ref),
+              Found =@= Own,
+              arg(IdArg, Fresh, P) ),
+            Items),
+    pairs_keys(Items, Ps),
+    chosen(Ps, Chosen),
+    memberchk(Chosen-Ref, Items),
+    erase(Ref),
+    arg(IdArg, Stored, Chosen).
+
 %!  rtl_policy_restoring(:Goal) is det.
 %
-%   Run Goal, which takes back results because a blocker arrived (or a better `first`
-%   partner), or makes them again because a blocker (or such a partner) was deleted.
-
-rtl_policy_withdrawing(Goal) :-
-    made_mode(withdraw, Goal).
+%   Run Goal, which makes results again because a blocker (or a `first` partner) was
+%   deleted: they are made where their last input event arrived (rtl_policy_made/5).
 
 rtl_policy_restoring(Goal) :-
-    made_mode(restore, Goal).
-
-made_mode(Mode, Goal) :-
     (   nb_current(rtl_made_mode, Old) -> true ; Old = none ),
-    setup_call_cleanup(nb_setval(rtl_made_mode, Mode),
+    setup_call_cleanup(nb_setval(rtl_made_mode, restore),
                        ignore(Goal),
                        nb_setval(rtl_made_mode, Old)).
 

@@ -120,11 +120,14 @@ builtin(rule, rtl_horizon:rtl_next_seq(_), []).
 builtin(rule, rtl_horizon:rtl_take_instance(Stored, _), [retract(Stored)]).   % from the rule's store
 builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
 builtin(rule, rtl_horizon:rtl_aggregate_redo(_, _, _, _, _), []).
+builtin(rule, rtl_horizon:rtl_aggregate_redo_numbered(_, _, _, _, _), []).
 builtin(rule, rtl_policy:rtl_position(_, _), []).                      % consumption policies
 builtin(rule, rtl_policy:rtl_policy_insert(_, _, _, Goal), [Goal]).
-builtin(rule, rtl_policy:rtl_policy_made(A, B, C, D, _, Goal), [assertz(A), assertz(B), retract(C), retract(D), Goal]).
-builtin(rule, rtl_policy:rtl_policy_unmade(A, B, C, D, _, Goal), [retract(A), retract(B), assertz(C), assertz(D), Goal]).
-builtin(rule, rtl_policy:rtl_policy_withdrawing(Goal), [Goal]).
+builtin(rule, rtl_policy:rtl_policy_made(A, B, _, _, Goal), [assertz(A), assertz(B), Goal]).
+builtin(rule, rtl_policy:rtl_policy_unmade(A, B, _, _, Goal), [retract(A), retract(B), Goal]).
+builtin(rule, rtl_policy:rtl_policy_arrival(_), []).
+builtin(rule, rtl_policy:rtl_policy_take_arrival(Stores, _), Retracts) :-
+    (   is_list(Stores) -> findall(retract(S), member(S, Stores), Retracts) ; Retracts = [retract(Stores)] ).
 builtin(rule, rtl_policy:rtl_policy_restoring(Goal), [Goal]).
 builtin(rule, rtl_policy:rtl_policy_delete(_, _, _, Stored), [retract(Stored)]).
 builtin(rule, rtl_policy:rtl_policy_drop_twins(_, Stored), [retract(Stored)]).

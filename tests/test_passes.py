@@ -131,6 +131,26 @@ def test_edbc_time_variables_do_not_capture_user_variables():
     assert "Start_" in texts and "End_" in texts
 
 
+def test_edbc_numbers_the_arrivals_of_rules_without_a_policy_that_feed_a_policy_rule():
+    """Only a rule whose results a policy rule takes: its stores carry the arrival numbers of
+    their instances, and its results the numbers of the pair they were made from."""
+    feeding = "u(I) <- a(I, _) seq b(I, _).\n"
+    consumer = "p([property(consumption_policy, recent)]) 'rule:' p(I, Y) <- u(I) seq c(I, Y).\n"
+    unit = through(feeding + consumer, edbc)
+    texts = [write_term(c) for c in unit.generated[0].triggers + unit.generated[0].clauses]
+    assert "ele_trigger(a(I, Any1), LStart, LEnd) :- rtl_policy_arrival(LArrivals), " \
+           "e_r1_1_left(I, Any1, LArrivals, LStart, LEnd)" in texts
+    left = next(t for t in texts if t.startswith("e_r1_1_left("))
+    assert "e_r1_1(I, Any1, Any2, LStart, REnd, LArrivals - RArrivals)" in left
+    assert "assertz(e_r1_1_lefts(I, Any1, LArrivals, LStart, LEnd))" in left
+    undo = next(t for t in texts if t.startswith("e_r1_1_left_retract("))
+    assert undo.startswith("e_r1_1_left_retract(I, Any1, LArrivals, LStart, LEnd) :- "
+                           "rtl_policy_take_arrival([e_r1_1_lefts(I, Any1, LArrivals, LStart, LEnd)], none) -> ")
+    # the same rule feeding no policy rule, and the policy rule itself, number nothing
+    for unit_ in (through(feeding, edbc), unit):
+        generated = unit_.generated[-1]
+        assert not any("rtl_policy_arrival" in write_term(c) for c in generated.triggers + generated.clauses)
+
 def test_pipeline_dump_after_every_pass():
     for compiler_pass in EVENT_PIPELINE:
         dumps = []

@@ -229,6 +229,91 @@ def test_rules_added_at_run_time_record_the_results_a_policy_rule_takes():
         {"base(1)@1-1": -1, "ux(1)@1-3": -1, "y(1)@1-5": -1, "y(1)@0-5": 1})
 
 
+
+def nets_to_the_run_without(program, name, events, deleted):
+    """The net output with `deleted` retracted at the end, checked against the run in which
+    it never arrived (its latest arrival, for an event that arrived twice)."""
+    engine = fresh(Engine.from_source(program, name))
+    with_deletion = net_output(engine.feed_batch(events + [deleted + (deleted[1], "retract")]))
+    fresh(engine)
+    latest = len(events) - 1 - events[::-1].index(deleted)
+    without = net_output(engine.feed_batch(events[:latest] + events[latest + 1:]))
+    assert with_deletion == without
+    return with_deletion
+
+
+def test_a_result_whose_blocker_came_first_arrives_where_its_last_input_arrived():
+    """The blocker d(1, 0) comes before the a and b it blocks: un(1) over [0, 3] is never made,
+    and c takes un(1) over [2, 3]. Deleting d makes the first un(1) where b arrived, before the
+    second, so c takes it."""
+    program = ("un(I) <- not(d(I, _)).[a(I, _), b(I, _)].\n"
+               "pn([property(consumption_policy, chronological)]) 'rule:' pn(I, Y) <- un(I) seq c(I, Y).\n")
+    events = [("d(1, 0)", 1), ("a(1, 0)", 0), ("b(1, 0)", 3), ("a(1, 1)", 2), ("c(1, 0)", 6)]
+    assert nets_to_the_run_without(program, "blocker_first.rtl", events, ("d(1, 0)", 1)) == Counter(
+        {"un(1)@0-3": 1, "un(1)@2-3": 1, "pn(1,0)@0-6": 1})
+
+
+def test_a_first_pair_made_again_arrives_where_its_last_input_arrived():
+    """Under `first`, a(1, 0) pairs with b at 3; deleting it pairs a(1, 0) with b at 5, as
+    when b at 5 arrived, before a(1, 1) paired with it: c takes that pair."""
+    program = ("ff([property(consumption_policy, first)]) 'rule:' ff(I) <- a(I, _) seq b(I, _).\n"
+               "pr([property(consumption_policy, chronological)]) 'rule:' pr(I, Y) <- ff(I) seq c(I, Y).\n")
+    events = [("a(1, 0)", 0), ("b(1, 0)", 3), ("b(1, 1)", 5), ("a(1, 1)", 4), ("c(1, 0)", 6)]
+    assert nets_to_the_run_without(program, "first_again.rtl", events, ("b(1, 0)", 3)) == Counter(
+        {"ff(1)@0-5": 1, "ff(1)@4-5": 1, "pr(1,0)@0-6": 1})
+
+
+def test_an_absence_blocked_from_the_start_arrives_where_it_was_decided():
+    """c blocks the absence after a(1, 0) before it is decided; the one after a(1, 1) is
+    decided later, and d(1, 0) takes it. Deleting c (inside the horizon, max_delay 0 + 2 * 3 s)
+    makes the first absence where it was decided, before the second, so d(1, 0) takes it."""
+    program = ("ab(I) <- not(c(I, _)).[a(I, _), 3].\n"
+               "pab([property(consumption_policy, chronological)]) 'rule:' pab(I, Y) <- ab(I) seq d(I, Y).\n")
+    engine = fresh(Engine.from_source(program, "absence_first.rtl"), "0")
+    events = [("a(1, 0)", 0), ("c(1, 0)", 2), ("a(1, 1)", 2.5), ("d(1, 0)", 6), ("d(1, 1)", 7)]
+    with_deletion = net_output(engine.feed_batch(events + [("c(1, 0)", 2, 2, "retract")]))
+    fresh(engine, "0")
+    assert with_deletion == net_output(engine.feed_batch([e for e in events if e[0] != "c(1, 0)"])) == Counter(
+        {"ab(1)@0-3": 1, "ab(1)@2.5-5.5": 1, "pab(1,0)@0-6": 1, "pab(1,1)@2.5-7": 1})
+
+def test_values_an_aggregate_gives_again_arrive_where_they_were_first_given():
+    """Deleting one of two b's takes back the count 2 and gives the count 1 again where it was
+    first given, before d arrived: d takes it (recent: the newest value waiting)."""
+    program = ("ua(I, N) <- a(I, _) seq aggregate(count, b(I, _), N).\n"
+               "pa([property(consumption_policy, recent)]) 'rule:' pa(I, N, Y) <- ua(I, N) seq d(I, Y).\n")
+    events = [("a(1, 2)", 1), ("b(1, 1)", 2), ("b(1, 0)", 2), ("d(1, 0)", 6)]
+    assert nets_to_the_run_without(program, "aggregate_again.rtl", events, ("b(1, 1)", 2)) == Counter(
+        {"ua(1,0)@1-1": 1, "ua(1,1)@1-2": 1, "pa(1,1,0)@1-6": 1})
+    # of two arrivals of the same b, the deletion takes back the latest (after d)
+    events = [("a(1, 1)", 1), ("b(1, 1)", 3), ("b(1, 1)", 3), ("d(1, 2)", 6), ("b(1, 1)", 3)]
+    assert nets_to_the_run_without(program, "aggregate_twice.rtl", events, ("b(1, 1)", 3)) == Counter(
+        {"ua(1,0)@1-1": 1, "ua(1,1)@1-3": 1, "ua(1,2)@1-3": 1, "pa(1,2,2)@1-6": 1})
+
+def test_the_rule_without_a_policy_deletes_the_latest_arrival_of_an_event():
+    """a(1, 0) at 1 arrives twice; its deletion takes back the second arrival, so the first
+    stays the first a the b pairs with, and c takes its result."""
+    program = ("ux(I) <- a(I, _) seq b(I, _).\n"
+               "px([property(consumption_policy, chronological)]) 'rule:' px(I, Y) <- ux(I) seq c(I, Y).\n")
+    events = [("a(1, 0)", 1), ("a(1, 0)", 0), ("a(1, 0)", 1), ("c(1, 0)", 6)]
+    engine = fresh(Engine.from_source(program, "twice_unrestricted.rtl"))
+    engine.feed_batch(events + [("a(1, 0)", 1, 1, "retract")])
+    assert net_output(engine.feed_batch([("b(1, 1)", 4)])) == Counter(
+        {"ux(1)@1-4": 1, "ux(1)@0-4": 1, "px(1,0)@1-6": 1})
+
+
+def test_identical_partial_matches_of_a_rule_without_a_policy_are_told_apart():
+    """a(1, 0) over [0, 0] and over [0, 1] make identical partial matches of `a seq b` (over
+    [0, 4]: only their inner times differ), with one from a(1, 2) between them. Deleting the
+    second a(1, 0) takes back its own: the first partial match stays first, and c takes its
+    result."""
+    program = ("u3(I) <- a(I, _) seq b(I, _) seq d(I, _).\n"
+               "p3([property(consumption_policy, chronological)]) 'rule:' p3(I, Y) <- u3(I) seq c(I, Y).\n")
+    events = [("c(1, 1)", 8), ("a(1, 0)", 0), ("b(1, 0)", 4), ("a(1, 2)", 1), ("a(1, 0)", 0, 1)]
+    engine = fresh(Engine.from_source(program, "inner.rtl"))
+    engine.feed_batch(events + [("a(1, 0)", 0, 1, "retract")])
+    assert net_output(engine.feed_batch([("d(1, 0)", 5)])) == Counter(
+        {"u3(1)@0-5": 1, "u3(1)@1-5": 1, "p3(1,1)@0-8": 1})
+
 # ---- a brute-force simulation of the policies ----------------------------------------------
 
 SIMULATED = {
@@ -519,3 +604,57 @@ def test_unrestricted_rules_feeding_policy_rules_in_any_arrival_order(hierarchy,
     arrival = list(dict.fromkeys(events))                   # (the list is the arrival order)
     ops, remaining = with_deletions(data, arrival)
     assert feed(hierarchy, ops) == feed(hierarchy, [("add", e) for e in remaining])
+
+
+# Rules without a policy that tell their input events apart by arrival: results made late (a
+# blocker deleted, a `first` partner deleted), the same input event arriving twice, and
+# identical partial matches of earlier steps (from a's over [0, 0] and [0, 1] with the same b).
+EXACT_HIERARCHY = [
+    "un(I) <- not(d(I, _)).[a(I, _), b(I, _)].",
+    "uf(I) <- (b(I, _) seq c(I, _)) fnot d(I, _).",
+    "ff([property(consumption_policy, first)]) 'rule:' ff(I) <- a(I, _) seq b(I, _).",
+    "u3(I) <- a(I, _) seq b(I, _) seq c(I, _).",
+    "pn([property(consumption_policy, chronological)]) 'rule:' pn(I, Y) <- un(I) seq c(I, Y).",
+    "pf([property(consumption_policy, recent)]) 'rule:' pf(I, Y) <- uf(I) seq d(I, Y).",
+    "pr([property(consumption_policy, chronological)]) 'rule:' pr(I, Y) <- ff(I) seq c(I, Y).",
+    "p3([property(consumption_policy, chronological)]) 'rule:' p3(I, Y) <- u3(I) seq d(I, Y).",
+    "uw(I) <- (a(I, _) and b(I, _)).3.",
+    "pw([property(consumption_policy, recent)]) 'rule:' pw(I, Y) <- uw(I) seq c(I, Y).",
+    "ua(I, N) <- a(I, _) seq aggregate(count, b(I, _), N).",
+    "pa([property(consumption_policy, chronological)]) 'rule:' pa(I, N, Y) <- ua(I, N) seq d(I, Y).",
+]
+
+# a's before b's before c's; d's between them (blockers) and last: identical results over
+# the same interval from different events, or from events that arrived twice
+exact_event = st.one_of(st.tuples(st.just("a"), st.just(1), st.integers(0, 2), st.sampled_from([0, 2]), st.integers(0, 1)),
+                        st.tuples(st.just("b"), st.just(1), st.integers(0, 1), st.sampled_from([3, 5]), st.just(0)),
+                        st.tuples(st.just("c"), st.just(1), st.integers(0, 1), st.sampled_from([6, 7]), st.just(0)),
+                        st.tuples(st.just("d"), st.just(1), st.integers(0, 1), st.sampled_from([1, 4, 8]), st.just(0)))
+
+
+@pytest.fixture(scope="module")
+def exact_hierarchy():
+    engine = Engine.from_source("\n".join(EXACT_HIERARCHY) + "\n", "exact_hierarchy.rtl")
+    yield engine
+    fresh(engine, "1.0")
+
+
+@settings(max_examples=1000, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(exact_event, min_size=4, max_size=10), st.data())
+def test_rules_without_a_policy_feeding_policy_rules_tell_arrivals_apart(exact_hierarchy, events, data):
+    """Results made late (a deleted blocker, a deleted `first` partner), events that arrived
+    twice and identical partial matches: in any arrival order, the output nets to the run
+    without the deleted events."""
+    arrival = with_duplicates(data, events)
+    ops, remaining = with_deletions(data, arrival)
+    assert feed(exact_hierarchy, ops) == feed(exact_hierarchy, [("add", e) for e in remaining])
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(st.tuples(exact_event, st.integers(0, 2)), min_size=4, max_size=10), st.data())
+def test_rules_without_a_policy_feeding_policy_rules_tell_arrivals_apart_within_the_delay_bound(
+        exact_hierarchy, delayed, data):
+    """The same with events up to 2 s late and deletions inside the retraction horizon
+    (H = 2 + 3 s, the window of uw)."""
+    kept, present = late_arrivals_with_deletions(data, delayed, horizon=5)
+    assert feed(exact_hierarchy, kept, "2") == feed(exact_hierarchy, [("add", e) for e in present], "2")

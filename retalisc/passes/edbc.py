@@ -96,8 +96,10 @@ def signature(term: Term) -> Optional[Tuple[str, int]]:
 
 def policy_inputs(rules: List[BinaryRule], policies: List[str]) -> Set[Tuple[str, int]]:
     """The events that a step under `recent` or `chronological` takes as input: a rule
-    without such a policy deriving one of them records when it made each result
-    (`_made`), so that the policy step deletes the very arrival a deletion takes back."""
+    without such a policy deriving one of them numbers the arrivals of its input events and
+    records when it made each result (`_made`), so that the policy step deletes the very
+    arrival a deletion takes back, and receives a result made late where it would have been
+    made (rtl_policy.pl)."""
     consumed: Set[Tuple[str, int]] = set()
     for rule, policy in zip(rules, policies):
         if policy not in ("recent", "chronological"):
@@ -169,7 +171,8 @@ def _split(own: List[Var], other: List[Var]) -> Tuple[List[Var], List[Var]]:
 class _RuleGenerator:
     def __init__(self, rule: BinaryRule, policy: str, provenance: bool = False):
         self.rule = rule
-        # the head is an input of a policy step: record when each result was made
+        # the head is an input of a policy step: number the input arrivals, record when each
+        # result was made
         self.provenance = provenance
         # `first` selects in the joins; every other step is unrestricted
         self.first = policy == "first"
@@ -194,7 +197,7 @@ class _RuleGenerator:
         self.stores: List[tuple] = []
         self.records: List[tuple] = []
         self.kept: List[tuple] = []
-        self.consumers: Dict[str, str] = {}
+        self.consumers: Dict[str, Tuple[str, bool]] = {}   # step -> the handler its results go to, with arrivals?
         # policy steps whose join key may be unbound in a partial match (a rule with `or`):
         # step name -> the variables recording each side's key as it was before the join
         self.loose: Dict[str, Tuple[Var, Var]] = {}
@@ -235,7 +238,7 @@ class _RuleGenerator:
         for step in self.rule.steps:
             for side, operand in (("left", step.left), ("right", step.right), ("negated", step.negated)):
                 if operand is not None and operand.step is not None:
-                    self.consumers[operand.step.name] = f"{step.name}_{side}"
+                    self.consumers[operand.step.name] = (f"{step.name}_{side}", self.takes_arrivals(step, side))
         for step in self.rule.steps:
             if step.op == "cnot":
                 self.negation_clauses(step)
@@ -259,9 +262,11 @@ class _RuleGenerator:
 
     # ---- arrivals ---------------------------------------------------------------------
 
-    def arrival(self, operand: Operand, handler: str, s: Var, e: Var) -> None:
+    def arrival(self, operand: Operand, handler: str, s: Var, e: Var, arrivals: Optional[Var] = None) -> None:
         """For an event atom: `ele_trigger/3` and `ele_untrigger/3` clauses that run
-        `handler(Vars, S, E)` / `handler_retract(...)` when the event occurs or is deleted."""
+        `handler(Vars, S, E)` / `handler_retract(...)` when the event occurs or is deleted.
+        With `arrivals` (a rule whose results a policy step takes), the handler also receives
+        the event's arrival number (rtl_policy_arrival/1); a deletion leaves it unbound."""
         if not operand.is_event:
             return
         if isinstance(operand.end, Var) and operand.start == operand.end:
@@ -271,10 +276,13 @@ class _RuleGenerator:
             end = operand.end if isinstance(operand.end, Var) else e
         filters = [self.times(f, start, end) for f in operand.filters]
         params = operand_vars(operand)
+        numbered = [C("rtl_policy_arrival", arrivals)] if arrivals is not None else []
         self.triggers.append(clause(C("ele_trigger", operand.term, start, end),
-                                    filters + [C(handler, *params, start, end)]))
+                                    filters + numbered + [C(handler, *params, *([arrivals] if numbered else []),
+                                                            start, end)]))
         self.triggers.append(clause(C("ele_untrigger", operand.term, start, end),
-                                    filters + [C(handler + "_retract", *params, start, end)]))
+                                    filters + [C(handler + "_retract", *params, *([V("_")] if numbered else []),
+                                                 start, end)]))
 
     def times(self, goal: Term, start: Var, end: Var) -> Term:
         """Replace the `check` placeholders for the start and end time."""
@@ -368,11 +376,39 @@ class _RuleGenerator:
             return None
         return C("=<", C("-", e, s), Number(_number(step.window)))
 
-    def output(self, step: Step, s: Var, e: Var, retract: bool = False) -> Term:
-        # a result recorded for a policy step also carries the intervals of its two operands
-        # (`made`): identical results of different input events are told apart
-        inner = [self.t(n) for n in ("S1", "E1", "S2", "E2")] if self.provenance and step.derives_head else []
-        return C(step.name + ("_retract" if retract else ""), *step.output.args, s, e, *inner)
+    def output(self, step: Step, s: Var, e: Var, retract: bool = False, arrivals: Optional[Term] = None) -> Term:
+        # in a rule whose results a policy step takes, a result carries the arrival numbers of
+        # the input events it was made from (`LArrivals-RArrivals`): identical results are
+        # told apart, and one made late knows when its last input event arrived
+        assert (arrivals is not None) == self.carries(step), step.name
+        return C(step.name + ("_retract" if retract else ""), *step.output.args, s, e,
+                 *([arrivals] if arrivals is not None else []))
+
+    def carries(self, step: Step) -> bool:
+        """The step's instances carry the arrival numbers of their input events (a rule whose
+        results a policy step takes, rtl_policy.pl); a sliding aggregate's values take an
+        arrival number when they are made (output_clauses)."""
+        return self.provenance and step.op != "sliding"
+
+    def takes_arrivals(self, step: Step, side: str) -> bool:
+        """The handler of `side` receives the instance's arrival numbers (an absence's result
+        takes its own when it is decided, an aggregate's value the numbers of its start event
+        and of the event counted)."""
+        return self.carries(step) and side != "negated" and step.op not in ("absence", "aggregate")
+
+    def arrivals(self, step: Step, side: str) -> List[Var]:
+        """The variable holding the arrival numbers of an instance of `side`, if it has one."""
+        if not self.takes_arrivals(step, side):
+            return []
+        return [V(self.fresh({"left": "LArrivals", "right": "RArrivals"}[side]))]
+
+    def take_arrival(self, step: Step, stored: Term, own: List[Term], then: Term) -> Term:
+        """if_own_stored for a store whose instances carry arrival numbers: a deletion of an
+        input event takes one of its arrivals (rtl_policy_take_arrival/2), a result taken back
+        the instance it was made from."""
+        stores = [stored] + (self.kept_of(stored) if step.window is not None else [])
+        own_term = C("own", *own) if self.unbound else Atom("none")
+        return C(";", C("->", C("rtl_policy_take_arrival", list_term(stores), own_term), then), Atom("true"))
 
     # ---- steps ------------------------------------------------------------------------
 
@@ -383,14 +419,15 @@ class _RuleGenerator:
             if operand is None:
                 continue
             handler = f"{step.name}_{side}"
-            self.arrival(operand, handler, s1, e1)
+            arrivals = self.arrivals(step, "left")
+            self.arrival(operand, handler, s1, e1, *arrivals)
             params = operand_vars(operand)
             window = self.window_check(step, s1, e1)
             for suffix, retract in (("", False), ("_retract", True)):
-                output = self.output(step, s1, e1, retract)
+                output = self.output(step, s1, e1, retract, *arrivals)
                 if step.name in self.branches:
                     output = substitute(output, {self.branches[step.name].name: Atom(side)})
-                self.clauses.append(clause(C(handler + suffix, *params, s1, e1), [window, output]))
+                self.clauses.append(clause(C(handler + suffix, *params, *arrivals, s1, e1), [window, output]))
 
     def join_clauses(self, step: Step) -> None:
         if self.first:
@@ -403,23 +440,25 @@ class _RuleGenerator:
         _, right_other = _split(right_vars, left_vars)
         recent = self.policy == "recent"
         pl, pr = self.positions()
-        lefts = self.store(step, "lefts", key + left_other + pl + [s1, e1], newest_first=recent)
-        rights = self.store(step, "rights", key + right_other + pr + [s2, e2], newest_first=recent)
+        al, ar = self.arrivals(step, "left"), self.arrivals(step, "right")
+        lefts = self.store(step, "lefts", key + left_other + pl + al + [s1, e1], newest_first=recent)
+        rights = self.store(step, "rights", key + right_other + pr + ar + [s2, e2], newest_first=recent)
         s, start_goals = self.interval(start_expr, self.t("S"))
         e, end_goals = self.interval(end_expr, self.t("E"))
         match = self.expr(relation) + start_goals + end_goals + [self.window_check(step, s, e)]
         matched = self.matched_record(step, lefts, rights, s, e)
-        sides = (("left", step.left, left_vars, lefts, rights), ("right", step.right, right_vars, rights, lefts))
-        for side, operand, own_vars, own_store, partner_store in sides:
+        sides = (("left", step.left, left_vars, al, lefts, rights),
+                 ("right", step.right, right_vars, ar, rights, lefts))
+        for side, operand, own_vars, own_arrivals, own_store, partner_store in sides:
             handler = f"{step.name}_{side}"
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
-            self.arrival(operand, handler, os_, oe)
+            self.arrival(operand, handler, os_, oe, *own_arrivals)
             # A left instance of `seq` ending no earlier than every start seen so far has no
             # right partner stored (rtl_started_after/1): in time order, the common case.
             skip = C("rtl_started_after", oe) if step.op == "seq" and side == "left" else None
             found = conj([skip, self.lookup(step, partner_store, oe)] + match)
-            self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s, e,
-                               key, side)
+            self.join_handlers(step, handler, own_vars, own_arrivals, os_, oe, own_store, partner_store, found,
+                               matched, s, e, key, side, self.pair_arrivals(al, ar))
         self.policy_facts(step, key, lefts, rights, matched, s, e)
 
     def first_join_clauses(self, step: Step) -> None:
@@ -434,11 +473,13 @@ class _RuleGenerator:
         left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
         key, left_other = _split(left_vars, right_vars)
         _, right_other = _split(right_vars, left_vars)
-        # each stored L is numbered (identical L's pair each on their own)
-        lid = V(self.fresh("LId"))
+        # each stored L is numbered (identical L's pair each on their own): by its arrival
+        # numbers when it has them
+        al, ar = self.arrivals(step, "left"), self.arrivals(step, "right")
+        lid = al[0] if al else V(self.fresh("LId"))
         lefts = self.store(step, "lefts", key + left_other + [lid, s1, e1])
-        rights = self.store(step, "rights", key + right_other + [s2, e2])
-        paired = self.record(step, "first", key + left_other + [lid, s1, e1] + right_other + [s2, e2],
+        rights = self.store(step, "rights", key + right_other + ar + [s2, e2])
+        paired = self.record(step, "first", key + left_other + [lid, s1, e1] + right_other + ar + [s2, e2],
                              rotated=step.window is not None)
 
         # In a rule with `or`, a partial match may leave a key variable unbound: an L that pairs
@@ -461,7 +502,7 @@ class _RuleGenerator:
 
         def variant(tag: str):
             """The right instance's terms with its variables renamed apart (`tag` "" keeps them)."""
-            renamed = right_other + [s2, e2] + (key if tag == "P" and loose else [])
+            renamed = right_other + ar + [s2, e2] + (key if tag == "P" and loose else [])
             if tag:
                 names = {v.name: V(self.fresh(v.name + tag)) for v in renamed}
                 r_other = [names[v.name] for v in right_other]
@@ -469,11 +510,13 @@ class _RuleGenerator:
             else:
                 names, r_other, rs, re_ = {}, right_other, s2, e2
             r_key = [names.get(v.name, v) for v in key] if loose else []
-            goals_, bounds_, s_, e_, rank_ = with_right(r_key, r_other, rs, re_)
+            # (of identical right instances, the one that arrived first)
+            r_arrivals = [names.get(v.name, v) for v in ar]
+            goals_, bounds_, s_, e_, rank_ = with_right(r_key, r_other + r_arrivals, rs, re_)
             store = substitute(rights, names)
             pairing = substitute(paired, names)
             out = [a if not isinstance(a, Var) else names.get(a.name, a) for a in step.output.args]
-            inner = [names.get(v.name, v) for v in (s1, e1, s2, e2)] if self.provenance and step.derives_head else []
+            inner = [C("-", lid, names.get(ar[0].name, ar[0]))] if ar else []
             return {"goals": goals_, "bounds": bounds_, "rank": rank_, "rights": store, "paired": pairing,
                     "add": C(step.name, *out, s_, e_, *inner), "retract": C(step.name + "_retract", *out, s_, e_, *inner)}
 
@@ -487,20 +530,20 @@ class _RuleGenerator:
 
         own = variant("")
         handler = f"{step.name}_left"
-        self.arrival(step.left, handler, s1, e1)
-        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [C("rtl_next_seq", lid), C("assertz", lefts),
-                                                                     pair_best(e1)]))
-        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
-            self.if_own_stored(step, lefts, left_vars + [s1, e1],
-                               C(";", C("->", self.record_take(paired), conj(own["bounds"] + [own["retract"]])),
-                                 Atom("true")))]))
+        self.arrival(step.left, handler, s1, e1, *al)
+        take = self.take_arrival if al else self.if_own_stored
+        self.clauses.append(clause(C(handler, *left_vars, *al, s1, e1), [
+            *([] if al else [C("rtl_next_seq", lid)]), C("assertz", lefts), pair_best(e1)]))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, *al, s1, e1), [
+            take(step, lefts, left_vars + [s1, e1],
+                 C(";", C("->", self.record_take(paired), conj(own["bounds"] + [own["retract"]])), Atom("true")))]))
         # a right instance: the L's it matches take it if it comes before their partner
         p_ = variant("P")
         take_over = conj([C("@<", own["rank"], p_["rank"]), self.record_take(p_["paired"])] + p_["bounds"]
-                         + [self.blocked(step, p_["retract"], False), self.record_add(paired), own["add"]])
+                         + [p_["retract"], self.record_add(paired), own["add"]])
         handler = f"{step.name}_right"
-        self.arrival(step.right, handler, s2, e2)
-        self.clauses.append(clause(C(handler, *right_vars, s2, e2), [
+        self.arrival(step.right, handler, s2, e2, *ar)
+        self.clauses.append(clause(C(handler, *right_vars, *ar, s2, e2), [
             C("assertz", rights),
             C("forall", conj([self.lookup(step, lefts, e2)] + own["goals"] + own["bounds"]),
               C(";", C("->", self.record_lookup(p_["paired"]), C(";", C("->", take_over, Atom("true")), Atom("true"))),
@@ -512,9 +555,9 @@ class _RuleGenerator:
             again = C(f"{step.name}_left_again", lid)
             stored_left = lefts if step.window is None else C(";", lefts, self.kept_lookup(lefts))
             self.clauses.append(clause(again, [stored_left, pair_best(e1)]))
-        self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
-            self.if_own_stored(step, rights, right_vars + [s2, e2], C("forall", self.record_lookup(paired), conj(
-                [self.record_take(paired)] + own["bounds"] + [own["retract"], self.blocked(step, again, True)])))]))
+        self.clauses.append(clause(C(handler + "_retract", *right_vars, *ar, s2, e2), [
+            take(step, rights, right_vars + [s2, e2], C("forall", self.record_lookup(paired), conj(
+                [self.record_take(paired)] + own["bounds"] + [own["retract"], self.restoring(again)])))]))
 
     def positions(self) -> Tuple[List[Var], List[Var]]:
         """Under a consumption policy, the position arguments of the left and right stores
@@ -523,19 +566,26 @@ class _RuleGenerator:
             return [], []
         return [V(self.fresh("LPos"))], [V(self.fresh("RPos"))]
 
-    def join_handlers(self, step: Step, handler: str, own_vars: List[Var], os_: Var, oe: Var, own_store: Term,
-                      partner_store: Term, found: Term, matched: Optional[Term], s: Term, e: Term,
-                      key: List[Var], side: str) -> None:
+    @staticmethod
+    def pair_arrivals(al: List[Var], ar: List[Var]) -> Optional[Term]:
+        """The arrival numbers of a pair's result: `LArrivals-RArrivals`."""
+        return C("-", al[0], ar[0]) if al else None
+
+    def join_handlers(self, step: Step, handler: str, own_vars: List[Var], own_arrivals: List[Var], os_: Var,
+                      oe: Var, own_store: Term, partner_store: Term, found: Term, matched: Optional[Term], s: Term,
+                      e: Term, key: List[Var], side: str, arrivals: Optional[Term]) -> None:
         """The add and delete rules of one side of a join (also of `cnot`): unrestricted, every
         partner found makes a result, and deleting takes back what the instance made with the
         partners still stored; under a policy, see consuming_join/consumed_retract."""
-        head = C(handler, *own_vars, os_, oe)
-        retract_head = C(handler + "_retract", *own_vars, os_, oe)
+        head = C(handler, *own_vars, *own_arrivals, os_, oe)
+        retract_head = C(handler + "_retract", *own_vars, *own_arrivals, os_, oe)
         if matched is None:
-            self.clauses.append(clause(head, [C("forall", found, self.output(step, s, e)), C("assertz", own_store)]))
+            self.clauses.append(clause(head, [C("forall", found, self.output(step, s, e, arrivals=arrivals)),
+                                              C("assertz", own_store)]))
+            take = self.take_arrival if own_arrivals else self.if_own_stored
             self.clauses.append(clause(retract_head, [
-                self.if_own_stored(step, own_store, own_vars + [os_, oe],
-                                   C("forall", found, self.output(step, s, e, retract=True)))]))
+                take(step, own_store, own_vars + [os_, oe],
+                     C("forall", found, self.output(step, s, e, retract=True, arrivals=arrivals)))]))
             return
         # A partner that fails the step's conditions is not a match: it is neither chosen nor
         # consumed, as when the condition is pushed onto an event (the output checks them again).
@@ -689,8 +739,10 @@ class _RuleGenerator:
         recent = self.policy == "recent"
         pl, pr = self.positions()
         pn = [V(self.fresh("NPos"))] if pl else []
-        lefts = self.store(step, "lefts", key + left_other + pl + [s1, e1], newest_first=recent)
-        rights = self.store(step, "rights", key + right_other + pr + [s2, e2], newest_first=recent)
+        al, ar = self.arrivals(step, "left"), self.arrivals(step, "right")
+        arrivals = self.pair_arrivals(al, ar)
+        lefts = self.store(step, "lefts", key + left_other + pl + al + [s1, e1], newest_first=recent)
+        rights = self.store(step, "rights", key + right_other + pr + ar + [s2, e2], newest_first=recent)
         negs = self.store(step, "negs", negated_key + negated_other + pn + [sn, en])
         between = [C("<", e1, sn), C("<", en, s2), Atom("!")]
         if pn:
@@ -701,15 +753,16 @@ class _RuleGenerator:
         pair = [C("<", e1, s2), window, unblocked]
         matched = self.matched_record(step, lefts, rights, s1, e2)
         self.forget_blockers(step, lefts, negs, s1, e1, sn, en)
-        for side, operand, own_vars, own_store, partner_store in (
-                ("left", step.left, left_vars, lefts, rights), ("right", step.right, right_vars, rights, lefts)):
+        for side, operand, own_vars, own_arrivals, own_store, partner_store in (
+                ("left", step.left, left_vars, al, lefts, rights),
+                ("right", step.right, right_vars, ar, rights, lefts)):
             handler = f"{step.name}_{side}"
             os_, oe = (s1, e1) if side == "left" else (s2, e2)
-            self.arrival(operand, handler, os_, oe)
+            self.arrival(operand, handler, os_, oe, *own_arrivals)
             skip = C("rtl_started_after", oe) if side == "left" else None     # as for `seq` (join_clauses)
             found = conj([skip, self.lookup(step, partner_store, oe)] + pair)
-            self.join_handlers(step, handler, own_vars, os_, oe, own_store, partner_store, found, matched, s1, e2,
-                               key, side)
+            self.join_handlers(step, handler, own_vars, own_arrivals, os_, oe, own_store, partner_store, found,
+                               matched, s1, e2, key, side, arrivals)
         self.policy_facts(step, key, lefts, rights, matched, s1, e2, negs if pn else None)
         # a blocker takes back the results it falls inside of; deleting it restores them
         handler = f"{step.name}_negated"
@@ -727,10 +780,10 @@ class _RuleGenerator:
                 C("rtl_policy_delete", Atom(step.name), Atom("negated"), V("_"), negs)]))
             return
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
-            self.blocked(step, C("forall", inside, self.output(step, s1, e2, retract=True)), False),
-            C("assertz", negs)]))
+            C("forall", inside, self.output(step, s1, e2, retract=True, arrivals=arrivals)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(step, negs, self.blocked(step, C("forall", inside, self.output(step, s1, e2)), True))]))
+            self.if_stored(step, negs,
+                           self.restoring(C("forall", inside, self.output(step, s1, e2, arrivals=arrivals))))]))
 
     def forget_blockers(self, step: Step, lefts: Term, negs: Term, s1: Var, e1: Var, sn: Var, en: Var) -> None:
         """The sweep of an unwindowed `not(N).[L, R]` whose R is an event: `ele_forget_blockers(Before)`
@@ -771,26 +824,31 @@ class _RuleGenerator:
         left_vars, negated_vars = operand_vars(step.left), operand_vars(step.negated)
         negated_key, negated_other = _split(negated_vars, left_vars)
         left_key, left_other = _split(left_vars, negated_vars)
-        lefts = self.store(step, "lefts", left_key + left_other + [s1, e1])
+        al = self.arrivals(step, "left")
+        arrivals = al[0] if al else None
+        lefts = self.store(step, "lefts", left_key + left_other + al + [s1, e1])
         negs = self.store(step, "negs", negated_key + negated_other + [sn, en])
         before = [C("<", en, s1), self.window_check(step, sn, e1), Atom("!")]
         unblocked = self.unblocked(step, f"{step.name}_blocked", negated_key + [s1, e1], negs,
                                    [g for g in before if g is not None], e1)
         handler = f"{step.name}_left"
-        self.arrival(step.left, handler, s1, e1)
+        self.arrival(step.left, handler, s1, e1, *al)
         derivable = conj([unblocked, self.window_check(step, s1, e1)])
-        self.clauses.append(clause(C(handler, *left_vars, s1, e1), [
-            C(";", C("->", derivable, self.output(step, s1, e1)), Atom("true")), C("assertz", lefts)]))
-        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
-            self.if_stored(step, lefts,
-                           C(";", C("->", derivable, self.output(step, s1, e1, retract=True)), Atom("true")))]))
+        self.clauses.append(clause(C(handler, *left_vars, *al, s1, e1), [
+            C(";", C("->", derivable, self.output(step, s1, e1, arrivals=arrivals)), Atom("true")),
+            C("assertz", lefts)]))
+        undo = C(";", C("->", derivable, self.output(step, s1, e1, retract=True, arrivals=arrivals)), Atom("true"))
+        taken = (self.take_arrival(step, lefts, left_vars + [s1, e1], undo) if al
+                 else self.if_stored(step, lefts, undo))
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, *al, s1, e1), [taken]))
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
         after = conj([self.lookup(step, lefts, en), C("<", en, s1), self.window_check(step, sn, e1), unblocked])
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
-            self.blocked(step, C("forall", after, self.output(step, s1, e1, retract=True)), False), C("assertz", negs)]))
+            C("forall", after, self.output(step, s1, e1, retract=True, arrivals=arrivals)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(step, negs, self.blocked(step, C("forall", after, self.output(step, s1, e1)), True))]))
+            self.if_stored(step, negs,
+                           self.restoring(C("forall", after, self.output(step, s1, e1, arrivals=arrivals))))]))
 
     def absence_clauses(self, step: Step) -> None:
         """not(N).[L, D]: no N in the D seconds after L ends (N starts after L's end and ends by
@@ -810,7 +868,10 @@ class _RuleGenerator:
         # older than D, and a result (decided D + max_delay after L) stays exact for deletions
         # for another D (the retraction horizon is max_delay plus the largest window)
         stores = replace(step, window=2 * float(step.duration))
-        decided = self.store(stores, "decided", left_key + left_other + [s1, e1, close])
+        # (a result a policy step takes arrives when it is decided)
+        decided_at = [V(self.fresh("DecidedAt"))] if self.carries(step) else []
+        arrivals = decided_at[0] if decided_at else None
+        decided = self.store(stores, "decided", left_key + left_other + decided_at + [s1, e1, close])
         negs = self.store(stores, "negs", negated_key + negated_other + [sn, en])
         inside = [C("<", e1, sn), C("=<", en, close), Atom("!")]
         unblocked = self.unblocked(stores, f"{step.name}_blocked", negated_key + [e1, close], negs, inside, e1)
@@ -825,19 +886,21 @@ class _RuleGenerator:
         self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
             closing,
             C(";", C("->", C("rtl_timer_cancel", decide), Atom("true")),
-              self.if_stored(stores, decided, C(";", C("->", derivable, self.output(step, s1, close, retract=True)),
+              self.if_stored(stores, decided, C(";", C("->", derivable, self.output(step, s1, close, retract=True,
+                                                                                    arrivals=arrivals)),
                                                     Atom("true"))))]))
         self.clauses.append(clause(decide, [
-            closing, C("assertz", decided),
-            C(";", C("->", derivable, self.output(step, s1, close)), Atom("true"))]))
+            closing] + [C("rtl_policy_arrival", a) for a in decided_at] + [C("assertz", decided),
+            C(";", C("->", derivable, self.output(step, s1, close, arrivals=arrivals)), Atom("true"))]))
         # a blocker takes back the decided results it falls inside of; deleting it restores them
         handler = f"{step.name}_negated"
         self.arrival(step.negated, handler, sn, en)
         found = conj([self.lookup(stores, decided, en), C("<", e1, sn), C("=<", en, close), derivable])
         self.clauses.append(clause(C(handler, *negated_vars, sn, en), [
-            self.blocked(step, C("forall", found, self.output(step, s1, close, retract=True)), False), C("assertz", negs)]))
+            C("forall", found, self.output(step, s1, close, retract=True, arrivals=arrivals)), C("assertz", negs)]))
         self.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-            self.if_stored(stores, negs, self.blocked(step, C("forall", found, self.output(step, s1, close)), True))]))
+            self.if_stored(stores, negs, self.restoring(C("forall", found, self.output(step, s1, close,
+                                                                                      arrivals=arrivals))))]))
 
     def sliding_clauses(self, step: Step) -> None:
         """sliding(F, P, Group, D, V): the matches of P are stored by group (with the value F
@@ -899,12 +962,21 @@ class _RuleGenerator:
         left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
         key, left_other = _split(left_vars, right_vars)
         _, right_other = _split(right_vars, left_vars)
-        # sequence number and accumulator before the times: the last two arguments of a store are its interval
-        lefts = self.store(step, "lefts", key + left_other + [seq, acc0, s1, e1])
+        # under a policy step that takes the values: the numbers of the start event and of the
+        # event counted (rtl_policy.pl), so the values given again after a deletion arrive
+        # where they were first given, and a deletion takes the latest arrival
+        numbered = self.carries(step)
+        # sequence number and accumulator before the times: the last two arguments of a store
+        # are its interval (and numbered, the one before them its arrival number)
+        numbers = (lambda a: [a, seq]) if numbered else (lambda a: [seq, a])
+        lefts = self.store(step, "lefts", key + left_other + numbers(acc0) + [s1, e1])
         rights = self.record(step, "rights", key + right_other + [rseq, s2, e2], rotated=step.window is not None)
 
         def left_with(a: Term, kept: str = "") -> Term:
-            return C(lefts.name + kept, *key, *left_other, seq, a, s1, e1)
+            return C(lefts.name + kept, *key, *left_other, *numbers(a), s1, e1)
+
+        def take_latest(stores: List[Term]) -> Term:
+            return C("rtl_policy_take_arrival", list_term(stores), Atom("none"))
 
         window = self.window_check(step, s1, e2)
         # the R's an accumulator counted, as rtl_aggregate_values/3 items
@@ -915,15 +987,23 @@ class _RuleGenerator:
         # the value over the empty set when the start event opens the aggregate (count, sum);
         # forall/2 leaves V unbound for the values that follow
         initial = C("rtl_aggregate_initial", function, value)
+        counted_seq = V(self.fresh("CountedSeq")) if numbered else V("_")
+        start_arrival = seq if numbered else None
+        value_arrivals = C("-", seq, counted_seq) if numbered else None
         self.clauses.append(clause(C(handler, *left_vars, s1, e1), [
             C("rtl_next_seq", seq), C("assertz", left_with(Atom("none"))),
-            C("forall", initial, self.output(step, s1, e1))]))
-        values = conj([C("forall", initial, self.output(step, s1, e1, retract=True)),
+            C("forall", initial, self.output(step, s1, e1, arrivals=start_arrival))]))
+        values = conj([C("forall", initial, self.output(step, s1, e1, retract=True, arrivals=start_arrival)),
                        counted, C("rtl_aggregate_values", items, V("_"), values_),
-                       C("forall", C("member", C("-", V("_"), C("-", value, e2)), values_),
-                         self.output(step, s1, e2, retract=True))])
-        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
-            self.if_stored(step, left_with(V("_")), values)]))
+                       C("forall", C("member", C("-", counted_seq, C("-", value, e2)), values_),
+                         self.output(step, s1, e2, retract=True, arrivals=value_arrivals))])
+        if numbered:
+            stored = left_with(V("_"))
+            taken = C(";", C("->", take_latest([stored] + (self.kept_of(stored) if step.window is not None else [])),
+                             values), Atom("true"))
+        else:
+            taken = self.if_stored(step, left_with(V("_")), values)
+        self.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [taken]))
         handler = f"{step.name}_right"
         self.arrival(step.right, handler, s2, e2)
         loops = []
@@ -931,17 +1011,23 @@ class _RuleGenerator:
             # an accumulator is updated where it is stored (live or kept)
             found = conj([left_with(acc0, kept), C("<", e1, s2), window])
             update = conj([C("rtl_aggregate", function, acc0, acc, value), C("retract", left_with(acc0, kept)),
-                           C("assertz", left_with(acc, kept)), self.output(step, s1, e2)])
+                           C("assertz", left_with(acc, kept)),
+                           self.output(step, s1, e2, arrivals=C("-", seq, rseq) if numbered else None)])
             loops.append(C("forall", found, update))
-        body = loops[:1]
+        # (numbered values: the counted event's number comes before the values it gives)
+        body = [C("rtl_next_seq", rseq)] if numbered else []
+        body += loops[:1]
         if len(loops) > 1:
             body.append(C(";", C("->", C("rtl_late", e2), conj(loops[1:])), Atom("true")))
-        body += [C("rtl_next_seq", rseq), self.record_add(rights)]
+        body += ([] if numbered else [C("rtl_next_seq", rseq)]) + [self.record_add(rights)]
         self.clauses.append(clause(C(handler, *right_vars, s2, e2), body))
         redo = C(f"{step.name}_redo", *key, *left_other, seq, s1, e1, removed)
         found = conj([self.lookup(step, left_with(V("_")), e2), C("<", seq, rseq), C("<", e1, s2), window])
+        counted_taken = self.record_take(rights)
+        if numbered:
+            counted_taken = take_latest(self.generations(rights) if self.is_rotated(rights) else [rights])
         self.clauses.append(clause(C(handler + "_retract", *right_vars, s2, e2), [
-            C(";", C("->", self.record_take(rights),
+            C(";", C("->", counted_taken,
                      C("forall", found, Compound(redo.name, redo.args[:-1] + (
                          C("-", rseq, C("-", C("-", function, s2), e2)),)))), Atom("true"))]))
         # one accumulator without the deleted R: take back its values from the R on, give the new ones
@@ -950,6 +1036,14 @@ class _RuleGenerator:
             replace = C(";", C("->", C("retract", left_with(V("_"), kept)), C("assertz", left_with(acc, kept))),
                         replace)
         replace = [replace]
+        if numbered:
+            self.clauses.append(clause(redo, [
+                counted, C("rtl_aggregate_redo_numbered", items, removed, acc, retracts, adds),
+                C("forall", C("member", C("-", counted_seq, C("-", value, e2)), retracts),
+                  self.output(step, s1, e2, retract=True, arrivals=value_arrivals)),
+                self.restoring(C("forall", C("member", C("-", counted_seq, C("-", value, e2)), adds),
+                                 self.output(step, s1, e2, arrivals=value_arrivals)))] + replace))
+            return
         self.clauses.append(clause(redo, [
             counted, C("rtl_aggregate_redo", items, removed, acc, retracts, adds),
             C("forall", C("member", C("-", value, e2), retracts), self.output(step, s1, e2, retract=True)),
@@ -976,26 +1070,26 @@ class _RuleGenerator:
                            C(";", C("->", self.record_take(fired), C("rtl_underived", event, s, due)),
                              Atom("true")))])
 
-    def made(self, step: Step, head: Compound, result: Term, retract: bool) -> Term:
+    def made(self, step: Step, result: Term, retract: bool, arrivals: Term) -> Term:
         """A result that a policy step takes as input, with the record of when it was made
-        (`_made`, kept for the retraction horizon): taking it back tells the policy step
-        which of several identical arrivals to delete (rtl_policy_unmade/4)."""
+        (`_made`, kept for the retraction horizon, with the arrival numbers it was made from):
+        taking it back tells the policy step which of several identical arrivals to delete
+        (rtl_policy_made/5, rtl_policy_unmade/5)."""
+        s, e = self.t("S"), self.t("E")
         position = V(self.time_names.setdefault("Made", self.fresh("Made")))
-        made = C(f"{step.name}_made", *head.args, position)
-        withdrawn = C(f"{step.name}_withdrawn", *head.args, position)
+        made = C(f"{step.name}_made", *step.output.args, s, e, arrivals, position)
         if not self.is_rotated(made):
             self.record(step, "made", list(made.args), rotated=True)
-            self.record(step, "withdrawn", list(withdrawn.args), rotated=True)
-        return C("rtl_policy_unmade" if retract else "rtl_policy_made",
-                 *self.generations(made), *self.generations(withdrawn), position, result)
+        return C("rtl_policy_unmade" if retract else "rtl_policy_made", *self.generations(made), arrivals, position,
+                 result)
 
-    def blocked(self, step: Step, goal: Term, restore: bool) -> Term:
-        """Results taken back by a blocker (or a better `first` partner), or made again when
-        it is deleted: under a policy step that takes them as input, they are withdrawn, and
-        come back at their old position (rtl_policy_withdrawing/1, rtl_policy_restoring/1)."""
-        if not (self.provenance and step.derives_head):
+    def restoring(self, goal: Term) -> Term:
+        """Results made again because a blocker (or a `first` partner) is deleted: under a
+        policy step that takes them as input, they arrive where their last input event arrived
+        (rtl_policy_restoring/1)."""
+        if not self.provenance:
             return goal
-        return C("rtl_policy_restoring" if restore else "rtl_policy_withdrawing", goal)
+        return C("rtl_policy_restoring", goal)
 
     def fresh(self, base: str) -> str:
         """A variable name no source variable of the rule uses (and reserve it)."""
@@ -1010,8 +1104,15 @@ class _RuleGenerator:
         the head); `e_retract(Vars, S, E)` takes it back the same way."""
         s, e = self.t("S"), self.t("E")
         conditions = [self.times(c, s, e) for c in step.conditions]
+        arrivals = V(self.fresh("Arrivals")) if self.provenance else None
         for retract in (False, True):
-            head = self.output(step, s, e, retract)
+            head = self.output(step, s, e, retract, arrivals if self.carries(step) else None)
+            numbered = []
+            if self.provenance and not self.carries(step):
+                # (a sliding aggregate's value arrives when it is made; its deletion takes the
+                # latest)
+                numbered = [] if retract else [C("rtl_policy_arrival", arrivals)]
+                arrivals = V("_") if retract else arrivals
             if step.derives_head:
                 rule = self.rule.rule
                 derive = "rtl_underived" if retract else "rtl_derived"
@@ -1025,11 +1126,12 @@ class _RuleGenerator:
                     result = None if rule.head == Atom("null") else C(derive, rule.head, s, e)
                 detected = None if retract else C("rtl_detected", Atom(self.rule.rule_id))
                 if self.provenance and result is not None and result.name in ("rtl_derived", "rtl_underived"):
-                    result = self.made(step, head, result, retract)
-                then = conj([detected, action, result]) if (detected or action or result) else Atom("true")
+                    result = self.made(step, result, retract, arrivals)
+                then = conj(numbered + [detected, action, result]) if (detected or action or result) else Atom("true")
             else:
-                consumer = self.consumers[step.name] + ("_retract" if retract else "")
-                then = C(consumer, *step.output.args, s, e)
+                consumer, takes_arrivals = self.consumers[step.name]
+                then = conj(numbered + [C(consumer + ("_retract" if retract else ""), *step.output.args,
+                                          *([arrivals] if takes_arrivals else []), s, e)])
             body = [C("forall", conj(conditions), then)] if conditions else [then]
             self.clauses.append(clause(head, body))
 
