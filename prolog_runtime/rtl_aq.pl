@@ -189,11 +189,16 @@ aq_register(Id, Goal, Answers) :-
     warm_fact_indexes,
     aq_answers(Id, Answers).
 
+%   The query's own consumer record is added once the evaluation is done:
+%   the answers found while registering are read from the table afterwards
+%   (notify/3), so resuming the query on each of them would be work for
+%   nothing (a tenth of the registration of a query with 100k answers).
 register_root(call, Id, G) :-
     assertz(aq_q(Id, G, call, pending)),
     aq_wait_call(G, q(Id)),
     drain,
     trie_lookup_state(q(Id), T),
+    assertz(aq_c(T, G, q(Id))),
     retract(aq_q(Id, G1, call, pending)),
     assertz(aq_q(Id, G1, call, T)).
 register_root(fact, Id, G) :-
@@ -606,9 +611,14 @@ table_of(m(T), T) :- !.
 table_of(T, T).
 
 consume(New, T, Lit, S) :-
-    aq_tab(T, _, Tr, _, _),
-    (   New == true -> Snap = [] ; findall(Lit-RA, answer_rank(Tr, Lit, RA), Snap) ),
-    assertz(aq_c(T, Lit, S)),
+    (   S = q(Id), nb_getval(aq_registering, Id)
+    ->  Snap = []                       % register_root/3 adds the record
+    ;   New == true
+    ->  Snap = [],
+        assertz(aq_c(T, Lit, S))
+    ;   findall(Lit-RA, answer_rank(T, Lit, RA), Snap),
+        assertz(aq_c(T, Lit, S))
+    ),
     nb_getval(aq_cstates, St),
     trie_insert(St, S, T),
     state_from(S, From),
