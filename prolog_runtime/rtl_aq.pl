@@ -1097,7 +1097,8 @@ ground_fact(F) :-
 %   predicate is ground (the usual case: then one global lookup answers
 %   ground_fact/1, a fifth of the cost of retracting a fact of a batch),
 %   false once one is not (then the flag per predicate decides), unknown
-%   until the first scan.
+%   until the first scan (at the first registration: warm_fact_indexes/0,
+%   or at the first use when the facts are changed before any).
 all_facts_ground :-
     \+ ( current_predicate(user:'$aq_fact_pred'/1),
           user:'$aq_fact_pred'(G),
