@@ -207,31 +207,22 @@ register_root(fact, Id, G) :-
     drain.
 
 %   SWI-Prolog builds the index of a dynamic predicate on its first call
-%   with bound arguments.  Looking up the stored facts and the goal records
-%   the ways updates do (a ground fact, as adding or retracting it does; the
-%   records waiting on a stored fact; the record of one state, as deletion
-%   does) builds the indexes now, so that the first update after a
-%   registration does not pay for indexing every goal record (50 ms for
-%   the 1.7M records of Program 6 with 500 queries).
-%
-%   SWI-Prolog keeps a built index up to date and assesses it again, as a
-%   predicate grows, at a call: every registration looks up the goal
-%   records as updates call them (warm_records/1), so that the first update
-%   does not pay for assessing a grown predicate's indexes (3-4 ms each for
-%   the 16,000 records waiting on show/3 of Program 6 with a query per
-%   user).  The other looks (a ground fact; clause/3 of the record of one
-%   state) are repeated only once the
-%   registrations since the last have doubled (doing all of them at every
-%   registration cost a fifth of the registration of Program 6 with a
-%   query per user): an index that was not worth building for the few
-%   goal records of the first queries is worth it for those of many.  (Program 6 with a query
-%   per user: the first query left 30 records waiting on show/3, no index,
-%   and the first retraction after the 500th query built the indexes of
-%   its 16,000 records and of the 15,000 likes/4 facts: 24 ms, against 0.1
-%   ms for the next retraction.)  Counting the records instead would cost
-%   more than the look: number_of_clauses walks the clauses.  Whether every
-%   stored fact is ground (ground_fact/1) is decided here too, once, rather
-%   than at the first retraction.
+%   with bound arguments, and assesses it again, as the predicate grows, at
+%   a later call.  Registration looks up the stored facts and the goal
+%   records the ways updates do, so that the first update after it does not
+%   pay for indexing (50 ms for the 1.7M records of Program 6 with 500
+%   queries, when the records were not looked up; 24 ms, against 0.1 ms for
+%   the next retraction, when they were looked up at the first query only,
+%   whose 30 records waiting on show/3 got no index, the 16,000 of the 500th
+%   did).  Every registration looks up the records as updates call them
+%   (warm_records/1); the other looks (a ground fact, as adding or
+%   retracting one does; clause/3 of one state's record, as over-deletion
+%   does) are repeated once the registrations have doubled since the last
+%   (at every registration they cost a fifth of the registration of Program
+%   6 with a query per user; counting the records to decide would cost
+%   more, number_of_clauses walks the clauses).  Whether every stored fact
+%   is ground (ground_fact/1) is decided here too, once, rather than at the
+%   first retraction.
 warm_fact_indexes :-
     flag(aq_registrations, R0, R0 + 1),
     R is R0 + 1,
@@ -250,8 +241,8 @@ warm_fact_index(F, R) :-
     ;   retractall(aq_warm(N, A, _)),
         assertz(aq_warm(N, A, R)),
         warm_records(F),
-        ignore(( once(user:F), \+ \+ once(user:F) )),
-        ignore(( user:'$aq_whead'(F, S, H), once(user:H), fact_record(F, S, _) ))
+        ignore(( \+ \+ ( once(user:F), once(user:F) ) )),
+        ignore(( \+ \+ ( user:'$aq_whead'(F, S, H), once(user:H), fact_record(F, S, _) ) ))
     ).
 
 %   The records waiting on a stored fact (addition, retraction), and those
