@@ -189,11 +189,16 @@ aq_register(Id, Goal, Answers) :-
     warm_fact_indexes,
     aq_answers(Id, Answers).
 
+%   The query's own consumer record is added once the evaluation is done:
+%   the answers found while registering are read from the table afterwards
+%   (notify/3), so resuming the query on each of them would be work for
+%   nothing (a tenth of the registration of a query with 100k answers).
 register_root(call, Id, G) :-
     assertz(aq_q(Id, G, call, pending)),
     aq_wait_call(G, q(Id)),
     drain,
     trie_lookup_state(q(Id), T),
+    assertz(aq_c(T, G, q(Id))),
     retract(aq_q(Id, G1, call, pending)),
     assertz(aq_q(Id, G1, call, T)).
 register_root(fact, Id, G) :-
@@ -202,24 +207,51 @@ register_root(fact, Id, G) :-
     drain.
 
 %   SWI-Prolog builds the index of a dynamic predicate on its first call
-%   with bound arguments.  Looking up the goal records the two ways updates
-%   do (those waiting on a stored fact; the record of one state, as deletion
-%   does) builds the indexes now, so that the first update after a
-%   registration does not pay for indexing every goal record (50 ms for
-%   the 1.7M records of Program 6 with 500 queries).
+%   with bound arguments, and assesses it again, as the predicate grows, at
+%   a later call.  Registration looks up the stored facts and the goal
+%   records the ways updates do, so that the first update after it does not
+%   pay for indexing (50 ms for the 1.7M records of Program 6 with 500
+%   queries, when the records were not looked up; 24 ms, against 0.1 ms for
+%   the next retraction, when they were looked up at the first query only,
+%   whose 30 records waiting on show/3 got no index, the 16,000 of the 500th
+%   did).  Every registration looks up the records as updates call them
+%   (warm_records/1); the other looks (a ground fact, as adding or
+%   retracting one does; clause/3 of one state's record, as over-deletion
+%   does) are repeated once the registrations have doubled since the last
+%   (at every registration they cost a fifth of the registration of Program
+%   6 with a query per user; counting the records to decide would cost
+%   more, number_of_clauses walks the clauses).  Whether every stored fact
+%   is ground (ground_fact/1) is decided here too, once, rather than at the
+%   first retraction.
 warm_fact_indexes :-
-    forall(user:'$aq_fact_pred'(F),
-           (   functor(F, N, A), aq_warm(N, A)
-           ->  true
-           ;   ignore(( once(user:F), \+ \+ once(user:'$aq_wrec'(F, _)) )),
-               ignore(( user:'$aq_whead'(F, S, H), once(user:H), fact_record(F, S, _),
-                        functor(F, N, A), assertz(aq_warm(N, A)) ))
-           )).
+    flag(aq_registrations, R0, R0 + 1),
+    R is R0 + 1,
+    forall(user:'$aq_fact_pred'(F), warm_fact_index(F, R)),
+    (   nb_getval(aq_ground, unknown)
+    ->  (   all_facts_ground -> G = true ; G = false ),
+        nb_setval(aq_ground, G)
+    ;   true
+    ).
 
-%   Once a predicate's goal records had their indexes built, SWI-Prolog keeps
-%   them up to date: later registrations do not look them up again (that cost
-%   a fifth of the registration of Program 6 with a query per user).
-:- dynamic aq_warm/2.
+warm_fact_index(F, R) :-
+    functor(F, N, A),
+    (   aq_warm(N, A, R0),
+        R < 2 * R0
+    ->  warm_records(F)
+    ;   retractall(aq_warm(N, A, _)),
+        assertz(aq_warm(N, A, R)),
+        warm_records(F),
+        ignore(( \+ \+ ( once(user:F), once(user:F) ) )),
+        ignore(( \+ \+ ( user:'$aq_whead'(F, S, H), once(user:H), fact_record(F, S, _) ) ))
+    ).
+
+%   The records waiting on a stored fact (addition, retraction), and those
+%   of one state waiting on its literal (re-derivation: premise/4).
+warm_records(F) :-
+    ignore(( \+ \+ ( once(user:F), once(user:'$aq_wrec'(F, _)) ) )),
+    ignore(( \+ \+ ( user:'$aq_whead'(F, S, H), once(user:H), once(user:'$aq_wrec'(F, S)) ) )).
+
+:- dynamic aq_warm/3.           % aq_warm(Name, Arity, RegistrationsThen)
 
 trie_lookup_state(S, T) :-
     nb_getval(aq_cstates, St),
@@ -342,7 +374,8 @@ aq_reset :-
     retractall(aq_c(_, _, _)), retractall(aq_dep(_, _)), retractall(aq_ev(_, _, _)),
     retractall(aq_agenda(_, _, _)),
     retractall(aq_negq(_, _, _, _, _)),
-    retractall(aq_warm(_, _)),
+    retractall(aq_warm(_, _, _)),
+    flag(aq_registrations, _, 0),
     retractall(aq_ground_facts(_, _, _)),       % recomputed when needed
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
     nb_getval(aq_cstates, St), trie_destroy(St),
@@ -606,9 +639,14 @@ table_of(m(T), T) :- !.
 table_of(T, T).
 
 consume(New, T, Lit, S) :-
-    aq_tab(T, _, Tr, _, _),
-    (   New == true -> Snap = [] ; findall(Lit-RA, answer_rank(Tr, Lit, RA), Snap) ),
-    assertz(aq_c(T, Lit, S)),
+    (   S = q(Id), nb_getval(aq_registering, Id)
+    ->  Snap = []                       % register_root/3 adds the record
+    ;   New == true
+    ->  Snap = [],
+        assertz(aq_c(T, Lit, S))
+    ;   findall(Lit-RA, answer_rank(T, Lit, RA), Snap),
+        assertz(aq_c(T, Lit, S))
+    ),
     nb_getval(aq_cstates, St),
     trie_insert(St, S, T),
     state_from(S, From),
@@ -1050,7 +1088,8 @@ ground_fact(F) :-
 %   predicate is ground (the usual case: then one global lookup answers
 %   ground_fact/1, a fifth of the cost of retracting a fact of a batch),
 %   false once one is not (then the flag per predicate decides), unknown
-%   until the first scan.
+%   until the first scan (at the first registration: warm_fact_indexes/0,
+%   or at the first use when the facts are changed before any).
 all_facts_ground :-
     \+ ( current_predicate(user:'$aq_fact_pred'/1),
           user:'$aq_fact_pred'(G),

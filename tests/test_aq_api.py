@@ -82,6 +82,46 @@ def test_memory_returns_to_baseline_on_a_large_chain():
     assert used1 <= used0
 
 
+def shop_source(users, artists=20, shows_per_artist=10, likes_per_user=8, seed=3):
+    """Program 6 of the thesis (users, artists' shows, likes) at a small size."""
+    import random
+    rng = random.Random(seed)
+    facts = [f"show({a}, {rng.randint(1, 10)}, [{rng.randint(0, 10)}, {rng.randint(0, 10)}])."
+             for a in range(artists) for _ in range(shows_per_artist)]
+    for u in range(users):
+        facts.append(f"loc({u}, [{rng.randint(0, 10)}, {rng.randint(0, 10)}]).")
+        facts += [f"likes({u}, {a}, {rng.randint(1, 10)}, {rng.randint(1, 15)})."
+                  for a in rng.sample(range(artists), likes_per_user)]
+    rule = ("notify(User, Artist, Price, [LX, LY]) :- show(Artist, Price, [LX, LY]), "
+            "likes(User, Artist, MaxPrice, MaxDistance), Price < MaxPrice, loc(User, [Lx, Ly]), "
+            "sqrt((LX - Lx) * (LX - Lx) + (LY - Ly) * (LY - Ly)) < MaxDistance.\n")
+    return rule + "\n".join(dict.fromkeys(facts)) + "\n"
+
+
+# the indexes of the stored facts and goal records, without their sizes
+INDEXES = ("findall(N/A-Is, ( user:'$aq_fact_pred'(F), ( G = F ; user:'$aq_whead'(F, _, G) ), "
+           "functor(G, N, A), ( predicate_property(user:G, indexed(L)) -> true ; L = [] ), "
+           "findall(I, member(I-_, L), Is) ), Out0), msort(Out0, Out1), format(string(Out), '~q', [Out1])")
+
+
+def test_updates_after_many_registrations_build_no_index():
+    """Registration builds the indexes that updates use (the first update after registering a
+    query per user once paid for indexing every goal record and fact), also for goal records
+    that grew from a few (no index worth building) to many over the registrations."""
+    aq = ActiveQueries.from_source(shop_source(users=300), "shop.pl")
+    for u in range(300):
+        aq.register(f"u{u}", f"notify({u}, A, P, L)")
+    before = aq.bridge.call_text(INDEXES)
+    assert "'aq_w:show/3'/4-[single(1)" in before
+    assert aq.bridge.once("nb_getval(aq_ground, true)")
+    liked = aq.bridge.call_text("once(user:likes(7, A, P, D)), format(string(Out), '~q', [likes(7, A, P, D)])")
+    before_answers = aq.answers("u7")
+    aq.retract_fact(liked)
+    aq.assert_fact(liked)
+    assert aq.answers("u7") == before_answers
+    assert aq.bridge.call_text(INDEXES) == before
+
+
 def test_errors_are_reported():
     from retalisc.driver.bridge import PrologError
     aq = ActiveQueries.from_source(PROGRAM4, "program4.pl")

@@ -87,6 +87,25 @@ test(batch_names_a_fact_twice, [setup(aq_reset), cleanup(restore_program4)]) :-
     aq_events(E3), assertion(E3 == [ev(q, add, path(0,3)), ev(q, delete, path(0,3))]),
     aq_answers(q, A), assertion(A == [path(0,1), path(0,2)]).
 
+% A query's own consumer record is added after its evaluation: a second query
+% of the same goal shares the table and gets its answers, both are notified
+% of later changes, and either keeps being notified after the other goes.
+test(queries_share_a_table, [setup(aq_reset), cleanup(restore_program4)]) :-
+    aq_register(a, path(0, _), A0), assertion(A0 == [path(0,1), path(0,2)]),
+    aq_register(b, path(0, _)),
+    aq_events(E0), assertion(E0 == [ev(b, answer, path(0,1)), ev(b, answer, path(0,2))]),
+    aq_register(c, path(1, _), C0), assertion(C0 == [path(1,2)]),
+    aq_assert(edge(2, 3)),
+    aq_events(E1), msort(E1, E1s),
+    assertion(E1s == [ev(a, add, path(0,3)), ev(b, add, path(0,3)), ev(c, add, path(1,3))]),
+    aq_unregister(a),
+    aq_retract(edge(1, 2)),
+    aq_events(E2), msort(E2, E2s),
+    assertion(E2s == [ev(b, delete, path(0,2)), ev(b, delete, path(0,3)),
+                      ev(c, delete, path(1,2)), ev(c, delete, path(1,3))]),
+    aq_unregister(b), aq_unregister(c),
+    aq_stats(S), forall(member(_=V, S), assertion(V == 0)).
+
 restore_program4 :-
     aq_reset,
     retractall(user:edge(_, _)),
