@@ -9,7 +9,8 @@
             rtl_policy_unmade/5,        % :MadeA, :MadeB, ?Id, -Position, :Underive
             rtl_policy_arrival/1,       % -Id
             rtl_policy_take_arrival/2,  % :Stores, +Own
-            rtl_policy_restoring/1      % :Goal
+            rtl_policy_restoring/1,     % :Goal
+            rtl_policy_at/2             % +Position, :Goal
           ]).
 
 /** <module> Consumption policies: exact deletion by rewinding and replaying a step
@@ -87,7 +88,7 @@ aggregate gives after a deletion arrive when the deletion is made.
 :- meta_predicate rtl_policy_insert(+, ?, +, 0), rtl_policy_delete(+, +, ?, :),
                   rtl_policy_drop_twins(+, :), rtl_policy_take(+, :, -),
                   rtl_policy_made(:, :, +, -, 0), rtl_policy_unmade(:, :, ?, -, 0),
-                  rtl_policy_take_arrival(:, +), rtl_policy_restoring(0).
+                  rtl_policy_take_arrival(:, +), rtl_policy_restoring(0), rtl_policy_at(+, 0).
 
 %!  rtl_position(-Position:integer, -Mode) is det.
 %
@@ -508,6 +509,15 @@ rtl_policy_restoring(Goal) :-
     setup_call_cleanup(nb_setval(rtl_made_mode, restore),
                        ignore(Goal),
                        nb_setval(rtl_made_mode, Old)).
+
+%!  rtl_policy_at(+Position, :Goal) is det.
+%
+%   Run Goal, which passes on a result given at Position (a sliding aggregate's change,
+%   rtl_sliding.pl): a policy step receives it there, in the past if later instances
+%   arrived, and rewinds itself as for a replay.
+
+rtl_policy_at(Position, Goal) :-
+    with_position(Position, Goal).
 
 %!  rtl_policy_positioned(+Module, +StoreName) is semidet.
 %
