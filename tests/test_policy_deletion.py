@@ -679,6 +679,18 @@ def test_a_change_a_sliding_aggregate_gives_after_a_deletion_arrives_where_it_is
         {"occ(1,1)@1-1": 1, "occ(1,0)@6-6": 1, "ps(1,0,x)@6-6.5": 1})
 
 
+def test_sliding_aggregates_added_at_run_time_place_their_changes_too():
+    """The same hierarchy added while the program runs (through the sandbox)."""
+    rules = ("occ(R, N) <- sliding(count, seen(R, _), R, 5, N).\n"
+             "ps([property(consumption_policy, recent)]) 'rule:' ps(R, N, Y) <- occ(R, N) seq c(R, Y).\n")
+    events = [("seen(1, a)", 1), ("seen(1, b)", 2), ("c(1, x)", 6.5)]
+    engine = fresh(Engine.from_source("base(X) <- c(X, _).\n", "base_sliding.rtl"))
+    engine.add_rules(rules)
+    with_deletion = net_output(engine.feed_batch(events + [("seen(1, b)", 2, 2, "retract")]))
+    assert with_deletion == Counter({"occ(1,1)@1-1": 1, "occ(1,0)@6-6": 1, "ps(1,0,x)@6-6.5": 1,
+                                     "base(1)@6.5-6.5": 1})
+
+
 SLIDING_HIERARCHY = [
     "sl(I, N) <- sliding(count, a(I, _), I, 3, N).",
     "su(I, S) <- sliding(sum(X), a(I, X), I, 3, S).",
@@ -702,7 +714,7 @@ def sliding_hierarchy():
     fresh(engine, "1.0")
 
 
-@settings(max_examples=2000, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(st.tuples(sliding_event, st.integers(0, 2)), min_size=3, max_size=10), st.data())
 def test_sliding_aggregates_feeding_policy_rules_net_to_the_run_without_the_deleted_events(
         sliding_hierarchy, delayed, data):
