@@ -9,7 +9,8 @@
             rtl_policy_unmade/5,        % :MadeA, :MadeB, ?Id, -Position, :Underive
             rtl_policy_arrival/1,       % -Id
             rtl_policy_take_arrival/2,  % :Stores, +Own
-            rtl_policy_restoring/1      % :Goal
+            rtl_policy_restoring/1,     % :Goal
+            rtl_policy_at/2             % +Position, :Goal
           ]).
 
 /** <module> Consumption policies: exact deletion by rewinding and replaying a step
@@ -76,8 +77,8 @@ the latest arrival and what it made (rtl_policy_take_arrival/2), taking a result
 the arrival it made in the policy step (rtl_policy_unmade/5), and a result it makes only when
 a blocker (or a `first` partner) is deleted arrives where it would have been made, when its
 last input event arrived (rtl_policy_made/5). Positions are then rational numbers: rewinding
-is to a position (`from`) or to just after one (`after`). The limit: the changes a sliding
-aggregate gives after a deletion arrive when the deletion is made.
+is to a position (`from`) or to just after one (`after`). A sliding aggregate's changes are
+passed on at their own positions (rtl_policy_at/2, rtl_sliding.pl).
 */
 
 :- use_module(library(lists)).
@@ -87,7 +88,7 @@ aggregate gives after a deletion arrive when the deletion is made.
 :- meta_predicate rtl_policy_insert(+, ?, +, 0), rtl_policy_delete(+, +, ?, :),
                   rtl_policy_drop_twins(+, :), rtl_policy_take(+, :, -),
                   rtl_policy_made(:, :, +, -, 0), rtl_policy_unmade(:, :, ?, -, 0),
-                  rtl_policy_take_arrival(:, +), rtl_policy_restoring(0).
+                  rtl_policy_take_arrival(:, +), rtl_policy_restoring(0), rtl_policy_at(+, 0).
 
 %!  rtl_position(-Position:integer, -Mode) is det.
 %
@@ -373,11 +374,17 @@ rtl_policy_take(Step, M:Partner, Key) :-
 %   takes next. Made later, because a blocker of its negation or its `first` partner was
 %   deleted (rtl_policy_restoring/1), or made in a replay, it is made where it would have
 %   been made when its last input event arrived: the policy step receives it in the past
-%   (late_position/4).
+%   (late_position/4). A sliding aggregate's change is made at the position it is given
+%   (rtl_policy_at/2).
 
 rtl_policy_made(MA:MadeA, MB:MadeB, Id, Position, Derive) :-
     nb_getval(rtl_replay_position, R),
-    (   R == none, \+ nb_current(rtl_made_mode, restore)
+    (   nb_current(rtl_made_mode, given)            % rtl_policy_at/2: the position is known
+    ->  nb_setval(rtl_made_mode, none),             % (for this result only)
+        Position = R,
+        kept_assert(MA:MadeA, MB:MadeB),
+        with_position(Position, Derive)
+    ;   R == none, \+ nb_current(rtl_made_mode, restore)
     ->  next_arrival(Position),
         kept_assert(MA:MadeA, MB:MadeB),
         ignore(Derive)
@@ -516,6 +523,21 @@ rtl_policy_restoring(Goal) :-
     setup_call_cleanup(nb_setval(rtl_made_mode, restore),
                        ignore(Goal),
                        nb_setval(rtl_made_mode, Old)).
+
+%!  rtl_policy_at(+Position, :Goal) is det.
+%
+%   Run Goal, which passes on a result given at Position (a sliding aggregate's change,
+%   rtl_sliding.pl): a policy step receives it there, in the past if later instances
+%   arrived, and rewinds itself as for a replay; a rule deriving it records it made there
+%   (rtl_policy_made/5, which passes it on without this mode).
+
+rtl_policy_at(Position, Goal) :-
+    with_position(Position, with_made_mode(given, Goal)).
+
+with_made_mode(Mode, Goal) :-
+    setup_call_cleanup(nb_setval(rtl_made_mode, Mode),
+                       ignore(Goal),
+                       nb_setval(rtl_made_mode, none)).
 
 %!  rtl_policy_positioned(+Module, +StoreName) is semidet.
 %

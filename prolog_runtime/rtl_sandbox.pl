@@ -138,6 +138,9 @@ builtin(rule, rtl_timers:rtl_absence_wait(_, Goal), [Goal]).
 builtin(rule, rtl_timers:rtl_timer_cancel(_), []).
 builtin(rule, rtl_sliding:rtl_sliding_refresh(_, _, _, _, A, B, C, D), Called) :-   % sliding aggregates
     maplist(closure_goal(2), [A, B, C, D], Called).
+builtin(rule, rtl_sliding:rtl_sliding_refresh_numbered(_, _, _, _, _, A, B, C, D, E), Called) :-
+    maplist(closure_goal, [3, 3, 2, 3, 2], [A, B, C, D, E], Called).
+builtin(rule, rtl_policy:rtl_policy_at(_, Goal), [Goal]).
 builtin(rule, rtl_sync:rtl_synchronized(_, Q, _, _, _), [Q]).
 builtin(rule, rtl_sync:rtl_synchronized_retract(_, Q, _, _, _), [Q]).
 builtin(rule, rtl_raise:new_event(_), []).

@@ -151,6 +151,29 @@ def test_edbc_numbers_the_arrivals_of_rules_without_a_policy_that_feed_a_policy_
         generated = unit_.generated[-1]
         assert not any("rtl_policy_arrival" in write_term(c) for c in generated.triggers + generated.clauses)
 
+def test_edbc_numbers_the_changes_of_a_sliding_aggregate_only_when_a_policy_step_takes_them():
+    """A sliding aggregate feeding a policy rule, or inside one, stores its matches with their
+    arrival numbers and gives its changes at a position (rtl_sliding_refresh_numbered/10);
+    feeding no policy step, it keeps the plain refresh."""
+    sliding = "s(R, N) <- sliding(count, a(R, _), R, 5, N).\n"
+    consumer = "p([property(consumption_policy, recent)]) 'rule:' p(R, N, Y) <- s(R, N) seq c(R, Y).\n"
+    inside = ("q([property(consumption_policy, chronological)]) 'rule:' "
+              "q(R, N, Y) <- sliding(count, a(R, _), R, 5, N) seq c(R, Y).\n")
+
+    def texts(unit, index):
+        generated = unit.generated[index]
+        return [write_term(c) for c in generated.triggers + generated.clauses]
+
+    for unit, index in ((through(sliding + consumer, edbc), 0), (through(inside, edbc), 0)):
+        numbered = texts(unit, index)
+        assert any("rtl_sliding_refresh_numbered(count, 5, " in t for t in numbered)
+        assert any("_show(R, N, T, At) :- assertz(" in t and "rtl_policy_at(At, " in t for t in numbered)
+        assert not any("rtl_sliding_refresh(count" in t for t in numbered)
+    plain = texts(through(sliding, edbc), 0)
+    assert any("rtl_sliding_refresh(count, 5, " in t for t in plain)
+    assert not any("numbered" in t or "rtl_policy" in t for t in plain)
+
+
 def test_pipeline_dump_after_every_pass():
     for compiler_pass in EVENT_PIPELINE:
         dumps = []

@@ -658,3 +658,89 @@ def test_rules_without_a_policy_feeding_policy_rules_tell_arrivals_apart_within_
     (H = 2 + 3 s, the window of uw)."""
     kept, present = late_arrivals_with_deletions(data, delayed, horizon=5)
     assert feed(exact_hierarchy, kept, "2") == feed(exact_hierarchy, [("add", e) for e in present], "2")
+
+
+# ---- sliding aggregates feeding policy rules ------------------------------------------------
+
+SLIDING_INEXACT = ("a sliding aggregate's changes have no arrival of their own: those a deletion gives are "
+                   "delivered to the policy rule when the deletion is made, not where the run without the "
+                   "deleted event gives them (when the clock reaches their time, or when the event that "
+                   "makes them arrives), so the policy rule pairs them with a later partner or none")
+
+
+def test_a_change_a_sliding_aggregate_gives_after_a_deletion_arrives_where_it_is_given_without_the_event():
+    """Without seen(1, b), the count drops to 0 at 6 (seen(1, a) leaves the window) when
+    c(1, x) moves the clock past 6, just before c arrives: c (recent) takes it. With the
+    deletion made after c, the count 0 at 6 is given at the deletion, after c."""
+    program = ("occ(R, N) <- sliding(count, seen(R, _), R, 5, N).\n"
+               "ps([property(consumption_policy, recent)]) 'rule:' ps(R, N, Y) <- occ(R, N) seq c(R, Y).\n")
+    events = [("seen(1, a)", 1), ("seen(1, b)", 2), ("c(1, x)", 6.5)]
+    assert nets_to_the_run_without(program, "sliding_again.rtl", events, ("seen(1, b)", 2)) == Counter(
+        {"occ(1,1)@1-1": 1, "occ(1,0)@6-6": 1, "ps(1,0,x)@6-6.5": 1})
+
+
+def test_sliding_aggregates_added_at_run_time_place_their_changes_too():
+    """The same hierarchy added while the program runs (through the sandbox)."""
+    rules = ("occ(R, N) <- sliding(count, seen(R, _), R, 5, N).\n"
+             "ps([property(consumption_policy, recent)]) 'rule:' ps(R, N, Y) <- occ(R, N) seq c(R, Y).\n")
+    events = [("seen(1, a)", 1), ("seen(1, b)", 2), ("c(1, x)", 6.5)]
+    engine = fresh(Engine.from_source("base(X) <- c(X, _).\n", "base_sliding.rtl"))
+    engine.add_rules(rules)
+    with_deletion = net_output(engine.feed_batch(events + [("seen(1, b)", 2, 2, "retract")]))
+    assert with_deletion == Counter({"occ(1,1)@1-1": 1, "occ(1,0)@6-6": 1, "ps(1,0,x)@6-6.5": 1,
+                                     "base(1)@6.5-6.5": 1})
+
+
+SLIDING_HIERARCHY = [
+    "sl(I, N) <- sliding(count, a(I, _), I, 3, N).",
+    "su(I, S) <- sliding(sum(X), a(I, X), I, 3, S).",
+    "sm(I, M) <- sliding(max(X), a(I, X), I, 2, M).",
+    "sr([property(consumption_policy, recent)]) 'rule:' sr(I, N, Y) <- sl(I, N) seq c(I, Y).",
+    "sc([property(consumption_policy, chronological)]) 'rule:' sc(I, S, Y) <- su(I, S) seq c(I, Y).",
+    "sx([property(consumption_policy, recent)]) 'rule:' sx(I, M, Y) <- sm(I, M) seq c(I, Y).",
+    # the values taken inside a policy rule, not as a derived event
+    "sw([property(consumption_policy, chronological)]) 'rule:' sw(I, N, Y) <- "
+    "sliding(count, a(I, _), I, 2, N) seq c(I, Y).",
+]
+
+sliding_event = st.one_of(st.tuples(st.just("a"), st.integers(1, 2), st.integers(0, 2), st.integers(0, 6), st.just(0)),
+                          st.tuples(st.just("c"), st.integers(1, 2), st.integers(0, 1), st.integers(1, 9), st.just(0)))
+
+
+@pytest.fixture(scope="module")
+def sliding_hierarchy():
+    engine = Engine.from_source("\n".join(SLIDING_HIERARCHY) + "\n", "sliding_hierarchy.rtl")
+    yield engine
+    fresh(engine, "1.0")
+
+
+def without_clock_movers(ops):
+    """The operations less the deletions of events whose arrival moved the clock: a deletion
+    does not move the clock back, so the leaves such an event made due stay given (as for a
+    sliding aggregate without a policy), where the run without it gives them later or not
+    at all. Returns the operations and the events present at the end."""
+    kept, clock, present = [], float("-inf"), []
+    for op, e in ops:
+        end = e[3] + e[4]
+        if op == "add":
+            present.append((e, end > clock))
+            clock = max(clock, end)
+        else:
+            latest = len(present) - 1 - [p for p, _ in present][::-1].index(e)
+            if present[latest][1]:
+                continue
+            del present[latest]
+        kept.append((op, e))
+    return kept, [e for e, _ in present]
+
+
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(st.tuples(sliding_event, st.integers(0, 2)), min_size=3, max_size=10), st.data())
+def test_sliding_aggregates_feeding_policy_rules_net_to_the_run_without_the_deleted_events(
+        sliding_hierarchy, delayed, data):
+    """Events up to 2 s late, deletions inside the retraction horizon (H = 2 + 3 s, the
+    sliding window) of events that did not move the clock: the output nets to the run
+    without the deleted events."""
+    ops, _ = late_arrivals_with_deletions(data, delayed, horizon=5)
+    kept, present = without_clock_movers(ops)
+    assert feed(sliding_hierarchy, kept, "2") == feed(sliding_hierarchy, [("add", e) for e in present], "2")

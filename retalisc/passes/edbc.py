@@ -248,6 +248,9 @@ class _RuleGenerator:
                 self.aggregate_clauses(step)
             elif step.op == "absence":
                 self.absence_clauses(step)
+            elif step.op == "sliding" and (self.provenance or self.policy in ("recent", "chronological")):
+                # its changes reach a policy step (of this rule or of a rule it feeds)
+                self.numbered_sliding_clauses(step)
             elif step.op == "sliding":
                 self.sliding_clauses(step)
             elif step.right is None or step.op == "or":
@@ -947,6 +950,68 @@ class _RuleGenerator:
             C("rtl_timer_add", leave, Atom("at"), C(f"{base}_refresh", *group_vars, leave, leave))]))
         self.clauses.append(clause(C(handler + "_retract", *inner_vars, s1, e1), [
             self.if_stored(stores, stored, conj(refresh))]))
+
+    def numbered_sliding_clauses(self, step: Step) -> None:
+        """sliding_clauses for a sliding aggregate whose changes a policy step takes: a match
+        is stored with its arrival number, a change with its position, and a timer that
+        reaches a leave time records its arrival number; a deletion gives each change the
+        position the run without the deleted match gives it (rtl_sliding_refresh_numbered/10)."""
+        function, group, value = step.sliding
+        duration = _number(step.duration)
+        s1, e1 = self.t("S1"), self.t("E1")
+        inner_vars = operand_vars(step.left)
+        group_vars = distinct_variables(variables(group))
+        x = function.args[0] if isinstance(function, Compound) else Number(1)
+        stores = replace(step, window=float(step.duration))
+        arrival, t, at = V(self.fresh("Arrival")), V(self.fresh("T")), V(self.fresh("At"))
+        # the arrival number third from the end, where rtl_policy_take_arrival/2 reads it
+        matched = self.store(stores, "slid", group_vars + [V(self.fresh("X")), s1, arrival, e1, e1])
+        shown = self.store(stores, "changes", group_vars + [value, at, t, t])
+        reached = self.store(stores, "reached", group_vars + [at, t, t])
+        base = step.name
+        x_, e_, v_, t_, p_ = (V(self.fresh(n)) for n in ("Xs", "Es", "Vs", "Ts", "Ps"))
+        stored_match = C(matched.name, *group_vars, x_, V("_"), p_, e_, V("_"))
+        stored_shown = C(shown.name, *group_vars, v_, p_, t_, V("_"))
+        stored_reached = C(reached.name, *group_vars, p_, t_, V("_"))
+        for name_, params, stored in (("matches", [x_, e_, p_], stored_match), ("shown", [v_, t_, p_], stored_shown),
+                                      ("reached_at", [t_, p_], stored_reached)):
+            self.clauses.append(clause(C(f"{base}_{name_}", *group_vars, *params),
+                                       [C(";", stored, self.kept_lookup(stored))]))
+        self.clauses.append(clause(C(f"{base}_show", *group_vars, value, t, at), [
+            C("assertz", shown), C("rtl_policy_at", at, self.output(step, t, t))]))
+        self.clauses.append(clause(C(f"{base}_unshow", *group_vars, value, t), [
+            self.if_stored(stores, C(shown.name, *group_vars, value, V("_"), t, t),
+                           self.output(step, t, t, retract=True))]))
+        frm, to, op = V(self.fresh("From")), V(self.fresh("To")), V(self.fresh("Op"))
+        self.clauses.append(clause(C(f"{base}_refresh", *group_vars, frm, to, op), [
+            C("rtl_sliding_refresh_numbered", function, Number(duration), frm, to, op,
+              *(C(f"{base}_{n}", *group_vars) for n in ("matches", "shown", "reached_at", "show", "unshow")))]))
+        # a timer reaching a leave time: the first records its arrival number
+        self.clauses.append(clause(C(f"{base}_reach", *group_vars, t), [
+            C("rtl_policy_arrival", at),
+            C(";", C("->", C(";", C(reached.name, *group_vars, V("_"), t, V("_")),
+                             self.kept_lookup(C(reached.name, *group_vars, V("_"), t, V("_")))),
+                     Atom("true")),
+              C("assertz", reached)),
+            C(f"{base}_refresh", *group_vars, t, t, C("at", at))]))
+        # arrivals and deletions of P; a leave time the clock has reached already was refreshed
+        # by the arrival (a timer then would record a later arrival as the time's)
+        leave, clock, upto = V(self.fresh("Leave")), V(self.fresh("Clock")), V(self.fresh("UpTo"))
+        upto_goals = [C("is", leave, C("+", e1, Number(duration))), C("rtl_clock", clock),
+                      C("is", upto, C("min", leave, clock))]
+        handler = f"{step.name}_left"
+        self.arrival(step.left, handler, s1, e1)
+        self.clauses.append(clause(C(handler, *inner_vars, s1, e1), [
+            C("rtl_policy_arrival", arrival), C("assertz", C(matched.name, *group_vars, x, s1, arrival, e1, e1))]
+            + upto_goals + [
+            C(f"{base}_refresh", *group_vars, e1, upto, C("at", arrival)),
+            C(";", C("->", C(">", leave, clock), C("rtl_timer_add", leave, Atom("at"), C(f"{base}_reach", *group_vars, leave))),
+              Atom("true"))]))
+        stored = C(matched.name, *group_vars, x, s1, V("_"), e1, e1)
+        self.clauses.append(clause(C(handler + "_retract", *inner_vars, s1, e1), [
+            C(";", C("->", C("rtl_policy_take_arrival", list_term([stored] + self.kept_of(stored)), Atom("none")),
+                     conj(upto_goals + [C(f"{base}_refresh", *group_vars, e1, upto, Atom("deleted"))])),
+              Atom("true"))]))
 
     def aggregate_clauses(self, step: Step) -> None:
         """L seq aggregate(F, R, V): each L starts an accumulator; every later R updates the
