@@ -4,6 +4,7 @@ ROS 2 pairs, the options, and the thesis's NAO program placing markers in the wo
 from __future__ import annotations
 
 import json
+import os
 import math
 import subprocess
 import sys
@@ -373,3 +374,18 @@ def test_cli_replays_a_bag_and_reports_bad_input(nao_bags, tmp_path):
         isinstance(bad.exception, SystemExit)
     usage = CliRunner().invoke(run_command, [str(program), "--events", "-", "--rate", "2"])
     assert usage.exit_code == 2 and "go with --bag" in usage.output
+
+
+def test_a_reader_of_the_bag_run_that_goes_away_ends_it_quietly(nao_bags, tmp_path):
+    """`retalisc run P --bag B | head -1`: status 1 and nothing on standard error, as for an
+    events file."""
+    program = tmp_path / "echo.rtl"
+    program.write_text("null <- zzz.\n")
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "RETALISC_CACHE_DIR": str(tmp_path / "cache")}
+    process = subprocess.Popen([sys.executable, "-m", "retalisc", "run", str(program), "--bag", str(nao_bags["ros1"]),
+                                "--echo-input"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    assert process.stdout.readline().startswith(b'{"event": ')
+    process.stdout.close()
+    stderr = process.stderr.read()
+    assert process.wait(timeout=120) == 1
+    assert stderr == b""

@@ -418,6 +418,8 @@ def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
     except MissingDependency as error:
         click.echo(f"error: {error}", err=True)
         return 2
+    except BrokenPipeError:
+        raise                       # the reader of standard output went away: the CLI ends quietly
     except OSError as error:
         click.echo(f"error: {error}", err=True)
         return 2
