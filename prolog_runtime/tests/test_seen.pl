@@ -101,12 +101,17 @@ block_steps(T, Model0, Model) :-
 retraction_step(T, Model0, Model) :-
     random_between(0, 4, K),
     random_between(1, 15, Back),
+    take_back(k(K), T, Back, Model0, Model).
+
+%   take_back(+Event, +T, +Back, +Model0, -Model): retract Event at T - Back when that is
+%   inside the horizon; the store must agree with the model on whether it is there.
+take_back(Event, T, Back, Model0, Model) :-
     Time is T - Back,
     rtl_seen_horizon(H),
     (   Time >= H
-    ->  (   selectchk(k(K)-Time, Model0, Model)
-        ->  assertion(rtl_seen_take(k(K), Time, Time))
-        ;   assertion(\+ rtl_seen_take(k(K), Time, Time)),
+    ->  (   selectchk(Event-Time, Model0, Model)
+        ->  assertion(rtl_seen_take(Event, Time, Time))
+        ;   assertion(\+ rtl_seen_take(Event, Time, Time)),
             Model = Model0
         )
     ;   Model = Model0
@@ -133,16 +138,7 @@ model_step(T, Model0, Model) :-
     random_between(0, 4, K),
     (   random_between(1, 5, 1)
     ->  random_between(0, 3, Back),
-        Time is T - Back,
-        rtl_seen_horizon(H),
-        (   Time >= H
-        ->  (   selectchk(k(K)-Time, Model0, Model)
-            ->  assertion(rtl_seen_take(k(K), Time, Time))
-            ;   assertion(\+ rtl_seen_take(k(K), Time, Time)),
-                Model = Model0
-            )
-        ;   Model = Model0
-        )
+        take_back(k(K), T, Back, Model0, Model)
     ;   add(k(K), T),
         Model = [k(K)-T|Model0]
     ).

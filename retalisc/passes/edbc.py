@@ -905,19 +905,25 @@ class _RuleGenerator:
             self.if_stored(stores, negs, self.restoring(C("forall", found, self.output(step, s1, close,
                                                                                       arrivals=arrivals))))]))
 
-    def sliding_clauses(self, step: Step) -> None:
-        """sliding(F, P, Group, D, V): the matches of P are stored by group (with the value F
-        aggregates, and their end twice: the interval the sweep reads), and so are the changes
-        output; an arrival or a deletion refreshes the changes of its group in [E, E + D] up to
-        the clock, and a timer at E + D refreshes that moment when the clock reaches it
-        (rtl_sliding.pl)."""
+    def sliding_parts(self, step: Step):
+        """What both forms of a sliding step are built from: the function, the value, the
+        duration, the match's times, the operand's and the group's variables, the aggregated
+        term (1 for count) and the step as its stores see it (windowed by the duration)."""
         function, group, value = step.sliding
         duration = _number(step.duration)
         s1, e1 = self.t("S1"), self.t("E1")
         inner_vars = operand_vars(step.left)
         group_vars = distinct_variables(variables(group))
         x = function.args[0] if isinstance(function, Compound) else Number(1)
-        stores = replace(step, window=float(step.duration))
+        return function, value, duration, s1, e1, inner_vars, group_vars, x, replace(step, window=float(step.duration))
+
+    def sliding_clauses(self, step: Step) -> None:
+        """sliding(F, P, Group, D, V): the matches of P are stored by group (with the value F
+        aggregates, and their end twice: the interval the sweep reads), and so are the changes
+        output; an arrival or a deletion refreshes the changes of its group in [E, E + D] up to
+        the clock, and a timer at E + D refreshes that moment when the clock reaches it
+        (rtl_sliding.pl)."""
+        function, value, duration, s1, e1, inner_vars, group_vars, x, stores = self.sliding_parts(step)
         matched = self.store(stores, "slid", group_vars + [V(self.fresh("X")), s1, e1, e1])
         t = V(self.fresh("T"))
         shown = self.store(stores, "changes", group_vars + [value, t, t])
@@ -956,13 +962,7 @@ class _RuleGenerator:
         is stored with its arrival number, a change with its position, and a timer that
         reaches a leave time records its arrival number; a deletion gives each change the
         position the run without the deleted match gives it (rtl_sliding_refresh_numbered/10)."""
-        function, group, value = step.sliding
-        duration = _number(step.duration)
-        s1, e1 = self.t("S1"), self.t("E1")
-        inner_vars = operand_vars(step.left)
-        group_vars = distinct_variables(variables(group))
-        x = function.args[0] if isinstance(function, Compound) else Number(1)
-        stores = replace(step, window=float(step.duration))
+        function, value, duration, s1, e1, inner_vars, group_vars, x, stores = self.sliding_parts(step)
         arrival, t, at = V(self.fresh("Arrival")), V(self.fresh("T")), V(self.fresh("At"))
         # the arrival number third from the end, where rtl_policy_take_arrival/2 reads it
         matched = self.store(stores, "slid", group_vars + [V(self.fresh("X")), s1, arrival, e1, e1])
