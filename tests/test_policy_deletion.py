@@ -289,6 +289,28 @@ def test_values_an_aggregate_gives_again_arrive_where_they_were_first_given():
     assert nets_to_the_run_without(program, "aggregate_twice.rtl", events, ("b(1, 1)", 3)) == Counter(
         {"ua(1,0)@1-1": 1, "ua(1,1)@1-3": 1, "ua(1,2)@1-3": 1, "pa(1,2,2)@1-6": 1})
 
+def test_an_aggregate_gives_its_values_in_the_arrival_order_of_their_start_events():
+    """Deleting b(1, 0) gives a(1, 0) at 2 its count 0 again, after a(1, 0) at 0 in the
+    aggregate's store; the next b must still give the value of the a that arrived first
+    before the other, as in the run without the deleted b: the third d (chronological)
+    takes the value given first. The second case: an update moves an accumulator to the end
+    of the store too (b(1, 0) at 3 counts for a(1, 0) at 0, not for the one at 5)."""
+    program = ("ua(I, N) <- a(I, _) seq aggregate(count, b(I, _), N).\n"
+               "pa([property(consumption_policy, chronological)]) 'rule:' pa(I, N, Y) <- ua(I, N) seq d(I, Y).\n")
+    engine = fresh(Engine.from_source(program, "aggregate_order.rtl"))
+    cases = [([("a(1, 0)", 2), ("b(1, 0)", 3), ("a(1, 0)", 0)], ("b(1, 0)", 3), [("d(1, 0)", 4)] * 3 + [("b(1, 1)", 3)],
+              "pa(1,1,0)@2-4"),
+             ([("a(1, 0)", 0), ("a(1, 0)", 5), ("b(1, 0)", 3)], ("b(1, 0)", 3), [("d(1, 0)", 7)] * 3 + [("b(1, 1)", 6)],
+              "pa(1,1,0)@0-7")]
+    for before, deleted, after, taken in cases:
+        fresh(engine)
+        with_deletion = net_output(engine.feed_batch(before + [deleted + (deleted[1], "retract")] + after))
+        fresh(engine)
+        without = net_output(engine.feed_batch([e for e in before if e != deleted] + after))
+        assert with_deletion == without
+        assert without[taken] == 1
+
+
 def test_the_rule_without_a_policy_deletes_the_latest_arrival_of_an_event():
     """a(1, 0) at 1 arrives twice; its deletion takes back the second arrival, so the first
     stays the first a the b pairs with, and c takes its result."""

@@ -1018,7 +1018,9 @@ class _RuleGenerator:
         accumulators of the L's before it (within the window) and yields their new value V.
         Values follow the order the instances are processed in: each gets a sequence number,
         and the R's are recorded, so that deleting an L takes back its values and deleting an
-        R replays the values of the accumulators it counted in (`_redo`)."""
+        R replays the values of the accumulators it counted in (`_redo`). Numbered (a policy
+        step takes the values), an R updates the accumulators in the arrival order of their
+        L's."""
         function, value = step.aggregate
         s1, e1, s2, e2 = self.t("S1"), self.t("E1"), self.t("S2"), self.t("E2")
         acc0, acc = V(self.fresh("Acc0")), V(self.fresh("Acc"))
@@ -1078,12 +1080,21 @@ class _RuleGenerator:
             update = conj([C("rtl_aggregate", function, acc0, acc, value), C("retract", left_with(acc0, kept)),
                            C("assertz", left_with(acc, kept)),
                            self.output(step, s1, e2, arrivals=C("-", seq, rseq) if numbered else None)])
-            loops.append(C("forall", found, update))
+            if numbered:
+                # numbered values are made in the arrival order of their start events: an
+                # update or a deletion's redo moves an accumulator to the end of its store,
+                # and the policy step takes the values in the order they are made
+                found_lefts, in_order = V(self.fresh("Lefts")), V(self.fresh("InOrder"))
+                loops.append([C("findall", C("-", seq, left_with(acc0, kept)), found, found_lefts),
+                              C("keysort", found_lefts, in_order),
+                              C("forall", C("member", C("-", V("_"), left_with(acc0, kept)), in_order), update)])
+            else:
+                loops.append([C("forall", found, update)])
         # (numbered values: the counted event's number comes before the values it gives)
         body = [C("rtl_next_seq", rseq)] if numbered else []
-        body += loops[:1]
+        body += loops[0]
         if len(loops) > 1:
-            body.append(C(";", C("->", C("rtl_late", e2), conj(loops[1:])), Atom("true")))
+            body.append(C(";", C("->", C("rtl_late", e2), conj([g for loop in loops[1:] for g in loop])), Atom("true")))
         body += ([] if numbered else [C("rtl_next_seq", rseq)]) + [self.record_add(rights)]
         self.clauses.append(clause(C(handler, *right_vars, s2, e2), body))
         redo = C(f"{step.name}_redo", *key, *left_other, seq, s1, e1, removed)
