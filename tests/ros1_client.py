@@ -144,11 +144,12 @@ def _pair(reply) -> list:
 
 def nao(seconds: float) -> dict:
     """Publish the sample NAO recording (tf and ar_pose markers) in record order and in real
-    time, as the robot would; collect what comes on /marker1 and /marker2 as event terms.
-    (Published as fast as possible on a loaded machine, one run gave a marker pose 1.3 cm
-    off the replay's: the two topics come on two connections, and their relative order is
-    then far from the recorded one; in-process reorderings of up to 1 s give the replay's
-    poses. Real time is what a robot does.)"""
+    time, as the robot would send it now: the recording is made with its first stamp at the
+    wall clock's now (`start_s`, reported), when the connections are up, so that the stamps
+    are on the node's clock (a header-less TFMessage is stamped with its arrival; with the
+    sample's own 2014 stamps the node's clock would be years ahead of every stamp, every
+    event late and every synchronized rule released at once). Collect what comes on
+    /marker1 and /marker2 as event terms."""
     from retalisc.robot_io.samples import nao_records, sample_store
 
     store = sample_store(1)
@@ -161,18 +162,19 @@ def nao(seconds: float) -> dict:
         received.append([topic, converter.term(decoded, "geometry_msgs/msg/PoseStamped")])
 
     subscribers = [rospy.Subscriber(t, rospy.AnyMsg, on_marker, callback_args=t) for t in ("/marker1", "/marker2")]
-    records = [r for r in nao_records(store, seconds=seconds) if r[0] in ("/tf", "/ar_pose_marker")]
-    for topic, msgtype, _, _ in records:
-        if topic not in publishers:
-            text, md5 = store.generate_msgdef(msgtype, ros_version=1)
-            name = msgtype.replace("/msg/", "/")
-            publishers[topic] = rospy.Publisher(topic, raw_message_class(name, md5, text), queue_size=None)
+    for topic, msgtype in (("/tf", "tf2_msgs/msg/TFMessage"), ("/ar_pose_marker", "ar_pose/msg/ARMarkers")):
+        text, md5 = store.generate_msgdef(msgtype, ros_version=1)
+        publishers[topic] = rospy.Publisher(topic, raw_message_class(msgtype.replace("/msg/", "/"), md5, text),
+                                            queue_size=None)
     wait_for(lambda: all(p.get_num_connections() > 0 for p in publishers.values())
              and all(s.get_num_connections() > 0 for s in subscribers))
-    began, first_ns = time.monotonic(), records[0][2]
-    for topic, msgtype, record_ns, msg in records:       # in real time, as recorded
+    start_s = time.time()
+    records = [r for r in nao_records(store, seconds=seconds, start_s=start_s) if r[0] in publishers]
+    messages = [(topic, record_ns, bytes(store.serialize_ros1(msg, msgtype))) for topic, msgtype, record_ns, msg in records]
+    began, first_ns = time.monotonic(), int(start_s * 1_000_000_000)
+    for topic, record_ns, raw in messages:       # in real time, as recorded
         message = publishers[topic].data_class()
-        message._buff = bytes(store.serialize_ros1(msg, msgtype))
+        message._buff = raw
         due = began + (record_ns - first_ns) / 1e9
         if due > time.monotonic():
             time.sleep(due - time.monotonic())
@@ -180,7 +182,7 @@ def nao(seconds: float) -> dict:
     expected = int(sys.argv[3]) if len(sys.argv) > 3 else 0
     wait_for(lambda: len(received) >= expected, 15)
     time.sleep(0.5)
-    return {"received": received, "published": len(records)}
+    return {"received": received, "published": len(records), "start_s": start_s}
 
 
 def bag(path: str, rate: float, topics: str, expected: int, out_topics: str) -> dict:

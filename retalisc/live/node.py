@@ -32,7 +32,11 @@ subscriber: an extra message costs, over rospy, about as much as the message its
 
 Time: an event is stamped with its message's `header.stamp`, or with the wall-clock time of
 its arrival when it has no header (or a zero stamp). A subscription or unsubscription at
-`now` (or with no time) means the wall clock's now.
+`now` (or with no time) means the wall clock's now. Events later than the delay bound void
+the promise of arrival-order independence (a synchronized rule no longer waits for them), so
+the node says so when it happens, not only in its summary: after a batch, at most once every
+`LATE_CHECK_SECONDS`, and when it closes, a growing late count is a warning on the log (the
+first `REPORTS_PER_TOPIC` times).
 """
 from __future__ import annotations
 
@@ -57,6 +61,7 @@ from .state import STATEFUL_CALLS
 BATCH = 2000
 REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
 CALL_TIMEOUT = 60.0
+LATE_CHECK_SECONDS = 1.0     # how often the consumer asks the runtime for its late count
 SEQ_SUFFIX = "/seq"          # the companion topic of the output numbers: `/out` -> `/out/seq`
 SEQ_TYPE = "std_msgs/UInt64"
 _HEADER = ("header", "std_msgs/msg/Header")
@@ -177,6 +182,9 @@ class LiveNode:
         self._numbering: Dict[str, str] = {}       # type -> how its messages carry their number
         self.advertised: Dict[str, str] = {}       # output topic -> its type (companions included)
         self._replay_now: Optional[float] = None   # the wall clock of a replayed request
+        self.late = 0              # the runtime's late count when it was last checked
+        self._late_warnings = 0
+        self._late_checked: Optional[float] = None    # time.monotonic() of the last check
         engine.on_output(self._output)
 
     # ---- life cycle ------------------------------------------------------------------------
@@ -223,6 +231,8 @@ class LiveNode:
             self._thread.join(timeout)
         if self.out is not None:
             self.out.flush()
+        if not self._thread.is_alive():
+            self._check_late()
         if self.state is not None:      # no last snapshot while the consumer is still feeding
             self.state.close(self, snapshot=not self._thread.is_alive())     # (with its subscriber counts)
         self.transport.close()
@@ -398,8 +408,22 @@ class LiveNode:
                 events = events[index + 1:]
         if self.out is not None:
             self.out.flush()
+        if count and (self._late_checked is None or time.monotonic() - self._late_checked >= LATE_CHECK_SECONDS):
+            self._check_late()
         if self.state is not None and count:
             self.state.fed(self, count)
+
+    def _check_late(self) -> None:
+        """Warn when events came later than the delay bound since the last check."""
+        self._late_checked = time.monotonic()
+        late = self.engine.stats().get("late", 0)
+        if late > self.late:
+            self._late_warnings += 1
+            if self._late_warnings <= REPORTS_PER_TOPIC:
+                self.log(f"warning: {late - self.late:,} events came more than the delay bound (max_delay) behind "
+                         f"the clock ({self.engine.clock():.3f}), {late:,} in all: their results may depend on "
+                         f"the arrival order; are the stamps on the node's clock? (docs/ros.md)")
+            self.late = late
 
     def _output(self, event) -> None:
         self.outputs += 1
