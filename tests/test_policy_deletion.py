@@ -466,6 +466,13 @@ def shapes_program():
     return policy_program(SHAPES)
 
 
+def program_engine(lines, name):
+    """An engine running the program of `lines`, shared by a module's properties; reset after."""
+    engine = Engine.from_source("\n".join(lines) + "\n", name)
+    yield engine
+    fresh(engine, "1.0")
+
+
 @pytest.fixture(scope="module")
 def shapes():
     engine = Engine.from_source(shapes_program(), "shapes.rtl")
@@ -603,9 +610,7 @@ staged_event = st.one_of(st.tuples(st.just("a"), st.just(1), st.integers(0, 2), 
 
 @pytest.fixture(scope="module")
 def hierarchy():
-    engine = Engine.from_source("\n".join(HIERARCHY) + "\n", "hierarchy.rtl")
-    yield engine
-    fresh(engine, "1.0")
+    yield from program_engine(HIERARCHY, "hierarchy.rtl")
 
 
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -656,9 +661,7 @@ exact_event = st.one_of(st.tuples(st.just("a"), st.just(1), st.integers(0, 2), s
 
 @pytest.fixture(scope="module")
 def exact_hierarchy():
-    engine = Engine.from_source("\n".join(EXACT_HIERARCHY) + "\n", "exact_hierarchy.rtl")
-    yield engine
-    fresh(engine, "1.0")
+    yield from program_engine(EXACT_HIERARCHY, "exact_hierarchy.rtl")
 
 
 @settings(max_examples=1000, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -699,9 +702,7 @@ spread_event = st.one_of(st.tuples(st.just("a"), st.just(1), st.integers(0, 2), 
 
 @pytest.fixture(scope="module")
 def windowed_aggregates():
-    engine = Engine.from_source("\n".join(WINDOWED_AGGREGATES) + "\n", "windowed_aggregates.rtl")
-    yield engine
-    fresh(engine, "1.0")
+    yield from program_engine(WINDOWED_AGGREGATES, "windowed_aggregates.rtl")
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -765,9 +766,7 @@ sliding_event = st.one_of(st.tuples(st.just("a"), st.integers(1, 2), st.integers
 
 @pytest.fixture(scope="module")
 def sliding_hierarchy():
-    engine = Engine.from_source("\n".join(SLIDING_HIERARCHY) + "\n", "sliding_hierarchy.rtl")
-    yield engine
-    fresh(engine, "1.0")
+    yield from program_engine(SLIDING_HIERARCHY, "sliding_hierarchy.rtl")
 
 
 def without_clock_movers(ops):
