@@ -122,18 +122,7 @@ rtl_raise_internal(Event, Start, End) :-
 rtl_input(Op, Event, Start, End) :-
     (   nb_current(rtl_raise_busy, true)
     ->  process(Op, Event, Start, End)           % nested call from a rule: no draining here
-    ;   b_setval(rtl_raise_busy, true),         % guarded/1, written out: this runs per event
-        rtl_max_steps(Max),
-        (   Max == inf
-        ->  drained(Op, Event, Start, End)
-        ;   call_with_inference_limit(drained(Op, Event, Start, End), Max, Result),
-            (   Result == inference_limit_exceeded
-            ->  throw(error(rtl_step_limit(Max), _))
-            ;   true
-            )
-        ),
-        b_setval(rtl_raise_busy, false),
-        rtl_halt_check
+    ;   guarded(drained(Op, Event, Start, End))
     ).
 
 % The event after the queued ones, then those it raised (a predicate: call/1 of a
