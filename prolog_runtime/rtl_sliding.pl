@@ -47,10 +47,7 @@ rtl_sliding_refresh(F, D, From, To, Matches, Shown, Show, Unshow) :-
     ->  true
     ;   Low is From - D,
         findall(E-X, ( call(Matches, X, E), E >= Low, E =< To ), Items),
-        findall(T, ( member(E-_, Items), ( T = E ; T is E + D ), T >= From, T =< To ), Times0),
-        sort(Times0, Times),
-        findall(T-V, ( member(T, Times), change(F, D, Items, T, V) ), Desired0),
-        msort(Desired0, Desired),
+        desired_changes(F, D, Items, From, To, Desired),
         findall(T-V, ( call(Shown, V, T), T >= From, T =< To ), Output0),
         msort(Output0, Output),
         difference(Output, Desired, Stale),
@@ -77,10 +74,7 @@ rtl_sliding_refresh_numbered(F, D, From, To, Op, Matches, Shown, Reached, Show, 
     ;   Low is From - D,
         findall(E-X-P, ( call(Matches, X, E, P), E >= Low, E =< To ), Numbered),
         findall(E-X, member(E-X-_, Numbered), Items),
-        findall(T, ( member(E-_, Items), ( T = E ; T is E + D ), T >= From, T =< To ), Times0),
-        sort(Times0, Times),
-        findall(T-V, ( member(T, Times), change(F, D, Items, T, V) ), Desired0),
-        msort(Desired0, Desired),
+        desired_changes(F, D, Items, From, To, Desired),
         findall(T-V-P, ( call(Shown, V, T, P), T >= From, T =< To ), Output0),
         msort(Output0, Output),
         (   Op = at(At)
@@ -149,6 +143,14 @@ replay_events([Pe-Event|Events], F, D, T, V, Visible0, Items0, Since0, Since) :-
     ;   Since1 = none
     ),
     replay_events(Events, F, D, T, V, Visible, Items, Since1, Since).
+
+%   desired_changes(+F, +D, +Items, +From, +To, -Desired): the changes (`T-V`, sorted) the
+%   matches Items give in [From, To]: a value can change only when a match enters or leaves.
+desired_changes(F, D, Items, From, To, Desired) :-
+    findall(T, ( member(E-_, Items), ( T = E ; T is E + D ), T >= From, T =< To ), Times0),
+    sort(Times0, Times),
+    findall(T-V, ( member(T, Times), change(F, D, Items, T, V) ), Desired0),
+    msort(Desired0, Desired).
 
 % The value at T, when it differs from the value just before T.
 change(F, D, Items, T, V) :-
