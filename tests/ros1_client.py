@@ -65,6 +65,7 @@ def services(node: str, forbidden: str) -> dict:
     result["bad_subscribe"] = _pair(add_out(topic="robot_pos", msg_type="", event="tf(P, C, V)",
                                             conditions="[shell(ls)]", template="", start="", end=""))
     wait_for(lambda: positions.get_num_connections() > 0 and tf_pub.get_num_connections() > 0)
+    time.sleep(0.5)     # the node adds our connection to its publisher after we count it (below)
     for i in range(5):
         tf_pub.publish(tf_message(100 + i, float(i)))
     wait_for(lambda: len(got) >= 5, 10)
@@ -168,6 +169,7 @@ def nao(seconds: float) -> dict:
                                             queue_size=None)
     wait_for(lambda: all(p.get_num_connections() > 0 for p in publishers.values())
              and all(s.get_num_connections() > 0 for s in subscribers))
+    time.sleep(0.5)     # as in services(): the node's publishers may not have added us yet
     start_s = time.time()
     records = [r for r in nao_records(store, seconds=seconds, start_s=start_s) if r[0] in publishers]
     messages = [(topic, record_ns, bytes(store.serialize_ros1(msg, msgtype))) for topic, msgtype, record_ns, msg in records]
@@ -225,6 +227,7 @@ def bag(path: str, rate: float, topics: str, expected: int, out_topics: str) -> 
         messages.append((record.topic, record.time_ns, bytes(store.serialize_ros1(record.msg, record.msgtype))))
     wait_for(lambda: all(p.get_num_connections() > 0 for p in publishers.values())
              and all(s.get_num_connections() > 0 for s in subscribers))
+    time.sleep(0.5)     # as in services(): the node's publishers may not have added us yet
     began, first_ns = time.monotonic(), messages[0][1]
     for topic, time_ns, raw in messages:
         due = began + (time_ns - first_ns) / 1e9 / rate
