@@ -90,7 +90,9 @@ aqt_add(T, A, R, New) :-
         New = true
     ).
 
-aqt_insert(T, A, V) :- trie_insert(T, A, V).
+aqt_insert(T, A, V) :-                  % trie_insert/3 raises an error for a key
+    \+ trie_lookup(T, A, _),             % stored with another value
+    trie_insert(T, A, V).
 
 aqt_lookup(T, A, V) :- trie_lookup(T, A, V).
 

@@ -7,7 +7,8 @@
     exactly when they are variants (0.0 and -0.0, 1 and 1.0 stay different, as for
     SWI-Prolog's tries). The records are found through an open-addressing hash table of
     their bytes (linear probing, deletion by backward shift: no tombstones), with the
-    entries themselves in a dense array that enumeration walks.
+    entries themselves in an array that enumeration walks (records of up to 24 bytes
+    inside their entry).
 
     Terms with attributed variables and cyclic terms are refused with the type errors of
     trie_insert/3. The tables are not shared between threads (rtl_aq.pl runs in one).
@@ -35,34 +36,58 @@
 
 static atom_t ATOM_true, ATOM_false;
 
+#define INLINE 24                   /* records this long are kept in the entry itself */
+
 typedef struct entry
-{ char     *record;                 /* PL_record_external() bytes */
-  int64_t   value;
+{ int64_t   value;
   uint32_t  length;                 /* of the record; NONGROUND: the term has variables */
   uint32_t  hash;
+  union
+  { char   *pointer;                /* PL_record_external() bytes */
+    char    bytes[INLINE];
+  } record;
 } entry;
 
 #define NONGROUND 0x80000000U
+#define DELETED   0x7fffffffU       /* the length of a removed entry */
+#define BYTES(length) ((length) & ~NONGROUND)
+#define RECORD(e) (BYTES((e)->length) <= INLINE ? (e)->record.bytes : (e)->record.pointer)
 
+/* A slot holds the entry's hash beside its index, so that a probe that passes other
+   entries reads the slots only. */
+#define SLOT(index1, hash) ((uint64_t)(hash) << 32 | (uint32_t)(index1))
+#define SLOT_INDEX(s) ((size_t)(uint32_t)(s) - 1)
+#define SLOT_HASH(s) ((uint32_t)((s) >> 32))
+
+/* Removed entries stay in the entries array as holes (removal touches no other entry)
+   until it is full: then it is compacted, and doubled when more than half of it is live. */
 typedef struct table
-{ entry    *entries;                /* dense: 0 .. count-1 */
-  size_t    count;
+{ entry    *entries;                /* 0 .. used-1, holes included */
+  size_t    used;
+  size_t    live;                   /* entries that are not holes */
   size_t    capacity;               /* of entries */
-  uint32_t *slots;                  /* index + 1 into entries, 0 = empty */
+  uint64_t *slots;                  /* SLOT(index + 1 into entries, hash), 0 = empty */
   size_t    nslots;                 /* a power of 2, at least 2 * capacity */
   size_t    nonground;              /* entries with variables */
   int       destroyed;
 } table;
 
 static void
+free_record(entry *e)
+{ if ( e->length != DELETED && BYTES(e->length) > INLINE )
+    PL_erase_external(e->record.pointer);
+  e->length = DELETED;
+}
+
+static void
 free_entries(table *t)
-{ for (size_t i = 0; i < t->count; i++)
-    PL_erase_external(t->entries[i].record);
+{ for (size_t i = 0; i < t->used; i++)
+    free_record(&t->entries[i]);
   free(t->entries);
   free(t->slots);
   t->entries = NULL;
   t->slots = NULL;
-  t->count = t->capacity = t->nslots = t->nonground = 0;
+  t->used = t->live = t->capacity = t->nslots = t->nonground = 0;
 }
 
 static int
@@ -111,7 +136,12 @@ hash_bytes(const char *s, size_t n)
   { h ^= (unsigned char)s[i];
     h *= 0x100000001b3ULL;
   }
-  return (uint32_t)(h ^ (h >> 32));
+  h ^= h >> 33;                             /* MurmurHash3's finaliser: FNV's low bits */
+  h *= 0xff51afd7ed558ccdULL;               /* depend on the low bits of the input only */
+  h ^= h >> 33;
+  h *= 0xc4ceb9fe1a85ec53ULL;
+  h ^= h >> 33;
+  return (uint32_t)h;
 }
 
 static int
@@ -153,7 +183,7 @@ term_key(term_t t, char **record, size_t *length, uint32_t *hash)
   { *record = PL_record_external(t, length);
     if ( !*record )
       ok = FALSE;
-    else if ( *length >= NONGROUND )
+    else if ( *length >= DELETED )
     { PL_erase_external(*record);
       ok = PL_resource_error("memory");
     } else
@@ -173,37 +203,48 @@ find_slot(const table *t, const char *record, size_t length, uint32_t hash)
   size_t i = hash & mask;
 
   for (;;)
-  { uint32_t s = t->slots[i];
+  { uint64_t s = t->slots[i];
     if ( s == 0 )
       return i;
-    const entry *e = &t->entries[s - 1];
-    if ( e->hash == hash && e->length == length &&
-         memcmp(e->record, record, length & ~NONGROUND) == 0 )
-      return i;
+    if ( SLOT_HASH(s) == hash )
+    { const entry *e = &t->entries[SLOT_INDEX(s)];
+      if ( e->length == length && memcmp(RECORD(e), record, BYTES(length)) == 0 )
+        return i;
+    }
     i = (i + 1) & mask;
   }
 }
 
 static int
 grow(table *t)
-{ size_t capacity = t->capacity ? t->capacity * 2 : 8;
+{ size_t capacity = t->capacity == 0 ? 8 : t->live * 2 > t->capacity ? t->capacity * 2
+                                                                     : t->capacity;
   size_t nslots = capacity * 2;
-  entry *entries = realloc(t->entries, capacity * sizeof(entry));
-  if ( !entries )
-    return FALSE;
-  t->entries = entries;
-  uint32_t *slots = calloc(nslots, sizeof(uint32_t));
-  if ( !slots )
-    return FALSE;
-  free(t->slots);
-  t->slots = slots;
-  t->nslots = nslots;
-  t->capacity = capacity;
-  for (size_t k = 0; k < t->count; k++)
+  size_t w = 0;
+
+  for (size_t k = 0; k < t->used; k++)              /* compact */
+    if ( t->entries[k].length != DELETED )
+      t->entries[w++] = t->entries[k];
+  t->used = w;
+  if ( capacity != t->capacity )
+  { entry *entries = realloc(t->entries, capacity * sizeof(entry));
+    if ( !entries )
+      return FALSE;
+    t->entries = entries;
+    uint64_t *slots = calloc(nslots, sizeof(uint64_t));
+    if ( !slots )
+      return FALSE;
+    free(t->slots);
+    t->slots = slots;
+    t->nslots = nslots;
+    t->capacity = capacity;
+  } else
+    memset(t->slots, 0, nslots * sizeof(uint64_t));
+  for (size_t k = 0; k < t->used; k++)
   { size_t mask = nslots - 1, i = t->entries[k].hash & mask;
-    while ( slots[i] )
+    while ( t->slots[i] )
       i = (i + 1) & mask;
-    slots[i] = (uint32_t)(k + 1);
+    t->slots[i] = SLOT(k + 1, t->entries[k].hash);
   }
   return TRUE;
 }
@@ -211,42 +252,48 @@ grow(table *t)
 /* Store a new entry at the empty slot i (found for this record). */
 static int
 add_entry(table *t, size_t i, char *record, size_t length, uint32_t hash, int64_t value)
-{ if ( t->count == t->capacity )
+{ if ( t->used == t->capacity )
   { if ( t->capacity >= UINT32_MAX / 4 || !grow(t) )
     { PL_erase_external(record);
       return PL_resource_error("memory");
     }
     i = find_slot(t, record, length, hash);
   }
-  entry *e = &t->entries[t->count];
-  e->record = record;
+  entry *e = &t->entries[t->used];
   e->value = value;
   e->length = (uint32_t)length;
   e->hash = hash;
+  if ( BYTES(length) <= INLINE )
+  { memcpy(e->record.bytes, record, BYTES(length));
+    PL_erase_external(record);
+  } else
+    e->record.pointer = record;
   if ( length & NONGROUND )
     t->nonground++;
-  t->slots[i] = (uint32_t)++t->count;
+  t->live++;
+  t->slots[i] = SLOT(++t->used, hash);
   return TRUE;
 }
 
-/* Empty slot i, shifting back the entries after it that probed past it; move the last
-   entry into the place of the removed one. */
+/* Empty slot i, shifting back the slots after it that probed past it, and leave a hole
+   in place of its entry. */
 static void
 remove_slot(table *t, size_t i)
 { size_t mask = t->nslots - 1;
-  size_t k = t->slots[i] - 1;
+  entry *e = &t->entries[SLOT_INDEX(t->slots[i])];
   size_t j = i;
 
-  PL_erase_external(t->entries[k].record);
-  if ( t->entries[k].length & NONGROUND )
+  if ( e->length & NONGROUND )
     t->nonground--;
+  free_record(e);
+  t->live--;
   t->slots[i] = 0;
   for (;;)
   { j = (j + 1) & mask;
-    uint32_t s = t->slots[j];
+    uint64_t s = t->slots[j];
     if ( s == 0 )
       break;
-    size_t home = t->entries[s - 1].hash & mask;
+    size_t home = SLOT_HASH(s) & mask;
     /* move s back to i unless its home lies cyclically in (i, j] */
     if ( (j > i) ? (home <= i || home > j) : (home <= i && home > j) )
     { t->slots[i] = s;
@@ -254,16 +301,6 @@ remove_slot(table *t, size_t i)
       i = j;
     }
   }
-  size_t last = t->count - 1;
-  if ( k != last )
-  { entry *e = &t->entries[last];
-    size_t m = e->hash & mask;
-    while ( t->slots[m] != last + 1 )
-      m = (m + 1) & mask;
-    t->entries[k] = *e;
-    t->slots[m] = (uint32_t)(k + 1);
-  }
-  t->count = last;
 }
 
 /* Look the term up: FALSE with an exception, else TRUE with *found and the slot. */
@@ -303,7 +340,7 @@ pl_aqt_add(term_t tt, term_t term, term_t value, term_t new)
     return FALSE;
   if ( found )
   { PL_erase_external(record);
-    entry *e = &t->entries[t->slots[slot] - 1];
+    entry *e = &t->entries[SLOT_INDEX(t->slots[slot])];
     if ( e->value > 0 )
       e->value = -e->value;
     return PL_unify_atom(new, ATOM_false);
@@ -341,7 +378,7 @@ pl_aqt_lookup(term_t tt, term_t term, term_t value)
   if ( !get_table(tt, &t) || !lookup(t, term, &record, &length, &hash, &slot, &found) )
     return FALSE;
   PL_erase_external(record);
-  return found && PL_unify_int64(value, t->entries[t->slots[slot] - 1].value);
+  return found && PL_unify_int64(value, t->entries[SLOT_INDEX(t->slots[slot])].value);
 }
 
 static foreign_t
@@ -357,7 +394,7 @@ pl_aqt_delete(term_t tt, term_t term, term_t value)
   PL_erase_external(record);
   if ( !found )
     return FALSE;
-  int64_t v = t->entries[t->slots[slot] - 1].value;
+  int64_t v = t->entries[SLOT_INDEX(t->slots[slot])].value;
   remove_slot(t, slot);
   return PL_unify_int64(value, v);
 }
@@ -374,9 +411,11 @@ pl_aqt_entries(term_t tt, term_t out)
   term_t list = PL_new_term_ref(), term = PL_new_term_ref();
   term_t value = PL_new_term_ref(), pair = PL_new_term_ref();
   PL_put_nil(list);
-  for (size_t i = t->count; i > 0; i--)
+  for (size_t i = t->used; i > 0; i--)
   { const entry *e = &t->entries[i - 1];
-    if ( !PL_recorded_external(e->record, term) || !PL_put_int64(value, e->value) ||
+    if ( e->length == DELETED )
+      continue;
+    if ( !PL_recorded_external(RECORD(e), term) || !PL_put_int64(value, e->value) ||
          !PL_cons_functor(pair, minus2, term, value) || !PL_cons_list(list, pair, list) )
       return FALSE;
   }
@@ -386,7 +425,7 @@ pl_aqt_entries(term_t tt, term_t out)
 static foreign_t
 pl_aqt_count(term_t tt, term_t count)
 { table *t;
-  return get_table(tt, &t) && PL_unify_int64(count, (int64_t)t->count);
+  return get_table(tt, &t) && PL_unify_int64(count, (int64_t)t->live);
 }
 
 static foreign_t
