@@ -70,7 +70,6 @@
 :- use_module(library(readutil)).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_aq_rules).
-:- use_module(rtl_aq_table).
 
 :- meta_predicate aq_set_notify(2).
 
@@ -276,7 +275,7 @@ aq_answers(Id, Answers) :-
     (   aq_q(Id, G, Kind, T) -> true ; existence_error(active_query, Id) ),
     (   Kind == call
     ->  aq_tab(T, _, Tr, _, _),
-        findall(G, aqt_gen(Tr, G, _), As0)
+        findall(G, trie_gen(Tr, G), As0)
     ;   findall(G, user:G, As0)
     ),
     sort(As0, Answers).
@@ -341,7 +340,7 @@ free_tables(Dead) :-
     nb_getval(aq_cstates, St),
     forall(member(T, Dead),
            ( retract(aq_tab(T, _, Tr, _, Key)),
-             aqt_destroy(Tr),
+             trie_destroy(Tr),
              ( Key == none -> true ; ignore(trie_delete(Sub, Key, _)) ),
              retractall(aq_tpred(_, _, T)),
              retractall(aq_dep(T, _)),
@@ -368,7 +367,7 @@ state_owner(S, T) :- S \= q(_), arg(1, S, T).
 %   scan the goal records once per query.
 aq_reset :-
     retractall(aq_q(_, _, _, _)),
-    forall(retract(aq_tab(T, _, _, _, _)), aqt_destroy(T)),
+    forall(retract(aq_tab(T, _, _, _, _)), trie_destroy(T)),
     retractall(aq_tpred(_, _, _)),
     forall(user:'$aq_fact_pred'(F),
            ( user:'$aq_whead'(F, _, H), retractall(user:H) )),
@@ -395,13 +394,13 @@ aq_stats([queries=NQ, tables=NT, answers=NA, consumers=NC, fact_records=NF,
     nb_getval(aq_nstates, NSt), trie_count(NSt, NN),
     aggregate_all(count, aq_q(_, _, _, _), NQ),
     aggregate_all(count, aq_tab(_, _, _, _, _), NT),
-    aggregate_all(sum(C), (aq_tab(_, _, Tr, _, _), aqt_count(Tr, C)), NA),
+    aggregate_all(sum(C), (aq_tab(_, _, Tr, _, _), trie_count(Tr, C)), NA),
     aggregate_all(count, aq_c(_, _, _), NC),
     aggregate_all(count, user:'$aq_wref'(_, _, _), NF),
     nb_getval(aq_cstates, St), trie_count(St, NS),
     nb_getval(aq_subgoals, Sub), trie_count(Sub, NG),
     aggregate_all(count, aq_dep(_, _), ND),
-    aggregate_all(count, ( aq_tab(_, _, Tr, _, _), aqt_gen(Tr, _, V), V < 0 ), NM).
+    aggregate_all(count, ( aq_tab(_, _, Tr, _, _), trie_gen(Tr, _, V), V < 0 ), NM).
 
 trie_count(Tr, C) :-
     (   trie_property(Tr, value_count(C)) -> true ; C = 0 ).
@@ -565,7 +564,7 @@ neg_table(call, Lit, S, T) :-
 neg_holds(fact, Lit, _) :-
     \+ user:Lit.
 neg_holds(call, Lit, T) :-
-    \+ aqt_gen(T, Lit, _).
+    \+ trie_gen(T, Lit, _).
 
 %   The pending negations of the lowest stratum are checked first: what they
 %   depend on is in lower strata, whose work is done (the agenda is empty).
@@ -702,16 +701,21 @@ aq_answer(T, A, R) :-
 %   an error rather than fail for a key that has another value, hence the
 %   lookup first.)
 answer(insert, T, A, RA) :-
-    aqt_add(T, A, RA, New),
-    (   New == true
-    ->  schedule(T, A, RA)
-    ;   true
+    (   trie_lookup(T, A, V)
+    ->  (   V > 0
+        ->  NV is -V,
+            trie_update(T, A, NV)
+        ;   true
+        )
+    ;   trie_insert(T, A, RA),
+        schedule(T, A, RA)
     ).
 answer(restore, T, A, RA) :-
-    NV is -RA,
-    (   aqt_insert(T, A, NV)
-    ->  schedule(T, A, RA)
-    ;   true
+    (   trie_lookup(T, A, _)
+    ->  true
+    ;   NV is -RA,
+        trie_insert(T, A, NV),
+        schedule(T, A, RA)
     ).
 %   RD is one more than the rank of the deleted derivation: it can have
 %   created A only if RD =< the rank of A.  A derivation of higher rank was
@@ -719,17 +723,17 @@ answer(restore, T, A, RA) :-
 %   An answer derived more than once that still has a derivation from
 %   facts alone (kept_by_facts/2) stays, and nothing behind it is visited.
 answer(delete, T, A, RD) :-
-    (   aqt_delete(T, A, V)
+    (   trie_delete(T, A, V)
     ->  RA is abs(V),
         (   ( RD =< RA -> true ; aq_conf(dred, basic) )
         ->  (   V > 0
             ->  schedule(T, A, RA)
             ;   kept_by_facts(T, A)
-            ->  aqt_insert(T, A, V)
+            ->  trie_insert(T, A, V)
             ;   mark(a(T, A)),
                 schedule(T, A, RA)
             )
-        ;   aqt_insert(T, A, V)         % cheaper than a lookup first: most
+        ;   trie_insert(T, A, V)        % cheaper than a lookup first: most
         )                               % deletions do reach the creator
     ;   true
     ).
@@ -809,7 +813,7 @@ fact_only_creator(go(Prev, Lit)) :-
 
 %   The answers of a table with their ranks.
 answer_rank(Tr, A, RA) :-
-    aqt_gen(Tr, A, V),
+    trie_gen(Tr, A, V),
     RA is abs(V).
 
 %   A new answer is propagated at once (depth-first) unless the propagation
@@ -906,7 +910,7 @@ owner_id(S, Id) :-
 %   A table is identified by its answer trie: states carry the trie itself,
 %   so propagating an answer needs no table lookup.
 new_table(Goal, Key, Owner, T) :-
-    aqt_new(T),
+    trie_new(T),
     copy_term(Goal, G),
     assertz(aq_tab(T, G, T, Owner, Key)),
     (   Key == none
@@ -1160,7 +1164,7 @@ dred_run(Seed, Cleanup, D) :-
 %   only when the forward propagation of a restored item reaches it.
 rederive(T, A) :-
     aq_tab(T, _, _, _, _),
-    \+ aqt_lookup(T, A, _),
+    \+ trie_lookup(T, A, _),
     answer_derivable(T, A, R),
     RA is R + 1,
     answer(restore, T, A, RA).
@@ -1259,7 +1263,7 @@ query_has(Id, A) :-
     aq_q(Id, _, Kind, T),
     (   Kind == call
     ->  aq_tab(T, _, Tr, _, _),
-        aqt_lookup(Tr, A, _)
+        trie_lookup(Tr, A, _)
     ;   has_fact(A)
     ), !.
 

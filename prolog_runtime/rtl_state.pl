@@ -24,9 +24,8 @@ a change here:
     schedule, the bounds of memory instances;
   - every flag/3 key starting with `rtl_` (handle and generation numbers).
 
-Tries and the answer tables of active queries (rtl_aq_table.pl: `aq_answers` blobs, or
-tries without its C library) are written as their entries and made again on restore,
-shared where they were shared. A clause reference (the clauses of a rule
+Tries (the answer tables of active queries) are written as their entries and made again
+on restore, shared where they were shared. A clause reference (the clauses of a rule
 added to active queries at run time) is written as the predicate and position of its
 clause and found again on restore. Other blobs (streams) cannot be written: a global
 holding one is skipped, a clause holding one makes the save fail with an error.
@@ -39,8 +38,7 @@ must not be restored is listed by excluded_predicate/1 and excluded_global/1 (ou
 streams, per-call state), which other modules may extend (multifile).
 
 The file is a sequence of fast_write/2 terms: `rtl_state(Version, Identity, Module)`,
-`tries(Entries)` (Id-Pairs for a trie, Id-aq_answers(Pairs) for an answer table),
-`pred(Module, Name, Arity, Clauses)` per predicate (`pred_refs/4`, after
+`tries(Entries)`, `pred(Module, Name, Arity, Clauses)` per predicate (`pred_refs/4`, after
 the others, for one whose clauses hold clause references), `globals(Pairs)`,
 `flags(Pairs)` and `end(Count)`. Identity is given by the caller (a hash of the compiled
 program and of the runtime, retalisc/driver/recovery.py); a snapshot whose version or
@@ -56,9 +54,8 @@ before restoring (retalisc/driver/recovery.py).
 :- use_module(library(apply)).
 :- use_module(library(pairs)).
 :- use_module(rtl_ele).
-:- use_module(rtl_aq_table, [aqt_new/1, aqt_insert/3, aqt_entries/2]).
 
-state_version(2).
+state_version(1).
 
 %!  excluded_predicate(?PI) is nondet.
 %!  excluded_global(?Key) is nondet.
@@ -152,15 +149,9 @@ trie_entries(S0-N0, From, Entries) :-
         trie_entries(S1, N0, Rest)
     ).
 
-trie_round(Id-Trie, Id-Entries, S0, S) :-
-    (   blob(Trie, trie)
-    ->  findall(K-Val, trie_gen(Trie, K, Val), Es0),
-        unblob(Es0, Es, S0, S),
-        Entries = Es
-    ;   aqt_entries(Trie, Es0),
-        unblob(Es0, Es, S0, S),
-        Entries = aq_answers(Es)
-    ).
+trie_round(Id-Trie, Id-Es, S0, S) :-
+    findall(K-Val, trie_gen(Trie, K, Val), Es0),
+    unblob(Es0, Es, S0, S).
 
 pred_term(M:Name/Arity, Term, S0, S) :-
     functor(H, Name, Arity),
@@ -193,7 +184,7 @@ unblob(T, T, S, S) :-
     plain_atomic(T), !.
 unblob(T, C, S0-N0, S) :-
     blob(T, Type), Type \== text, !,
-    (   ( Type == trie ; Type == aq_answers )
+    (   Type == trie
     ->  (   get_assoc(T, S0, Id)
         ->  S = S0-N0
         ;   Id = N0, N is N0 + 1, put_assoc(T, S0, Id, S1), S = S1-N
@@ -330,8 +321,10 @@ state_error(Format, Args) :-
 
 apply_state(Program, OldM, TrieEntries, Preds, Globals, Flags) :-
     Program = M-_,
-    pairs_keys_values(TrieEntries, Ids, Entries),
-    maplist(new_trie, Entries, Tries),
+    length(TrieEntries, NT),
+    length(Tries, NT),
+    maplist(new_trie, Tries),
+    pairs_keys_values(TrieEntries, Ids, _),
     pairs_keys_values(IdTries, Ids, Tries),
     list_to_assoc(IdTries, ById),
     Map = map(OldM, M, ById),
@@ -356,18 +349,13 @@ apply_state(Program, OldM, TrieEntries, Preds, Globals, Flags) :-
 owned_by(K, Modules) :-
     (   sub_atom(K, 0, _, _, aq_) -> memberchk(rtl_aq, Modules) ; true ).
 
-new_trie(aq_answers(_), T) :- !, aqt_new(T).
-new_trie(_, T) :- trie_new(T).
+new_trie(T) :- trie_new(T).
 
 fill_trie(Map, Id-Entries) :-
     Map = map(_, _, ById),
     get_assoc(Id, ById, Trie),
-    (   Entries = aq_answers(Es)
-    ->  forall(member(K0-V0, Es),
-               ( reblob(Map, K0, K), reblob(Map, V0, V), aqt_insert(Trie, K, V) ))
-    ;   forall(member(K0-V0, Entries),
-               ( reblob(Map, K0, K), reblob(Map, V0, V), trie_insert(Trie, K, V) ))
-    ).
+    forall(member(K0-V0, Entries),
+           ( reblob(Map, K0, K), reblob(Map, V0, V), trie_insert(Trie, K, V) )).
 
 restore_pred(Map, Term) :-
     Term =.. [Kind, M0, Name, Arity, Clauses],
@@ -446,7 +434,7 @@ rtl_state_capture(Program, state(Preds, Globals, Flags)) :-
 
 unwritable_blob(V) :-
     \+ plain_atomic(V),
-    blob(V, Type), Type \== trie, Type \== aq_answers, Type \== clause.
+    blob(V, Type), Type \== trie, Type \== clause.
 
 % Atoms, [] (a reserved symbol), numbers and strings: what fast_write/2 writes as it is.
 plain_atomic(T) :-
@@ -461,8 +449,8 @@ canonical(M, T, C) :-
     clause_position(T, '$rtl_clause'(CM:PI, Index)),
     canonical(M, '$clause'(CM:PI, Index), C).
 canonical(M, T, C) :-
-    \+ plain_atomic(T), blob(T, Type), ( Type == trie ; Type == aq_answers ), !,
-    (   Type == trie -> findall(K-V, trie_gen(T, K, V), Es0) ; aqt_entries(T, Es0) ),
+    \+ plain_atomic(T), blob(T, trie), !,
+    findall(K-V, trie_gen(T, K, V), Es0),
     maplist(canonical(M), Es0, Es1),
     maplist(numbered, Es1, Es2),                % entries with variables sort by their shape
     msort(Es2, Es),

@@ -23,7 +23,7 @@ fi
 # rtl_aq.pl, rtl_aq_api.pl) and rtl_load.pl: they check, at each start, that the others are
 # up to date.
 for src in rtl_*.pl; do
-    case "$src" in rtl_load.pl|rtl_aq.pl|rtl_aq_api.pl|rtl_aq_table.pl) rm -f "${src%.pl}.qlf"; continue ;; esac
+    case "$src" in rtl_load.pl|rtl_aq.pl|rtl_aq_api.pl) rm -f "${src%.pl}.qlf"; continue ;; esac
     qlf="${src%.pl}.qlf"
     if [ ! -f "$qlf" ] || [ "$src" -nt "$qlf" ] || [ "$(command -v swipl)" -nt "$qlf" ]; then
         if swipl -q -g "qcompile('${src%.pl}')" -t halt >/dev/null 2>&1 </dev/null; then
