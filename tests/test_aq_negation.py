@@ -82,6 +82,17 @@ def test_optimized_negation_matches_oracles(case):
     check(*case, mode="optimized")
 
 
+def test_variable_first_met_inside_a_negation_and_used_after_it():
+    """`\\+ f(Y), e(Y, Y)` with no f/1 facts and e(0, 1): no answer, from us, the recomputation and
+    the oracle (SWI-Prolog 9.0.4 compiles this clause's last call wrongly: the oracle's clauses
+    end with `true`)."""
+    source = (":- dynamic e/2, f/1, r/2.\nq(X) :- e(X, X), \\+ f(X).\np(0, 0) :- \\+ f(Y), e(Y, Y).\n"
+              "r(X, X) :- f(X), \\+ e(X, X).\n")
+    for variant in [("tabled", False, "primary"), ("naive", False, "primary")]:
+        check(source, ["p(X, Y)"], [("+", ["e(0, 1)"]), ("+", ["e(1, 1)"]), ("-", ["e(1, 1)"])],
+              mode=variant[0], subsumption=variant[1], dred=variant[2])
+
+
 def compile_error(source: str) -> str:
     with pytest.raises(RetalisError) as info:
         compile_source(source, "prog.pl", active_queries=AqOptions("tabled"))
