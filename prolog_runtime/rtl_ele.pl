@@ -104,6 +104,7 @@ rtl_reset :-
     nb_setval(rtl_clock, -inf),
     nb_setval(rtl_longest_event, 0),
     nb_setval(rtl_next_sweep, inf),
+    nb_setval(rtl_blocker_sweep_due, -inf),
     nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
     forall(counter(S), nb_setval(S, 0)),
     forget_detections,
@@ -578,13 +579,24 @@ rtl_collect_garbage :-
 % Negated events of unwindowed negations that can no longer block anything, with the waiting
 % partial matches they block for good (the compiled `ele_forget_blockers/1`): those that
 % ended before every later event can start (the delay bound, and the longest interval seen)
-% and outside the retraction horizon.
+% and outside the retraction horizon, Keep seconds before the clock. The compiled sweep
+% visits every stored negated event, so it runs once the clock has moved on by Keep / 2
+% (rtl_blocker_sweep_due), not at every sweep of the stores: a negated event is then
+% dropped at most 1.5 Keep after its end, and each one is visited about twice however long
+% Keep is (the longest interval of a derived event can be a thousand times the delay bound).
 forget_blockers(M, Clock, Delay) :-
     (   predicate_property(M:ele_forget_blockers(_), number_of_clauses(N)), N > 0,
-        rtl_horizon(Horizon), Horizon \== inf
+        rtl_horizon(Horizon), Horizon \== inf,
+        (   nb_current(rtl_blocker_sweep_due, Due)
+        ->  Clock >= Due
+        ;   true
+        )
     ->  nb_getval(rtl_longest_event, Longest),
-        Before is Clock - max(Delay + Longest, Horizon),
-        forall(M:ele_forget_blockers(Before), true)
+        Keep is max(Delay + Longest, Horizon),
+        Before is Clock - Keep,
+        forall(M:ele_forget_blockers(Before), true),
+        Due1 is Clock + Keep / 2,
+        nb_setval(rtl_blocker_sweep_due, Due1)
     ;   true
     ).
 
