@@ -107,3 +107,47 @@ def test_the_store_stays_flat_on_a_long_stream(policy):
         assert size_long <= 1.5 * size_short + 50, (size_short, size_long)
     else:                           # unrestricted keeps every unblocked left and right, by definition
         assert size_long < size_kept / 2, (size_short, size_long, size_kept)
+
+
+SWEEP_COUNT = """\
+:- use_module(retalis_runtime(retalis)).
+:- dynamic sweeps/1.
+sweeps(0).
+count_sweeps(Before) :-
+    retract(sweeps(N)), N1 is N + 1, assertz(sweeps(N1)),
+    nb_getval(rtl_clock, Clock), nb_getval(rtl_longest_event, Longest),
+    assertz(sweep_at(Clock, Longest, Before)).
+:- dynamic sweep_at/3.
+main :-
+    M = negation_sweeps,
+    asserta(M:(ele_forget_blockers(Before) :- user:count_sweeps(Before), fail)),
+    rtl_output_to(buffer),
+    rtl_input(add, z(1), 0, 500),           % an interval: later events may start 500 s earlier
+    forall(between(501, 3500, T),
+           ( K is T mod 3, I is T mod 7,
+             ( K =:= 0 -> E = a(I, T) ; K =:= 1 -> E = b(I, T) ; E = c(I, T) ),
+             rtl_input(add, E, T, T), rtl_take_output(_) )),
+    sweeps(N), rtl_flag(max_delay, Delay), rtl_horizon(Horizon),
+    findall(C-L, sweep_at(C, L, _), At),
+    format("~w ~w ~w ~q~n", [N, Delay, Horizon, At]).
+"""
+
+
+def test_the_blockers_are_swept_once_the_clock_moved_half_of_what_they_keep(tmp_path, swipl):
+    # The compiled sweep visits every stored negated event: it runs when the clock has moved on
+    # by half of max(delay + longest interval, horizon) since the last one, not at every sweep
+    # of the stores (every 64 events here, each visiting hundreds of negated events kept for the
+    # longest interval seen, 500 s).
+    import subprocess
+    result = compile_source(program("recent", RULES[:1]), "negation_sweeps.rtl", module="negation_sweeps")
+    (tmp_path / "p.pl").write_text(result.prolog)
+    (tmp_path / "count.pl").write_text(SWEEP_COUNT)
+    done = subprocess.run([swipl, "-g", "consult(count), main, halt", str(tmp_path / "p.pl"), "--none"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    count, delay, horizon, at = done.stdout.split(" ", 3)
+    sweeps = [tuple(map(float, pair.split("-"))) for pair in at.strip()[1:-1].split(",")]
+    assert int(count) == len(sweeps) >= 3
+    for (clock0, longest0), (clock1, _) in zip(sweeps, sweeps[1:]):
+        assert clock1 - clock0 >= max(float(delay) + longest0, float(horizon)) / 2
+    assert int(count) < 3000 / 64 / 2
