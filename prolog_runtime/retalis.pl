@@ -20,6 +20,7 @@
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
 :- use_module(rtl_lines, [rtl_read_line/2, rtl_split_lines/2, rtl_utf8_line/2]).
+:- use_module(rtl_horizon, [rtl_warnings_pending/0]).
 :- reexport(rtl_time).
 :- reexport(rtl_raise).
 :- reexport(rtl_subscriptions).
@@ -403,14 +404,30 @@ atomic_run([Item|Items], Run, Rest) :-
     ).
 atomic_run([], [], []).
 
-run_atomic([], _, _, _, N, _, N).
-run_atomic([a(Event, T)|Run], Rest, In, Name, N0, Options, N) :-
-    run_event(add, Event, T, T, Outcome),
-    count_outcome(Outcome),
-    (   Run == [] -> Items = Rest ; Items = Run ),
-    item_done(Outcome, Items, In, Name, N0, Options),
+%   The run is one block of input events (rtl_input_block/1): each event is processed by
+%   rtl_block_input/3 under its own catch/3, with its own step limit, and reported as
+%   run_event/5 reports it.
+
+run_atomic(Run, Rest, In, Name, N0, Options, N) :-
+    rtl_input_block(atomic_events(Run, Rest, In, Name, N0, Options, N)).
+
+atomic_events([], _, _, _, N, _, N).
+atomic_events([a(Event, T)|Run], Rest, In, Name, N0, Options, N) :-
+    catch(rtl_block_input(Event, T, T), Error, true),
+    (   var(Error)
+    ->  (   Run \== []
+        ->  (   rtl_warnings_pending -> print_warnings(Name, N0) ; true )
+        ;   item_done(ok, Rest, In, Name, N0, Options)
+        )
+    ;   rtl_drop_raised,
+        event_text(Event, Text),
+        event_failure(Error, Text, Outcome),
+        count_outcome(Outcome),
+        (   Run == [] -> Items = Rest ; Items = Run ),
+        item_done(Outcome, Items, In, Name, N0, Options)
+    ),
     N1 is N0 + 1,
-    run_atomic(Run, Rest, In, Name, N1, Options, N).
+    atomic_events(Run, Rest, In, Name, N1, Options, N).
 
 % The last item of a block may flush the output.
 item_done(Outcome, Items, In, Name, N, Options) :-

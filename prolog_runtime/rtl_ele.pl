@@ -11,6 +11,7 @@
             rtl_clock/1,                % -Clock
             rtl_advance_clock/1,        % +Time
             rtl_started_after/1,        % +Time
+            rtl_blockers_due/4,         % +Step, +Partner, +Clock, -Before
             rtl_set_flag/2,             % +Flag, +Value
             rtl_flag/2,                 % ?Flag, ?Value
             rtl_max_steps/1,            % -Steps
@@ -59,6 +60,7 @@ events until the retraction horizon has passed (rtl_horizon.pl, which also decid
 deletion is too late).
 */
 
+:- use_module(library(assoc)).
 :- use_module(rtl_io).
 :- use_module(rtl_horizon).
 :- use_module(rtl_timers).
@@ -102,11 +104,13 @@ rtl_program(Module) :-
 
 rtl_reset :-
     nb_setval(rtl_clock, -inf),
-    nb_setval(rtl_longest_event, 0),
+    empty_assoc(NoIntervals),
+    nb_setval(rtl_longest_by_type, NoIntervals),
     nb_setval(rtl_next_sweep, inf),
     nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
     forall(counter(S), nb_setval(S, 0)),
     forget_detections,
+    forget_blocker_sweeps,
     rtl_horizon_reset,
     retractall(rtl_output_line(_)),
     rtl_take_warnings(_),
@@ -251,7 +255,7 @@ rtl_clock(Clock) :-
 %   is duplicate_term/2 and nb_linkval/2, and the link survives backtracking as the copy does).
 
 rtl_event(Event, Start, End) :-
-    (   End > Start -> note_duration(Start, End) ; true ),
+    (   End > Start -> note_duration(Event, Start, End) ; true ),
     note_start(Start),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
@@ -277,14 +281,19 @@ rtl_event(Event, Start, End) :-
     nb_getval(rtl_next_sweep, Sweep),
     (   End >= Sweep -> periodic_sweep ; true ).
 
-% The longest interval of an event seen so far: with the delay bound, it says how early a
-% later event can start (rtl_collect_garbage/0, negation stores).
-note_duration(Start, End) :-
-    (   End - Start > 0,
-        nb_getval(rtl_longest_event, Longest),
-        End - Start > Longest
+% The longest interval of an event of each type (Name/Arity) seen so far, in the assoc
+% rtl_longest_by_type: with the delay bound, it says how early a later event of that type can
+% start (the sweep of negation blockers, rtl_blockers_due/4).
+note_duration(Event, Start, End) :-
+    (   End - Start > 0
     ->  Duration is End - Start,
-        nb_linkval(rtl_longest_event, Duration)
+        functor(Event, Name, Arity),
+        nb_getval(rtl_longest_by_type, Longest0),
+        (   get_assoc(Name/Arity, Longest0, Longest), Longest >= Duration
+        ->  true
+        ;   put_assoc(Name/Arity, Longest0, Duration, Longest1),
+            nb_setval(rtl_longest_by_type, Longest1)
+        )
     ;   true
     ).
 
@@ -367,7 +376,7 @@ rtl_retract_event(Event, Start, End) :-
 
 rtl_derived(Event, Start, End) :-
     rtl_count(derived),
-    note_duration(Start, End),
+    note_duration(Event, Start, End),
     note_start(Start),
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
@@ -380,7 +389,7 @@ rtl_derived(Event, Start, End) :-
 %   subscriptions, but not counted, not written as output and not moving the clock.
 
 rtl_internal_event(Event, Start, End) :-
-    note_duration(Start, End),
+    note_duration(Event, Start, End),
     note_start(Start),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
@@ -570,23 +579,53 @@ rtl_collect_garbage :-
                ( Before is Clock - Window - Delay,
                  rtl_retire_store(M, Name, Arity, Before) )),
         rtl_forget_kept(M, Clock),
-        forget_blockers(M, Clock, Delay),
+        forget_blockers(M, Clock),
         rtl_swept(Clock)
     ),
     schedule_next_sweep.
 
 % Negated events of unwindowed negations that can no longer block anything, with the waiting
-% partial matches they block for good (the compiled `ele_forget_blockers/1`): those that
-% ended before every later event can start (the delay bound, and the longest interval seen)
-% and outside the retraction horizon.
-forget_blockers(M, Clock, Delay) :-
-    (   predicate_property(M:ele_forget_blockers(_), number_of_clauses(N)), N > 0,
-        rtl_horizon(Horizon), Horizon \== inf
-    ->  nb_getval(rtl_longest_event, Longest),
-        Before is Clock - max(Delay + Longest, Horizon),
-        forall(M:ele_forget_blockers(Before), true)
+% partial matches they block for good (the compiled `ele_forget_blockers/1`, one clause per
+% negation, each of which asks rtl_blockers_due/4 whether its sweep is due).
+forget_blockers(M, Clock) :-
+    (   predicate_property(M:ele_forget_blockers(_), number_of_clauses(N)), N > 0
+    ->  forall(M:ele_forget_blockers(Clock), true)
     ;   true
     ).
+
+%!  rtl_blockers_due(+Step, +Partner, +Clock, -Before) is semidet.
+%
+%   The sweep of the blockers of Step, a negation whose right operand is an event of type
+%   Partner (Name/Arity), is due at Clock; Before is the time before which a negated event
+%   that ended can block nothing more: no later Partner starts before it (the delay bound and
+%   the longest interval of a Partner seen so far) and it lies outside the retraction horizon.
+%   That keeps a negated event Keep = Clock - Before seconds after its end. The compiled
+%   sweep visits every stored negated event of Step, so it is due once the clock has moved on
+%   by Keep / 2 since the last one (a global variable per step): a negated event is dropped at
+%   most 1.5 Keep after its end and visited about twice. Keep depends on the Partner's own
+%   intervals, not on those of other events (a derived event can span a thousand times the
+%   delay bound).
+
+rtl_blockers_due(Step, Partner, Clock, Before) :-
+    rtl_flag(max_delay, Delay),
+    Delay \== inf,
+    rtl_horizon(Horizon),
+    Horizon \== inf,
+    nb_getval(rtl_longest_by_type, ByType),
+    (   get_assoc(Partner, ByType, Longest) -> true ; Longest = 0 ),
+    Keep is max(Delay + Longest, Horizon),
+    atom_concat('rtl_blockers_due ', Step, Key),
+    (   nb_current(Key, Due)
+    ->  Clock >= Due
+    ;   true
+    ),
+    Before is Clock - Keep,
+    Due1 is Clock + Keep / 2,
+    nb_setval(Key, Due1).
+
+forget_blocker_sweeps :-
+    forall(( nb_current(Key, _), atom(Key), sub_atom(Key, 0, _, _, 'rtl_blockers_due ') ),
+           nb_delete(Key)).
 
 % The next sweep is due when the clock has moved on by half of the smallest window plus
 % the delay bound: every stored match is then at most 1.5 times as old as it needs to be.

@@ -13,6 +13,7 @@
             rtl_too_late_text/4,        % +End, +Retracted, +Derived, -Text
             rtl_warning/1,              % +Text
             rtl_take_warnings/1,        % -Texts
+            rtl_warnings_pending/0,
             rtl_next_seq/1,             % -Seq
             rtl_take_instance/2,        % :Stored, +Own
             rtl_aggregate_values/3,     % +Items, -Acc, -Values
@@ -327,6 +328,14 @@ rtl_take_warnings(Texts) :-
     ->  findall(T, retract(warning_text(T)), Texts)
     ;   Texts = []
     ).
+
+%!  rtl_warnings_pending is semidet.
+%
+%   Some warning waits to be taken (rtl_take_warnings/1).
+
+rtl_warnings_pending :-
+    warning_text(_),
+    !.
 
 %!  rtl_take_instance(:Stored, +Own) is semidet.
 %

@@ -3,6 +3,8 @@
             new_event/2,                % +Event, +Time
             new_event/3,                % +Event, +Secs, +NSecs
             rtl_input/4,                % +Op, +Event, +Start, +End
+            rtl_input_block/1,          % :Goal
+            rtl_block_input/3,          % +Event, +Start, +End
             rtl_raise_internal/3,       % +Event, +Start, +End
             rtl_flush_raised/0,
             rtl_guarded/1,              % :Goal
@@ -28,7 +30,7 @@ rtl_flush_raised/0).
 :- use_module(rtl_time).
 :- use_module(rtl_halt).
 
-:- meta_predicate rtl_guarded(0).
+:- meta_predicate rtl_guarded(0), rtl_input_block(0).
 
 % The events raised and not processed yet, oldest first: a queue kept in the global
 % variable rtl_raised (per thread, like the rest of the runtime's state), changed in place
@@ -124,6 +126,34 @@ rtl_input(Op, Event, Start, End) :-
     ->  process(Op, Event, Start, End)           % nested call from a rule: no draining here
     ;   guarded(drained(Op, Event, Start, End))
     ).
+
+%!  rtl_input_block(:Goal) is det.
+%!  rtl_block_input(+Event, +Start, +End) is det.
+%
+%   A block of input events: Goal processes them one at a time with rtl_block_input/3,
+%   which is rtl_input(add, Event, Start, End) without what a block sets once (the line
+%   loop's run of plain event lines, retalis.pl). Goal runs as the events being processed
+%   (`rtl_raise_busy`, set with b_setval/2 before the block, so that an error in one event
+%   caught by the loop leaves it set for the next); each event keeps its own step limit,
+%   its events raised meanwhile and its halt check. Only the line loop, outside any event,
+%   opens a block.
+
+rtl_input_block(Goal) :-
+    b_setval(rtl_raise_busy, true),
+    call(Goal),
+    b_setval(rtl_raise_busy, false).
+
+rtl_block_input(Event, Start, End) :-
+    rtl_max_steps(Max),
+    (   Max == inf
+    ->  drained(add, Event, Start, End)
+    ;   call_with_inference_limit(drained(add, Event, Start, End), Max, Result),
+        (   Result == inference_limit_exceeded      % (the goal of limited/1: the same steps)
+        ->  throw(error(rtl_step_limit(Max), _))
+        ;   true
+        )
+    ),
+    rtl_halt_check.
 
 % The event after the queued ones, then those it raised (a predicate: call/1 of a
 % conjunction would compile it for every event).

@@ -117,6 +117,7 @@ builtin(rule, rtl_ele:rtl_detected(_), []).
 builtin(rule, rtl_horizon:rtl_late(_), []).                % deletions and late events
 builtin(rule, rtl_horizon:rtl_kept_generation(_), []).
 builtin(rule, rtl_horizon:rtl_next_seq(_), []).
+builtin(rule, rtl_ele:rtl_blockers_due(_, _, _, _), []).         % a negation's sweep
 builtin(rule, rtl_horizon:rtl_take_instance(Stored, _), [retract(Stored)]).   % from the rule's store
 builtin(rule, rtl_horizon:rtl_aggregate_values(_, _, _), []).
 builtin(rule, rtl_horizon:rtl_aggregate_redo(_, _, _, _, _), []).

@@ -197,3 +197,79 @@ def test_an_out_of_date_qlf_file_is_not_used_and_nothing_is_printed_or_written(t
     assert stale.stdout.split() == ["c_reader", "from_source"]
     assert stale.stderr == ""
     assert (qlf.read_bytes(), qlf.stat().st_mtime) == before                # not rewritten
+
+
+# ---- a block of plain event lines ------------------------------------------------------------
+
+# Events that fail in a condition, run out of steps, raise events, set timers or halt, in the
+# middle of a block of plain event lines (which the C reader takes at once and the loop
+# processes as one block, retalis.pl run_atomic/7): each still fails, is stopped, or ends the
+# run with its own line number, as in the loop of the runtime without its C helpers.
+BLOCK_PROGRAM = """\
+both(X, Y) <- a(X) seq b(Y).
+big(X) <- c(X) where (X > 50).
+spin(X) <- s(X) where (between(1, inf, _), fail).      % runs until its step limit
+echoed(X) do new_event(e(X)) <- d(X).
+again(X) <- e(X).
+quiet(X) <- not(b(X)).[a(X), 5].
+stopped(X) do halt <- h(X).
+"""
+
+
+@pytest.fixture(scope="module")
+def block_setup(tmp_path_factory, swipl):
+    from retalisc.compiler import compile_source
+
+    work = tmp_path_factory.mktemp("line_loop_block")
+    prolog_only = work / "runtime"
+    shutil.copytree(RUNTIME, prolog_only, ignore=shutil.ignore_patterns("foreign", "tests", "c"))
+    program = work / "p.pl"
+    program.write_text(compile_source(BLOCK_PROGRAM, "p.rtl", output_name="p.pl").prolog)
+    return swipl, program, prolog_only
+
+
+@st.composite
+def block_streams(draw):
+    out = []
+    t = 0
+    for _ in range(draw(st.integers(100, 600))):
+        t += draw(st.integers(0, 2))
+        kind = draw(st.sampled_from("aaabbbccddes") if draw(st.integers(0, 30)) else st.sampled_from(["s", "h"]))
+        value = "zz" if kind == "c" and draw(st.integers(0, 5)) == 0 else draw(st.integers(1, 100))
+        out.append(json.dumps({"event": f"{kind}({value})", "t": t}))
+    return ("\n".join(out) + "\n").encode()
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                                  HealthCheck.too_slow,
+                                                                  HealthCheck.data_too_large])
+@given(block_streams(), st.booleans(), st.booleans(), st.sampled_from([(), ("--max-timers=3",)]))
+def test_failures_limits_and_halts_inside_a_block_keep_their_lines(block_setup, data, stdin, strict, timers):
+    options = ("--max-steps=5000", *timers) + (("--strict",) if strict else ())
+    fast = run(block_setup, data, c_reader=True, stdin=stdin, options=options)
+    slow = run(block_setup, data, c_reader=False, stdin=stdin, options=options)
+    assert fast == slow
+    assert b"events in" in fast[2]
+
+
+def test_an_event_out_of_steps_in_a_block_is_reported_with_its_line(block_setup):
+    lines = [json.dumps({"event": f"{'ab'[t % 2]}({t})", "t": t}) for t in range(1, 100)]
+    lines[9] = json.dumps({"event": "s(1)", "t": 10})
+    lines[19] = json.dumps({"event": "c(zz)", "t": 20})
+    lines[29] = json.dumps({"event": "d(7)", "t": 30})
+    data = ("\n".join(lines) + "\n").encode()
+    code, out, err = run(block_setup, data, c_reader=True, stdin=False, options=("--max-steps=5000",))
+    assert code == 0
+    errors = err.decode().splitlines()
+    assert re.match(r".*:10: error: more than 5,000 steps \(--max-steps\) while processing s\(1\)$", errors[0])
+    assert re.match(r".*:20: error: .* while processing c\(zz\)$", errors[1])
+    assert errors[2].startswith("retalis: 100 events in, ") and errors[2].endswith(", 2 failed")   # e(7) raised
+    assert b'"again(7)"' in out and b'"both(2,3)"' in out and b'"both(12,13)"' in out
+    lines[39] = json.dumps({"event": "h(1)", "t": 40})
+    data = ("\n".join(lines) + "\n").encode()
+    code, out, err = run(block_setup, data, c_reader=True, stdin=False, options=("--max-steps=5000",))
+    assert err.decode().splitlines()[-1].startswith("retalis: 41 events in, ")
+    assert code == 1
+    assert re.match(r".*:40: error: the program called halt \(in the action halt\) while processing h\(1\)$",
+                    err.decode().splitlines()[2])
+    assert b'"both(38,39)"' in out and b'"both(42,43)"' not in out

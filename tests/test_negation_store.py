@@ -4,6 +4,7 @@ outside the retraction horizon is dropped with the waiting partial matches it bl
 good. The oracle is the same program without that sweep: same output for any stream that
 respects the delay bound, in any arrival order within it, with interval events and
 deletions; and the store stays flat on a long stream."""
+import json
 import random
 import re
 
@@ -29,16 +30,16 @@ def program(policy: str, rules=RULES) -> str:
 
 
 def without_sweep(prolog: str) -> str:
-    return re.sub(r"^ele_forget_blockers\(Before[^\n]*\n(?:[ \t][^\n]*\n)*", "", prolog, flags=re.M)
+    return re.sub(r"^ele_forget_blockers\(Clock[^\n]*\n(?:[ \t][^\n]*\n)*", "", prolog, flags=re.M)
 
 
 def load(policy: str, sweep: bool, rules=RULES, tag: str = "") -> Engine:
     result = compile_source(program(policy, rules), f"negation_{policy}_{sweep}{tag}.rtl",
                             module=f"negation_{policy}_{'sweep' if sweep else 'keep'}{tag}")
     if not sweep:
-        assert "ele_forget_blockers(Before" in result.prolog
+        assert "ele_forget_blockers(Clock" in result.prolog
         result.prolog = without_sweep(result.prolog)
-        assert "ele_forget_blockers(Before" not in result.prolog
+        assert "ele_forget_blockers(Clock" not in result.prolog
     engine = Engine.from_compiled(result)
     engine.set_flag("max_delay", repr(DELAY))
     return engine
@@ -99,7 +100,9 @@ def test_the_store_stays_flat_on_a_long_stream(policy):
     # (the last rule's blockers share only the right side's variables: its store is not swept)
     swept, kept = load(policy, True, RULES[:3], "_flat"), load(policy, False, RULES[:3], "_flat")
     stream = long_stream(6_000)
-    _, size_short = run(swept, stream[:1_500])
+    # (from 3,000 events on: before, the waiting rights, at most one per key and value under
+    # `recent`, 20 x 20 per rule, are still filling up)
+    _, size_short = run(swept, stream[:3_000])
     _, size_long = run(swept, stream)
     _, size_kept = run(kept, stream)
     if policy == "recent":
@@ -107,3 +110,71 @@ def test_the_store_stays_flat_on_a_long_stream(policy):
         assert size_long <= 1.5 * size_short + 50, (size_short, size_long)
     else:                           # unrestricted keeps every unblocked left and right, by definition
         assert size_long < size_kept / 2, (size_short, size_long, size_kept)
+
+
+SWEEP_COUNT = """\
+:- use_module(retalis_runtime(retalis)).
+:- use_module(library(assoc)).
+:- dynamic sweep_at/4.
+count_sweeps(_) :-
+    nb_getval(rtl_clock, Clock),
+    nb_getval(rtl_longest_by_type, ByType),
+    ( get_assoc(b/2, ByType, Longest) -> true ; Longest = 0 ),
+    ( nb_current('rtl_blockers_due e_r1_1', Due) -> true ; Due = null ),
+    predicate_property(negation_sweeps:e_r1_1_negs(_, _, _, _, _), number_of_clauses(Negs)),
+    assertz(sweep_at(Clock, Longest, Due, Negs)).
+main(Interval) :-
+    M = negation_sweeps,
+    asserta(M:(ele_forget_blockers(Clock) :- user:count_sweeps(Clock), fail)),
+    rtl_output_to(buffer),
+    rtl_input(add, Interval, 0, 500),       % an interval: 500 s long
+    forall(between(501, 3500, T),
+           ( K is T mod 3, I is T mod 7,
+             ( K =:= 0 -> E = a(I, T) ; K =:= 1 -> E = b(I, T) ; E = c(I, T) ),
+             rtl_input(add, E, T, T), rtl_take_output(_) )),
+    rtl_flag(max_delay, Delay), rtl_horizon(Horizon),
+    findall([C, L, D, N], sweep_at(C, L, D, N), At),
+    format("~w ~w ~q~n", [Delay, Horizon, At]).
+"""
+
+
+def sweeps(tmp_path, swipl, interval: str):
+    import subprocess
+    result = compile_source(program("recent", RULES[:1]), "negation_sweeps.rtl", module="negation_sweeps")
+    (tmp_path / "p.pl").write_text(result.prolog)
+    (tmp_path / "count.pl").write_text(SWEEP_COUNT)
+    done = subprocess.run([swipl, "-g", f"consult(count), main({interval}), halt", str(tmp_path / "p.pl"), "--none"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    delay, horizon, at = done.stdout.split(" ", 2)
+    # at each sweep of the stores, before the blockers' own clause: clock, longest B, when
+    # the blockers' sweep is due (set by the last one), negated events stored
+    offers = [tuple(offer) for offer in json.loads(at)]
+    return float(delay), float(horizon), offers
+
+
+def test_the_blockers_are_swept_once_the_clock_moved_half_of_what_they_keep(tmp_path, swipl):
+    # The compiled sweep visits every stored negated event, so it runs when the clock has moved
+    # on by half of what it keeps, max(delay + longest interval of a B, horizon), since the last
+    # one: here every 250 s (a B of 500 s was seen), not at each sweep of the stores.
+    delay, horizon, offers = sweeps(tmp_path, swipl, "b(1, 0)")
+    assert len(offers) > 3000 / 64 - 5                  # the stores are swept every 64 events
+    assert offers[-1][1] == 500
+    taken = [(prev, cur) for prev, cur in zip(offers, offers[1:]) if cur[2] != prev[2]]
+    assert 3000 / 250 - 2 <= len(taken) <= 3000 / 250 + 1
+    for prev, cur in taken:
+        clock, longest, due, _ = prev
+        assert prev[2] is None or clock >= prev[2]
+        assert cur[2] == clock + max(delay + longest, horizon) / 2
+    # what it keeps stays bounded: a third of the events are negated, kept at most 1.5 * 501 s
+    assert max(n for *_, n in offers) <= 1.5 * 501 / 3 + 64
+
+
+def test_a_long_interval_of_another_event_does_not_delay_the_sweep(tmp_path, swipl):
+    # What a blocker must wait for is how early a later B can start: a long interval of
+    # another event (here z, as a long derived event would be) does not make it wait.
+    delay, horizon, offers = sweeps(tmp_path, swipl, "z(1)")
+    assert all(longest == 0 for _, longest, _, _ in offers)
+    taken = [cur for prev, cur in zip(offers, offers[1:]) if cur[2] != prev[2]]
+    assert len(taken) >= len(offers) - 2
+    assert max(n for *_, n in offers[1:]) <= 64

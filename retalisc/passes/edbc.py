@@ -789,22 +789,24 @@ class _RuleGenerator:
                            self.restoring(C("forall", inside, self.output(step, s1, e2, arrivals=arrivals))))]))
 
     def forget_blockers(self, step: Step, lefts: Term, negs: Term, s1: Var, e1: Var, sn: Var, en: Var) -> None:
-        """The sweep of an unwindowed `not(N).[L, R]` whose R is an event: `ele_forget_blockers(Before)`
+        """The sweep of an unwindowed `not(N).[L, R]` whose R is an event: `ele_forget_blockers(Clock)`
         drops each N that ended before `Before` together with the waiting Ls it blocks (those that
-        ended before it started). The runtime passes a `Before` that no later R can start before
-        (the delay bound and the longest event interval seen) and that lies outside the retraction
-        horizon: such an L can never pair again, and no later L can end before such an N starts,
-        so the N can block nothing more. Only when N's key is L's (else an N blocks an L only
-        for some Rs)."""
-        if step.window is not None or not step.right.is_event:
+        ended before it started). `rtl_blockers_due/4` says whether this step's sweep is due and
+        gives a `Before` that no later R can start before (the delay bound and the longest
+        interval of an R seen) and that lies outside the retraction horizon: such an L can never
+        pair again, and no later L can end before such an N starts, so the N can block nothing
+        more. Only when N's key is L's (else an N blocks an L only for some Rs)."""
+        if step.window is not None or not step.right.is_event or signature(step.right.term) is None:
             return
         left_names = {v.name for v in operand_vars(step.left)}
         if not {v.name for v in operand_vars(step.negated)} & (left_names | {v.name for v in operand_vars(step.right)}) \
                 <= left_names:
             return
-        before = V(self.fresh("Before"))
+        clock, before = V(self.fresh("Clock")), V(self.fresh("Before"))
+        name, arity = signature(step.right.term)
         blocked_lefts = conj([lefts, C("<", e1, sn)])
-        self.clauses.append(clause(C("ele_forget_blockers", before), [
+        self.clauses.append(clause(C("ele_forget_blockers", clock), [
+            C("rtl_blockers_due", Atom(step.name), C("/", Atom(name), Number(arity)), clock, before),
             C("forall", conj([negs, C("<", en, before)]),
               conj([C("forall", blocked_lefts, C("retract", lefts)), C("retract", negs)]))]))
 
