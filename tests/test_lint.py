@@ -159,3 +159,27 @@ def test_werror_makes_warnings_errors(tmp_path, command):
     clean = tmp_path / "clean.rtl"
     clean.write_text("r(X) <- a(X) or b(X).\n")
     assert CliRunner().invoke(main, [command, str(clean), "--werror"]).exit_code == 0
+
+
+def test_variable_met_first_inside_a_negation_and_used_after_it():
+    [warning] = lint("p(0, 0) :- \\+ f(Y), e(Y, Y).\n")
+    assert warning.code == "variable-bound-after-negation"
+    assert (warning.span.line, warning.span.column) == (1, 17)
+    assert "variable Y is met first inside \\+ f(Y)" in warning.message
+    assert "before the negation" in warning.hint
+
+
+@pytest.mark.parametrize("text", [
+    "p(X) :- e(X, Y), \\+ f(Y).\n",                # bound before the negation
+    "p(Y) :- \\+ f(Y), e(Y, Y).\n",                # a head variable: the caller may bind it
+    "p :- \\+ f(Y), e(1, 2).\n",                   # not used after it
+    "p :- \\+ f(_Y), e(_Y, 1).\n",                 # marked as don't-care
+])
+def test_negations_that_bind_nothing_later_used_are_not_reported(text):
+    assert "variable-bound-after-negation" not in codes(text)
+
+
+def test_variable_met_first_inside_a_negation_in_a_condition():
+    [warning] = lint(":- dynamic f/1, g/1.\nalarm(X) <- smoke(X) where (\\+ f(Z), g(Z)).\n")
+    assert warning.code == "variable-bound-after-negation"
+    assert warning.span.line == 2

@@ -20,7 +20,12 @@ errors. The pass changes nothing in the unit but `unit.lint` and `unit.warnings`
   relates them and no window bounds them: every event of one side is paired with every
   earlier event of the other, and a rule without window keeps its partial matches forever,
   so each event costs more than the one before (not reported under the `recent` and
-  `chronological` policies, which consume partners).
+  `chronological` policies, which consume partners);
+- `variable-bound-after-negation`: a variable met first inside `\\+ G` of a clause body or a
+  condition and used by a later goal: `\\+` binds nothing, so the negation asks whether G holds
+  for any value, not for the one the later goal finds (and SWI-Prolog 9.0.4 compiles such a
+  clause wrongly when the later goal is its last call: `p :- \\+ f(Y), e(Y, Y).` with only
+  `e(0, 1)` stored succeeds).
 
 Runs last in the event pipeline, after the checks that make a program an error.
 """
@@ -82,6 +87,7 @@ def lint_unit(unit: Unit) -> List[LintWarning]:
         if unit.settings.consumption_policy == "unrestricted":
             found += _keyless_joins(rule)
     found += _event_operators_in_clauses(program)
+    found += _variables_bound_after_negation(program)
     found += _undefined_predicates(unit)
     found.sort(key=lambda w: (w.span.line, w.span.column) if w.span else (0, 0))
     return found
@@ -279,6 +285,57 @@ def _keyless_joins(rule: EventRule) -> Iterable[LintWarning]:
             "kept forever, so each event costs more than the one before",
             "use the same variable on both sides for the thing they are about (a(X) seq b(X)), relate them "
             "with a where condition, or bound the pattern with a window: (P).Seconds")
+
+
+# ---- a variable met first inside a negation -------------------------------------------------
+
+
+def _variables_bound_after_negation(program) -> List[LintWarning]:
+    found: List[LintWarning] = []
+    for clause in program.static_clauses:
+        if clause.body is not None:
+            found += _negated_then_used(clause.body, {v.name for v in variables(clause.head)}, clause.span)
+    for rule in program.event_rules:
+        conditions = list(pattern_conditions(rule.pattern))
+        events = _all_variables(rule.pattern) | {v.name for v in variables(rule.head)}
+        for i, condition in enumerate(conditions):
+            others = {v.name for c in conditions[:i] + conditions[i + 1:] for v in variables(c)}
+            found += _negated_then_used(condition, events | others, rule.span)
+    return found
+
+
+def _conjuncts(goal):
+    while isinstance(goal, Compound) and goal.name == "," and goal.arity == 2:
+        yield from _conjuncts(goal.args[0])
+        goal = goal.args[1]
+    yield goal
+
+
+def _negated_then_used(body, known: Set[str], fallback: Optional[Span]) -> List[LintWarning]:
+    """Variables of a `\\+` in the conjunction `body` that no earlier goal (nor `known`)
+    mentions and a later goal uses."""
+    goals = list(_conjuncts(body))
+    seen = set(known)
+    found: List[LintWarning] = []
+    for i, goal in enumerate(goals):
+        if isinstance(goal, Compound) and goal.name == "\\+" and goal.arity == 1:
+            later = set()
+            for after in goals[i + 1:]:
+                later |= {v.name for v in variables(after)}
+            for var in variables(goal.args[0]):
+                if var.name in seen or var.name not in later or var.name.startswith("_"):
+                    continue
+                seen.add(var.name)          # once per variable
+                negated = write_term(goal.args[0], 999)
+                found.append(LintWarning(
+                    "variable-bound-after-negation", span_of(var) or span_of(goal) or fallback,
+                    f"variable {var.name} is met first inside \\+ {negated} and used after it: \\+ binds "
+                    f"nothing, so this asks whether {negated} holds for any {var.name}, not for the one the "
+                    "later goal finds (SWI-Prolog 9.0.4 also compiles such a clause wrongly)",
+                    f"put the goal that binds {var.name} before the negation"))
+        else:
+            seen |= {v.name for v in variables(goal)}
+    return found
 
 
 # ---- predicates that do not exist -------------------------------------------------------
