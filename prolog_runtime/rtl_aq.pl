@@ -103,6 +103,7 @@ init_globals :-
     trie_new(St), nb_setval(aq_cstates, St),
     trie_new(NS), nb_setval(aq_nstates, NS),
     nb_setval(aq_buffer, off),
+    nb_setval(aq_joins, unknown),
     nb_setval(aq_dred, '$none').
 
 %!  aq_configure(+Options) is det.
@@ -117,6 +118,7 @@ aq_configure(Options) :-
     retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
     retractall(aq_fact_only(_, _, _)),
     nb_setval(aq_ground, unknown),
+    nb_setval(aq_joins, unknown),
     forall(member(Opt, Options), configure(Opt)).
 
 configure(mode(M)) :- !,
@@ -181,6 +183,7 @@ aq_register(Id, Goal, Answers) :-
     (   aq_q(Id, _, _, _) -> permission_error(register, active_query, Id) ; true ),
     goal_kind(Goal, Kind),
     copy_term(Goal, G),
+    (   nb_getval(aq_joins, unknown) -> find_join_steps ; true ),
     nb_setval(aq_registering, Id),
     nb_setval(aq_phase, insert),
     catch(register_root(Kind, Id, G), E,
@@ -446,7 +449,15 @@ aq_wait_fact(Lit, S) :-
     wait_fact(P, Lit, S).
 
 wait_fact(insert, Lit, S) :-
-    user:'$aq_wadd'(Lit, S),
+    (   join_state(S)
+    ->  true
+    ;   user:'$aq_wadd'(Lit, S)
+    ),
+    forall(user:Lit, go(S, Lit, 0)).
+%   A join state existed when its consumer state or its answer is over-deleted
+%   (the caller found both), and it has that one derivation.
+wait_fact(delete, Lit, S) :-
+    join_state(S), !,
     forall(user:Lit, go(S, Lit, 0)).
 wait_fact(delete, Lit, S) :-
     take_fact_records(Lit, S, N),
@@ -458,7 +469,9 @@ wait_fact(delete, Lit, S) :-
 %   A state that is there already gets one more goal record: restoring an
 %   over-deleted derivation reached it a second time.
 wait_fact(restore, Lit, S) :-
-    (   has_fact_record(Lit, S)
+    (   join_state(S)
+    ->  forall(user:Lit, go(S, Lit, 0))
+    ;   has_fact_record(Lit, S)
     ->  user:'$aq_wadd'(Lit, S)
     ;   wait_fact(insert, Lit, S)
     ).
@@ -485,6 +498,75 @@ take_fact_records(Lit, S, N) :-
 
 has_fact_record(Lit, S) :-
     once(fact_record(Lit, S, _)).
+
+%   Join states.  A state S waiting on a fact literal F that a consumer
+%   state P creates from an answer of its call literal L, with no builtin
+%   between the two literals ('$aq_go'(P, L, _) :- aq_wait_fact(F, S)),
+%   exists exactly when P waits on its table and L has that answer: S is
+%   the join of P with the table.  When S holds every variable of P and L,
+%   the pair (P, answer) is its only derivation, and S keeps no goal record:
+%   a fact that arrives (or goes) finds its join states through the
+%   consumer states of that step (a trie lookup in the cstates trie with the
+%   arguments the fact binds) and their tables (a trie lookup of the answer
+%   the fact binds).  A left-recursive rule (path(X, Y) :- path(X, Z),
+%   edge(Z, Y)) so keeps one record per call instead of one per answer.
+%   The steps are found in the generated clauses (join_step/5), again when
+%   rules are added or removed at run time; not in the naive mode, whose
+%   facts are tables.
+:- dynamic aq_join_step/4.      % aq_join_step(Fact, Prev, CallLiteral, State)
+
+join_state(S) :-
+    nb_getval(aq_joins, true),
+    aq_join_step(_, _, _, S), !.
+
+%   The join states that wait on fact F: those of the consumer states of a
+%   join step that have an answer binding F's literal.
+join_states(F, S) :-
+    nb_getval(aq_joins, true),
+    aq_join_step(F, P, L, S),
+    nb_getval(aq_cstates, St),
+    trie_gen(St, P, V),
+    table_of(V, T),
+    trie_gen(T, L, _).
+
+%   Forward from fact F to every state that waits on it.
+fact_go(F) :-
+    forall(user:'$aq_wrec'(F, S), go(S, F, 0)),
+    (   nb_getval(aq_joins, true)
+    ->  findall(S, join_states(F, S), Ss),
+        forall(member(S, Ss), go(S, F, 0))
+    ;   true
+    ).
+
+awaited_fact(F) :-
+    (   user:'$aq_wrec'(F, _)
+    ->  true
+    ;   join_states(F, _)
+    ->  true
+    ).
+
+find_join_steps :-
+    retractall(aq_join_step(_, _, _, _)),
+    (   aq_conf(mode, naive)
+    ->  true
+    ;   forall(join_step(F, P, L, S), assertz(aq_join_step(F, P, L, S)))
+    ),
+    (   aq_join_step(_, _, _, _) -> B = true ; B = false ),
+    nb_setval(aq_joins, B).
+
+join_step(F, P, L, S) :-
+    user:clause('$aq_go'(P, L, _), Body),
+    body_last(Body, true, Last),
+    strip_module(Last, _, aq_wait_fact(F, S)),
+    nonvar(P), P \= q(_),
+    nonvar(L), L \= '$aq_not'(_),
+    user:'$aq_kind'(L, call),
+    \+ user:'$aq_fact_pred'(L),
+    term_variables(P-L, Vs),
+    term_variables(S, SVs),
+    forall(member(V, Vs), ( member(W, SVs), W == V )),
+    functor(S, N, A), functor(S0, N, A),
+    aggregate_all(count, state_creator(S0, _), 1).
 
 %!  aq_wait_call(+Literal, +State) is det.
 %
@@ -943,7 +1025,7 @@ aq_assert(Fact) :-
 add_fact(Fact) :-
     ( ground(Fact) -> true ; not_all_ground(Fact) ),
     assertz(user:Fact),
-    forall(user:'$aq_wrec'(Fact, S), go(S, Fact, 0)),
+    fact_go(Fact),
     drain.
 
 %!  aq_assert_all(+Facts) is det.
@@ -968,13 +1050,13 @@ add_facts([F|Fs]) :-
     ->  (   user:F
         ->  true
         ;   assertz(user:F),
-            forall(user:'$aq_wrec'(F, S), go(S, F, 0))
+            fact_go(F)
         )
     ;   has_fact(F)
     ->  true
     ;   not_all_ground(F),
         assertz(user:F),
-        forall(user:'$aq_wrec'(F, S), go(S, F, 0))
+        fact_go(F)
     ),
     add_facts(Fs).
 
@@ -1006,7 +1088,7 @@ retract_facts(Facts0) :-
 %   not there does nothing).
 quiet_retract([], []).
 quiet_retract([F|Fs], Awaited) :-
-    (   \+ user:'$aq_wrec'(F, _)
+    (   \+ awaited_fact(F)
     ->  erase_fact(F),
         Awaited = Awaited1
     ;   has_fact(F)
@@ -1122,8 +1204,7 @@ dred_run(Seed, Cleanup) :-
 over_delete_facts(Facts) :-
     nb_getval(aq_dred, D),
     forall(member(F, Facts), ignore(trie_insert(D, f(F)))),
-    forall(member(F, Facts),
-           forall(user:'$aq_wrec'(F, S), go(S, F, 0))).
+    forall(member(F, Facts), fact_go(F)).
 
 dred_end(D) :-
     (   aq_agenda(_, _, _) -> retractall(aq_agenda(_, _, _)) ; true ),
@@ -1245,6 +1326,10 @@ creates(aq_wait_neg(_, _, S, _), S).
 
 premise(act(T), none, _, 0) :- !,
     aq_tab(T, _, _, _, _).
+premise(P, fact, Lit, 0) :-
+    join_state(P), !,
+    user:Lit,
+    once(join_states(Lit, P)).
 premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on their
     \+ \+ user:'$aq_wrec'(Lit, P),   % bound arguments, goal records often are not; but
     user:Lit,                       % one look at the records first skips a rule whose
@@ -1292,9 +1377,14 @@ aq_add_rule(Rule0) :-
         (   user:'$aq_kind'(P, _) -> true ; assertz(user:'$aq_kind'(P, call)) ),
         maplist(assert_clause, Clauses, Refs),
         assertz(aq_rule(N, Rule, Refs)),
+        join_steps_changed,
         Clauses = [Act|_],
         neg_update(activate_rule(insert, Act))
     ).
+
+%   The steps of the join states (join_step/4) as the clauses are now.
+join_steps_changed :-
+    (   nb_getval(aq_joins, unknown) -> true ; find_join_steps ).
 
 as_call(fact(G), call(G)) :- !.
 as_call(L, L).
@@ -1325,7 +1415,8 @@ aq_remove_rule(Rule) :-
         Refs = [ActRef|_],
         clause(user:AH, AB, ActRef),
         neg_update(dred_run(activate_rule(delete, (AH :- AB)),
-                            ( maplist(erase, Refs), erase(RuleRef) )))
+                            ( maplist(erase, Refs), erase(RuleRef) ))),
+        join_steps_changed
     ;   throw(aq_rule_error('no such rule was added (only rules added at run time can be removed)'))
     ).
 
