@@ -119,6 +119,8 @@ aq_configure(Options) :-
     retractall(aq_fact_only(_, _, _)),
     nb_setval(aq_ground, unknown),
     nb_setval(aq_joins, unknown),
+    retractall(aq_join_consumers(_, _, _)),
+    retractall(aq_join_off(_, _)),
     forall(member(Opt, Options), configure(Opt)).
 
 configure(mode(M)) :- !,
@@ -378,6 +380,8 @@ aq_reset :-
     retractall(aq_agenda(_, _, _)),
     retractall(aq_negq(_, _, _, _, _)),
     retractall(aq_warm(_, _, _)),
+    retractall(aq_join_consumers(_, _, _)),
+    retractall(aq_join_off(_, _)),
     flag(aq_registrations, _, 0),
     retractall(aq_ground_facts(_, _, _)),       % recomputed when needed
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
@@ -549,10 +553,53 @@ find_join_steps :-
     retractall(aq_join_step(_, _, _, _)),
     (   aq_conf(mode, naive)
     ->  true
-    ;   forall(join_step(F, P, L, S), assertz(aq_join_step(F, P, L, S)))
+    ;   forall(( join_step(F, P, L, S), functor(P, N, A), \+ aq_join_off(N, A) ),
+               assertz(aq_join_step(F, P, L, S)))
     ),
     (   aq_join_step(_, _, _, _) -> B = true ; B = false ),
     nb_setval(aq_joins, B).
+
+%   A fact of a join step's literal looks at every consumer state of the
+%   step that its arguments do not tell apart (path(X, Z) for every X, when
+%   edge(Z, Y) arrives), where a goal record is found by its index.  Past
+%   join_consumer_limit/1 consumer states of one step, its states get their
+%   goal records again (join_step_to_records/2) and keep them until
+%   aq_reset/0.  The limit weighs a trie lookup per consumer state (about
+%   0.1 us) at every fact of the literal against a goal record per answer
+%   (about 1 us and 250 bytes).  A switch in the middle of a propagation may
+%   give a state a second record for the derivation it had as a join state:
+%   that counts it as derived twice, which costs DRed a re-derivation check
+%   and changes no answer.
+join_consumer_limit(32).
+
+:- dynamic
+    aq_join_consumers/3,        % aq_join_consumers(Name, Arity, Count)
+    aq_join_off/2.              % aq_join_off(Name, Arity): the step has records
+
+count_join_consumer(S) :-
+    (   nb_getval(aq_joins, true),
+        functor(S, N, A), functor(P, N, A),
+        aq_join_step(_, P, _, _)
+    ->  (   retract(aq_join_consumers(N, A, C0)) -> true ; C0 = 0 ),
+        C is C0 + 1,
+        assertz(aq_join_consumers(N, A, C)),
+        (   join_consumer_limit(Max),
+            C > Max,
+            nb_getval(aq_phase, insert)
+        ->  join_step_to_records(N, A)
+        ;   true
+        )
+    ;   true
+    ).
+
+join_step_to_records(N, A) :-
+    functor(P, N, A),
+    nb_getval(aq_cstates, St),
+    forall(retract(aq_join_step(F, P, L, S)),
+           ( findall(F-S, ( trie_gen(St, P, V), table_of(V, T), trie_gen(T, L, _) ), Waiting),
+             forall(member(F-S, Waiting), user:'$aq_wadd'(F, S)) )),
+    assertz(aq_join_off(N, A)),
+    (   aq_join_step(_, _, _, _) -> true ; nb_setval(aq_joins, false) ).
 
 join_step(F, P, L, S) :-
     user:clause('$aq_go'(P, L, _), Body),
@@ -721,6 +768,7 @@ table_of(m(T), T) :- !.
 table_of(T, T).
 
 consume(New, T, Lit, S) :-
+    count_join_consumer(S),
     (   S = q(Id), nb_getval(aq_registering, Id)
     ->  Snap = []                       % register_root/3 adds the record
     ;   New == true

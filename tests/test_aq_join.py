@@ -96,3 +96,19 @@ def test_left_recursion_keeps_no_record_per_answer():
 
 def support_rules(name):
     return RULES[name]
+
+
+def test_many_consumers_of_one_join_step():
+    """40 queries path(I, _) on a left-recursive graph: past 32 consumer states of the join
+    step its states get goal records again (every fact would otherwise look at all of them);
+    the answers stay those of SWI tabling through additions and deletions, before and after."""
+    edges = [f"edge({i}, {i + 1})" for i in range(40)] + ["edge(7, 3)", "edge(20, 11)", "edge(39, 0)"]
+    source = ":- dynamic edge/2.\n" + RULES["left"] + "".join(e + ".\n" for e in edges)
+    goals = [f"path({i}, X)" for i in range(0, 40, 3)] + [f"path({i}, X)" for i in range(1, 40, 3)] \
+        + [f"path({i}, X)" for i in range(2, 40, 9)] + ["path(X, 5)", "path(3, 30)"]
+    steps = [("-", "edge(39, 0)"), ("-", "edge(15, 16)"), ("+", "edge(39, 0)"), ("+", "edge(15, 16)"),
+             ("-", "edge(7, 3)"), ("-", "edge(2, 3)"), ("+", "edge(41, 42)"), ("+", "edge(40, 41)"),
+             ("+", "edge(2, 3)"), ("-", "edge(40, 41)")]
+    check(source, goals, steps)
+    before_switch = [f"path({i}, X)" for i in range(0, 40, 3)]
+    check(source, before_switch, steps)
