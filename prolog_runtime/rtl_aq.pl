@@ -533,14 +533,17 @@ join_states(F, S) :-
     table_of(V, T),
     trie_gen(T, L, _).
 
-%   Forward from fact F to every state that waits on it.
+%   Forward from fact F to every state that waits on it.  The join states
+%   are collected first: should the goal records' propagation switch their
+%   step to records (join_step_to_records/2), the records loop, which sees
+%   the records as they were when it started, would miss them.
 fact_go(F) :-
-    forall(user:'$aq_wrec'(F, S), go(S, F, 0)),
     (   nb_getval(aq_joins, true)
-    ->  findall(S, join_states(F, S), Ss),
-        forall(member(S, Ss), go(S, F, 0))
-    ;   true
-    ).
+    ->  findall(S, join_states(F, S), Joined)
+    ;   Joined = []
+    ),
+    forall(user:'$aq_wrec'(F, S), go(S, F, 0)),
+    forall(member(S, Joined), go(S, F, 0)).
 
 awaited_fact(F) :-
     (   user:'$aq_wrec'(F, _)

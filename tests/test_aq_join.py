@@ -12,6 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import test_aq_support as support
+from test_aq_oracle import run_updates
 from retalisc.compiler import AqOptions, compile_source
 
 NODES = [str(n) for n in range(5)]
@@ -112,3 +113,49 @@ def test_many_consumers_of_one_join_step():
     check(source, goals, steps)
     before_switch = [f"path({i}, X)" for i in range(0, 40, 3)]
     check(source, before_switch, steps)
+
+
+START = st.integers(0, 39).map(lambda i: f"start({i})")
+BIG_EDGE = st.tuples(st.integers(0, 41), st.integers(0, 41)).map(lambda t: f"edge({t[0]}, {t[1]})")
+
+
+@st.composite
+def switch_case(draw):
+    """Batches that start many tables of one join step at once (start(I) makes path(I, _) a
+    table), with edges in the same batch: the step switches to goal records in the middle of
+    the batch's propagation, or at a later update."""
+    edges = [f"edge({i}, {i + 1})" for i in range(40)] + draw(st.lists(BIG_EDGE, max_size=6, unique=True))
+    starts = draw(st.lists(START, max_size=5, unique=True))
+    steps = []
+    for _ in range(draw(st.integers(1, 4))):
+        batch = draw(st.lists(st.one_of(START, START, START, BIG_EDGE), min_size=1, max_size=40))
+        steps.append((draw(st.sampled_from("++-")), batch))
+    source = (":- dynamic edge/2, start/1.\n" + RULES["left"] + "reach(X, Y) :- start(X), path(X, Y).\n"
+              + "".join(f + ".\n" for f in edges + starts))
+    return source, ["reach(X, Y)", "path(0, 20)"], steps
+
+
+@settings(max_examples=max(5, int(os.environ.get("AQ_EXAMPLES", "25")) // 3), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(switch_case())
+def test_join_step_switching_to_records_in_a_batch(case):
+    source, goals, steps = case
+    inc, orc, scr, stats = run_updates(source, goals, steps, "tabled", False, "primary")
+    for key in orc:
+        assert inc[key] == orc[key], f"step {key}: incremental {inc[key]} != SWI tabling {orc[key]}"
+        assert scr[key] == orc[key], f"step {key}: scratch {scr[key]} != SWI tabling {orc[key]}"
+    assert "fact_records=0" in stats, stats
+
+
+def test_switch_during_a_fact_propagation_keeps_the_fact_for_join_states():
+    """edge(0, K) makes path(K, _) a new table (through hop/1) and is also the fact that the
+    join state after path(50, 0) waits on: the step switches to goal records while the 33rd
+    such edge propagates, and path(50, K) must still be derived from that edge."""
+    source = (":- dynamic edge/2.\n" + RULES["left"] + "hop(Y) :- edge(0, X), path(X, Y).\n"
+              + "edge(50, 0).\nedge(60, 61).\n")
+    batch = [f"edge(0, {k})" for k in range(1, 41)] + [f"edge({k}, {k + 100})" for k in range(1, 41, 5)]
+    steps = [("+", batch), ("-", ["edge(0, 7)", "edge(0, 35)"]), ("+", ["edge(0, 35)"])]
+    inc, orc, scr, stats = run_updates(source, ["path(50, Y)", "hop(Y)"], steps, "tabled", False, "primary")
+    for key in orc:
+        assert inc[key] == orc[key], f"step {key}: incremental {inc[key]} != SWI tabling {orc[key]}"
+        assert scr[key] == orc[key], f"step {key}: scratch {scr[key]} != SWI tabling {orc[key]}"
