@@ -16,7 +16,10 @@
     by the head and the literals before literal j.  It waits for literal j,
     either on stored facts (a fact record, "facts resolved in place") or on a
     table of answers (a consumer record).  Together they are the one kind of
-    goal(a_i, e_ki) record of the Optimized approach.
+    goal(a_i, e_ki) record of the Optimized approach.  A state on a fact
+    literal right after a call literal is a join state instead: no record,
+    the join of the consumer state before it with its table (see "Join
+    states").
 
     Tables are keyed according to the mode:
       tabled     variant of the sub-goal (or a subsuming table), shared by all
@@ -121,6 +124,7 @@ aq_configure(Options) :-
     nb_setval(aq_ground, unknown),
     nb_setval(aq_joins, unknown),
     retractall(aq_join_step(_, _, _, _)),
+    retractall(aq_join_eligible(_, _, _, _)),
     retractall(aq_join_consumers(_, _, _)),
     retractall(aq_join_off(_, _)),
     forall(member(Opt, Options), configure(Opt)).
@@ -407,6 +411,7 @@ aq_reset :-
     retractall(aq_negq(_, _, _, _, _)),
     retractall(aq_warm(_, _, _)),
     retractall(aq_join_step(_, _, _, _)),
+    retractall(aq_join_eligible(_, _, _, _)),
     retractall(aq_join_consumers(_, _, _)),
     retractall(aq_join_off(_, _)),
     flag(aq_registrations, _, 0),
@@ -541,10 +546,17 @@ has_fact_record(Lit, S) :-
 %   arguments the fact binds) and their tables (a trie lookup of the answer
 %   the fact binds).  A left-recursive rule (path(X, Y) :- path(X, Z),
 %   edge(Z, Y)) so keeps one record per call instead of one per answer.
-%   The steps are found in the generated clauses (join_step/5), again when
+%   The steps are found in the generated clauses (join_step/4), again when
 %   rules are added or removed at run time; not in the naive mode, whose
-%   facts are tables.
-:- dynamic aq_join_step/4.      % aq_join_step(Fact, Prev, CallLiteral, State)
+%   facts are tables.  A step is live from its first consumer state on:
+%   only live steps are looked at when a fact arrives or goes, so that a
+%   step no query uses (the body order compiled for another adornment)
+%   costs the updates nothing.  The global aq_joins is true while a step is
+%   live, eligible while there are steps but none is live, false without
+%   steps (unknown until the first registration).
+:- dynamic
+    aq_join_step/4,             % aq_join_step(Fact, Prev, CallLiteral, State): live
+    aq_join_eligible/4.         % the same for every join step of the program
 
 join_state(S) :-
     aq_join_step(_, _, _, S), !.
@@ -565,27 +577,31 @@ join_states(F, S) :-
 %   the records as they were when it started, would miss them.
 fact_go(F) :-
     (   nb_getval(aq_joins, true)
-    ->  findall(S, join_states(F, S), Joined)
-    ;   Joined = []
-    ),
-    forall(user:'$aq_wrec'(F, S), go(S, F, 0)),
-    forall(member(S, Joined), go(S, F, 0)).
-
-awaited_fact(F) :-
-    (   user:'$aq_wrec'(F, _)
-    ->  true
-    ;   join_states(F, _)
-    ->  true
+    ->  findall(F-S, join_states(F, S), Joined),
+        forall(user:'$aq_wrec'(F, S), go(S, F, 0)),
+        forall(member(F1-S, Joined), go(S, F1, 0))
+    ;   forall(user:'$aq_wrec'(F, S), go(S, F, 0))
     ).
 
 find_join_steps :-
     retractall(aq_join_step(_, _, _, _)),
+    retractall(aq_join_eligible(_, _, _, _)),
     (   aq_conf(mode, naive)
     ->  true
     ;   forall(( join_step(F, P, L, S), functor(P, N, A), \+ aq_join_off(N, A) ),
-               assertz(aq_join_step(F, P, L, S)))
+               ( assertz(aq_join_eligible(F, P, L, S)),
+                 (   aq_join_consumers(N, A, _)
+                 ->  assertz(aq_join_step(F, P, L, S))
+                 ;   true
+                 ) ))
     ),
-    (   aq_join_step(_, _, _, _) -> B = true ; B = false ),
+    join_flag.
+
+join_flag :-
+    (   aq_join_step(_, _, _, _) -> B = true
+    ;   aq_join_eligible(_, _, _, _) -> B = eligible
+    ;   B = false
+    ),
     nb_setval(aq_joins, B).
 
 %   A fact of a join step's literal looks at every consumer state of the
@@ -606,13 +622,16 @@ join_consumer_limit(32).
     aq_join_off/2.              % aq_join_off(Name, Arity): the step has records
 
 count_join_consumer(S) :-
-    (   nb_getval(aq_joins, true),
+    (   \+ nb_getval(aq_joins, false),
         functor(S, N, A), functor(P, N, A),
-        aq_join_step(_, P, _, _)
+        aq_join_eligible(_, P, _, _)
     ->  (   retract(aq_join_consumers(N, A, C0)) -> true ; C0 = 0 ),
         C is C0 + 1,
         assertz(aq_join_consumers(N, A, C)),
-        (   join_consumer_limit(Max),
+        (   C =:= 1
+        ->  forall(aq_join_eligible(F, P, L, S1), assertz(aq_join_step(F, P, L, S1))),
+            nb_setval(aq_joins, true)
+        ;   join_consumer_limit(Max),
             C > Max,
             nb_getval(aq_phase, insert)
         ->  join_step_to_records(N, A)
@@ -627,8 +646,9 @@ join_step_to_records(N, A) :-
     forall(retract(aq_join_step(F, P, L, S)),
            ( findall(F-S, ( trie_gen(St, P, V), table_of(V, T), trie_gen(T, L, _) ), Waiting),
              forall(member(F-S, Waiting), user:'$aq_wadd'(F, S)) )),
+    retractall(aq_join_eligible(_, P, _, _)),
     assertz(aq_join_off(N, A)),
-    (   aq_join_step(_, _, _, _) -> true ; nb_setval(aq_joins, false) ).
+    join_flag.
 
 join_step(F, P, L, S) :-
     user:clause('$aq_go'(P, L, _), Body),
@@ -1165,12 +1185,13 @@ retract_facts(Facts0) :-
 %   not there does nothing).
 quiet_retract([], []).
 quiet_retract([F|Fs], Awaited) :-
-    (   \+ awaited_fact(F)
-    ->  erase_fact(F),
+    (   \+ \+ ( user:'$aq_wrec'(F, _) ; join_states(F, _) )
+    ->  (   has_fact(F)
+        ->  Awaited = [F|Awaited1]
+        ;   Awaited = Awaited1
+        )
+    ;   erase_fact(F),
         Awaited = Awaited1
-    ;   has_fact(F)
-    ->  Awaited = [F|Awaited1]
-    ;   Awaited = Awaited1
     ),
     quiet_retract(Fs, Awaited1).
 
