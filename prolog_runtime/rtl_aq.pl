@@ -1141,21 +1141,37 @@ aq_assert_all(Facts) :-
 %   A ground fact is implied by a stored one exactly when calling it
 %   succeeds (implied_fact/1), tested in place: a batch of a belief base
 %   that few queries watch costs little more than the plain assertz/1s.
-add_facts([]).
-add_facts([F|Fs]) :-
+%   Without join steps (aq_joins false, or unknown before the first
+%   registration) none can become live in the batch, and its facts go to
+%   the goal records only; otherwise a fact's propagation may make a step
+%   live for the next fact, and each fact asks (fact_go/1).
+add_facts(Facts) :-
+    nb_getval(aq_joins, J),
+    (   ( J == false ; J == unknown )
+    ->  add_facts(Facts, records)
+    ;   add_facts(Facts, joins)
+    ).
+
+add_facts([], _).
+add_facts([F|Fs], How) :-
     (   ground(F)
     ->  (   user:F
         ->  true
         ;   assertz(user:F),
-            fact_go(F)
+            added_fact_go(How, F)
         )
     ;   has_fact(F)
     ->  true
     ;   not_all_ground(F),
         assertz(user:F),
-        fact_go(F)
+        added_fact_go(How, F)
     ),
-    add_facts(Fs).
+    add_facts(Fs, How).
+
+added_fact_go(records, F) :-
+    forall(user:'$aq_wrec'(F, S), go(S, F, 0)).
+added_fact_go(joins, F) :-
+    fact_go(F).
 
 %!  aq_retract(+Fact) is det.
 %
@@ -1182,10 +1198,17 @@ retract_facts(Facts0) :-
 %   A fact no state waits on derived nothing: it goes without DRed (most
 %   retractions of a belief base that a few queries watch are such facts),
 %   and without asking first whether it is stored (erasing a fact that is
-%   not there does nothing).
-quiet_retract([], []).
-quiet_retract([F|Fs], Awaited) :-
-    (   \+ \+ ( user:'$aq_wrec'(F, _) ; join_states(F, _) )
+%   not there does nothing).  Nothing propagates here, so whether a join
+%   step is live is asked once for the batch.
+quiet_retract(Facts, Awaited) :-
+    (   nb_getval(aq_joins, true)
+    ->  quiet_retract(Facts, joins, Awaited)
+    ;   quiet_retract(Facts, records, Awaited)
+    ).
+
+quiet_retract([], _, []).
+quiet_retract([F|Fs], How, Awaited) :-
+    (   awaited_fact(How, F)
     ->  (   has_fact(F)
         ->  Awaited = [F|Awaited1]
         ;   Awaited = Awaited1
@@ -1193,7 +1216,12 @@ quiet_retract([F|Fs], Awaited) :-
     ;   erase_fact(F),
         Awaited = Awaited1
     ),
-    quiet_retract(Fs, Awaited1).
+    quiet_retract(Fs, How, Awaited1).
+
+awaited_fact(records, F) :-
+    \+ \+ user:'$aq_wrec'(F, _).
+awaited_fact(joins, F) :-
+    \+ \+ ( user:'$aq_wrec'(F, _) ; join_states(F, _) ).
 
 %   Every fact of a batch is checked before any is changed.
 check_facts([]).
