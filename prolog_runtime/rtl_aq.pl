@@ -1148,30 +1148,41 @@ aq_assert_all(Facts) :-
 add_facts(Facts) :-
     nb_getval(aq_joins, J),
     (   ( J == false ; J == unknown )
-    ->  add_facts(Facts, records)
-    ;   add_facts(Facts, joins)
+    ->  add_facts_to_records(Facts)
+    ;   add_facts_to_joins(Facts)
     ).
 
-add_facts([], _).
-add_facts([F|Fs], How) :-
+add_facts_to_records([]).
+add_facts_to_records([F|Fs]) :-
     (   ground(F)
     ->  (   user:F
         ->  true
         ;   assertz(user:F),
-            added_fact_go(How, F)
+            forall(user:'$aq_wrec'(F, S), go(S, F, 0))
         )
     ;   has_fact(F)
     ->  true
     ;   not_all_ground(F),
         assertz(user:F),
-        added_fact_go(How, F)
+        forall(user:'$aq_wrec'(F, S), go(S, F, 0))
     ),
-    add_facts(Fs, How).
+    add_facts_to_records(Fs).
 
-added_fact_go(records, F) :-
-    forall(user:'$aq_wrec'(F, S), go(S, F, 0)).
-added_fact_go(joins, F) :-
-    fact_go(F).
+add_facts_to_joins([]).
+add_facts_to_joins([F|Fs]) :-
+    (   ground(F)
+    ->  (   user:F
+        ->  true
+        ;   assertz(user:F),
+            fact_go(F)
+        )
+    ;   has_fact(F)
+    ->  true
+    ;   not_all_ground(F),
+        assertz(user:F),
+        fact_go(F)
+    ),
+    add_facts_to_joins(Fs).
 
 %!  aq_retract(+Fact) is det.
 %
@@ -1202,26 +1213,32 @@ retract_facts(Facts0) :-
 %   step is live is asked once for the batch.
 quiet_retract(Facts, Awaited) :-
     (   nb_getval(aq_joins, true)
-    ->  quiet_retract(Facts, joins, Awaited)
-    ;   quiet_retract(Facts, records, Awaited)
+    ->  quiet_retract_joins(Facts, Awaited)
+    ;   quiet_retract_records(Facts, Awaited)
     ).
 
-quiet_retract([], _, []).
-quiet_retract([F|Fs], How, Awaited) :-
-    (   awaited_fact(How, F)
-    ->  (   has_fact(F)
-        ->  Awaited = [F|Awaited1]
-        ;   Awaited = Awaited1
-        )
-    ;   erase_fact(F),
+quiet_retract_records([], []).
+quiet_retract_records([F|Fs], Awaited) :-
+    (   \+ user:'$aq_wrec'(F, _)
+    ->  erase_fact(F),
         Awaited = Awaited1
+    ;   has_fact(F)
+    ->  Awaited = [F|Awaited1]
+    ;   Awaited = Awaited1
     ),
-    quiet_retract(Fs, How, Awaited1).
+    quiet_retract_records(Fs, Awaited1).
 
-awaited_fact(records, F) :-
-    \+ \+ user:'$aq_wrec'(F, _).
-awaited_fact(joins, F) :-
-    \+ \+ ( user:'$aq_wrec'(F, _) ; join_states(F, _) ).
+quiet_retract_joins([], []).
+quiet_retract_joins([F|Fs], Awaited) :-
+    (   \+ user:'$aq_wrec'(F, _),
+        \+ join_states(F, _)
+    ->  erase_fact(F),
+        Awaited = Awaited1
+    ;   has_fact(F)
+    ->  Awaited = [F|Awaited1]
+    ;   Awaited = Awaited1
+    ),
+    quiet_retract_joins(Fs, Awaited1).
 
 %   Every fact of a batch is checked before any is changed.
 check_facts([]).
