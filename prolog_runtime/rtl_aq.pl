@@ -986,7 +986,21 @@ fact_only_creator(go(Prev, Lit)) :-
     nonvar(Lit), Lit \= '$aq_not'(_),
     \+ aq_conf(mode, naive),
     user:'$aq_fact_pred'(Lit),
+    waits_on_facts(Prev),
     fact_only_state(Prev).
+
+%   States like P wait on stored facts: the goal that creates them is
+%   aq_wait_fact/2.  The literal's predicate having stored facts is not
+%   enough: a predicate with rules and facts is waited on through its
+%   table, whose answers may depend on the answer being kept (r(Y, X) :-
+%   e(X, X), r(Y, X) kept r(1, 0) by itself once its fact went).
+waits_on_facts(P) :-
+    \+ \+ ( (   user:clause('$aq_act'(_, _), Body)
+            ;   user:clause('$aq_go'(_, _, _), Body)
+            ),
+            body_last(Body, _, Last),
+            strip_module(Last, _, aq_wait_fact(_, S)),
+            \+ S \= P ).
 
 :- dynamic aq_fact_only/3.
 
