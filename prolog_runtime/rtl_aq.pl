@@ -16,7 +16,10 @@
     by the head and the literals before literal j.  It waits for literal j,
     either on stored facts (a fact record, "facts resolved in place") or on a
     table of answers (a consumer record).  Together they are the one kind of
-    goal(a_i, e_ki) record of the Optimized approach.
+    goal(a_i, e_ki) record of the Optimized approach.  A state on a fact
+    literal right after a call literal is a join state instead: no record,
+    the join of the consumer state before it with its table (see "Join
+    states").
 
     Tables are keyed according to the mode:
       tabled     variant of the sub-goal (or a subsuming table), shared by all
@@ -41,6 +44,7 @@
           [ aq_configure/1,         % +Options
             aq_register/2,          % +Id, :Goal
             aq_register/3,          % +Id, :Goal, -Answers
+            aq_register/4,          % +Id, :Goal, -Answers, +Options
             aq_unregister/1,        % +Id
             aq_assert/1,            % +Fact
             aq_retract/1,           % +Fact
@@ -103,6 +107,7 @@ init_globals :-
     trie_new(St), nb_setval(aq_cstates, St),
     trie_new(NS), nb_setval(aq_nstates, NS),
     nb_setval(aq_buffer, off),
+    nb_setval(aq_joins, unknown),
     nb_setval(aq_dred, '$none').
 
 %!  aq_configure(+Options) is det.
@@ -117,6 +122,11 @@ aq_configure(Options) :-
     retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
     retractall(aq_fact_only(_, _, _)),
     nb_setval(aq_ground, unknown),
+    nb_setval(aq_joins, unknown),
+    retractall(aq_join_step(_, _, _, _)),
+    retractall(aq_join_eligible(_, _, _, _)),
+    retractall(aq_join_consumers(_, _, _)),
+    retractall(aq_join_off(_, _)),
     forall(member(Opt, Options), configure(Opt)).
 
 configure(mode(M)) :- !,
@@ -174,20 +184,39 @@ aq_register(Id, Goal) :-
     aq_register(Id, Goal, Answers),
     forall(member(A, Answers), emit(Id, answer, A)).
 
-aq_register(Id, _:Goal0, Answers) :- !,
-    aq_register(Id, Goal0, Answers).
 aq_register(Id, Goal, Answers) :-
+    aq_register(Id, Goal, Answers, []).
+
+%!  aq_register(+Id, :Goal, -Answers, +Options) is det.
+%
+%   As aq_register/3; Options: answers(sorted) (the default) or
+%   answers(unsorted): Answers holds each answer once, in the order of
+%   its table, not sorted (a query with 100k answers registers in a fifth
+%   less time; findall/3 does not sort either).
+
+aq_register(Id, _:Goal0, Answers, Options) :- !,
+    aq_register(Id, Goal0, Answers, Options).
+aq_register(Id, Goal, Answers, Options) :-
+    must_be(list, Options),
+    (   memberchk(answers(Order), Options)
+    ->  must_be(oneof([sorted, unsorted]), Order)
+    ;   Order = sorted
+    ),
     must_be(ground, Id),
     (   aq_q(Id, _, _, _) -> permission_error(register, active_query, Id) ; true ),
     goal_kind(Goal, Kind),
     copy_term(Goal, G),
+    (   nb_getval(aq_joins, unknown) -> find_join_steps ; true ),
     nb_setval(aq_registering, Id),
     nb_setval(aq_phase, insert),
     catch(register_root(Kind, Id, G), E,
           ( nb_setval(aq_registering, '$none'), retractall(aq_agenda(_, _, _)), throw(E) )),
     nb_setval(aq_registering, '$none'),
     warm_fact_indexes,
-    aq_answers(Id, Answers).
+    (   Order == sorted
+    ->  aq_answers(Id, Answers)
+    ;   query_answers(Id, Answers)
+    ).
 
 %   The query's own consumer record is added once the evaluation is done:
 %   the answers found while registering are read from the table afterwards
@@ -272,13 +301,19 @@ goal_kind(Goal, Kind) :-
 %   The current answers of active query Id, sorted.
 
 aq_answers(Id, Answers) :-
+    query_answers(Id, As0),
+    sort(As0, Answers).
+
+%   The answers of a query in the order of its table, each once (a fact
+%   stored twice is one answer).
+query_answers(Id, Answers) :-
     (   aq_q(Id, G, Kind, T) -> true ; existence_error(active_query, Id) ),
     (   Kind == call
     ->  aq_tab(T, _, Tr, _, _),
-        findall(G, trie_gen(Tr, G), As0)
-    ;   findall(G, user:G, As0)
-    ),
-    sort(As0, Answers).
+        findall(G, trie_gen(Tr, G), Answers)
+    ;   findall(G, user:G, As0),
+        sort(As0, Answers)
+    ).
 
 %!  aq_query(:Goal, -Answers) is det.
 %
@@ -375,6 +410,10 @@ aq_reset :-
     retractall(aq_agenda(_, _, _)),
     retractall(aq_negq(_, _, _, _, _)),
     retractall(aq_warm(_, _, _)),
+    retractall(aq_join_step(_, _, _, _)),
+    retractall(aq_join_eligible(_, _, _, _)),
+    retractall(aq_join_consumers(_, _, _)),
+    retractall(aq_join_off(_, _)),
     flag(aq_registrations, _, 0),
     retractall(aq_ground_facts(_, _, _)),       % recomputed when needed
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
@@ -446,7 +485,15 @@ aq_wait_fact(Lit, S) :-
     wait_fact(P, Lit, S).
 
 wait_fact(insert, Lit, S) :-
-    user:'$aq_wadd'(Lit, S),
+    (   join_state(S)
+    ->  true
+    ;   user:'$aq_wadd'(Lit, S)
+    ),
+    forall(user:Lit, go(S, Lit, 0)).
+%   A join state existed when its consumer state or its answer is over-deleted
+%   (the caller found both), and it has that one derivation.
+wait_fact(delete, Lit, S) :-
+    join_state(S), !,
     forall(user:Lit, go(S, Lit, 0)).
 wait_fact(delete, Lit, S) :-
     take_fact_records(Lit, S, N),
@@ -458,7 +505,9 @@ wait_fact(delete, Lit, S) :-
 %   A state that is there already gets one more goal record: restoring an
 %   over-deleted derivation reached it a second time.
 wait_fact(restore, Lit, S) :-
-    (   has_fact_record(Lit, S)
+    (   join_state(S)
+    ->  forall(user:Lit, go(S, Lit, 0))
+    ;   has_fact_record(Lit, S)
     ->  user:'$aq_wadd'(Lit, S)
     ;   wait_fact(insert, Lit, S)
     ).
@@ -485,6 +534,135 @@ take_fact_records(Lit, S, N) :-
 
 has_fact_record(Lit, S) :-
     once(fact_record(Lit, S, _)).
+
+%   Join states.  A state S waiting on a fact literal F that a consumer
+%   state P creates from an answer of its call literal L, with no builtin
+%   between the two literals ('$aq_go'(P, L, _) :- aq_wait_fact(F, S)),
+%   exists exactly when P waits on its table and L has that answer: S is
+%   the join of P with the table.  When S holds every variable of P and L,
+%   the pair (P, answer) is its only derivation, and S keeps no goal record:
+%   a fact that arrives (or goes) finds its join states through the
+%   consumer states of that step (a trie lookup in the cstates trie with the
+%   arguments the fact binds) and their tables (a trie lookup of the answer
+%   the fact binds).  A left-recursive rule (path(X, Y) :- path(X, Z),
+%   edge(Z, Y)) so keeps one record per call instead of one per answer.
+%   The steps are found in the generated clauses (join_step/4), again when
+%   rules are added or removed at run time; not in the naive mode, whose
+%   facts are tables.  A step is live from its first consumer state on:
+%   only live steps are looked at when a fact arrives or goes, so that a
+%   step no query uses (the body order compiled for another adornment)
+%   costs the updates nothing.  The global aq_joins is true while a step is
+%   live, eligible while there are steps but none is live, false without
+%   steps (unknown until the first registration).
+:- dynamic
+    aq_join_step/4,             % aq_join_step(Fact, Prev, CallLiteral, State): live
+    aq_join_eligible/4.         % the same for every join step of the program
+
+join_state(S) :-
+    aq_join_step(_, _, _, S), !.
+
+%   The join states that wait on fact F: those of the consumer states of a
+%   join step that have an answer binding F's literal.
+join_states(F, S) :-
+    nb_getval(aq_joins, true),
+    aq_join_step(F, P, L, S),
+    nb_getval(aq_cstates, St),
+    trie_gen(St, P, V),
+    table_of(V, T),
+    trie_gen(T, L, _).
+
+%   Forward from fact F to every state that waits on it.  The join states
+%   are collected first: should the goal records' propagation switch their
+%   step to records (join_step_to_records/2), the records loop, which sees
+%   the records as they were when it started, would miss them.
+fact_go(F) :-
+    (   nb_getval(aq_joins, true)
+    ->  findall(F-S, join_states(F, S), Joined),
+        forall(user:'$aq_wrec'(F, S), go(S, F, 0)),
+        forall(member(F1-S, Joined), go(S, F1, 0))
+    ;   forall(user:'$aq_wrec'(F, S), go(S, F, 0))
+    ).
+
+find_join_steps :-
+    retractall(aq_join_step(_, _, _, _)),
+    retractall(aq_join_eligible(_, _, _, _)),
+    (   aq_conf(mode, naive)
+    ->  true
+    ;   forall(( join_step(F, P, L, S), functor(P, N, A), \+ aq_join_off(N, A) ),
+               ( assertz(aq_join_eligible(F, P, L, S)),
+                 (   aq_join_consumers(N, A, _)
+                 ->  assertz(aq_join_step(F, P, L, S))
+                 ;   true
+                 ) ))
+    ),
+    join_flag.
+
+join_flag :-
+    (   aq_join_step(_, _, _, _) -> B = true
+    ;   aq_join_eligible(_, _, _, _) -> B = eligible
+    ;   B = false
+    ),
+    nb_setval(aq_joins, B).
+
+%   A fact of a join step's literal looks at every consumer state of the
+%   step that its arguments do not tell apart (path(X, Z) for every X, when
+%   edge(Z, Y) arrives), where a goal record is found by its index.  Past
+%   join_consumer_limit/1 consumer states of one step, its states get their
+%   goal records again (join_step_to_records/2) and keep them until
+%   aq_reset/0.  The limit weighs a trie lookup per consumer state (about
+%   0.1 us) at every fact of the literal against a goal record per answer
+%   (about 1 us and 250 bytes).  A switch in the middle of a propagation may
+%   give a state a second record for the derivation it had as a join state:
+%   that counts it as derived twice, which costs DRed a re-derivation check
+%   and changes no answer.
+join_consumer_limit(32).
+
+:- dynamic
+    aq_join_consumers/3,        % aq_join_consumers(Name, Arity, Count)
+    aq_join_off/2.              % aq_join_off(Name, Arity): the step has records
+
+count_join_consumer(S) :-
+    (   \+ nb_getval(aq_joins, false),
+        functor(S, N, A), functor(P, N, A),
+        aq_join_eligible(_, P, _, _)
+    ->  (   retract(aq_join_consumers(N, A, C0)) -> true ; C0 = 0 ),
+        C is C0 + 1,
+        assertz(aq_join_consumers(N, A, C)),
+        (   C =:= 1
+        ->  forall(aq_join_eligible(F, P, L, S1), assertz(aq_join_step(F, P, L, S1))),
+            nb_setval(aq_joins, true)
+        ;   join_consumer_limit(Max),
+            C > Max,
+            nb_getval(aq_phase, insert)
+        ->  join_step_to_records(N, A)
+        ;   true
+        )
+    ;   true
+    ).
+
+join_step_to_records(N, A) :-
+    functor(P, N, A),
+    nb_getval(aq_cstates, St),
+    forall(retract(aq_join_step(F, P, L, S)),
+           ( findall(F-S, ( trie_gen(St, P, V), table_of(V, T), trie_gen(T, L, _) ), Waiting),
+             forall(member(F-S, Waiting), user:'$aq_wadd'(F, S)) )),
+    retractall(aq_join_eligible(_, P, _, _)),
+    assertz(aq_join_off(N, A)),
+    join_flag.
+
+join_step(F, P, L, S) :-
+    user:clause('$aq_go'(P, L, _), Body),
+    body_last(Body, true, Last),
+    strip_module(Last, _, aq_wait_fact(F, S)),
+    nonvar(P), P \= q(_),
+    nonvar(L), L \= '$aq_not'(_),
+    user:'$aq_kind'(L, call),
+    \+ user:'$aq_fact_pred'(L),
+    term_variables(P-L, Vs),
+    term_variables(S, SVs),
+    forall(member(V, Vs), ( member(W, SVs), W == V )),
+    functor(S, N, A), functor(S0, N, A),
+    aggregate_all(count, state_creator(S0, _), 1).
 
 %!  aq_wait_call(+Literal, +State) is det.
 %
@@ -639,6 +817,7 @@ table_of(m(T), T) :- !.
 table_of(T, T).
 
 consume(New, T, Lit, S) :-
+    count_join_consumer(S),
     (   S = q(Id), nb_getval(aq_registering, Id)
     ->  Snap = []                       % register_root/3 adds the record
     ;   New == true
@@ -807,7 +986,21 @@ fact_only_creator(go(Prev, Lit)) :-
     nonvar(Lit), Lit \= '$aq_not'(_),
     \+ aq_conf(mode, naive),
     user:'$aq_fact_pred'(Lit),
+    waits_on_facts(Prev),
     fact_only_state(Prev).
+
+%   States like P wait on stored facts: the goal that creates them is
+%   aq_wait_fact/2.  The literal's predicate having stored facts is not
+%   enough: a predicate with rules and facts is waited on through its
+%   table, whose answers may depend on the answer being kept (r(Y, X) :-
+%   e(X, X), r(Y, X) kept r(1, 0) by itself once its fact went).
+waits_on_facts(P) :-
+    \+ \+ ( (   user:clause('$aq_act'(_, _), Body)
+            ;   user:clause('$aq_go'(_, _, _), Body)
+            ),
+            body_last(Body, _, Last),
+            strip_module(Last, _, aq_wait_fact(_, S)),
+            \+ S \= P ).
 
 :- dynamic aq_fact_only/3.
 
@@ -943,7 +1136,7 @@ aq_assert(Fact) :-
 add_fact(Fact) :-
     ( ground(Fact) -> true ; not_all_ground(Fact) ),
     assertz(user:Fact),
-    forall(user:'$aq_wrec'(Fact, S), go(S, Fact, 0)),
+    fact_go(Fact),
     drain.
 
 %!  aq_assert_all(+Facts) is det.
@@ -962,8 +1155,19 @@ aq_assert_all(Facts) :-
 %   A ground fact is implied by a stored one exactly when calling it
 %   succeeds (implied_fact/1), tested in place: a batch of a belief base
 %   that few queries watch costs little more than the plain assertz/1s.
-add_facts([]).
-add_facts([F|Fs]) :-
+%   Without join steps (aq_joins false, or unknown before the first
+%   registration) none can become live in the batch, and its facts go to
+%   the goal records only; otherwise a fact's propagation may make a step
+%   live for the next fact, and each fact asks (fact_go/1).
+add_facts(Facts) :-
+    nb_getval(aq_joins, J),
+    (   ( J == false ; J == unknown )
+    ->  add_facts_to_records(Facts)
+    ;   add_facts_to_joins(Facts)
+    ).
+
+add_facts_to_records([]).
+add_facts_to_records([F|Fs]) :-
     (   ground(F)
     ->  (   user:F
         ->  true
@@ -976,7 +1180,23 @@ add_facts([F|Fs]) :-
         assertz(user:F),
         forall(user:'$aq_wrec'(F, S), go(S, F, 0))
     ),
-    add_facts(Fs).
+    add_facts_to_records(Fs).
+
+add_facts_to_joins([]).
+add_facts_to_joins([F|Fs]) :-
+    (   ground(F)
+    ->  (   user:F
+        ->  true
+        ;   assertz(user:F),
+            fact_go(F)
+        )
+    ;   has_fact(F)
+    ->  true
+    ;   not_all_ground(F),
+        assertz(user:F),
+        fact_go(F)
+    ),
+    add_facts_to_joins(Fs).
 
 %!  aq_retract(+Fact) is det.
 %
@@ -1003,9 +1223,16 @@ retract_facts(Facts0) :-
 %   A fact no state waits on derived nothing: it goes without DRed (most
 %   retractions of a belief base that a few queries watch are such facts),
 %   and without asking first whether it is stored (erasing a fact that is
-%   not there does nothing).
-quiet_retract([], []).
-quiet_retract([F|Fs], Awaited) :-
+%   not there does nothing).  Nothing propagates here, so whether a join
+%   step is live is asked once for the batch.
+quiet_retract(Facts, Awaited) :-
+    (   nb_getval(aq_joins, true)
+    ->  quiet_retract_joins(Facts, Awaited)
+    ;   quiet_retract_records(Facts, Awaited)
+    ).
+
+quiet_retract_records([], []).
+quiet_retract_records([F|Fs], Awaited) :-
     (   \+ user:'$aq_wrec'(F, _)
     ->  erase_fact(F),
         Awaited = Awaited1
@@ -1013,7 +1240,19 @@ quiet_retract([F|Fs], Awaited) :-
     ->  Awaited = [F|Awaited1]
     ;   Awaited = Awaited1
     ),
-    quiet_retract(Fs, Awaited1).
+    quiet_retract_records(Fs, Awaited1).
+
+quiet_retract_joins([], []).
+quiet_retract_joins([F|Fs], Awaited) :-
+    (   \+ user:'$aq_wrec'(F, _),
+        \+ join_states(F, _)
+    ->  erase_fact(F),
+        Awaited = Awaited1
+    ;   has_fact(F)
+    ->  Awaited = [F|Awaited1]
+    ;   Awaited = Awaited1
+    ),
+    quiet_retract_joins(Fs, Awaited1).
 
 %   Every fact of a batch is checked before any is changed.
 check_facts([]).
@@ -1122,8 +1361,7 @@ dred_run(Seed, Cleanup) :-
 over_delete_facts(Facts) :-
     nb_getval(aq_dred, D),
     forall(member(F, Facts), ignore(trie_insert(D, f(F)))),
-    forall(member(F, Facts),
-           forall(user:'$aq_wrec'(F, S), go(S, F, 0))).
+    forall(member(F, Facts), fact_go(F)).
 
 dred_end(D) :-
     (   aq_agenda(_, _, _) -> retractall(aq_agenda(_, _, _)) ; true ),
@@ -1245,6 +1483,10 @@ creates(aq_wait_neg(_, _, S, _), S).
 
 premise(act(T), none, _, 0) :- !,
     aq_tab(T, _, _, _, _).
+premise(P, fact, Lit, 0) :-
+    join_state(P), !,
+    user:Lit,
+    once(join_states(Lit, P)).
 premise(P, fact, Lit, 0) :-       % the fact first: stored facts are indexed on their
     \+ \+ user:'$aq_wrec'(Lit, P),   % bound arguments, goal records often are not; but
     user:Lit,                       % one look at the records first skips a rule whose
@@ -1292,9 +1534,14 @@ aq_add_rule(Rule0) :-
         (   user:'$aq_kind'(P, _) -> true ; assertz(user:'$aq_kind'(P, call)) ),
         maplist(assert_clause, Clauses, Refs),
         assertz(aq_rule(N, Rule, Refs)),
+        join_steps_changed,
         Clauses = [Act|_],
         neg_update(activate_rule(insert, Act))
     ).
+
+%   The steps of the join states (join_step/4) as the clauses are now.
+join_steps_changed :-
+    (   nb_getval(aq_joins, unknown) -> true ; find_join_steps ).
 
 as_call(fact(G), call(G)) :- !.
 as_call(L, L).
@@ -1325,7 +1572,8 @@ aq_remove_rule(Rule) :-
         Refs = [ActRef|_],
         clause(user:AH, AB, ActRef),
         neg_update(dred_run(activate_rule(delete, (AH :- AB)),
-                            ( maplist(erase, Refs), erase(RuleRef) )))
+                            ( maplist(erase, Refs), erase(RuleRef) ))),
+        join_steps_changed
     ;   throw(aq_rule_error('no such rule was added (only rules added at run time can be removed)'))
     ).
 

@@ -162,3 +162,24 @@ def test_rules_added_and_removed_at_run_time():
     assert deleted == ["r(1,3)"] and aq.answers("q") == ["r(1,2)"]
     with pytest.raises(PrologError):
         aq.remove_rule("r(X, Y) :- e(X, Z), r(Z, Y)")
+
+
+def test_register_with_unsorted_answers():
+    """aq_register/4 with answers(unsorted): each answer once, in the table's order; the same
+    set as the sorted list of aq_register/3 (a fact listed twice is one answer)."""
+    from retalisc.compiler import AqOptions, compile_source
+    from test_aq_support import _run
+    facts = "".join(f"edge({(7 * i) % 50}, {(7 * i + 3) % 50}).\n" for i in range(60))
+    source = PROGRAM4 + facts + "edge(0, 1).\n"
+    generated = compile_source(source, "unsorted.pl", active_queries=AqOptions("tabled")).prolog
+    main = ("main :- aq_register(s, path(0, X), Sorted), aq_unregister(s),\n"
+            "    aq_register(u, path(0, X), Unsorted, [answers(unsorted)]), aq_answers(u, Now),\n"
+            "    msort(Unsorted, U1), length(Unsorted, N),\n"
+            "    aq_register(f, edge(0, Y), Fs, [answers(unsorted)]),\n"
+            "    catch(aq_register(g, edge(0, Y), _, [answers(random)]), error(E, _), true),\n"
+            "    ( U1 == Sorted -> B1 = same ; B1 = differ ), ( Now == Sorted -> B2 = same ; B2 = differ ),\n"
+            "    format('~w ~w ~w ~q ~q~n', [N, B1, B2, Fs, E]).\n")
+    out = _run(generated + main)[-1].split(" ")
+    assert int(out[0]) > 20 and out[1:3] == ["same", "same"], out
+    assert out[3] in ("[edge(0,1),edge(0,3)]", "[edge(0,3),edge(0,1)]"), out
+    assert out[4].startswith("type_error"), out

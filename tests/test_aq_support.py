@@ -103,6 +103,9 @@ def _run(text: str) -> List[str]:
 
 
 _PRINT = r"""
+% the oracle's copy of a rule removed at run time: a variant, not the first clause that unifies
+retract_variant((H :- B)) :-
+    copy_term(H, H0), clause(H0, B0, Ref), (H0 :- B0) =@= (H :- B), !, erase(Ref).
 print_state(K, Qs) :-
     forall(nth1(I, Qs, _), ( aq_answers(I, L), format("~w ~w inc ~q~n", [K, I, L]) )).
 print_oracle(K, Os) :-
@@ -133,7 +136,7 @@ def run_all(source: str, goals: List[str], steps: List[Step], mode: str, subsump
     qlist = "[" + ", ".join(goals) + "]"
     olist = "[" + ", ".join(f"({oracle_goal(g, source, extra)})-({g})" for g in goals) + "]"
     ops = {"+": "aq_assert", "-": "aq_retract"}
-    rule_ops = {"+": ("aq_add_rule", "assertz"), "-": ("aq_remove_rule", "retract")}
+    rule_ops = {"+": ("aq_add_rule", "assertz"), "-": ("aq_remove_rule", "retract_variant")}
     body = [f"    Qs = {qlist}, Os = {olist},",
             "    forall(nth1(I, Qs, G), aq_register(I, G, _)),",
             "    print_state(0, Qs), print_oracle(0, Os),"]

@@ -14,14 +14,17 @@ from retalisc.cli import main
 from retalisc.driver import recovery
 from retalisc.driver.active_queries import ActiveQueries
 
-# recursion (tables with answers of answers), a stored-fact query, a rule added and removed
-# at run time (its clause references are in the state), a negation
+# recursion (tables with answers of answers), left recursion (states that are joins of a
+# consumer with its table, without goal records), a stored-fact query, a rule added and
+# removed at run time (its clause references are in the state), a negation
 PROGRAM = """\
 path(X, Y) :- edge(X, Y).
 path(X, Y) :- edge(X, Z), path(Z, Y).
 reach(X) :- path(0, X).
 lonely(X) :- node(X), \\+ reach(X).
 weight(Y) :- w(X), Y is X + 1.
+lpath(X, Y) :- lpath(X, Z), edge(Z, Y).
+lpath(X, Y) :- edge(X, Y).
 :- dynamic w/1.
 node(0). node(1). node(2). node(3). node(4). node(5). node(6). node(7).
 edge(0, 1).
@@ -34,7 +37,7 @@ def write_script(path, commands, seed):
     registered again), edges asserted and retracted, a rule added and removed, comments."""
     rng = random.Random(seed)
     lines = ["?q1 path(X, Y).", "?q2 reach(X).", "?q3 path(1, Y).", "?q4 lonely(X).", "?q5 edge(X, 3).",
-             "?q6 weight(W)."]
+             "?q6 weight(W).", "?q7 lpath(0, Y)."]
     edges, rule, q3 = set(), False, True
     while len(lines) < commands:
         r = rng.random()
