@@ -569,8 +569,11 @@ static int json_time_text(buffer *b, term_t t)
    letter, then letters, digits and _: never quoted, and written as they are in any position,
    operators included), [], proper and partial lists of plain terms, and compound terms whose
    name is such an identifier and whose arity is not 1 or 2 (no operator has another arity,
-   so writeq/1 writes them as name(Arg,...), without spaces). Fails for any other term, which
-   PL_write_term() then writes. Nothing it writes needs escaping in a JSON string. */
+   so writeq/1 writes them as name(Arg,...), without spaces), and unbound variables that are
+   not attributed: named `_123` by varName() of SWI-Prolog, which PL_write_term() calls too, so
+   the name (the variable's offset in its stack) is the one writeq/1 writes at that moment.
+   Fails for any other term, which PL_write_term() then writes. Nothing it writes needs
+   escaping in a JSON string. */
 static int plain_atom(atom_t a, buffer *b)
 { size_t len;
   const char *s = PL_atom_nchars(a, &len);
@@ -618,6 +621,12 @@ static int plain_term(buffer *b, term_t t, int depth)
           return FALSE;
       }
       return buf_add(b, ")", 1);
+    }
+    case PL_VARIABLE:                               /* its name, as every writer names it */
+    { const char *name;
+      size_t len;
+      if ( PL_is_attvar(t) ) return FALSE;
+      return PL_get_nchars(t, &len, (char **)&name, CVT_VARIABLE|BUF_STACK) && buf_add(b, name, len);
     }
     default:
       return FALSE;
@@ -683,6 +692,19 @@ pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
   return ok;
 }
 
+/* rtl_fast_plain_text(+Term, -Text): Term as plain_term() writes it; fails for a term that is
+   not plain (the writers above hand it to PL_write_term()). For tests. */
+static foreign_t
+pl_fast_plain_text(term_t term, term_t text)
+{ buffer b = { NULL, 0, 0 };
+  fid_t fid = PL_open_foreign_frame();
+  int ok = plain_term(&b, term, 0);
+  PL_discard_foreign_frame(fid);
+  ok = ok && PL_unify_chars(text, PL_STRING|REP_UTF8, b.len, b.data);
+  free(b.data);
+  return ok;
+}
+
 install_t
 install_rtl_fastread(void)
 { atom_add = PL_new_atom("add");                  /* registered: never garbage collected */
@@ -691,4 +713,5 @@ install_rtl_fastread(void)
   PL_register_foreign("rtl_fast_event_line", 7, pl_fast_event_line, 0);
   PL_register_foreign("rtl_fast_event_json", 4, pl_fast_event_json, 0);
   PL_register_foreign("rtl_fast_write_event", 4, pl_fast_write_event, 0);
+  PL_register_foreign("rtl_fast_plain_text", 2, pl_fast_plain_text, 0);
 }
