@@ -256,7 +256,10 @@ rtl_clock(Clock) :-
 
 rtl_event(Event, Start, End) :-
     (   End > Start -> note_duration(Event, Start, End) ; true ),
-    note_start(Start),
+    (   nb_current(rtl_latest_start, Latest), Start > Latest     % note_start/1, inline
+    ->  nb_linkval(rtl_latest_start, Start)
+    ;   true
+    ),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_linkval(rtl_clock, End),
@@ -270,9 +273,10 @@ rtl_event(Event, Start, End) :-
     N is N0 + 1,
     nb_linkval(events, N),
     (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
-    run_output_hooks(Event, Start, End, add),
+    (   type_output_hook(Event, Hook), call(Hook, Event, Start, End, add), fail ; true ),
+    (   nb_current(rtl_output_hooks, true) -> run_hooks_of_every_type(Event, Start, End, add) ; true ),
     nb_getval(rtl_program, M),
-    forall(M:ele_trigger(Event, Start, End), true),
+    (   M:ele_trigger(Event, Start, End), fail ; true ),   % forall/2 without its meta-call
     nb_getval(rtl_clock, Clock),
     (   nb_current(rtl_next_timer, Next), Next =< Clock  % due now, or set by the event
     ->  rtl_timers_run(after)
@@ -367,7 +371,7 @@ rtl_retract_event(Event, Start, End) :-
     ;   rtl_count(retracted),
         (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
         run_output_hooks(Event, Start, End, retract),
-        forall(M:ele_untrigger(Event, Start, End), true)
+        (   M:ele_untrigger(Event, Start, End), fail ; true )
     ).
 
 %!  rtl_derived(+Event, +Start, +End) is det.
@@ -381,7 +385,7 @@ rtl_derived(Event, Start, End) :-
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
-    forall(M:ele_trigger(Event, Start, End), true).
+    (   M:ele_trigger(Event, Start, End), fail ; true ).
 
 %!  rtl_internal_event(+Event, +Start, +End) is det.
 %
@@ -393,7 +397,7 @@ rtl_internal_event(Event, Start, End) :-
     note_start(Start),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
-    forall(M:ele_trigger(Event, Start, End), true).
+    (   M:ele_trigger(Event, Start, End), fail ; true ).
 
 %!  rtl_underived(+Event, +Start, +End) is det.
 %
@@ -404,7 +408,7 @@ rtl_underived(Event, Start, End) :-
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, retract) ; true ),
     run_output_hooks(Event, Start, End, retract),
-    forall(M:ele_untrigger(Event, Start, End), true).
+    (   M:ele_untrigger(Event, Start, End), fail ; true ).
 
 %!  rtl_add_output_hook(:Hook) is det.
 %!  rtl_remove_output_hook(:Hook) is det.
@@ -443,12 +447,16 @@ type_skeleton(Pattern, Skeleton) :-
     ;   Skeleton = Pattern
     ).
 
+% (rtl_event/3 runs the hooks of the event's type inline.)
 run_output_hooks(Event, Start, End, Op) :-
-    forall(type_output_hook(Event, Hook), call(Hook, Event, Start, End, Op)),
+    (   type_output_hook(Event, Hook), call(Hook, Event, Start, End, Op), fail ; true ),
     (   nb_current(rtl_output_hooks, true)
-    ->  forall(output_hook(Hook), call(Hook, Event, Start, End, Op))
+    ->  run_hooks_of_every_type(Event, Start, End, Op)
     ;   true
     ).
+
+run_hooks_of_every_type(Event, Start, End, Op) :-
+    forall(output_hook(Hook), call(Hook, Event, Start, End, Op)).
 
 %!  rtl_output_to(+Sink) is det.
 %
