@@ -225,6 +225,9 @@ OUTPUT_TERMS = [
     "f(123456789012345678901234567890)", "[]", "'[]'", "'{}'", "f(;)", "f((a:-b))", "f(\\+a)",
     "f('\\x1\\')", "f('\\x7f\\')", "f(\"back\\\\slash\")", "f('quo\"te')", "f(a= \\+)", "f(1r3)",
     "f(- (-1))", "f(-(-(1)))", "f(1.0e-10)", "f(-0.0)", "f(\"\\x0\\\")",
+    # the extremes of 64-bit integers, and lines longer than the C writer's first buffer
+    "p(-9223372036854775808,9223372036854775807,0,-1,10)", "p([" + ",".join(map(str, range(-300, 300))) + "])",
+    "q('" + "long quoted text " * 60 + "')",
 ]
 
 

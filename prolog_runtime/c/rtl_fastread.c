@@ -483,20 +483,45 @@ pl_fast_read_lines(term_t stream, term_t max_lines, term_t max_depth, term_t ite
 
 /* ---- output lines ------------------------------------------------------------------ */
 
+/* A line is built in a buffer on the C stack of the call (most lines fit: no malloc() per
+   line) and moves to the heap when it outgrows it; buf_free() frees only a heap buffer. */
+#define LINE_BUFFER 512
+
 typedef struct {
   char *data;
   size_t len, size;
+  int on_heap;
 } buffer;
+
+#define BUFFER_ON(stack) { (stack), 0, sizeof(stack), FALSE }
 
 static int buf_grow(buffer *b, size_t extra)
 { if ( b->len + extra <= b->size ) return TRUE;
   size_t size = b->size ? b->size : 256;
   while ( size < b->len + extra ) size *= 2;
-  char *data = realloc(b->data, size);
+  char *data = b->on_heap ? realloc(b->data, size) : malloc(size);
   if ( !data ) return FALSE;
+  if ( !b->on_heap && b->len ) memcpy(data, b->data, b->len);
   b->data = data;
   b->size = size;
+  b->on_heap = TRUE;
   return TRUE;
+}
+
+static int buf_add(buffer *b, const char *s, size_t n);
+
+static void buf_free(buffer *b)
+{ if ( b->on_heap ) free(b->data);
+}
+
+/* An integer in decimal, as snprintf("%lld") writes it. */
+static int buf_int64(buffer *b, int64_t i)
+{ char digits[24];
+  char *p = digits + sizeof(digits);
+  uint64_t u = i < 0 ? (uint64_t)0 - (uint64_t)i : (uint64_t)i;
+  do { *--p = (char)('0' + u % 10); u /= 10; } while ( u );
+  if ( i < 0 ) *--p = '-';
+  return buf_add(b, p, (size_t)(digits + sizeof(digits) - p));
 }
 
 static int buf_add(buffer *b, const char *s, size_t n)
@@ -549,10 +574,8 @@ static int json_escaped(buffer *b, const char *s, size_t n)
 static int json_time_text(buffer *b, term_t t)
 { if ( PL_is_integer(t) )
   { int64_t i;
-    char num[32];
     if ( !PL_get_int64(t, &i) ) return FALSE;       /* a big integer: rtl_io.pl */
-    int n = snprintf(num, sizeof(num), "%lld", (long long)i);
-    return buf_add(b, num, (size_t)n);
+    return buf_int64(b, i);
   }
   double d;
   if ( !PL_is_float(t) || !PL_get_float(t, &d) || !isfinite(d) ) return FALSE;
@@ -591,11 +614,8 @@ static int plain_term(buffer *b, term_t t, int depth)
   if ( depth > MAX_NESTING ) return FALSE;
   switch ( PL_term_type(t) )
   { case PL_INTEGER:
-    { char num[32];
       if ( !PL_get_int64(t, &i) ) return FALSE;     /* a big integer */
-      int n = snprintf(num, sizeof(num), "%lld", (long long)i);
-      return buf_add(b, num, (size_t)n);
-    }
+      return buf_int64(b, i);
     case PL_FLOAT:
       return json_time_text(b, t);                  /* finite floats only */
     case PL_ATOM:
@@ -661,10 +681,11 @@ static int event_json(buffer *b, term_t event, term_t start, term_t end)
 
 static foreign_t
 pl_fast_event_json(term_t event, term_t start, term_t end, term_t json)
-{ buffer b = { NULL, 0, 0 };
+{ char stack[LINE_BUFFER];
+  buffer b = BUFFER_ON(stack);
   int ok = event_json(&b, event, start, end) &&
            PL_unify_chars(json, PL_STRING|REP_UTF8, b.len, b.data);
-  free(b.data);
+  buf_free(&b);
   return ok;
 }
 
@@ -673,13 +694,14 @@ pl_fast_event_json(term_t event, term_t start, term_t end, term_t json)
    finite, before anything is written). */
 static foreign_t
 pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
-{ buffer b = { NULL, 0, 0 };
+{ char stack[LINE_BUFFER];
+  buffer b = BUFFER_ON(stack);
   IOSTREAM *s;
   int ok = event_json(&b, event, start, end) && buf_text(&b, "\n");
 
   if ( ok )
   { if ( !PL_get_stream(stream, &s, SIO_OUTPUT) )
-    { free(b.data);
+    { buf_free(&b);
       return FALSE;
     }
     if ( s->encoding == ENC_UTF8 )
@@ -688,7 +710,7 @@ pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
       ok = FALSE;
     ok = PL_release_stream(s) && ok;
   }
-  free(b.data);
+  buf_free(&b);
   return ok;
 }
 
@@ -696,12 +718,13 @@ pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
    not plain (the writers above hand it to PL_write_term()). For tests. */
 static foreign_t
 pl_fast_plain_text(term_t term, term_t text)
-{ buffer b = { NULL, 0, 0 };
+{ char stack[LINE_BUFFER];
+  buffer b = BUFFER_ON(stack);
   fid_t fid = PL_open_foreign_frame();
   int ok = plain_term(&b, term, 0);
   PL_discard_foreign_frame(fid);
   ok = ok && PL_unify_chars(text, PL_STRING|REP_UTF8, b.len, b.data);
-  free(b.data);
+  buf_free(&b);
   return ok;
 }
 
