@@ -380,9 +380,14 @@ rtl_retract_event(Event, Start, End) :-
 %   Called by compiled rules when they derive Event: deliver it and feed it back in.
 
 rtl_derived(Event, Start, End) :-
-    rtl_count(derived),
-    note_duration(Event, Start, End),
-    note_start(Start),
+    nb_getval(derived, D0),                                     % rtl_count/1, inline
+    D is D0 + 1,
+    nb_linkval(derived, D),
+    (   End > Start -> note_duration(Event, Start, End) ; true ),
+    (   nb_current(rtl_latest_start, Latest), Start > Latest     % note_start/1, inline
+    ->  nb_linkval(rtl_latest_start, Start)
+    ;   true
+    ),
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
