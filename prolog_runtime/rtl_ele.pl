@@ -68,6 +68,7 @@ deletion is too late).
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
 :- dynamic type_output_hook/2.              % type_output_hook(Skeleton, Hook)
+:- dynamic counter_key_of/2.                % counter_key_of(Rule, GlobalKey)
 :- meta_predicate rtl_add_output_hook(4), rtl_remove_output_hook(4),
                   rtl_add_type_output_hook(+, 4), rtl_remove_type_output_hook(+, 4).
 :- dynamic flag_value/2.
@@ -256,7 +257,10 @@ rtl_clock(Clock) :-
 
 rtl_event(Event, Start, End) :-
     (   End > Start -> note_duration(Event, Start, End) ; true ),
-    note_start(Start),
+    (   nb_current(rtl_latest_start, Latest), Start > Latest     % note_start/1, inline
+    ->  nb_linkval(rtl_latest_start, Start)
+    ;   true
+    ),
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_linkval(rtl_clock, End),
@@ -270,9 +274,10 @@ rtl_event(Event, Start, End) :-
     N is N0 + 1,
     nb_linkval(events, N),
     (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
-    run_output_hooks(Event, Start, End, add),
+    (   type_output_hook(Event, Hook), call(Hook, Event, Start, End, add), fail ; true ),
+    (   nb_current(rtl_output_hooks, true) -> run_hooks_of_every_type(Event, Start, End, add) ; true ),
     nb_getval(rtl_program, M),
-    forall(M:ele_trigger(Event, Start, End), true),
+    (   M:ele_trigger(Event, Start, End), fail ; true ),   % forall/2 without its meta-call
     nb_getval(rtl_clock, Clock),
     (   nb_current(rtl_next_timer, Next), Next =< Clock  % due now, or set by the event
     ->  rtl_timers_run(after)
@@ -367,7 +372,7 @@ rtl_retract_event(Event, Start, End) :-
     ;   rtl_count(retracted),
         (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
         run_output_hooks(Event, Start, End, retract),
-        forall(M:ele_untrigger(Event, Start, End), true)
+        (   M:ele_untrigger(Event, Start, End), fail ; true )
     ).
 
 %!  rtl_derived(+Event, +Start, +End) is det.
@@ -375,13 +380,18 @@ rtl_retract_event(Event, Start, End) :-
 %   Called by compiled rules when they derive Event: deliver it and feed it back in.
 
 rtl_derived(Event, Start, End) :-
-    rtl_count(derived),
-    note_duration(Event, Start, End),
-    note_start(Start),
+    nb_getval(derived, D0),                                     % rtl_count/1, inline
+    D is D0 + 1,
+    nb_linkval(derived, D),
+    (   End > Start -> note_duration(Event, Start, End) ; true ),
+    (   nb_current(rtl_latest_start, Latest), Start > Latest     % note_start/1, inline
+    ->  nb_linkval(rtl_latest_start, Start)
+    ;   true
+    ),
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, add) ; true ),
     run_output_hooks(Event, Start, End, add),
-    forall(M:ele_trigger(Event, Start, End), true).
+    (   M:ele_trigger(Event, Start, End), fail ; true ).
 
 %!  rtl_internal_event(+Event, +Start, +End) is det.
 %
@@ -393,7 +403,7 @@ rtl_internal_event(Event, Start, End) :-
     note_start(Start),
     run_output_hooks(Event, Start, End, add),
     nb_getval(rtl_program, M),
-    forall(M:ele_trigger(Event, Start, End), true).
+    (   M:ele_trigger(Event, Start, End), fail ; true ).
 
 %!  rtl_underived(+Event, +Start, +End) is det.
 %
@@ -404,7 +414,7 @@ rtl_underived(Event, Start, End) :-
     nb_getval(rtl_program, M),
     (   M:ele_printed(Event) -> rtl_emit(Event, Start, End, -, retract) ; true ),
     run_output_hooks(Event, Start, End, retract),
-    forall(M:ele_untrigger(Event, Start, End), true).
+    (   M:ele_untrigger(Event, Start, End), fail ; true ).
 
 %!  rtl_add_output_hook(:Hook) is det.
 %!  rtl_remove_output_hook(:Hook) is det.
@@ -443,12 +453,16 @@ type_skeleton(Pattern, Skeleton) :-
     ;   Skeleton = Pattern
     ).
 
+% (rtl_event/3 runs the hooks of the event's type inline.)
 run_output_hooks(Event, Start, End, Op) :-
-    forall(type_output_hook(Event, Hook), call(Hook, Event, Start, End, Op)),
+    (   type_output_hook(Event, Hook), call(Hook, Event, Start, End, Op), fail ; true ),
     (   nb_current(rtl_output_hooks, true)
-    ->  forall(output_hook(Hook), call(Hook, Event, Start, End, Op))
+    ->  run_hooks_of_every_type(Event, Start, End, Op)
     ;   true
     ).
+
+run_hooks_of_every_type(Event, Start, End, Op) :-
+    forall(output_hook(Hook), call(Hook, Event, Start, End, Op)).
 
 %!  rtl_output_to(+Sink) is det.
 %
@@ -527,9 +541,18 @@ rtl_count(Name) :-
 %   per rule, `rtl_detected Rule`, reset with the other counters.
 
 rtl_detected(Rule) :-
-    atom_concat('rtl_detected ', Rule, Key),
+    counter_key(Rule, Key),
     (   nb_current(Key, N0) -> N is N0 + 1 ; N = 1 ),
     nb_linkval(Key, N).
+
+% The global variable of a rule's count: made once per rule and kept in counter_key_of/2
+% (looking it up costs a third of making it with atom_concat/3 at every detection).
+counter_key(Rule, Key) :-
+    (   atomic(Rule), counter_key_of(Rule, Key0)
+    ->  Key = Key0
+    ;   atom_concat('rtl_detected ', Rule, Key),
+        assertz(counter_key_of(Rule, Key))
+    ).
 
 %!  rtl_detections(-Pairs:list(pair)) is det.
 %

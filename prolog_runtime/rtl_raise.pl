@@ -157,9 +157,13 @@ rtl_block_input(Event, Start, End) :-
 
 % The event after the queued ones, then those it raised (a predicate: call/1 of a
 % conjunction would compile it for every event).
-drained(Op, Event, Start, End) :-
+drained(add, Event, Start, End) :-
     drain,
-    process(Op, Event, Start, End),
+    rtl_event(Event, Start, End),
+    drain.
+drained(retract, Event, Start, End) :-
+    drain,
+    rtl_retract_event(Event, Start, End),
     drain.
 
 %   guarded(:Goal) is det.
@@ -233,7 +237,9 @@ process(retract, Event, Start, End) :-
     rtl_retract_event(Event, Start, End).
 
 drain :-
-    (   dequeue(raised(Raised, Start, End))
+    (   nb_current(rtl_raised, Q),                  % (the test of dequeue/1, inline: the queue
+        arg(1, Q, c(_, _)),                         % is looked at twice for every input event)
+        dequeue(raised(Raised, Start, End))
     ->  (   Raised = '$internal'(Event)
         ->  rtl_internal_event(Event, Start, End)
         ;   rtl_event(Raised, Start, End)

@@ -68,6 +68,7 @@ state_version(1).
 excluded_predicate(rtl_ele:rtl_output_line/1).
 excluded_predicate(rtl_subscriptions:consumer_file/2).
 excluded_predicate(rtl_horizon:warning_text/1).
+excluded_predicate(rtl_ele:counter_key_of/2).     % a cache of atoms
 
 excluded_global(rtl_program).
 excluded_global(rtl_action_stream).

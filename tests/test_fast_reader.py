@@ -225,6 +225,9 @@ OUTPUT_TERMS = [
     "f(123456789012345678901234567890)", "[]", "'[]'", "'{}'", "f(;)", "f((a:-b))", "f(\\+a)",
     "f('\\x1\\')", "f('\\x7f\\')", "f(\"back\\\\slash\")", "f('quo\"te')", "f(a= \\+)", "f(1r3)",
     "f(- (-1))", "f(-(-(1)))", "f(1.0e-10)", "f(-0.0)", "f(\"\\x0\\\")",
+    # the extremes of 64-bit integers, and lines longer than the C writer's first buffer
+    "p(-9223372036854775808,9223372036854775807,0,-1,10)", "p([" + ",".join(map(str, range(-300, 300))) + "])",
+    "q('" + "long quoted text " * 60 + "')",
 ]
 
 
@@ -273,6 +276,77 @@ def plain_terms(depth):
 @given(st.lists(plain_terms(3), min_size=10, max_size=30))
 def test_plain_output_terms_are_written_as_writeq_writes_them(tmp_path, swipl, texts):
     compare_output(tmp_path, swipl, texts)
+
+
+# Terms with variables (the derived event of an `or` branch that did not bind everything): the
+# C writer names each variable itself, as writeq/1 names it at that moment (`_123`, its offset
+# in the stack), so both writers are compared on the same term in the same process; `plain`
+# counts the terms the C writer wrote without the Prolog writer (rtl_fast_plain_text/2).
+VAR_WRITE_CHECK = r"""
+:- use_module(library(readutil)).
+main :-
+    current_prolog_flag(argv, [File|_]),
+    read_file_to_string(File, Text, []),
+    split_string(Text, "\n", "", Lines0),
+    append(Lines, [_], Lines0),
+    foldl(compare_output, Lines, 0-0, Plain-Differ),
+    format("plain ~w differ ~w~n", [Plain, Differ]).
+
+compare_output(Line, P0-D0, P-D) :-
+    term_string(Event, Line),
+    rtl_use_fast_reader(false),
+    rtl_event_json(Event, 1, 2.5, -, add, Slow),
+    format(string(Writeq), "~q", [Event]),
+    rtl_use_fast_reader(true),
+    rtl_event_json(Event, 1, 2.5, -, add, Fast),
+    tmp_file_stream(utf8, File, Out),
+    (   rtl_write_event_line(Out, Event, 1, 2.5) -> true ; true ),
+    close(Out),
+    read_file_to_string(File, Written, [encoding(utf8)]),
+    delete_file(File),
+    (   rtl_io:rtl_fast_plain_text(Event, PlainText)
+    ->  P is P0 + 1,
+        ( PlainText == Writeq -> Same = true ; Same = false )
+    ;   P = P0, Same = true
+    ),
+    (   Slow == Fast, string_concat(Slow, "\n", Written), Same == true
+    ->  D = D0
+    ;   D is D0 + 1,
+        format("DIFFER ~q~n  prolog ~s~n  c      ~s~n  stream ~s~n", [Event, Slow, Fast, Written])
+    ).
+"""
+
+VARIABLE_TERMS = ["p4(1,2,_)", "p(X,X,Y,[a,Y|Z],Z)", "f(_,g(_,_,_))", "[_|_]", "[_]", "_", "p(_,1.5,[],q)",
+                  "p(X,'A',X)", "f(- X)", "f(X+1,y,z)", "p(X,Y,Z)"]
+
+
+def test_output_terms_with_variables_are_written_in_c_as_writeq_writes_them(tmp_path, swipl):
+    plain, differ = run_check(tmp_path, swipl, "var_write_check", VARIABLE_TERMS, VAR_WRITE_CHECK)
+    assert differ == 0
+    # all but the quoted atom, the operators and the compounds of arity 1 and 2 are written by C itself
+    assert plain == len(VARIABLE_TERMS) - 4
+
+
+PLAIN_WITH_VARIABLES = st.one_of(PLAIN_NAMES, PLAIN_NUMBERS, st.sampled_from(["X", "Y", "_", "_A", "Z"]))
+
+
+def plain_terms_with_variables(depth):
+    if depth == 0:
+        return PLAIN_WITH_VARIABLES
+    sub = plain_terms_with_variables(depth - 1)
+    return st.one_of(
+        PLAIN_WITH_VARIABLES,
+        st.builds(lambda f, args: f + "(" + ",".join(args) + ")", PLAIN_NAMES,
+                  st.lists(sub, min_size=1, max_size=5)),
+        st.builds(lambda items, tail: "[" + ",".join(items) + (("|" + tail) if tail and items else "") + "]",
+                  st.lists(sub, max_size=4), st.one_of(st.just(""), sub)),
+    )
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(plain_terms_with_variables(3), min_size=10, max_size=30))
+def test_random_output_terms_with_variables_are_written_the_same(tmp_path, swipl, texts):
+    run_check(tmp_path, swipl, "var_write_check", texts, VAR_WRITE_CHECK)
 
 
 # ---- the line loop: blocks of plain event lines against every line read in Prolog --------------

@@ -483,20 +483,45 @@ pl_fast_read_lines(term_t stream, term_t max_lines, term_t max_depth, term_t ite
 
 /* ---- output lines ------------------------------------------------------------------ */
 
+/* A line is built in a buffer on the C stack of the call (most lines fit: no malloc() per
+   line) and moves to the heap when it outgrows it; buf_free() frees only a heap buffer. */
+#define LINE_BUFFER 512
+
 typedef struct {
   char *data;
   size_t len, size;
+  int on_heap;
 } buffer;
+
+#define BUFFER_ON(stack) { (stack), 0, sizeof(stack), FALSE }
 
 static int buf_grow(buffer *b, size_t extra)
 { if ( b->len + extra <= b->size ) return TRUE;
   size_t size = b->size ? b->size : 256;
   while ( size < b->len + extra ) size *= 2;
-  char *data = realloc(b->data, size);
+  char *data = b->on_heap ? realloc(b->data, size) : malloc(size);
   if ( !data ) return FALSE;
+  if ( !b->on_heap && b->len ) memcpy(data, b->data, b->len);
   b->data = data;
   b->size = size;
+  b->on_heap = TRUE;
   return TRUE;
+}
+
+static int buf_add(buffer *b, const char *s, size_t n);
+
+static void buf_free(buffer *b)
+{ if ( b->on_heap ) free(b->data);
+}
+
+/* An integer in decimal, as snprintf("%lld") writes it. */
+static int buf_int64(buffer *b, int64_t i)
+{ char digits[24];
+  char *p = digits + sizeof(digits);
+  uint64_t u = i < 0 ? (uint64_t)0 - (uint64_t)i : (uint64_t)i;
+  do { *--p = (char)('0' + u % 10); u /= 10; } while ( u );
+  if ( i < 0 ) *--p = '-';
+  return buf_add(b, p, (size_t)(digits + sizeof(digits) - p));
 }
 
 static int buf_add(buffer *b, const char *s, size_t n)
@@ -549,10 +574,8 @@ static int json_escaped(buffer *b, const char *s, size_t n)
 static int json_time_text(buffer *b, term_t t)
 { if ( PL_is_integer(t) )
   { int64_t i;
-    char num[32];
     if ( !PL_get_int64(t, &i) ) return FALSE;       /* a big integer: rtl_io.pl */
-    int n = snprintf(num, sizeof(num), "%lld", (long long)i);
-    return buf_add(b, num, (size_t)n);
+    return buf_int64(b, i);
   }
   double d;
   if ( !PL_is_float(t) || !PL_get_float(t, &d) || !isfinite(d) ) return FALSE;
@@ -569,8 +592,11 @@ static int json_time_text(buffer *b, term_t t)
    letter, then letters, digits and _: never quoted, and written as they are in any position,
    operators included), [], proper and partial lists of plain terms, and compound terms whose
    name is such an identifier and whose arity is not 1 or 2 (no operator has another arity,
-   so writeq/1 writes them as name(Arg,...), without spaces). Fails for any other term, which
-   PL_write_term() then writes. Nothing it writes needs escaping in a JSON string. */
+   so writeq/1 writes them as name(Arg,...), without spaces), and unbound variables that are
+   not attributed: named `_123` by varName() of SWI-Prolog, which PL_write_term() calls too, so
+   the name (the variable's offset in its stack) is the one writeq/1 writes at that moment.
+   Fails for any other term, which PL_write_term() then writes. Nothing it writes needs
+   escaping in a JSON string. */
 static int plain_atom(atom_t a, buffer *b)
 { size_t len;
   const char *s = PL_atom_nchars(a, &len);
@@ -588,11 +614,8 @@ static int plain_term(buffer *b, term_t t, int depth)
   if ( depth > MAX_NESTING ) return FALSE;
   switch ( PL_term_type(t) )
   { case PL_INTEGER:
-    { char num[32];
       if ( !PL_get_int64(t, &i) ) return FALSE;     /* a big integer */
-      int n = snprintf(num, sizeof(num), "%lld", (long long)i);
-      return buf_add(b, num, (size_t)n);
-    }
+      return buf_int64(b, i);
     case PL_FLOAT:
       return json_time_text(b, t);                  /* finite floats only */
     case PL_ATOM:
@@ -618,6 +641,12 @@ static int plain_term(buffer *b, term_t t, int depth)
           return FALSE;
       }
       return buf_add(b, ")", 1);
+    }
+    case PL_VARIABLE:                               /* its name, as every writer names it */
+    { const char *name;
+      size_t len;
+      if ( PL_is_attvar(t) ) return FALSE;
+      return PL_get_nchars(t, &len, (char **)&name, CVT_VARIABLE|BUF_STACK) && buf_add(b, name, len);
     }
     default:
       return FALSE;
@@ -652,10 +681,11 @@ static int event_json(buffer *b, term_t event, term_t start, term_t end)
 
 static foreign_t
 pl_fast_event_json(term_t event, term_t start, term_t end, term_t json)
-{ buffer b = { NULL, 0, 0 };
+{ char stack[LINE_BUFFER];
+  buffer b = BUFFER_ON(stack);
   int ok = event_json(&b, event, start, end) &&
            PL_unify_chars(json, PL_STRING|REP_UTF8, b.len, b.data);
-  free(b.data);
+  buf_free(&b);
   return ok;
 }
 
@@ -664,13 +694,14 @@ pl_fast_event_json(term_t event, term_t start, term_t end, term_t json)
    finite, before anything is written). */
 static foreign_t
 pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
-{ buffer b = { NULL, 0, 0 };
+{ char stack[LINE_BUFFER];
+  buffer b = BUFFER_ON(stack);
   IOSTREAM *s;
   int ok = event_json(&b, event, start, end) && buf_text(&b, "\n");
 
   if ( ok )
   { if ( !PL_get_stream(stream, &s, SIO_OUTPUT) )
-    { free(b.data);
+    { buf_free(&b);
       return FALSE;
     }
     if ( s->encoding == ENC_UTF8 )
@@ -679,7 +710,21 @@ pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
       ok = FALSE;
     ok = PL_release_stream(s) && ok;
   }
-  free(b.data);
+  buf_free(&b);
+  return ok;
+}
+
+/* rtl_fast_plain_text(+Term, -Text): Term as plain_term() writes it; fails for a term that is
+   not plain (the writers above hand it to PL_write_term()). For tests. */
+static foreign_t
+pl_fast_plain_text(term_t term, term_t text)
+{ char stack[LINE_BUFFER];
+  buffer b = BUFFER_ON(stack);
+  fid_t fid = PL_open_foreign_frame();
+  int ok = plain_term(&b, term, 0);
+  PL_discard_foreign_frame(fid);
+  ok = ok && PL_unify_chars(text, PL_STRING|REP_UTF8, b.len, b.data);
+  buf_free(&b);
   return ok;
 }
 
@@ -691,4 +736,5 @@ install_rtl_fastread(void)
   PL_register_foreign("rtl_fast_event_line", 7, pl_fast_event_line, 0);
   PL_register_foreign("rtl_fast_event_json", 4, pl_fast_event_json, 0);
   PL_register_foreign("rtl_fast_write_event", 4, pl_fast_write_event, 0);
+  PL_register_foreign("rtl_fast_plain_text", 2, pl_fast_plain_text, 0);
 }
