@@ -148,3 +148,39 @@ def test_a_ground_retraction_keeps_a_more_general_fact():
     assert sorted(got[4][0]) == ["e(A,1)", "f(1)", "h(1)"]     # e(1, 1) is implied by e(X, 1)
     assert sorted(got[5][0]) == ["e(A,1)", "f(1)", "h(1)"]
     assert got[5][1] == "[p(1)]"
+
+
+@st.composite
+def case_with_repeated_facts(draw):
+    """As case(), but the program may list a fact more than once."""
+    facts, steps = draw(case())
+    repeated = draw(st.lists(st.sampled_from(facts), max_size=3)) if facts else []
+    return facts + repeated, steps
+
+
+@SETTINGS
+@given(case_with_repeated_facts())
+def test_batches_keep_the_set_semantics_of_repeated_program_facts(data):
+    """A fact the program lists twice is one fact: retracting it removes both copies, also while
+    every stored fact is ground (the batch path erases a ground fact with retract/1 only when no
+    fact is stored twice)."""
+    facts, steps = data
+    got = run(facts, steps)
+    store: List = [canon(f) for f in facts]
+    for k in range(len(steps) + 1):
+        if k:
+            apply(store, *steps[k - 1])
+        stored, answers = got[k]
+        assert sorted(stored) == sorted(shown(s) for s in store), f"step {k}: {steps[:k]}"
+        assert answers.replace(" ", "") == expected_answers(store), f"step {k}: {steps[:k]}"
+
+
+def test_a_repeated_ground_fact_goes_at_once():
+    """h(5) listed twice, every fact ground, no state waiting on h(5) (no f(5)): one retraction
+    removes both copies, so p(5) does not appear when f(5) comes."""
+    got = run(["f(1)", "h(1)", "h(5)", "h(5)"], [("-", ["h(5)"]), ("+", ["f(5)"]), ("+", ["h(5)"])])
+    assert got[0][1] == "[p(1)]"
+    assert sorted(got[1][0]) == ["f(1)", "h(1)"]
+    assert sorted(got[2][0]) == ["f(1)", "f(5)", "h(1)"]
+    assert got[2][1] == "[p(1)]"
+    assert got[3][1] == "[p(1),p(5)]"
