@@ -73,8 +73,16 @@
 :- use_module(library(lists)).
 :- use_module(library(apply)).
 :- use_module(library(readutil)).
+:- use_module(library(pairs)).
+:- use_module(library(assoc)).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_aq_rules).
+
+%   Arithmetic compiled to virtual machine instructions (this file only):
+%   the ranks of answers (aq_answer/3) and the adornment masks of
+%   activations (aq_adornment/2) are computed for every answer and table,
+%   and called is/2 cost a tenth of a point query.
+:- set_prolog_flag(optimise, true).
 
 :- meta_predicate aq_set_notify(2).
 
@@ -82,7 +90,6 @@
     aq_tab/5,          % aq_tab(T, Goal, AnswerTrie, Owner, Key)
     aq_tpred/3,        % aq_tpred(Name/Arity, Goal, T)   (subsumption index)
     aq_c/3,            % aq_c(T, Literal, State)       consumer records
-    aq_dep/2,          % aq_dep(From, T)               From = T0 | root(Id)
     aq_agenda/3,       % aq_agenda(T, Answer, Rank)    new answers still to propagate
     aq_q/4,            % aq_q(Id, Goal, Kind, T)
     aq_ev/3,           % aq_ev(Id, Op, Answer)         pending notifications
@@ -343,29 +350,60 @@ aq_unregister(Id) :-
     (   Kind == call
     ->  forall(clause(aq_c(T, _, q(Id)), true, Ref), erase(Ref)),
         nb_getval(aq_cstates, St),
-        ignore(trie_delete(St, q(Id), _)),
-        retractall(aq_dep(root(Id), _))
+        ignore(trie_delete(St, q(Id), _))
     ;   forall(user:'$aq_wref'(G, S, Ref), ( S == q(Id) -> erase(Ref) ; true ))
     ),
     retractall(aq_ev(Id, _, _)),
     collect_garbage.
 
 %   Tables reachable from a registered query survive; everything else goes.
+%   Table T depends on table T2 when a state of T (its first argument is T)
+%   consumes T2 (the cstates trie) or checks a negated literal against T2
+%   (the nstates trie, and the negations still to be checked): the
+%   dependencies are read from the states when a query goes, not recorded
+%   per table (a clause and a lookup for each of the 1000 tables of a point
+%   query on a chain of 1000, a seventh of its registration).
 collect_garbage :-
     findall(T, aq_q(_, _, call, T), Roots),
-    reachable(Roots, [], Live0),
-    sort(Live0, Live),
+    table_dependencies(Deps),
+    empty_assoc(Seen0),
+    reachable(Roots, Deps, Seen0, Seen),
+    assoc_to_keys(Seen, Live),
     findall(T, aq_tab(T, _, _, _, _), All),
     ord_subtract_sorted(All, Live, Dead),
     (   Dead == [] -> true ; free_tables(Dead) ).
 
-reachable([], Seen, Seen).
-reachable([T|Ts], Seen, Live) :-
-    (   memberchk(T, Seen)
-    ->  reachable(Ts, Seen, Live)
-    ;   findall(T2, aq_dep(T, T2), Next),
-        append(Next, Ts, Ts1),
-        reachable(Ts1, [T|Seen], Live)
+%   Deps maps every table to the tables its states consume or check.
+table_dependencies(Deps) :-
+    nb_getval(aq_cstates, St),
+    nb_getval(aq_nstates, NS),
+    findall(From-T,
+            (   (   trie_entry(St, S, V), table_of(V, T)
+                ;   trie_entry(NS, ns(S, _), n(call, T, _, _))
+                ;   aq_negq(_, call, _, S, T)
+                ),
+                state_owner(S, From)
+            ),
+            Pairs0),
+    sort(Pairs0, Pairs),
+    group_pairs_by_key(Pairs, Grouped),
+    list_to_assoc(Grouped, Deps).
+
+%   trie_gen/3 of SWI-Prolog 9.0.4 crashes (a segmentation fault) on a trie
+%   whose entries were all deleted after it had keys of different functors,
+%   as the state tries have once every query is unregistered.
+trie_entry(Trie, Key, Value) :-
+    trie_property(Trie, value_count(N)),
+    N > 0,
+    trie_gen(Trie, Key, Value).
+
+reachable([], _, Seen, Seen).
+reachable([T|Ts], Deps, Seen0, Seen) :-
+    (   get_assoc(T, Seen0, _)
+    ->  reachable(Ts, Deps, Seen0, Seen)
+    ;   put_assoc(T, Seen0, true, Seen1),
+        (   get_assoc(T, Deps, Next) -> append(Next, Ts, Ts1) ; Ts1 = Ts ),
+        reachable(Ts1, Deps, Seen1, Seen)
     ).
 
 ord_subtract_sorted(All, Live, Dead) :-
@@ -381,7 +419,6 @@ free_tables(Dead) :-
              trie_destroy(Tr),
              ( Key == none -> true ; ignore(trie_delete(Sub, Key, _)) ),
              retractall(aq_tpred(_, _, T)),
-             retractall(aq_dep(T, _)),
              forall(retract(aq_c(T, _, S)), ignore(trie_delete(St, S, _)))
            )),
     % states owned by dead tables, waiting on facts or on live tables
@@ -389,7 +426,7 @@ free_tables(Dead) :-
     forall(( clause(aq_c(_, _, S), true, Ref), state_owner(S, O), aq_dead(O) ),
            ( erase(Ref), ignore(trie_delete(St, S, _)) )),
     nb_getval(aq_nstates, NS),
-    forall(( trie_gen(NS, ns(S, G), _), state_owner(S, O), aq_dead(O) ),
+    forall(( trie_entry(NS, ns(S, G), _), state_owner(S, O), aq_dead(O) ),
            ignore(trie_delete(NS, ns(S, G), _))),
     retractall(aq_dead(_)).
 
@@ -409,7 +446,7 @@ aq_reset :-
     retractall(aq_tpred(_, _, _)),
     forall(user:'$aq_fact_pred'(F),
            ( user:'$aq_whead'(F, _, H), retractall(user:H) )),
-    retractall(aq_c(_, _, _)), retractall(aq_dep(_, _)), retractall(aq_ev(_, _, _)),
+    retractall(aq_c(_, _, _)), retractall(aq_ev(_, _, _)),
     retractall(aq_agenda(_, _, _)),
     retractall(aq_negq(_, _, _, _, _)),
     retractall(aq_warm(_, _, _)),
@@ -441,7 +478,10 @@ aq_stats([queries=NQ, tables=NT, answers=NA, consumers=NC, fact_records=NF,
     aggregate_all(count, user:'$aq_wref'(_, _, _), NF),
     nb_getval(aq_cstates, St), trie_count(St, NS),
     nb_getval(aq_subgoals, Sub), trie_count(Sub, NG),
-    aggregate_all(count, aq_dep(_, _), ND),
+    table_dependencies(Deps),
+    assoc_to_values(Deps, Consumed),
+    append(Consumed, AllConsumed),
+    length(AllConsumed, ND),
     aggregate_all(count, ( aq_tab(_, _, Tr, _, _), trie_gen(Tr, _, V), V < 0 ), NM).
 
 trie_count(Tr, C) :-
@@ -738,9 +778,7 @@ wait_neg(delete, _, Lit, S, Str) :-
 neg_table(fact, _, _, none).
 neg_table(call, Lit, S, T) :-
     table_for(Lit, S, T, New),
-    state_from(S, From),
-    (   aq_dep(From, T) -> true ; assertz(aq_dep(From, T)) ),
-    (   New == true -> activate(T) ; true ).
+    activate(New, T).
 
 neg_holds(fact, Lit, _) :-
     \+ user:Lit.
@@ -823,7 +861,7 @@ consume(New, T, Lit, S) :-
     count_join_consumer(S),
     (   S = q(Id), nb_getval(aq_registering, Id)
     ->  Snap = []                       % register_root/3 adds the record
-    ;   New == true
+    ;   New = new(_)
     ->  Snap = [],
         assertz(aq_c(T, Lit, S))
     ;   findall(Lit-RA, answer_rank(T, Lit, RA), Snap),
@@ -831,13 +869,8 @@ consume(New, T, Lit, S) :-
     ),
     nb_getval(aq_cstates, St),
     trie_insert(St, S, T),
-    state_from(S, From),
-    (   aq_dep(From, T) -> true ; assertz(aq_dep(From, T)) ),
-    (   New == true -> activate(T) ; true ),
+    activate(New, T),
     forall(member(Lit-RA, Snap), go(S, Lit, RA)).
-
-state_from(q(Id), From) :- !, From = root(Id).
-state_from(S, T) :- arg(1, S, T).
 
 %!  aq_fact_arrived(+State, +Fact) is det.
 %
@@ -850,9 +883,11 @@ go(q(Id), Lit, _) :- !,
 go(S, Lit, R) :-
     (   user:'$aq_go'(S, Lit, R) -> true ; true ).
 
-activate(T) :-
-    aq_tab(T, G, _, _, _),
+%   New is new(Goal) for a table just created for Goal (its rules run now),
+%   old for a table that was there.
+activate(new(G), T) :-
     forall(user:'$aq_act'(G, T), true).
+activate(old, _).
 
 %!  aq_adornment(+Vars, -Mask) is det.
 %
@@ -1075,16 +1110,16 @@ table_for(Lit, S, T, New) :-
 table_for(tabled, Lit, _, T, New) :-
     nb_getval(aq_subgoals, Sub),
     (   trie_lookup(Sub, Lit, T)
-    ->  New = false
+    ->  New = old
     ;   aq_conf(subsumption, true),
         subsuming_table(Lit, T)
-    ->  New = false
-    ;   new_table(Lit, Lit, shared, T),
-        New = true
+    ->  New = old
+    ;   new_table(Lit, Lit, shared, T, G),
+        New = new(G)
     ).
-table_for(optimized, Lit, S, T, true) :-
+table_for(optimized, Lit, S, T, new(G)) :-
     owner_id(S, Id),
-    new_table(Lit, none, Id, T).
+    new_table(Lit, none, Id, T, G).
 table_for(naive, Lit, S, T, New) :-
     owner_id(S, Id),
     (   S = q(_)
@@ -1094,9 +1129,9 @@ table_for(naive, Lit, S, T, New) :-
     Key = n(Id, G),
     nb_getval(aq_subgoals, Sub),
     (   trie_lookup(Sub, Key, T)
-    ->  New = false
-    ;   new_table(G, Key, Id, T),
-        New = true
+    ->  New = old
+    ;   new_table(G, Key, Id, T, G1),
+        New = new(G1)
     ).
 
 subsuming_table(Lit, T) :-
@@ -1110,8 +1145,9 @@ owner_id(S, Id) :-
     aq_tab(T0, _, _, Id, _).
 
 %   A table is identified by its answer trie: states carry the trie itself,
-%   so propagating an answer needs no table lookup.
-new_table(Goal, Key, Owner, T) :-
+%   so propagating an answer needs no table lookup.  G is the table's own
+%   copy of Goal, which its rules are activated with.
+new_table(Goal, Key, Owner, T, G) :-
     trie_new(T),
     copy_term(Goal, G),
     assertz(aq_tab(T, G, T, Owner, Key)),
