@@ -110,7 +110,6 @@ aq_conf(negation, false).
 init_globals :-
     nb_setval(aq_phase, insert),
     nb_setval(aq_ground, unknown),
-    nb_setval(aq_stored_once, unknown),
     nb_setval(aq_registering, '$none'),
     trie_new(Sub), nb_setval(aq_subgoals, Sub),
     trie_new(St), nb_setval(aq_cstates, St),
@@ -131,7 +130,6 @@ aq_configure(Options) :-
     retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
     retractall(aq_fact_only(_, _, _)),
     nb_setval(aq_ground, unknown),
-    nb_setval(aq_stored_once, unknown),
     nb_setval(aq_joins, unknown),
     retractall(aq_join_step(_, _, _, _)),
     retractall(aq_join_eligible(_, _, _, _)),
@@ -1271,13 +1269,12 @@ retract_facts(Facts0) :-
 quiet_retract(Facts, Awaited) :-
     (   nb_getval(aq_joins, true)
     ->  quiet_retract_joins(Facts, Awaited)
-    ;   stored_facts_ground,
-        stored_once
+    ;   stored_facts_ground
     ->  quiet_retract_ground(Facts, Awaited)
     ;   quiet_retract_records(Facts, Awaited)
     ).
 
-%   While every stored fact is ground and stored once, a ground fact's two
+%   While every stored fact is ground, a ground fact's two
 %   tests and its erasure are the generated '$aq_retract_ground'/3 of its
 %   predicate (one call instead of the goal-record test, ground_fact/1 and
 %   a meta-call).
@@ -1397,31 +1394,6 @@ all_facts_ground :-
           user:'$aq_fact_pred'(G),
           user:clause(G, true),
           \+ ground(G) ).
-
-%   No stored fact is stored twice (facts loaded with the program may
-%   repeat; aq_assert/1 adds none twice).  Then '$aq_retract_ground'/3
-%   erases a ground fact with retract/1, which stops at the first copy,
-%   0.1 us faster than retractall/1.  Decided at the first batch retraction
-%   (a sort of every predicate's facts, 0.2 us a fact, not paid by programs
-%   that never retract), and true from then on: additions test first.
-stored_once :-
-    nb_getval(aq_stored_once, Once),
-    (   Once == unknown
-    ->  (   \+ ( current_predicate(user:'$aq_fact_pred'/1),
-                 user:'$aq_fact_pred'(G),
-                 \+ stored_once(G) )
-        ->  Once1 = true
-        ;   Once1 = false
-        ),
-        nb_setval(aq_stored_once, Once1),
-        Once1 == true
-    ;   Once == true
-    ).
-
-stored_once(G) :-
-    findall(G, user:clause(G, true), Facts),
-    sort(Facts, Set),
-    same_length(Facts, Set).
 
 not_all_ground(F) :-
     nb_setval(aq_ground, false),
