@@ -107,6 +107,7 @@ rtl_reset :-
     nb_setval(rtl_clock, -inf),
     empty_assoc(NoIntervals),
     nb_setval(rtl_longest_by_type, NoIntervals),
+    nb_setval(rtl_blockers_swept_by_type, NoIntervals),
     nb_setval(rtl_next_sweep, inf),
     nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
     forall(counter(S), nb_setval(S, 0)),
@@ -288,7 +289,11 @@ rtl_event(Event, Start, End) :-
 
 % The longest interval of an event of each type (Name/Arity) seen so far, in the assoc
 % rtl_longest_by_type: with the delay bound, it says how early a later event of that type can
-% start (the sweep of negation blockers, rtl_blockers_due/4).
+% start (the sweep of negation blockers, rtl_blockers_due/4).  Only an event longer than any
+% before it of its type can start before the time up to which a sweep dropped blockers for
+% that type (rtl_blockers_swept_by_type); one that does, arriving within the delay bound, is
+% counted late: a match it would have made with a waiting partial match the sweep dropped is
+% missing (no longest interval is known in advance).
 note_duration(Event, Start, End) :-
     (   End - Start > 0
     ->  Duration is End - Start,
@@ -297,10 +302,26 @@ note_duration(Event, Start, End) :-
         (   get_assoc(Name/Arity, Longest0, Longest), Longest >= Duration
         ->  true
         ;   put_assoc(Name/Arity, Longest0, Duration, Longest1),
-            nb_setval(rtl_longest_by_type, Longest1)
+            nb_setval(rtl_longest_by_type, Longest1),
+            started_before_sweep(Name/Arity, Start, End)
         )
     ;   true
     ).
+
+started_before_sweep(Type, Start, End) :-
+    nb_getval(rtl_blockers_swept_by_type, Swept),
+    (   get_assoc(Type, Swept, Before),
+        Start < Before,
+        \+ beyond_delay(End)
+    ->  rtl_count(late)
+    ;   true
+    ).
+
+beyond_delay(End) :-
+    rtl_flag(max_delay, Delay),
+    Delay \== inf,
+    nb_getval(rtl_clock, Clock),
+    End < Clock - Delay.
 
 %!  rtl_started_after(+Time:number) is semidet.
 %
@@ -627,7 +648,8 @@ forget_blockers(M, Clock) :-
 %   by Keep / 2 since the last one (a global variable per step): a negated event is dropped at
 %   most 1.5 Keep after its end and visited about twice. Keep depends on the Partner's own
 %   intervals, not on those of other events (a derived event can span a thousand times the
-%   delay bound).
+%   delay bound). A Partner longer than any before it may start before Before: it is counted
+%   late (note_duration/3).
 
 rtl_blockers_due(Step, Partner, Clock, Before) :-
     rtl_flag(max_delay, Delay),
@@ -644,7 +666,13 @@ rtl_blockers_due(Step, Partner, Clock, Before) :-
     ),
     Before is Clock - Keep,
     Due1 is Clock + Keep / 2,
-    nb_setval(Key, Due1).
+    nb_setval(Key, Due1),
+    nb_getval(rtl_blockers_swept_by_type, Swept0),
+    (   get_assoc(Partner, Swept0, Before0), Before0 >= Before
+    ->  true
+    ;   put_assoc(Partner, Swept0, Before, Swept1),
+        nb_setval(rtl_blockers_swept_by_type, Swept1)
+    ).
 
 forget_blocker_sweeps :-
     forall(( nb_current(Key, _), atom(Key), sub_atom(Key, 0, _, _, 'rtl_blockers_due ') ),

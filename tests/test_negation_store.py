@@ -1,5 +1,6 @@
 """The store of an unwindowed negation keeps only what can still block a match: a negated
-event that ended before every later event can start (delay bound, longest interval seen) and
+event that ended before every later right operand can start (delay bound, longest interval of
+that type seen so far) and
 outside the retraction horizon is dropped with the waiting partial matches it blocks for
 good. The oracle is the same program without that sweep: same output for any stream that
 respects the delay bound, in any arrival order within it, with interval events and
@@ -178,3 +179,20 @@ def test_a_long_interval_of_another_event_does_not_delay_the_sweep(tmp_path, swi
     taken = [cur for prev, cur in zip(offers, offers[1:]) if cur[2] != prev[2]]
     assert len(taken) >= len(offers) - 2
     assert max(n for *_, n in offers[1:]) <= 64
+
+
+def test_a_right_operand_longer_than_any_before_it_that_starts_before_a_sweep_is_counted_late():
+    """No longest interval is known in advance: a b spanning 300 time units, on time, starts
+    before the blockers a sweep dropped (with the waiting a they blocked for good). The match
+    it would have made is missing, and the run says so by counting it late; without the
+    sweep it is there and nothing is late."""
+    rule = ["nt(I, X, Y) <- not(c(I, _)).[a(I, X), b(I, Y)]."]
+    items = [("a(1, 1)", 1, 1), ("c(1, 1)", 3, 3)] + [(f"d({k})", 3 + k, 3 + k) for k in range(1, 300)]
+    items.append(("b(1, 7)", 2, 302))
+    results = {}
+    for sweep in (True, False):
+        engine = load("unrestricted", sweep, rule, tag="_long_b")
+        out, _ = run(engine, items)
+        results[sweep] = ([e for e in out if e[0].startswith("nt(")], engine.stats()["late"])
+    assert results[False] == ([("nt(1,1,7)", 1, 302, "add")], 0)
+    assert results[True] == ([], 1)
