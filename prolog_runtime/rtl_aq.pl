@@ -648,7 +648,8 @@ join_flag :-
 %   A fact of a join step's literal looks at every consumer state of the
 %   step that its arguments do not tell apart (path(X, Z) for every X, when
 %   edge(Z, Y) arrives), where a goal record is found by its index.  Past
-%   join_consumer_limit/1 consumer states of one step, its states get their
+%   join_consumer_limit/1 consumer states of one step (states still there:
+%   live_join_consumers/3), its states get their
 %   goal records again (join_step_to_records/2) and keep them until
 %   aq_reset/0.  The limit weighs a trie lookup per consumer state (about
 %   0.1 us) at every fact of the literal against a goal record per answer
@@ -674,11 +675,28 @@ count_join_consumer(S) :-
             nb_setval(aq_joins, true)
         ;   join_consumer_limit(Max),
             C > Max,
-            nb_getval(aq_phase, insert)
+            nb_getval(aq_phase, insert),
+            live_join_consumers(N, A, Max)
         ->  join_step_to_records(N, A)
         ;   true
         )
     ;   true
+    ).
+
+%   The count above grows with every consumer state made (again by DRed, or
+%   by queries registered and unregistered in turn); past the limit the
+%   states still there are counted (one trie walk per Max new states), and
+%   the count restarts from them when they are not more than Max.
+live_join_consumers(N, A, Max) :-
+    functor(P, N, A),
+    nb_getval(aq_cstates, St),
+    aggregate_all(count, trie_gen(St, P, _), Live0),
+    Live is Live0 + 1,                  % the state being made is not in the trie yet
+    (   Live > Max
+    ->  true
+    ;   retractall(aq_join_consumers(N, A, _)),
+        assertz(aq_join_consumers(N, A, Live)),
+        fail
     ).
 
 join_step_to_records(N, A) :-

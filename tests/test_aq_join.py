@@ -159,3 +159,15 @@ def test_switch_during_a_fact_propagation_keeps_the_fact_for_join_states():
     for key in orc:
         assert inc[key] == orc[key], f"step {key}: incremental {inc[key]} != SWI tabling {orc[key]}"
         assert scr[key] == orc[key], f"step {key}: scratch {scr[key]} != SWI tabling {orc[key]}"
+
+
+def test_registering_and_unregistering_keeps_the_join_step():
+    """Beside a query path(0, _), a query path(1, _) registered and unregistered 40 times on a
+    left-recursive chain: the join step never has more than two consumer states at a time, so
+    it stays a join step (no goal record per answer), and the answers stay right."""
+    source = (":- dynamic edge/2.\n" + RULES["left"]
+              + "".join(f"edge({i}, {i + 1}).\n" for i in range(50)))
+    churn = "forall(between(1, 40, _), ( aq_register(p, path(1, _), _), aq_unregister(p) )), "
+    answers, after, records = _stats_after(source, "path(0, _)", churn + "aq_retract(edge(30, 31)), ")
+    assert (answers, after) == (50, 30)
+    assert records <= 2, records
