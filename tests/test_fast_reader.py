@@ -453,3 +453,17 @@ def test_output_on_a_regular_file_comes_before_the_message_of_a_later_line(swipl
     assert [line for line in lines[:rejected] if line.startswith("{")] == \
         [f'{{"event": "big(1,{k})", "start": {k}, "end": {k}}}' for k in range(3, 6)]
     assert lines[rejected + 1] == '{"event": "big(1,9)", "start": 9, "end": 9}'
+
+
+def test_a_cyclic_list_is_left_to_the_prolog_writer(swipl):
+    """The C writer walks a list cell by cell: a cyclic list would never end there, so it
+    declines it (and a compound nested without end stops at its depth limit)."""
+    goal = ("L = [a|L], ( rtl_io:rtl_fast_plain_text(L, _) -> writeln(written) ; writeln(declined) ), "
+            "T = f(T, b, c), ( rtl_io:rtl_fast_plain_text(T, _) -> writeln(written) ; writeln(declined) ), "
+            "rtl_io:rtl_fast_plain_text([a, [b|_], c], Text), writeln(Text)")
+    done = subprocess.run([swipl, "-g", f"use_module('{ROOT / 'prolog_runtime' / 'rtl_io'}')", "-g", goal,
+                           "-t", "halt"], capture_output=True, text=True, timeout=20)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[:2] == ["declined", "declined"]
+    assert lines[2].startswith("[a,[b|_") and lines[2].endswith("],c]")

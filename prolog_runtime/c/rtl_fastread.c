@@ -624,6 +624,8 @@ static int plain_term(buffer *b, term_t t, int depth)
       return buf_add(b, "[]", 2);
     case PL_LIST_PAIR:
     { term_t head = PL_new_term_ref(), tail = PL_copy_term_ref(t);
+      size_t cells;
+      if ( PL_skip_list(t, 0, &cells) == PL_CYCLIC_TERM ) return FALSE;  /* it would never end */
       if ( !buf_add(b, "[", 1) ) return FALSE;
       for (int first = TRUE; PL_get_list(tail, head, tail); first = FALSE)
       { if ( (!first && !buf_add(b, ",", 1)) || !plain_term(b, head, depth + 1) ) return FALSE;
