@@ -174,6 +174,7 @@ def test_variable_met_first_inside_a_negation_and_used_after_it():
     "p(Y) :- \\+ f(Y), e(Y, Y).\n",                # a head variable: the caller may bind it
     "p :- \\+ f(Y), e(1, 2).\n",                   # not used after it
     "p :- \\+ f(_Y), e(_Y, 1).\n",                 # marked as don't-care
+    "p :- \\+ f(Y), \\+ g(Y).\n",                  # used after it only in another negation
 ])
 def test_negations_that_bind_nothing_later_used_are_not_reported(text):
     assert "variable-bound-after-negation" not in codes(text)

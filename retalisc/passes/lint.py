@@ -23,9 +23,8 @@ errors. The pass changes nothing in the unit but `unit.lint` and `unit.warnings`
   `chronological` policies, which consume partners);
 - `variable-bound-after-negation`: a variable met first inside `\\+ G` of a clause body or a
   condition and used by a later goal: `\\+` binds nothing, so the negation asks whether G holds
-  for any value, not for the one the later goal finds (and SWI-Prolog 9.0.4 compiles such a
-  clause wrongly when the later goal is its last call: `p :- \\+ f(Y), e(Y, Y).` with only
-  `e(0, 1)` stored succeeds).
+  for any value, not for the one the later goal finds (and SWI-Prolog 9.0.4 may compile such a
+  clause wrongly: `p(0) :- \\+ f(Y), e(Y, Y).` with only `e(0, 1)` stored succeeds).
 
 Runs last in the event pipeline, after the checks that make a program an error.
 """
@@ -321,7 +320,8 @@ def _negated_then_used(body, known: Set[str], fallback: Optional[Span]) -> List[
         if isinstance(goal, Compound) and goal.name == "\\+" and goal.arity == 1:
             later = set()
             for after in goals[i + 1:]:
-                later |= {v.name for v in variables(after)}
+                if not (isinstance(after, Compound) and after.name == "\\+" and after.arity == 1):
+                    later |= {v.name for v in variables(after)}
             for var in variables(goal.args[0]):
                 if var.name in seen or var.name not in later or var.name.startswith("_"):
                     continue
@@ -331,7 +331,7 @@ def _negated_then_used(body, known: Set[str], fallback: Optional[Span]) -> List[
                     "variable-bound-after-negation", span_of(var) or span_of(goal) or fallback,
                     f"variable {var.name} is met first inside \\+ {negated} and used after it: \\+ binds "
                     f"nothing, so this asks whether {negated} holds for any {var.name}, not for the one the "
-                    "later goal finds (SWI-Prolog 9.0.4 also compiles such a clause wrongly)",
+                    "later goal finds (SWI-Prolog 9.0.4 may also compile such a clause wrongly)",
                     f"put the goal that binds {var.name} before the negation"))
         else:
             seen |= {v.name for v in variables(goal)}
