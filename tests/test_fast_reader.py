@@ -12,19 +12,23 @@ from hypothesis import strategies as st
 ROOT = Path(__file__).resolve().parent.parent
 LIBRARY = ROOT / "prolog_runtime" / "foreign" / "rtl_fastread.so"
 
+
+def lines_main(compare: str, counted: str, fast_reader: bool = False) -> str:
+    """The main/0 of a comparison script: fold `compare` over the lines of the file given as
+    its argument, counting what it counts and the lines the two roads differ on."""
+    setup = "    rtl_use_fast_reader(true),\n" if fast_reader else ""
+    return (":- use_module(library(readutil)).\nmain :-\n"
+            "    current_prolog_flag(argv, [File|_]),\n"
+            "    read_file_to_string(File, Text, []),\n"
+            '    split_string(Text, "\\n", "", Lines0),\n'
+            "    append(Lines, [_], Lines0),\n"
+            f"{setup}    foldl({compare}, Lines, 0-0, Counted-Differ),\n"
+            f'    format("{counted} ~w differ ~w~n", [Counted, Differ]).\n')
+
+
 # For each line: parse with the Prolog reader, then with the C reader; print the line
 # number when the two differ, and count the lines the C reader took itself.
-CHECK = r"""
-:- use_module(library(readutil)).
-main :-
-    current_prolog_flag(argv, [File|_]),
-    read_file_to_string(File, Text, []),
-    split_string(Text, "\n", "", Lines0),
-    append(Lines, [_], Lines0),
-    rtl_use_fast_reader(true),
-    foldl(compare_line, Lines, 0-0, Taken-Differ),
-    format("taken ~w differ ~w~n", [Taken, Differ]).
-
+CHECK = lines_main("compare_line", "taken", fast_reader=True) + r"""
 compare_line(Line, T0-D0, T-D) :-
     rtl_use_fast_reader(false),
     rtl_parse_event_line(Line, 1000, Slow),
@@ -176,16 +180,7 @@ def test_without_the_c_reader_the_runtime_reads_every_line_in_prolog(tmp_path, s
 
 # The C writer of output lines (rtl_fast_event_json/4) against rtl_event_json/6 in Prolog:
 # each event text is read as a term and written both ways with each pair of times.
-WRITE_CHECK = r"""
-:- use_module(library(readutil)).
-main :-
-    current_prolog_flag(argv, [File|_]),
-    read_file_to_string(File, Text, []),
-    split_string(Text, "\n", "", Lines0),
-    append(Lines, [_], Lines0),
-    foldl(compare_output, Lines, 0-0, Taken-Differ),
-    format("taken ~w differ ~w~n", [Taken, Differ]).
-
+WRITE_CHECK = lines_main("compare_output", "taken") + r"""
 compare_output(Line, T0-D0, T-D) :-
     catch(term_string(Event, Line), _, fail),       % (random texts need not be terms)
     ground(Event),                                  % (a variable's name depends on the stack)
@@ -282,16 +277,7 @@ def test_plain_output_terms_are_written_as_writeq_writes_them(tmp_path, swipl, t
 # C writer names each variable itself, as writeq/1 names it at that moment (`_123`, its offset
 # in the stack), so both writers are compared on the same term in the same process; `plain`
 # counts the terms the C writer wrote without the Prolog writer (rtl_fast_plain_text/2).
-VAR_WRITE_CHECK = r"""
-:- use_module(library(readutil)).
-main :-
-    current_prolog_flag(argv, [File|_]),
-    read_file_to_string(File, Text, []),
-    split_string(Text, "\n", "", Lines0),
-    append(Lines, [_], Lines0),
-    foldl(compare_output, Lines, 0-0, Plain-Differ),
-    format("plain ~w differ ~w~n", [Plain, Differ]).
-
+VAR_WRITE_CHECK = lines_main("compare_output", "plain") + r"""
 compare_output(Line, P0-D0, P-D) :-
     term_string(Event, Line),
     rtl_use_fast_reader(false),
