@@ -1195,10 +1195,14 @@ aq_assert(Fact) :-
     ).
 
 add_fact(Fact) :-
+    store_fact(Fact),
+    drain.
+
+%   Store Fact, not implied by a stored one, and resume what waits on it.
+store_fact(Fact) :-
     ( ground(Fact) -> true ; not_all_ground(Fact) ),
     assertz(user:Fact),
-    fact_go(Fact),
-    drain.
+    fact_go(Fact).
 
 %!  aq_assert_all(+Facts) is det.
 aq_assert_all(Facts) :-
@@ -1235,26 +1239,13 @@ add_facts_to_records([F|Fs]) :-
     ->  user:'$aq_add_ground'(F)
     ;   has_fact(F)
     ->  true
-    ;   not_all_ground(F),
-        assertz(user:F),
-        forall(user:'$aq_wrec'(F, S), go(S, F, 0))
+    ;   store_fact(F)
     ),
     add_facts_to_records(Fs).
 
 add_facts_to_joins([]).
 add_facts_to_joins([F|Fs]) :-
-    (   ground(F)
-    ->  (   user:F
-        ->  true
-        ;   assertz(user:F),
-            fact_go(F)
-        )
-    ;   has_fact(F)
-    ->  true
-    ;   not_all_ground(F),
-        assertz(user:F),
-        fact_go(F)
-    ),
+    (   implied_fact(F) -> true ; store_fact(F) ),
     add_facts_to_joins(Fs).
 
 %!  aq_retract(+Fact) is det.
@@ -1286,10 +1277,10 @@ retract_facts(Facts0) :-
 %   step is live is asked once for the batch.
 quiet_retract(Facts, Awaited) :-
     (   nb_getval(aq_joins, true)
-    ->  quiet_retract_joins(Facts, Awaited)
+    ->  quiet_retract_each(Facts, true, Awaited)
     ;   stored_facts_ground
     ->  quiet_retract_ground(Facts, Awaited)
-    ;   quiet_retract_records(Facts, Awaited)
+    ;   quiet_retract_each(Facts, false, Awaited)
     ).
 
 %   While every stored fact is ground, a ground fact's two
@@ -1300,33 +1291,24 @@ quiet_retract_ground([], []).
 quiet_retract_ground([F|Fs], Awaited) :-
     (   ground(F)
     ->  user:'$aq_retract_ground'(F, Awaited, Awaited1)
-    ;   quiet_retract_records([F], Awaited0),
+    ;   quiet_retract_each([F], false, Awaited0),
         append(Awaited0, Awaited1, Awaited)
     ),
     quiet_retract_ground(Fs, Awaited1).
 
-quiet_retract_records([], []).
-quiet_retract_records([F|Fs], Awaited) :-
-    (   \+ user:'$aq_wrec'(F, _)
-    ->  erase_fact(F),
-        Awaited = Awaited1
-    ;   has_fact(F)
-    ->  Awaited = [F|Awaited1]
-    ;   Awaited = Awaited1
-    ),
-    quiet_retract_records(Fs, Awaited1).
-
-quiet_retract_joins([], []).
-quiet_retract_joins([F|Fs], Awaited) :-
+%   Joins is true while a join step is live: then a fact some join state
+%   waits on goes through DRed too.
+quiet_retract_each([], _, []).
+quiet_retract_each([F|Fs], Joins, Awaited) :-
     (   \+ user:'$aq_wrec'(F, _),
-        \+ join_states(F, _)
+        \+ ( Joins == true, join_states(F, _) )
     ->  erase_fact(F),
         Awaited = Awaited1
     ;   has_fact(F)
     ->  Awaited = [F|Awaited1]
     ;   Awaited = Awaited1
     ),
-    quiet_retract_joins(Fs, Awaited1).
+    quiet_retract_each(Fs, Joins, Awaited1).
 
 %   Every fact of a batch is checked before any is changed.
 check_facts([]).

@@ -569,8 +569,8 @@ rtl_detected(Rule) :-
 % The global variable of a rule's count: made once per rule and kept in counter_key_of/2
 % (looking it up costs a third of making it with atom_concat/3 at every detection).
 counter_key(Rule, Key) :-
-    (   atomic(Rule), counter_key_of(Rule, Key0)
-    ->  Key = Key0
+    (   counter_key_of(Rule, Key)
+    ->  true
     ;   atom_concat('rtl_detected ', Rule, Key),
         assertz(counter_key_of(Rule, Key))
     ).

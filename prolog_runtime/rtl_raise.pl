@@ -144,15 +144,7 @@ rtl_input_block(Goal) :-
     b_setval(rtl_raise_busy, false).
 
 rtl_block_input(Event, Start, End) :-
-    rtl_max_steps(Max),
-    (   Max == inf
-    ->  drained(add, Event, Start, End)
-    ;   call_with_inference_limit(drained(add, Event, Start, End), Max, Result),
-        (   Result == inference_limit_exceeded      % (the goal of limited/1: the same steps)
-        ->  throw(error(rtl_step_limit(Max), _))
-        ;   true
-        )
-    ),
+    limited(drained(add, Event, Start, End)),
     rtl_halt_check.
 
 % The event after the queued ones, then those it raised (a predicate: call/1 of a

@@ -37,12 +37,7 @@ events), as for the partial matches (docs/runtime.md).
 rtl_seen_add(Event, Start, End) :-
     open_generation_name(Name),
     assertz(Name:seen(Event, Start, End)),
-    generation_size(Size0),
-    Size is Size0 + 1,
-    (   Size >= 1024
-    ->  close_generation(Name, End)
-    ;   nb_linkval(rtl_seen_size, Size)             % (a number: no copy needed)
-    ).
+    grow_generation(Name, 1, End).
 
 %!  rtl_seen_add_atomic(+Items:list) is det.
 %
@@ -56,18 +51,23 @@ rtl_seen_add_atomic(Items) :-
     open_generation_name(Name),
     assertz(Name:seen_atomic(Items)),
     items_latest(Items, 0, Count, -inf, Latest),
-    generation_size(Size0),
-    Size is Size0 + Count,
-    (   Size >= 1024
-    ->  close_generation(Name, Latest)
-    ;   nb_linkval(rtl_seen_size, Size)             % (a number: no copy needed)
-    ).
+    grow_generation(Name, Count, Latest).
 
 items_latest([], N, N, Latest, Latest).
 items_latest([a(_, T)|Items], N0, N, Latest0, Latest) :-
     N1 is N0 + 1,
     (   T > Latest0 -> Latest1 = T ; Latest1 = Latest0 ),
     items_latest(Items, N1, N, Latest1, Latest).
+
+% The open generation Name got Added events, the latest ending at Latest: closed once it
+% holds 1,024.
+grow_generation(Name, Added, Latest) :-
+    generation_size(Size0),
+    Size is Size0 + Added,
+    (   Size >= 1024
+    ->  close_generation(Name, Latest)
+    ;   nb_linkval(rtl_seen_size, Size)             % (a number: no copy needed)
+    ).
 
 % (A snapshot of an older runtime has no size: its generation counts as empty.)
 generation_size(Size) :-
