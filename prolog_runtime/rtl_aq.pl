@@ -313,12 +313,13 @@ aq_answers(Id, Answers) :-
     sort(As0, Answers).
 
 %   The answers of a query in the order of its table, each once (a fact
-%   stored twice is one answer).
+%   stored twice is one answer).  A table is its answer trie: no lookup of
+%   aq_tab/5 (whose first call by table after the tables were made builds
+%   an index over all of them, a thirtieth of a point query's registration).
 query_answers(Id, Answers) :-
     (   aq_q(Id, G, Kind, T) -> true ; existence_error(active_query, Id) ),
     (   Kind == call
-    ->  aq_tab(T, _, Tr, _, _),
-        findall(G, trie_gen(Tr, G), Answers)
+    ->  findall(G, trie_gen(T, G), Answers)
     ;   findall(G, user:G, As0),
         sort(As0, Answers)
     ).
@@ -1564,8 +1565,7 @@ premise(P, call, Lit, R) :-
 query_has(Id, A) :-
     aq_q(Id, _, Kind, T),
     (   Kind == call
-    ->  aq_tab(T, _, Tr, _, _),
-        trie_lookup(Tr, A, _)
+    ->  trie_lookup(T, A, _)
     ;   has_fact(A)
     ), !.
 
