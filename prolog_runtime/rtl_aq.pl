@@ -438,7 +438,12 @@ state_owner(S, T) :- S \= q(_), arg(1, S, T).
 %   Unregister every query and drop every table (the facts stay).
 
 %   Everything goes at once: unregistering the queries one by one would
-%   scan the goal records once per query.
+%   scan the goal records once per query.  What is known of the facts
+%   (whether every stored fact is ground: aq_ground, aq_ground_facts/3)
+%   stays with them: scanning them again at the next registration cost
+%   0.1 ms for a chain of 1000 facts, 10 ms for 100k facts, and the
+%   re-evaluation of the queries after a negation flipped (aq_reset, then
+%   every query registered again) a scan of every fact.
 aq_reset :-
     retractall(aq_q(_, _, _, _)),
     forall(retract(aq_tab(T, _, _, _, _)), trie_destroy(T)),
@@ -454,11 +459,12 @@ aq_reset :-
     retractall(aq_join_consumers(_, _, _)),
     retractall(aq_join_off(_, _)),
     flag(aq_registrations, _, 0),
-    retractall(aq_ground_facts(_, _, _)),       % recomputed when needed
     nb_getval(aq_subgoals, Sub), trie_destroy(Sub),
     nb_getval(aq_cstates, St), trie_destroy(St),
     nb_getval(aq_nstates, NS), trie_destroy(NS),
-    init_globals.
+    nb_getval(aq_ground, Ground),
+    init_globals,
+    nb_setval(aq_ground, Ground).
 
 %!  aq_stats(-Stats) is det.
 %
