@@ -746,7 +746,7 @@ wait_call(insert, Lit, S) :-
     (   trie_lookup(St, S, V)
     ->  (   V = m(_) -> true ; trie_update(St, S, m(V)) )
     ;   table_for(Lit, S, T, New),
-        consume(New, T, Lit, S)
+        consume(New, T, Lit, S, St)
     ).
 wait_call(delete, Lit, S) :-
     nb_getval(aq_cstates, St),
@@ -880,7 +880,7 @@ reevaluate_queries :-
 table_of(m(T), T) :- !.
 table_of(T, T).
 
-consume(New, T, Lit, S) :-
+consume(New, T, Lit, S, St) :-
     count_join_consumer(S),
     (   S = q(Id), nb_getval(aq_registering, Id)
     ->  Snap = []                       % register_root/3 adds the record
@@ -890,7 +890,6 @@ consume(New, T, Lit, S) :-
     ;   findall(Lit-RA, answer_rank(T, Lit, RA), Snap),
         assertz(aq_c(T, Lit, S))
     ),
-    nb_getval(aq_cstates, St),
     trie_insert(St, S, T),
     activate(New, T),
     forall(member(Lit-RA, Snap), go(S, Lit, RA)).
@@ -1134,10 +1133,17 @@ table_for(tabled, Lit, _, T, New) :-
     nb_getval(aq_subgoals, Sub),
     (   trie_lookup(Sub, Lit, T)
     ->  New = old
-    ;   aq_conf(subsumption, true),
-        subsuming_table(Lit, T)
-    ->  New = old
+    ;   aq_conf(subsumption, true)
+    ->  (   subsuming_table(Lit, T)
+        ->  New = old
+        ;   new_table(Lit, Lit, shared, T, G),
+            trie_insert(Sub, Lit, T),
+            functor(G, N, A),
+            assertz(aq_tpred(N/A, G, T)),
+            New = new(G)
+        )
     ;   new_table(Lit, Lit, shared, T, G),
+        trie_insert(Sub, Lit, T),
         New = new(G)
     ).
 table_for(optimized, Lit, S, T, new(G)) :-
@@ -1154,6 +1160,7 @@ table_for(naive, Lit, S, T, New) :-
     (   trie_lookup(Sub, Key, T)
     ->  New = old
     ;   new_table(G, Key, Id, T, G1),
+        trie_insert(Sub, Key, T),
         New = new(G1)
     ).
 
@@ -1169,20 +1176,12 @@ owner_id(S, Id) :-
 
 %   A table is identified by its answer trie: states carry the trie itself,
 %   so propagating an answer needs no table lookup.  G is the table's own
-%   copy of Goal, which its rules are activated with.
+%   copy of Goal, which its rules are activated with.  The caller enters
+%   Key (none: a table of its own, the optimized mode) in the subgoals trie.
 new_table(Goal, Key, Owner, T, G) :-
     trie_new(T),
     copy_term(Goal, G),
-    assertz(aq_tab(T, G, T, Owner, Key)),
-    (   Key == none
-    ->  true
-    ;   nb_getval(aq_subgoals, Sub),
-        trie_insert(Sub, Key, T)
-    ),
-    (   aq_conf(subsumption, true), Owner == shared
-    ->  functor(G, N, A), assertz(aq_tpred(N/A, G, T))
-    ;   true
-    ).
+    assertz(aq_tab(T, G, T, Owner, Key)).
 
 		 /*******************************
 		 *     UPDATES: ADD, DELETE     *
