@@ -1537,9 +1537,19 @@ state_step(S, act(T), none, G, Check) :-
     creates(Last, S),
     Check = (aq_tab(T, G0, _, _, _), G = G0, Check0).
 
+%   The activation of a rule with a body order per adornment picks the
+%   order in an if-then-else (If -> Then ; Else): each branch is a body of
+%   its own, checked with If or with \+ If.
 body_last((A, B), Check, Last) :- !,
     body_last(B, Check0, Last),
     (   Check0 == true -> Check = A ; Check = (A, Check0) ).
+body_last((If -> Then ; Else), Check, Last) :- !,
+    (   body_last(Then, Check0, Last),
+        Test = If
+    ;   body_last(Else, Check0, Last),
+        Test = (\+ If)
+    ),
+    (   Check0 == true -> Check = Test ; Check = (Test, Check0) ).
 body_last(G, true, G).
 
 creates(_:G, S) :- !, creates(G, S).

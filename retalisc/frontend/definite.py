@@ -75,6 +75,9 @@ class Rule:
     stratum: int = 0         # of the head predicate (set by aq_program: stratified negation)
     # (head variables, adornment masks) this body order is for (aq_join_order); None: every call
     guard: Optional[tuple] = None
+    # the number of the written rule this body order was made from (aq_join_order: the rules
+    # with one variant_of share one activation, which picks the order); 0: not a variant
+    variant_of: int = 0
 
     @property
     def indicator(self) -> Indicator:

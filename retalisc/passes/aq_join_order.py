@@ -10,9 +10,10 @@ For a rule whose head arguments are variables, every *adornment* (which of them 
 gets the body order a greedy choice gives: the next user literal is the one with most bound
 arguments, then the fewest variables still unbound, then the earliest; each builtin goes in as
 soon as its variables are bound.
-When the adornments give more than one order, the rule becomes one rule per order, each
-guarded by `aq_adornment(HeadVars, Mask), memberchk(Mask, Masks)` in its activation; exactly
-one of them runs for a call.  A body is only reordered when that cannot change what it means:
+When the adornments give more than one order, the rule becomes one rule per order (its
+`variant_of` the written rule's number), each for the masks in its `guard`; the backend gives
+them one activation clause that computes the mask once (`aq_adornment(HeadVars, Mask)`) and
+picks the order by it, so exactly one of them runs for a call.  A body is only reordered when that cannot change what it means:
 Only in the tabled mode (variant tables terminate whatever the order; the Optimized mode,
 with a table per call, might not). No `==`, `\\==` or negated builtin (they depend on what is bound), no negated literal, every
 builtin's variables bound where it stands in the written order (for that adornment), and at
@@ -150,6 +151,7 @@ def run(unit: AqUnit) -> AqUnit:
             new = copy.copy(rule)
             new.body = [rule.body[i] for i in order]
             new.guard = (head_vars(rule), masks) if masks else None
+            new.variant_of = rule.index if masks else 0
             rules.append(new)
     for k, rule in enumerate(rules, 1):
         rule.index = k
