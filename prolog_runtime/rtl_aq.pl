@@ -168,8 +168,11 @@ aq_set_notify(Hook) :- retractall(aq_hook(_)), assertz(aq_hook(Hook)).
 %   update); the queue is emptied.
 
 aq_events(Events) :-
-    findall(ev(Id, Op, A), aq_ev(Id, Op, A), Events),
-    retractall(aq_ev(_, _, _)).
+    (   aq_ev(_, _, _)
+    ->  findall(ev(Id, Op, A), aq_ev(Id, Op, A), Events),
+        retractall(aq_ev(_, _, _))
+    ;   Events = []
+    ).
 
 emit(Id, Op, A) :-
     (   nb_getval(aq_buffer, on)
@@ -1206,13 +1209,33 @@ store_fact(Fact) :-
 
 %!  aq_assert_all(+Facts) is det.
 aq_assert_all(Facts) :-
-    ( is_list(Facts) -> true ; must_be(list, Facts) ),
-    check_facts(Facts),
+    checked_batch(Facts, Ground),
     (   aq_conf(negation, true)
     ->  maplist(aq_assert, Facts)
-    ;   add_facts(Facts),
+    ;   add_facts(Ground, Facts),
         drain
     ).
+
+%   Every fact of a batch is checked before any is changed.  Ground is
+%   true for a ground batch (the usual one): one ground/1 for the list, and
+%   each fact's predicate found by the first-argument index of the
+%   generated '$aq_fact_pred'/1, the same lookup that the batch's calls of
+%   '$aq_add_ground'/1 and '$aq_retract_ground'/3 make.  Any other batch,
+%   and a ground one with an error, is checked fact by fact, which reports
+%   the first bad fact.
+checked_batch(Facts, Ground) :-
+    (   ground(Facts),
+        stored_predicates(Facts)
+    ->  Ground = true
+    ;   ( is_list(Facts) -> true ; must_be(list, Facts) ),
+        check_facts(Facts),
+        Ground = false
+    ).
+
+stored_predicates([]).
+stored_predicates([F|Fs]) :-
+    user:'$aq_fact_pred'(F),
+    stored_predicates(Fs).
 
 %   The facts of a batch, propagated one after the other (depth-first, as
 %   far as schedule/3 goes) and the agenda drained once at the end: the
@@ -1226,12 +1249,19 @@ aq_assert_all(Facts) :-
 %   registration) none can become live in the batch, and its facts go to
 %   the goal records only; otherwise a fact's propagation may make a step
 %   live for the next fact, and each fact asks (fact_go/1).
-add_facts(Facts) :-
+add_facts(Ground, Facts) :-
     nb_getval(aq_joins, J),
-    (   ( J == false ; J == unknown )
-    ->  add_facts_to_records(Facts)
-    ;   add_facts_to_joins(Facts)
+    (   J == true
+    ->  add_facts_to_joins(Facts)
+    ;   Ground == true
+    ->  add_ground_facts(Facts)
+    ;   add_facts_to_records(Facts)
     ).
+
+add_ground_facts([]).
+add_ground_facts([F|Fs]) :-
+    user:'$aq_add_ground'(F),
+    add_ground_facts(Fs).
 
 add_facts_to_records([]).
 add_facts_to_records([F|Fs]) :-
@@ -1259,14 +1289,13 @@ aq_retract(Fact) :-
 %
 %   Remove all Facts in one DRed pass.
 aq_retract_all(Facts0) :-
-    ( is_list(Facts0) -> true ; must_be(list, Facts0) ),
-    check_facts(Facts0),
-    neg_update(retract_facts(Facts0)).
+    checked_batch(Facts0, Ground),
+    neg_update(retract_facts(Ground, Facts0)).
 
 %   Facts that are stored and that some state waits on go through one DRed
 %   pass; the others are erased at once.
-retract_facts(Facts0) :-
-    quiet_retract(Facts0, Awaited0),
+retract_facts(Ground, Facts0) :-
+    quiet_retract(Ground, Facts0, Awaited0),
     sort(Awaited0, Awaited),
     (   Awaited == [] -> true ; dred(Awaited) ).
 
@@ -1275,13 +1304,20 @@ retract_facts(Facts0) :-
 %   and without asking first whether it is stored (erasing a fact that is
 %   not there does nothing).  Nothing propagates here, so whether a join
 %   step is live is asked once for the batch.
-quiet_retract(Facts, Awaited) :-
+quiet_retract(Ground, Facts, Awaited) :-
     (   nb_getval(aq_joins, true)
     ->  quiet_retract_each(Facts, true, Awaited)
-    ;   stored_facts_ground
-    ->  quiet_retract_ground(Facts, Awaited)
-    ;   quiet_retract_each(Facts, false, Awaited)
+    ;   \+ stored_facts_ground
+    ->  quiet_retract_each(Facts, false, Awaited)
+    ;   Ground == true
+    ->  retract_ground_facts(Facts, Awaited)
+    ;   quiet_retract_ground(Facts, Awaited)
     ).
+
+retract_ground_facts([], []).
+retract_ground_facts([F|Fs], Awaited) :-
+    user:'$aq_retract_ground'(F, Awaited, Awaited1),
+    retract_ground_facts(Fs, Awaited1).
 
 %   While every stored fact is ground, a ground fact's two
 %   tests and its erasure are the generated '$aq_retract_ground'/3 of its
