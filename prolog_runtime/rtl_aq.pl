@@ -1297,7 +1297,55 @@ aq_retract_all(Facts0) :-
 retract_facts(Ground, Facts0) :-
     quiet_retract(Ground, Facts0, Awaited0),
     sort(Awaited0, Awaited),
-    (   Awaited == [] -> true ; dred(Awaited) ).
+    (   Awaited == []
+    ->  true
+    ;   Awaited = [F],
+        retraction_keeps_answers(F)
+    ->  erase_fact(F)
+    ;   dred(Awaited)
+    ).
+
+%   A single retracted ground fact F that states wait on changes no answer
+%   when each of them is the last step of its rule (F resumes it to an
+%   answer, not to another state), created from stored facts only
+%   (fact_only_state/1), and the answer it gives with F has a derivation
+%   that F is not part of: a state that is there, also created from facts
+%   only, resumed with another stored fact (the seller's offer of the same
+%   object at another price).  Then the DRed pass would over-delete nothing
+%   (kept_by_facts/2 keeps each such answer) and notify nothing, and F just
+%   goes.  No state depends on F: one that was created with F has a
+%   predecessor whose goal record waits on F at an earlier step, and that
+%   record stops the shortcut; nor does the other derivation depend on an
+%   answer (its state comes from facts).  Primary DRed only, while every
+%   stored fact is ground and no join step is live (join states wait on F
+%   without a goal record).
+retraction_keeps_answers(F) :-
+    ground(F),
+    aq_conf(dred, primary),
+    \+ aq_conf(mode, naive),
+    \+ nb_getval(aq_joins, true),
+    stored_facts_ground,
+    \+ ( user:'$aq_wrec'(F, S),
+          \+ last_step_kept(F, S) ).
+
+last_step_kept(F, S) :-
+    fact_only_state(S),
+    once(user:'$aq_final'(A, T, S, fact, F, Check)),
+    (   call(Check)
+    ->  answer_kept_without(T, A, F)
+    ;   true                            % F gives S no answer
+    ).
+
+answer_kept_without(T, A, F) :-
+    copy_term(A, A1),
+    user:'$aq_final'(A1, T, P, fact, Lit, Check),
+    fact_only_state(P),
+    \+ \+ user:'$aq_wrec'(Lit, P),
+    user:Lit,
+    Lit \== F,
+    user:'$aq_wrec'(Lit, P),
+    call(Check),
+    A1 =@= A, !.
 
 %   A fact no state waits on derived nothing: it goes without DRed (most
 %   retractions of a belief base that a few queries watch are such facts),
@@ -1378,7 +1426,11 @@ has_fact(F) :-
 %   Remove the stored copies of Fact (a variant of it).
 erase_fact(F) :-
     (   ground_fact(F)
-    ->  retractall(user:F)
+    ->  (   retract(user:F),            % stops at the first copy, where
+            \+ user:F                   % retractall/1 looks at every clause
+        ->  true                        % of the index bucket (twice the cost)
+        ;   retractall(user:F)
+        )
     ;   forall(stored_copy(F, Ref), erase(Ref))
     ).
 
