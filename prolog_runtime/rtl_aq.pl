@@ -1217,25 +1217,25 @@ aq_assert_all(Facts) :-
     ).
 
 %   Every fact of a batch is checked before any is changed.  Ground is
-%   true for a ground batch (the usual one): one ground/1 for the list, and
-%   each fact's predicate found by the first-argument index of the
-%   generated '$aq_fact_pred'/1, the same lookup that the batch's calls of
-%   '$aq_add_ground'/1 and '$aq_retract_ground'/3 make.  Any other batch,
-%   and a ground one with an error, is checked fact by fact, which reports
-%   the first bad fact.
+%   true for a list of ground facts of stored predicates (the usual batch),
+%   each found by the first-argument index of the generated
+%   '$aq_ground_fact'/1 (the lookup that the batch's calls of
+%   '$aq_add_ground'/1 and '$aq_retract_ground'/3 make again), which tests
+%   atomic arguments in line.  Any other batch, and a ground one with an
+%   error, is checked fact by fact, which reports the first bad fact.
 checked_batch(Facts, Ground) :-
-    (   ground(Facts),
-        stored_predicates(Facts)
+    (   is_list(Facts),
+        ground_facts(Facts)
     ->  Ground = true
     ;   ( is_list(Facts) -> true ; must_be(list, Facts) ),
         check_facts(Facts),
         Ground = false
     ).
 
-stored_predicates([]).
-stored_predicates([F|Fs]) :-
-    user:'$aq_fact_pred'(F),
-    stored_predicates(Fs).
+ground_facts([]).
+ground_facts([F|Fs]) :-
+    user:'$aq_ground_fact'(F),
+    ground_facts(Fs).
 
 %   The facts of a batch, propagated one after the other (depth-first, as
 %   far as schedule/3 goes) and the agenda drained once at the end: the
