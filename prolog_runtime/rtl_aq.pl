@@ -168,8 +168,11 @@ aq_set_notify(Hook) :- retractall(aq_hook(_)), assertz(aq_hook(Hook)).
 %   update); the queue is emptied.
 
 aq_events(Events) :-
-    findall(ev(Id, Op, A), aq_ev(Id, Op, A), Events),
-    retractall(aq_ev(_, _, _)).
+    (   aq_ev(_, _, _)
+    ->  findall(ev(Id, Op, A), aq_ev(Id, Op, A), Events),
+        retractall(aq_ev(_, _, _))
+    ;   Events = []
+    ).
 
 emit(Id, Op, A) :-
     (   nb_getval(aq_buffer, on)
@@ -1212,13 +1215,33 @@ store_fact(Fact) :-
 
 %!  aq_assert_all(+Facts) is det.
 aq_assert_all(Facts) :-
-    ( is_list(Facts) -> true ; must_be(list, Facts) ),
-    check_facts(Facts),
+    checked_batch(Facts, Ground),
     (   aq_conf(negation, true)
     ->  maplist(aq_assert, Facts)
-    ;   add_facts(Facts),
+    ;   add_facts(Ground, Facts),
         drain
     ).
+
+%   Every fact of a batch is checked before any is changed.  Ground is
+%   true for a list of ground facts of stored predicates (the usual batch),
+%   each found by the first-argument index of the generated
+%   '$aq_ground_fact'/1 (the lookup that the batch's calls of
+%   '$aq_add_ground'/1 and '$aq_retract_ground'/3 make again), which tests
+%   atomic arguments in line.  Any other batch, and a ground one with an
+%   error, is checked fact by fact, which reports the first bad fact.
+checked_batch(Facts, Ground) :-
+    (   is_list(Facts),
+        ground_facts(Facts)
+    ->  Ground = true
+    ;   ( is_list(Facts) -> true ; must_be(list, Facts) ),
+        check_facts(Facts),
+        Ground = false
+    ).
+
+ground_facts([]).
+ground_facts([F|Fs]) :-
+    user:'$aq_ground_fact'(F),
+    ground_facts(Fs).
 
 %   The facts of a batch, propagated one after the other (depth-first, as
 %   far as schedule/3 goes) and the agenda drained once at the end: the
@@ -1232,12 +1255,19 @@ aq_assert_all(Facts) :-
 %   registration) none can become live in the batch, and its facts go to
 %   the goal records only; otherwise a fact's propagation may make a step
 %   live for the next fact, and each fact asks (fact_go/1).
-add_facts(Facts) :-
+add_facts(Ground, Facts) :-
     nb_getval(aq_joins, J),
-    (   ( J == false ; J == unknown )
-    ->  add_facts_to_records(Facts)
-    ;   add_facts_to_joins(Facts)
+    (   J == true
+    ->  add_facts_to_joins(Facts)
+    ;   Ground == true
+    ->  add_ground_facts(Facts)
+    ;   add_facts_to_records(Facts)
     ).
+
+add_ground_facts([]).
+add_ground_facts([F|Fs]) :-
+    user:'$aq_add_ground'(F),
+    add_ground_facts(Fs).
 
 add_facts_to_records([]).
 add_facts_to_records([F|Fs]) :-
@@ -1265,29 +1295,83 @@ aq_retract(Fact) :-
 %
 %   Remove all Facts in one DRed pass.
 aq_retract_all(Facts0) :-
-    ( is_list(Facts0) -> true ; must_be(list, Facts0) ),
-    check_facts(Facts0),
-    neg_update(retract_facts(Facts0)).
+    checked_batch(Facts0, Ground),
+    neg_update(retract_facts(Ground, Facts0)).
 
 %   Facts that are stored and that some state waits on go through one DRed
 %   pass; the others are erased at once.
-retract_facts(Facts0) :-
-    quiet_retract(Facts0, Awaited0),
+retract_facts(Ground, Facts0) :-
+    quiet_retract(Ground, Facts0, Awaited0),
     sort(Awaited0, Awaited),
-    (   Awaited == [] -> true ; dred(Awaited) ).
+    (   Awaited == []
+    ->  true
+    ;   Awaited = [F],
+        retraction_keeps_answers(F)
+    ->  erase_fact(F)
+    ;   dred(Awaited)
+    ).
+
+%   A single retracted ground fact F that states wait on changes no answer
+%   when each of them is the last step of its rule (F resumes it to an
+%   answer, not to another state), created from stored facts only
+%   (fact_only_state/1), and the answer it gives with F has a derivation
+%   that F is not part of: a state that is there, also created from facts
+%   only, resumed with another stored fact (the seller's offer of the same
+%   object at another price).  Then the DRed pass would over-delete nothing
+%   (kept_by_facts/2 keeps each such answer) and notify nothing, and F just
+%   goes.  No state depends on F: one that was created with F has a
+%   predecessor whose goal record waits on F at an earlier step, and that
+%   record stops the shortcut; nor does the other derivation depend on an
+%   answer (its state comes from facts).  Primary DRed only, while every
+%   stored fact is ground and no join step is live (join states wait on F
+%   without a goal record).
+retraction_keeps_answers(F) :-
+    ground(F),
+    aq_conf(dred, primary),
+    \+ aq_conf(mode, naive),
+    \+ nb_getval(aq_joins, true),
+    stored_facts_ground,
+    \+ ( user:'$aq_wrec'(F, S),
+          \+ last_step_kept(F, S) ).
+
+last_step_kept(F, S) :-
+    fact_only_state(S),
+    once(user:'$aq_final'(A, T, S, fact, F, Check)),
+    (   call(Check)
+    ->  answer_kept_without(T, A, F)
+    ;   true                            % F gives S no answer
+    ).
+
+answer_kept_without(T, A, F) :-
+    copy_term(A, A1),
+    user:'$aq_final'(A1, T, P, fact, Lit, Check),
+    fact_only_state(P),
+    \+ \+ user:'$aq_wrec'(Lit, P),
+    user:Lit,
+    Lit \== F,
+    user:'$aq_wrec'(Lit, P),
+    call(Check),
+    A1 =@= A, !.
 
 %   A fact no state waits on derived nothing: it goes without DRed (most
 %   retractions of a belief base that a few queries watch are such facts),
 %   and without asking first whether it is stored (erasing a fact that is
 %   not there does nothing).  Nothing propagates here, so whether a join
 %   step is live is asked once for the batch.
-quiet_retract(Facts, Awaited) :-
+quiet_retract(Ground, Facts, Awaited) :-
     (   nb_getval(aq_joins, true)
     ->  quiet_retract_each(Facts, true, Awaited)
-    ;   stored_facts_ground
-    ->  quiet_retract_ground(Facts, Awaited)
-    ;   quiet_retract_each(Facts, false, Awaited)
+    ;   \+ stored_facts_ground
+    ->  quiet_retract_each(Facts, false, Awaited)
+    ;   Ground == true
+    ->  retract_ground_facts(Facts, Awaited)
+    ;   quiet_retract_ground(Facts, Awaited)
     ).
+
+retract_ground_facts([], []).
+retract_ground_facts([F|Fs], Awaited) :-
+    user:'$aq_retract_ground'(F, Awaited, Awaited1),
+    retract_ground_facts(Fs, Awaited1).
 
 %   While every stored fact is ground, a ground fact's two
 %   tests and its erasure are the generated '$aq_retract_ground'/3 of its
@@ -1348,7 +1432,11 @@ has_fact(F) :-
 %   Remove the stored copies of Fact (a variant of it).
 erase_fact(F) :-
     (   ground_fact(F)
-    ->  retractall(user:F)
+    ->  (   retract(user:F),            % stops at the first copy, where
+            \+ user:F                   % retractall/1 looks at every clause
+        ->  true                        % of the index bucket (twice the cost)
+        ;   retractall(user:F)
+        )
     ;   forall(stored_copy(F, Ref), erase(Ref))
     ).
 

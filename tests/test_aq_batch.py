@@ -178,3 +178,30 @@ def test_a_repeated_ground_fact_goes_at_once():
     assert sorted(got[2][0]) == ["f(1)", "f(5)", "h(1)"]
     assert got[2][1] == "[p(1)]"
     assert got[3][1] == "[p(1),p(5)]"
+
+
+def test_a_batch_with_a_bad_fact_changes_nothing():
+    """A batch is checked before any fact is changed, the ground batch (one ground/1 for the list,
+    the predicates by index) as any other: a fact of a predicate without stored facts, a number, a
+    variable or a list that is not one raise the error of the first bad fact, and the store and
+    the answers stay as they were."""
+    source = ":- dynamic e/2, f/1, h/1.\n" + RULES + "f(1).\nh(1).\nf(2).\n"
+    generated = compile_source(source, "program.pl", active_queries=AqOptions("tabled")).prolog
+    batches = ["[f(3), h(2), p(3)]", "[h(2), 42]", "[f(3), X]", "[h(2)|f(3)]", "[h(2), e(0, Y), nope]",
+               "[f(1), h(1), g(1)]"]
+    body = ["    aq_register(p, p(_), _), print_store(0),"]
+    for k, batch in enumerate(batches, start=1):
+        for pred in ("aq_assert_all", "aq_retract_all"):
+            body.append(f"    catch(({pred}({batch}), E{k}{pred[3]} = none), error(E{k}{pred[3]}, _), true),"
+                        f" format('~w ~w error ~q~n', [{k}, {pred[3]}, E{k}{pred[3]}]), print_store({k}),")
+    body.append("    true.")
+    lines = support._run(generated + PRINT + "main :-\n" + "\n".join(body) + "\n")
+    errors = [line.split(" ", 3)[3] for line in lines if " error " in line]
+    errors = [e if not e.startswith("type_error(callable,_") else "type_error(callable,_)" for e in errors]
+    assert errors == ["permission_error(modify,static_procedure,p/1)"] * 2 \
+        + ["type_error(callable,42)"] * 2 + ["type_error(callable,_)"] * 2 \
+        + ["type_error(list,[h(2)|f(3)])"] * 2 + ["permission_error(modify,static_procedure,nope/0)"] * 2 \
+        + ["permission_error(modify,static_procedure,g/1)"] * 2, errors
+    stores = {line for line in lines if " store " in line or " answers " in line}
+    assert {line.split(" ", 1)[1] for line in stores} == {"store f(1)", "store f(2)", "store h(1)",
+                                                          "answers [p(1)]"}, stores

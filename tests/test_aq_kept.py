@@ -9,6 +9,9 @@ same facts, and delete in batches that may take the alternative derivation's own
 in the same pass (the seller or the type of the object).  After every step the maintained
 answers equal SWI-Prolog's `:- table` answers and recomputation from scratch, and the
 notifications of the step equal the difference between the oracle's answers before and after.
+A single retracted fact whose states all give answers kept that way goes without a DRed pass
+(retraction_keeps_answers/1 in rtl_aq.pl); the single-fact cases add a rule that joins offers/3
+with itself, so that states created with a fact also wait on facts of its predicate.
 AQ_EXAMPLES sets the number of examples (default 12)."""
 from __future__ import annotations
 
@@ -151,3 +154,40 @@ def test_no_answer_kept_by_its_own_table():
     inc = support._parse(lines, "inc")
     assert inc[(0, 1)] == "[r(1,0)]" and inc[(1, 1)] == "[]" == scratch[(1, 1)], inc
     assert inc[(2, 1)] == "[r(1,0)]" and support._parse(lines, "events")[(1, 1)] == "[delete-r(1,0)]"
+
+
+SELF_JOIN = "two(S, O) :- offers(S, O, P), offers(O, S, P).\n"
+
+
+@st.composite
+def single_fact_case(draw):
+    """Batches of one fact (the shortcut applies to one retracted fact that states wait on)."""
+    facts = draw(st.lists(FACT, min_size=4, max_size=16, unique=True))
+    pool = facts + draw(st.lists(FACT, max_size=6))
+    one = st.lists(st.sampled_from(pool), min_size=1, max_size=1)
+    steps = draw(st.lists(st.tuples(st.sampled_from("+--"), one), min_size=1, max_size=10))
+    goals = draw(st.lists(st.sampled_from(GOALS + ["two(S, O)", "two(0, O)", "two(S, 1)"]),
+                          min_size=1, max_size=3, unique=True))
+    source = (":- dynamic seller/2, has/2, offers/3.\n" + RULES + SELF_JOIN
+              + "".join(f + ".\n" for f in facts))
+    return source, goals, steps
+
+
+@SETTINGS
+@given(single_fact_case())
+def test_single_fact_retractions_match_oracles_and_notifications(c):
+    check(*c, mode="tabled")
+
+
+def test_single_retraction_with_another_offer_notifies_nothing():
+    """acc(1, 0) from offers at prices 0 and 1: the first retraction keeps it without a
+    notification, the second deletes it, an addition brings it back."""
+    source = (":- dynamic seller/2, has/2, offers/3.\n" + RULES
+              + "seller(0, 0).\nhas(0, 1).\noffers(0, 1, 0).\noffers(0, 1, 1).\noffers(0, 2, 0).\n")
+    lines, scratch = run(source, ["acc(1, S)", "acc(O, S)"],
+                         [("-", ["offers(0, 1, 0)"]), ("-", ["offers(0, 1, 1)"]), ("+", ["offers(0, 1, 2)"])],
+                         "tabled")
+    inc, events = support._parse(lines, "inc"), support._parse(lines, "events")
+    assert inc[(1, 1)] == "[acc(1,0)]" == scratch[(1, 1)] and events[(1, 1)] == "[]", (inc, events)
+    assert inc[(2, 1)] == "[]" == scratch[(2, 1)] and events[(2, 1)] == "[delete-acc(1,0)]"
+    assert inc[(3, 1)] == "[acc(1,0)]" and events[(3, 1)] == "[add-acc(1,0)]"

@@ -207,6 +207,7 @@ def _render(program: Program) -> str:
             "record_decl": f"{quote_atom(f'aq_w:{name}/{arity}')}/{arity + 1}",
             "pattern": _pattern(ind),
             "record": _record(ind),
+            "args": [f"A{i}" for i in range(1, arity + 1)],
         })
     order = {ind: n for n, ind in enumerate(program.dynamic)}
     grouped = sorted(program.facts, key=lambda f: order.get(_indicator(f.term), len(order)))
