@@ -319,7 +319,7 @@ query_answers(Id, Answers) :-
     (   aq_q(Id, G, Kind, T) -> true ; existence_error(active_query, Id) ),
     (   Kind == call
     ->  aq_tab(T, _, Tr, _, _),
-        findall(G, trie_gen_compiled(Tr, G), Answers)
+        findall(G, trie_gen(Tr, G), Answers)
     ;   findall(G, user:G, As0),
         sort(As0, Answers)
     ).
