@@ -523,16 +523,25 @@ trie_count(Tr, C) :-
 %   State waits for stored facts matching Literal: record it (so later
 %   assertions find it) and resolve Literal in place against the facts.
 
+%   The insert phase is written out here, not as a clause of wait_fact/3:
+%   it runs once per answer of a rule whose next literal is a stored fact,
+%   and every call less is a frame less on the depth-first propagation
+%   (see "Seventh round" in docs/active_queries.md).
 aq_wait_fact(Lit, S) :-
     nb_getval(aq_phase, P),
-    wait_fact(P, Lit, S).
+    (   P == insert
+    ->  (   aq_join_state(S)
+        ->  true
+        ;   user:'$aq_wadd'(Lit, S)
+        ),
+        (   user:Lit,
+            go(S, Lit, 0),
+            fail
+        ;   true
+        )
+    ;   wait_fact(P, Lit, S)
+    ).
 
-wait_fact(insert, Lit, S) :-
-    (   join_state(S)
-    ->  true
-    ;   user:'$aq_wadd'(Lit, S)
-    ),
-    resume_with_facts(Lit, S).
 %   A join state existed when its consumer state or its answer is over-deleted
 %   (the caller found both), and it has that one derivation.
 wait_fact(delete, Lit, S) :-
@@ -552,16 +561,8 @@ wait_fact(restore, Lit, S) :-
     ->  forall(user:Lit, go(S, Lit, 0))
     ;   has_fact_record(Lit, S)
     ->  user:'$aq_wadd'(Lit, S)
-    ;   wait_fact(insert, Lit, S)
-    ).
-
-%   A failure-driven loop: forall/2 costs 0.07 us more per call, once per
-%   answer of a left-recursive rule.
-resume_with_facts(Lit, S) :-
-    (   user:Lit,
-        go(S, Lit, 0),
-        fail
-    ;   true
+    ;   user:'$aq_wadd'(Lit, S),
+        forall(user:Lit, go(S, Lit, 0))
     ).
 
 %   The goal records of State waiting on Literal (variants, not instances).
@@ -947,10 +948,23 @@ adornment([V|Vs], Bit, M0, M) :-
 %   Answer-invariant tabling: only a new answer (no variant in the table yet)
 %   is propagated to the consumers.
 
+%   The insert phase is written out here, as in aq_wait_fact/2: it runs
+%   for every answer derived.
 aq_answer(T, A, R) :-
     nb_getval(aq_phase, P),
     RA is R + 1,
-    answer(P, T, A, RA).
+    (   P == insert
+    ->  (   trie_lookup(T, A, V)
+        ->  (   V > 0
+            ->  NV is -V,
+                trie_update(T, A, NV)
+            ;   true
+            )
+        ;   trie_insert(T, A, RA),
+            schedule(T, A, RA)
+        )
+    ;   answer(P, T, A, RA)
+    ).
 
 %   The answer trie of a table maps every answer to its rank R, stored as
 %   -R once the answer was derived more than once (or restored by DRed,
@@ -959,17 +973,7 @@ aq_answer(T, A, R) :-
 %   over-deleted lost that derivation, and comes back only if the forward
 %   propagation of a restored item derives it again.  (trie_insert/3 raises
 %   an error rather than fail for a key that has another value, hence the
-%   lookup first.)
-answer(insert, T, A, RA) :-
-    (   trie_lookup(T, A, V)
-    ->  (   V > 0
-        ->  NV is -V,
-            trie_update(T, A, NV)
-        ;   true
-        )
-    ;   trie_insert(T, A, RA),
-        schedule(T, A, RA)
-    ).
+%   lookup first.)  The insert phase is in aq_answer/3.
 answer(restore, T, A, RA) :-
     (   trie_lookup(T, A, _)
     ->  true
@@ -1096,12 +1100,16 @@ answer_rank(Tr, A, RA) :-
 %   of derivations (left recursion over a long path) does not grow the
 %   stacks by frames per answer.  prolog_current_frame/1 is the cheapest
 %   depth measure there is (a counter in a global variable costs twice as
-%   much per answer).
+%   much per answer).  The loop of propagate/3 is written out: a frame
+%   less per answer.
 schedule(T, A, RA) :-
     prolog_current_frame(F),
     (   F > 500000
     ->  assertz(aq_agenda(T, A, RA))
-    ;   propagate(T, A, RA)
+    ;   aq_c(T, A, S),
+        go(S, A, RA),
+        fail
+    ;   true
     ).
 
 drain :-
