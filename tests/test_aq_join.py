@@ -171,3 +171,24 @@ def test_registering_and_unregistering_keeps_the_join_step():
     answers, after, records = _stats_after(source, "path(0, _)", churn + "aq_retract(edge(30, 31)), ")
     assert (answers, after) == (50, 30)
     assert records <= 2, records
+
+
+def test_join_state_index_follows_the_live_steps():
+    """The states of the live join steps are also kept by their functor (aq_join_state/1, the
+    test every state waiting on facts makes): the two agree when a step goes live, after it
+    switched to goal records, after aq_reset/0 and after a rule added and removed at run time."""
+    source = (":- dynamic edge/2.\n" + RULES["left"]
+              + "".join(f"edge({i}, {i + 1}).\n" for i in range(40)))
+    generated = compile_source(source, "chain.pl", active_queries=AqOptions("tabled")).prolog
+    text = generated + """
+same(Tag) :- findall(S, rtl_aq:aq_join_step(_, _, _, S), Steps),
+    findall(S, rtl_aq:aq_join_state(S), States), length(Steps, N),
+    ( Steps =@= States -> format('~w ~w~n', [Tag, N]) ; format('~w differ~n', [Tag]) ).
+main :- aq_register(q, path(0, _), _), same(live),
+    forall(between(1, 34, I), aq_register(I, path(I, _), _)), same(switched),
+    aq_reset, aq_register(q, path(0, _), _), same(reset),
+    aq_add_rule((path(X, Y) :- path(X, Z), edge(Y, Z))), aq_register(r, path(2, _), _), same(added),
+    aq_remove_rule((path(X, Y) :- path(X, Z), edge(Y, Z))), same(removed).
+"""
+    lines = support._run(text)
+    assert lines[-5:] == ["live 1", "switched 0", "reset 1", "added 2", "removed 1"], lines
