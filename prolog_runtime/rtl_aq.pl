@@ -268,10 +268,10 @@ warm_fact_indexes :-
     flag(aq_registrations, R0, R0 + 1),
     R is R0 + 1,
     forall(user:'$aq_fact_pred'(F), warm_fact_index(F, R)),
-    (   nb_getval(aq_ground, unknown)
-    ->  (   all_facts_ground -> G = true ; G = false ),
-        nb_setval(aq_ground, G)
-    ;   true
+    nb_getval(aq_ground, G),
+    (   known_ground(G)
+    ->  true
+    ;   resolve_ground(G, _)
     ).
 
 warm_fact_index(F, R) :-
@@ -444,10 +444,12 @@ state_owner(S, T) :- S \= q(_), arg(1, S, T).
 %   Everything goes at once: unregistering the queries one by one would
 %   scan the goal records once per query.  What is known of the facts
 %   (whether every stored fact is ground: aq_ground, aq_ground_facts/3)
-%   stays with them: scanning them again at the next registration cost
-%   0.1 ms for a chain of 1000 facts, 10 ms for 100k facts, and the
-%   re-evaluation of the queries after a negation flipped (aq_reset, then
-%   every query registered again) a scan of every fact.
+%   stays with them while no stored predicate changes (kept/2, checked by
+%   resolve_ground/2; facts asserted directly after the reset, as a test
+%   or a loader does, make it stale): scanning them again at the next
+%   registration cost 0.1 ms for a chain of 1000 facts, 5-10 ms for 100k
+%   facts, and the re-evaluation of the queries after a negation flipped
+%   (aq_reset, then every query registered again) a scan of every fact.
 aq_reset :-
     retractall(aq_q(_, _, _, _)),
     forall(retract(aq_tab(T, _, _, _, _)), trie_destroy(T)),
@@ -469,7 +471,11 @@ aq_reset :-
     nb_getval(aq_nstates, NS), trie_destroy(NS),
     nb_getval(aq_ground, Ground),
     init_globals,
-    nb_setval(aq_ground, Ground).
+    (   known_ground(Ground)
+    ->  facts_generations(Gens),
+        nb_setval(aq_ground, kept(Ground, Gens))
+    ;   nb_setval(aq_ground, Ground)
+    ).
 
 %!  aq_stats(-Stats) is det.
 %
@@ -1269,6 +1275,7 @@ checked_batch(Facts, Ground) :-
 
 ground_facts([]).
 ground_facts([F|Fs]) :-
+    nonvar(F),                          % a variable would unify with a fact of arity 0
     user:'$aq_ground_fact'(F),
     ground_facts(Fs).
 
@@ -1282,15 +1289,17 @@ ground_facts([F|Fs]) :-
 %   watch costs little more than the plain assertz/1s.
 %   Without join steps (aq_joins false, or unknown before the first
 %   registration) none can become live in the batch, and its facts go to
-%   the goal records only; otherwise a fact's propagation may make a step
-%   live for the next fact, and each fact asks (fact_go/1).
+%   the goal records only; otherwise (eligible too) a fact's propagation
+%   may make a step live for the next fact, and each fact asks
+%   (fact_go/1).
 add_facts(Ground, Facts) :-
     nb_getval(aq_joins, J),
-    (   J == true
-    ->  add_facts_to_joins(Facts)
-    ;   Ground == true
-    ->  add_ground_facts(Facts)
-    ;   add_facts_to_records(Facts)
+    (   ( J == false ; J == unknown )
+    ->  (   Ground == true
+        ->  add_ground_facts(Facts)
+        ;   add_facts_to_records(Facts)
+        )
+    ;   add_facts_to_joins(Facts)
     ).
 
 add_ground_facts([]).
@@ -1499,11 +1508,11 @@ ground_fact(F) :-
 
 stored_facts_ground :-
     nb_getval(aq_ground, All),
-    (   All == unknown
-    ->  (   all_facts_ground -> All1 = true ; All1 = false ),
-        nb_setval(aq_ground, All1),
-        All1 == true
-    ;   All == true
+    (   All == true
+    ->  true
+    ;   All \== false,
+        resolve_ground(All, Known),
+        Known == true
     ).
 
 %   The global aq_ground is true while every stored fact of every dynamic
@@ -1511,7 +1520,28 @@ stored_facts_ground :-
 %   ground_fact/1, a fifth of the cost of retracting a fact of a batch),
 %   false once one is not (then the flag per predicate decides), unknown
 %   until the first scan (at the first registration: warm_fact_indexes/0,
-%   or at the first use when the facts are changed before any).
+%   or at the first use when the facts are changed before any), and
+%   kept(Known, Generations) after aq_reset/0: Known holds while no stored
+%   predicate was changed since (the generations of their last changes are
+%   the same), else the facts are scanned again.
+known_ground(true).
+known_ground(false).
+
+resolve_ground(kept(Known, Gens), All) :-
+    facts_generations(Gens),
+    !,
+    All = Known,
+    nb_setval(aq_ground, All).
+resolve_ground(_, All) :-
+    retractall(aq_ground_facts(_, _, _)),
+    (   all_facts_ground -> All = true ; All = false ),
+    nb_setval(aq_ground, All).
+
+facts_generations(Gens) :-
+    findall(G, ( current_predicate(user:'$aq_fact_pred'/1),
+                 user:'$aq_fact_pred'(F),
+                 predicate_property(user:F, last_modified_generation(G)) ),
+            Gens).
 %   Stored facts have the body true: calling one with free arguments gives
 %   the fact itself (twice as fast as clause/2 over 100k facts).
 all_facts_ground :-
@@ -1521,9 +1551,13 @@ all_facts_ground :-
           \+ ground(G) ).
 
 not_all_ground(F) :-
-    nb_setval(aq_ground, false),
     functor(F, N, A),
-    retractall(aq_ground_facts(N, A, _)),
+    nb_getval(aq_ground, Known),
+    (   known_ground(Known)
+    ->  retractall(aq_ground_facts(N, A, _))
+    ;   retractall(aq_ground_facts(_, _, _))   % may be stale (kept/2)
+    ),
+    nb_setval(aq_ground, false),
     assertz(aq_ground_facts(N, A, false)).
 
 mark(Key) :-

@@ -19,6 +19,7 @@ from typing import Dict, List, Tuple
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import test_aq_kept as kept
 import test_aq_support as support
 from retalisc.compiler import AqOptions, compile_source
 
@@ -185,10 +186,11 @@ def test_a_batch_with_a_bad_fact_changes_nothing():
     the predicates by index) as any other: a fact of a predicate without stored facts, a number, a
     variable or a list that is not one raise the error of the first bad fact, and the store and
     the answers stay as they were."""
-    source = ":- dynamic e/2, f/1, h/1.\n" + RULES + "f(1).\nh(1).\nf(2).\n"
+    source = ":- dynamic e/2, f/1, h/1, alarm/0.\n" + RULES + "f(1).\nh(1).\nf(2).\n"
     generated = compile_source(source, "program.pl", active_queries=AqOptions("tabled")).prolog
+    # [X] alone: a variable must not be taken for the stored predicate of arity 0
     batches = ["[f(3), h(2), p(3)]", "[h(2), 42]", "[f(3), X]", "[h(2)|f(3)]", "[h(2), e(0, Y), nope]",
-               "[f(1), h(1), g(1)]"]
+               "[f(1), h(1), g(1)]", "[X]"]
     body = ["    aq_register(p, p(_), _), print_store(0),"]
     for k, batch in enumerate(batches, start=1):
         for pred in ("aq_assert_all", "aq_retract_all"):
@@ -201,7 +203,20 @@ def test_a_batch_with_a_bad_fact_changes_nothing():
     assert errors == ["permission_error(modify,static_procedure,p/1)"] * 2 \
         + ["type_error(callable,42)"] * 2 + ["type_error(callable,_)"] * 2 \
         + ["type_error(list,[h(2)|f(3)])"] * 2 + ["permission_error(modify,static_procedure,nope/0)"] * 2 \
-        + ["permission_error(modify,static_procedure,g/1)"] * 2, errors
+        + ["permission_error(modify,static_procedure,g/1)"] * 2 + ["type_error(callable,_)"] * 2, errors
     stores = {line for line in lines if " store " in line or " answers " in line}
     assert {line.split(" ", 1)[1] for line in stores} == {"store f(1)", "store f(2)", "store h(1)",
                                                           "answers [p(1)]"}, stores
+
+
+def test_a_ground_batch_that_makes_a_join_step_live():
+    """While the program has a join step that no query uses yet, a batch's first fact can make it
+    live (trigger(1) starts the table of r(1, _), whose state after t(1, Z) joins with e/2); the
+    next fact of the same batch must then reach the join state: answers against SWI-Prolog's
+    tabling and recomputation, and the notifications, for a ground batch and a mixed one."""
+    source = (":- dynamic trigger/1, g/2, e/2.\n"
+              "q(X) :- trigger(X), r(X, Y).\nr(X, Y) :- t(X, Z), e(Z, Y).\nt(X, Z) :- g(X, Z).\n"
+              "g(1, 5).\ne(9, 9).\n")
+    for batch in (["trigger(1)", "e(5, 7)"], ["trigger(1)", "e(5, 7)", "e(8, X)"]):
+        for mode in ("tabled", "optimized"):
+            kept.check(source, ["q(X)"], [("+", batch)], mode)
