@@ -1034,15 +1034,28 @@ answer(delete, T, A, RD) :-
 %   re-derivation of A and of what depends on it.
 kept_by_facts(T, A) :-
     aq_conf(dred, primary),
+    fact_derivation(T, A, dred).
+
+%   A has a one-step derivation from a state P created from facts only,
+%   resumed with a stored fact Lit that Other allows (other_fact/2).
+fact_derivation(T, A, Other) :-
     copy_term(A, A1),
     user:'$aq_final'(A1, T, P, fact, Lit, Check),
     fact_only_state(P),
     \+ \+ user:'$aq_wrec'(Lit, P),
-    user:clause(Lit, true, Ref),
-    \+ deleted_fact(Ref),
+    other_fact(Other, Lit),
     user:'$aq_wrec'(Lit, P),
     call(Check),
     A1 =@= A, !.
+
+%   A stored fact that is not one the current DRed pass deletes; or that
+%   is not F (a single retraction before any change: retraction_keeps_answers/1).
+other_fact(dred, Lit) :-
+    user:clause(Lit, true, Ref),
+    \+ deleted_fact(Ref).
+other_fact(without(F), Lit) :-
+    user:Lit,
+    Lit \== F.
 
 %   The stored fact Ref is one of the facts the current DRed pass deletes.
 %   It is looked up as stored, not as the literal it was resolved with: the
@@ -1381,15 +1394,7 @@ last_step_kept(F, S) :-
     ).
 
 answer_kept_without(T, A, F) :-
-    copy_term(A, A1),
-    user:'$aq_final'(A1, T, P, fact, Lit, Check),
-    fact_only_state(P),
-    \+ \+ user:'$aq_wrec'(Lit, P),
-    user:Lit,
-    Lit \== F,
-    user:'$aq_wrec'(Lit, P),
-    call(Check),
-    A1 =@= A, !.
+    fact_derivation(T, A, without(F)).
 
 %   A fact no state waits on derived nothing: it goes without DRed (most
 %   retractions of a belief base that a few queries watch are such facts),
