@@ -4,8 +4,8 @@ query over ground facts equals its answers computed in Python.
 
 The batch path decides per fact without asking first whether it is stored (a fact no state waits
 on is erased at once) and, while every stored fact of every predicate is ground, retracts a ground
-fact with retractall/1 on the strength of one global flag (`aq_ground`); once a non-ground fact is
-stored, the flag per predicate decides.  A wrong flag would let retracting `e(0, 1)` remove the
+fact with retract/1 and backtracking into it (every copy) on the strength of one global flag
+(`aq_ground`); once a non-ground fact is stored, the flag per predicate decides.  A wrong flag would let retracting `e(0, 1)` remove the
 more general `e(X, 1)`, or an assertion add a fact that a stored one implies: the model catches
 both.  The model (docs/active_queries.md, "Programs"): asserting a ground fact does nothing when
 a stored fact is it or is more general; asserting a non-ground fact does nothing when a variant
@@ -179,6 +179,21 @@ def test_a_repeated_ground_fact_goes_at_once():
     assert sorted(got[2][0]) == ["f(1)", "f(5)", "h(1)"]
     assert got[2][1] == "[p(1)]"
     assert got[3][1] == "[p(1),p(5)]"
+
+
+def test_a_fact_listed_three_times_goes_at_once():
+    """h(5) and h(1) listed three times: retracting h(5) (no state waits on it: the generated
+    retraction of a ground fact) and h(1) (a state waits on it: the DRed pass and its cleanup)
+    removes every copy, so nothing of either is left and p(5) does not come with f(5)."""
+    got = run(["f(1)", "h(1)", "h(1)", "h(5)", "h(5)", "h(1)", "h(5)"],
+              [("-", ["h(5)"]), ("-", ["f(0)", "h(1)"]), ("+", ["f(5)"])])
+    assert got[0][1] == "[p(1)]"
+    assert sorted(got[1][0]) == ["f(1)", "h(1)", "h(1)", "h(1)"]
+    assert got[1][1] == "[p(1)]"
+    assert sorted(got[2][0]) == ["f(1)"]
+    assert got[2][1] == "[]"
+    assert sorted(got[3][0]) == ["f(1)", "f(5)"]
+    assert got[3][1] == "[]"
 
 
 def test_a_batch_with_a_bad_fact_changes_nothing():
