@@ -1472,13 +1472,14 @@ has_fact(F) :-
     ;   once(stored_copy(F, _))
     ).
 
-%   Remove the stored copies of Fact (a variant of it).  A ground fact goes
-%   by retract/1 and backtracking into it: every copy in one walk of the
-%   index bucket, and a fact stored once costs one retract/1 (retractall/1
-%   looks at every clause of the bucket, twice the cost).
+%   Remove the stored copies of Fact (a variant of it).
 erase_fact(F) :-
     (   ground_fact(F)
-    ->  \+ ( retract(user:F), fail )
+    ->  (   retract(user:F),            % stops at the first copy, where
+            \+ user:F                   % retractall/1 looks at every clause
+        ->  true                        % of the index bucket (twice the cost)
+        ;   retractall(user:F)
+        )
     ;   forall(stored_copy(F, Ref), erase(Ref))
     ).
 
