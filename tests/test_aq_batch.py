@@ -5,11 +5,12 @@ query over ground facts equals its answers computed in Python.
 The batch path decides per fact without asking first whether it is stored (a fact no state waits
 on is erased at once) and, while every stored fact of every predicate is ground, retracts a ground
 fact with retract/1 (and retractall/1 for a copy left behind) on the strength of one global flag
-(`aq_ground`); once a non-ground fact is stored, the flag per predicate decides.  A wrong flag would let retracting `e(0, 1)` remove the
-more general `e(X, 1)`, or an assertion add a fact that a stored one implies: the model catches
-both.  The model (docs/active_queries.md, "Programs"): asserting a ground fact does nothing when
-a stored fact is it or is more general; asserting a non-ground fact does nothing when a variant
-is stored; retracting a fact removes every stored variant of it (for a ground fact: itself only).
+(`aq_ground`); once a non-ground fact is stored, the flag per predicate decides.  A wrong flag
+would let retracting `e(0, 1)` remove the more general `e(X, 1)`, or an assertion add a fact that
+a stored one implies: the model catches both.  The model (docs/active_queries.md, "Programs"):
+asserting a ground fact does nothing when a stored fact is it or is more general; asserting a
+non-ground fact does nothing when a variant is stored; retracting a fact removes every stored
+variant of it (for a ground fact: itself only).
 """
 from __future__ import annotations
 
