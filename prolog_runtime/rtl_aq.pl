@@ -1187,14 +1187,12 @@ table_for(tabled, Lit, _, T, New) :-
     ;   aq_conf(subsumption, true)
     ->  (   subsuming_table(Lit, T)
         ->  New = old
-        ;   new_table(Lit, Lit, shared, T, G),
-            trie_insert(Sub, Lit, T),
+        ;   subgoal_table(Sub, Lit, Lit, shared, T, G),
             functor(G, N, A),
             assertz(aq_tpred(N/A, G, T)),
             New = new(G)
         )
-    ;   new_table(Lit, Lit, shared, T, G),
-        trie_insert(Sub, Lit, T),
+    ;   subgoal_table(Sub, Lit, Lit, shared, T, G),
         New = new(G)
     ).
 table_for(optimized, Lit, S, T, new(G)) :-
@@ -1210,8 +1208,7 @@ table_for(naive, Lit, S, T, New) :-
     nb_getval(aq_subgoals, Sub),
     (   trie_lookup(Sub, Key, T)
     ->  New = old
-    ;   new_table(G, Key, Id, T, G1),
-        trie_insert(Sub, Key, T),
+    ;   subgoal_table(Sub, G, Key, Id, T, G1),
         New = new(G1)
     ).
 
@@ -1233,6 +1230,11 @@ new_table(Goal, Key, Owner, T, G) :-
     trie_new(T),
     copy_term(Goal, G),
     assertz(aq_tab(T, G, T, Owner, Key)).
+
+%   A new table entered under Key in the subgoals trie Sub.
+subgoal_table(Sub, Goal, Key, Owner, T, G) :-
+    new_table(Goal, Key, Owner, T, G),
+    trie_insert(Sub, Key, T).
 
 		 /*******************************
 		 *     UPDATES: ADD, DELETE     *
@@ -1547,6 +1549,7 @@ facts_generations(Gens) :-
                  user:'$aq_fact_pred'(F),
                  predicate_property(user:F, last_modified_generation(G)) ),
             Gens).
+
 %   Stored facts have the body true: calling one with free arguments gives
 %   the fact itself (twice as fast as clause/2 over 100k facts).
 all_facts_ground :-

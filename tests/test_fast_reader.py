@@ -254,12 +254,14 @@ PLAIN_NUMBERS = st.one_of(st.integers(-10**20, 10**20).map(str),
                           st.sampled_from(["-0.0", "1.0e300", "-3", "0", "\"s\""]))
 
 
-def plain_terms(depth):
+def nested_terms(leaves, depth):
+    """Texts of terms up to depth: leaves, compound terms and lists (with or without a tail) of
+    nested terms."""
     if depth == 0:
-        return st.one_of(PLAIN_NAMES, PLAIN_NUMBERS)
-    sub = plain_terms(depth - 1)
+        return leaves
+    sub = nested_terms(leaves, depth - 1)
     return st.one_of(
-        PLAIN_NAMES, PLAIN_NUMBERS,
+        leaves,
         st.builds(lambda f, args: f + "(" + ",".join(args) + ")", PLAIN_NAMES,
                   st.lists(sub, min_size=1, max_size=5)),
         st.builds(lambda items, tail: "[" + ",".join(items) + (("|" + tail) if tail and items else "") + "]",
@@ -268,7 +270,7 @@ def plain_terms(depth):
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(st.lists(plain_terms(3), min_size=10, max_size=30))
+@given(st.lists(nested_terms(st.one_of(PLAIN_NAMES, PLAIN_NUMBERS), 3), min_size=10, max_size=30))
 def test_plain_output_terms_are_written_as_writeq_writes_them(tmp_path, swipl, texts):
     compare_output(tmp_path, swipl, texts)
 
@@ -316,21 +318,8 @@ def test_output_terms_with_variables_are_written_in_c_as_writeq_writes_them(tmp_
 PLAIN_WITH_VARIABLES = st.one_of(PLAIN_NAMES, PLAIN_NUMBERS, st.sampled_from(["X", "Y", "_", "_A", "Z"]))
 
 
-def plain_terms_with_variables(depth):
-    if depth == 0:
-        return PLAIN_WITH_VARIABLES
-    sub = plain_terms_with_variables(depth - 1)
-    return st.one_of(
-        PLAIN_WITH_VARIABLES,
-        st.builds(lambda f, args: f + "(" + ",".join(args) + ")", PLAIN_NAMES,
-                  st.lists(sub, min_size=1, max_size=5)),
-        st.builds(lambda items, tail: "[" + ",".join(items) + (("|" + tail) if tail and items else "") + "]",
-                  st.lists(sub, max_size=4), st.one_of(st.just(""), sub)),
-    )
-
-
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(st.lists(plain_terms_with_variables(3), min_size=10, max_size=30))
+@given(st.lists(nested_terms(PLAIN_WITH_VARIABLES, 3), min_size=10, max_size=30))
 def test_random_output_terms_with_variables_are_written_the_same(tmp_path, swipl, texts):
     run_check(tmp_path, swipl, "var_write_check", texts, VAR_WRITE_CHECK)
 
