@@ -32,6 +32,8 @@ from types import TracebackType
 from typing import TYPE_CHECKING, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, unique_module_name
+from ..runtime_rules import compile_rules
+from . import snapshot
 from .bridge import Bridge, PrologError
 from .values import Term, Time, Value, Variable, parse_term, time_value
 
@@ -556,8 +558,6 @@ class Engine:
         is already in use or when a goal of a rule is unsafe (`unsafe goal: shell/1`): the
         rules come from outside the program file, so they must pass the sandbox
         (prolog_runtime/rtl_sandbox.pl). Nothing of `text` is added then."""
-        from ..runtime_rules import compile_rules
-
         with self._lock:
             prefix = self._call("rtl_api_fresh_rule_prefix", self.module)
             compiled = compile_rules(_text(text, "rule text"), self.module, prefix)
@@ -712,9 +712,7 @@ class Engine:
     def identity(self) -> str:
         """The hash of the compiled program and the runtime a snapshot of this Engine carries."""
         if self._identity is None:
-            from . import recovery
-
-            self._identity = recovery.program_identity(self.prolog_file.read_text(encoding="utf-8"), self.module)
+            self._identity = snapshot.program_identity(self.prolog_file.read_text(encoding="utf-8"), self.module)
         return self._identity
 
     def save_state(self, path: Union[str, Path]) -> None:
@@ -722,24 +720,20 @@ class Engine:
         rules added, postponed queries, active queries, flags, clock, counters) to the file
         `path`, atomically: a temporary file, flushed to disk, renamed over `path`. Call it
         between calls that feed events (never from a callback)."""
-        from . import recovery
-
         path = Path(path)
         with self._lock:
-            recovery.replace_atomically(
+            snapshot.replace_atomically(
                 path, lambda temporary: self._call("rtl_api_save_state", str(temporary), self.identity()))
 
     def restore_state(self, path: Union[str, Path]) -> None:
         """Replace the state by the one `save_state` wrote to `path`. A file that is not a
         complete snapshot of this program under this runtime version raises
-        `recovery.StateError` and changes nothing."""
+        `recovery.StateError` (`snapshot.StateError`) and changes nothing."""
         with self._lock:
             try:
                 self._call("rtl_api_restore_state", str(path), self.identity())
             except PrologError as error:
-                from . import recovery
-
-                raise recovery.StateError(f"{path}: {error}") from None
+                raise snapshot.StateError(f"{path}: {error}") from None
 
     def state_digest(self) -> str:
         """A hash of everything a snapshot holds (equal states, equal digests)."""

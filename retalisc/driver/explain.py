@@ -18,6 +18,8 @@ from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, 
 from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
 from .engine import Engine, OutputEvent, Rejection
 from .event_lines import batch_payload
+from ..frontend.writer import write_term
+from ..frontend.program import walk_pattern
 
 def _fresh(counter: List[int], what: str) -> Var:
     counter[0] += 1
@@ -104,8 +106,6 @@ class Explainer:
 
 
 def _step_description(step, side: str) -> str:
-    from ..frontend.writer import write_term
-
     mine, other = (step.left, step.right) if side == "left" else (step.right, step.left)
     text = write_term(mine.term, 999)
     if other is None:
@@ -145,8 +145,6 @@ def trace_specs(unit, labels: Iterable[str]) -> list:
 def late_rules(unit) -> list:
     """Per rule: its label, the window of its pattern (-1 for none) and its event atoms, for
     rtl_trace_late/3."""
-    from ..frontend.program import walk_pattern
-
     found = []
     for binary in unit.rules:
         windows = [p.length for p in walk_pattern(binary.rule.pattern) if isinstance(p, Window)]

@@ -1,68 +1,27 @@
-"""Snapshots of a running program's state on disk, and the state directory of a run that
-survives a crash (docs/recovery.md).
-
-A snapshot file is written by the runtime (prolog_runtime/rtl_state.pl, fast_write terms)
-to a temporary file next to its place, flushed to disk (fsync) and renamed over it, so a
-reader sees the old file or the new one, never half of one. It is tagged with the
-*identity* of the program and runtime: a hash of the compiled program (its module name left
-out) and of every runtime source file; the runtime refuses a snapshot with another identity.
+"""The state directory of a run that survives a crash (docs/recovery.md), and the
+recoverable run loops. How one snapshot file is written and tagged (its identity, the atomic
+replacement) is `snapshot.py`, below the Engine.
 """
 from __future__ import annotations
 
 import hashlib
 import json
 import os
-from functools import lru_cache
+import sys
+import time
 from pathlib import Path
 from typing import Optional, Union
 
-from ..runtime_location import runtime_dir
+import click
 
-STATE_FORMAT = "retalisc-state-1"
-
-
-class StateError(Exception):
-    """A snapshot or state directory that cannot be used (corrupt, from another program or
-    version, unwritable)."""
-
-
-@lru_cache(maxsize=None)
-def runtime_version() -> str:
-    """A hash of the runtime's Prolog sources: a snapshot is only read by the runtime that wrote it."""
-    digest = hashlib.sha256(STATE_FORMAT.encode())
-    for path in sorted(Path(runtime_dir()).glob("*.pl")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
-    return digest.hexdigest()
-
-
-def program_identity(prolog_text: str, module: str) -> str:
-    """The identity of a compiled program under this runtime: the same program compiled under
-    another module name has the same identity."""
-    digest = hashlib.sha256(runtime_version().encode())
-    digest.update((prolog_text.replace(module, "\0M\0") if module else prolog_text).encode("utf-8"))
-    return digest.hexdigest()[:32]
-
-
-def fsync_directory(directory: Union[str, Path]) -> None:
-    """Make a rename in `directory` durable (where the platform allows it)."""
-    try:
-        fd = os.open(str(directory), os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def fsync_file(path: Union[str, Path]) -> None:
-    fd = os.open(str(path), os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
+from ..robot_io.messages import MessageConverter
+from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages, open_recording
+from ..robot_io.ros1_terms import Ros1Terms
+from .bridge import PrologError
+from .event_lines import batch_payload
+from .outputs import detections_line
+from .run import Progress, RunStopped, _live_batches, end_the_input, print_summary
+from .snapshot import STATE_FORMAT, StateError, fsync_directory, replace_atomically
 
 
 def file_sha256(path: Union[str, Path]) -> str:
@@ -78,25 +37,6 @@ def file_sha256(path: Union[str, Path]) -> str:
 DEFAULT_SNAPSHOT_EVENTS = 200_000   # input lines between two snapshots
 DEFAULT_SNAPSHOT_SECONDS = 60.0     # or seconds of processing, whichever comes first
 KEEP_SNAPSHOTS = 2                  # the newest complete ones; older ones are deleted
-
-
-def replace_atomically(path: Union[str, Path], write) -> None:
-    """Make `path` what `write(temporary)` writes, or leave it as it was: the temporary file
-    is flushed to disk, renamed over `path`, and the rename flushed (the directory); on any
-    error the temporary file is removed."""
-    path = Path(path)
-    temporary = path.with_name(path.name + ".tmp")
-    try:
-        write(temporary)
-        fsync_file(temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        try:
-            temporary.unlink()
-        except OSError:
-            pass
-        raise
-    fsync_directory(path.parent)
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
@@ -333,7 +273,6 @@ def take_snapshot(directory: StateDir, engine, sink, manifest: dict, log):
     """Flush the output to disk, then write a snapshot of `engine` with `manifest` (the input
     position) and the output position. A snapshot that cannot be written (a full disk) is
     reported on `log` and None returned: the run goes on, the previous snapshot stays."""
-    from .bridge import PrologError
 
     sink.flush()
     os.fsync(sink.fileno())
@@ -361,12 +300,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     input) the lines are journaled (EventJournal) before they are processed, a restart
     replays the journal after the snapshot and then reads standard input on; the output is
     flushed after each batch. Returns the exit status."""
-    import sys
-    import time
 
-    from .bridge import PrologError
-    from .event_lines import batch_payload
-    from .run import Progress, RunStopped, end_the_input, print_summary
 
     log = log or sys.stderr
     started = time.perf_counter()
@@ -467,9 +401,7 @@ def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_s
     after the restored snapshot (replayed), then the lines of standard input as they arrive,
     each batch appended to the journal before it is processed. The journal's segment is that
     of the newest snapshot: the caller opens it when it takes the first snapshot of a new run."""
-    import sys
 
-    from .run import _live_batches
 
     line = first_line
     if restored is not None:
@@ -501,8 +433,6 @@ def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], displ
     restores the newest complete one, cuts `out` back and goes on from its script line. A bad
     script line or a failed command ends the run as without --state (its message on `log`,
     with `display_name` for the script; exit status 2 or 1). Returns the exit status."""
-    import sys
-    import time
 
     log = log or sys.stderr
     batch_size = max(1, min(batch_size, snapshot_commands))   # snapshots fall between batches
@@ -555,16 +485,8 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
     the options that select and convert its messages are part of the snapshot's input name:
     a state directory of another selection is refused); a restart passes over that many
     messages and goes on. Returns the exit status (2: the recording cannot be read)."""
-    import sys
-    import time
 
-    import click
 
-    from ..robot_io.messages import MessageConverter
-    from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages, open_recording
-    from ..robot_io.ros1_terms import Ros1Terms
-    from .bridge import PrologError
-    from .run import detections_line
 
     log = log or sys.stderr
     options = options or BagOptions()

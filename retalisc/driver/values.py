@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from typing import Any, List, Sequence, Tuple, Union
 
 from ..frontend.depth import with_room_for_depth
+from .bridge import Bridge, PrologError
+from ..runtime_location import runtime_dir
 
 __all__ = ["Term", "Variable", "Value", "Time", "data_value", "parse_term", "time_value"]
 
@@ -59,14 +61,10 @@ _runtime_loaded = False
 def parse_term(text: str) -> Value:
     """The Python value of a term written as Prolog text (as output lines carry it). The text
     is read by SWI-Prolog (`rtl_api_term_data/2`), so whatever the runtime writes reads back."""
-    from .bridge import Bridge, PrologError
-
     global _runtime_loaded
     bridge = Bridge()
     if not _runtime_loaded:
         if not bridge.once("current_predicate(rtl_api:rtl_api_term_data/2)"):    # constant text
-            from ..runtime_location import runtime_dir
-
             bridge.consult(str(runtime_dir() / "retalis.pl"))
         _runtime_loaded = True
     try:

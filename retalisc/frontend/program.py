@@ -18,6 +18,7 @@ from .errors import RetalisSyntaxError
 from .operators import ETALIS_ALIASES
 from .parser import ReadClause, read_program
 from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list, span_of, to_prolog
+from .writer import write_term
 
 
 # ---- patterns --------------------------------------------------------------------------
@@ -627,8 +628,6 @@ _NOT_PATTERNS = {
 
 
 def _function_text(function: Term) -> str:
-    from .writer import write_term
-
     return write_term(function, 999)
 
 
@@ -674,8 +673,6 @@ def pattern_conditions(pattern: Pattern):
 
 
 def pattern_text(pattern: Pattern) -> str:
-    from .writer import write_term
-
     if isinstance(pattern, EventAtom):
         text = write_term(pattern.term, 1024)
         if pattern.start is not None:

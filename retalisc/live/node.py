@@ -57,6 +57,8 @@ from ..robot_io.messages import ConversionError, Convention, MessageConverter
 from ..robot_io.ros1_terms import Ros1Terms
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 from .state import STATEFUL_CALLS
+from ..robot_io.bags import typestore
+from ..driver.bridge import PrologError
 
 BATCH = 2000
 REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
@@ -155,8 +157,6 @@ class LiveNode:
                  convention: Convention = Convention(), out: Optional[IO[str]] = None,
                  log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True),
                  linger: float = 0.0, state=None):
-        from ..robot_io.bags import typestore
-
         self.engine = engine
         self.transport = transport
         self.config = config or PubSubConfig()
@@ -376,8 +376,6 @@ class LiveNode:
         self.learned[name] = definition
 
     def _feed(self, events: List[tuple]) -> None:
-        from ..driver.bridge import PrologError
-
         if self.state is not None:
             self.state.events(events)       # journaled (flushed) before they are fed
         count = len(events)

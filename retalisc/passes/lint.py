@@ -40,6 +40,7 @@ from ..frontend.terms import Atom, Compound, Span, indicator, span_of, variables
 from ..frontend.writer import write_term
 from .loadable import _goals, _loads_code, _program_predicates
 from .unit import Unit
+from ..frontend.terms import Number
 
 name = "lint"
 
@@ -112,8 +113,6 @@ def _window_on_last_operand(rule: EventRule, text: str) -> Iterable[LintWarning]
 
 
 def _number(value):
-    from ..frontend.terms import Number
-
     return Number(int(value) if float(value).is_integer() else value)
 
 

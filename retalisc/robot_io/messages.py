@@ -42,6 +42,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from ..frontend.terms import Atom, Compound, String
 from .data_terms import DataTerm, atom_text, float_text, quote_atom, read_data_term
+from .data_terms import write_data_term
 
 # rosbags' Nodetype values (rosbags.typesys.base.Nodetype), fixed by its message model.
 BASE, NAME, ARRAY, SEQUENCE = 1, 2, 3, 4
@@ -405,7 +406,6 @@ def _functor(term: DataTerm) -> Optional[str]:
 
 
 def _describe(term: DataTerm) -> str:
-    from .data_terms import write_data_term
     text = write_data_term(term)
     return text if len(text) <= 60 else text[:57] + "..."
 

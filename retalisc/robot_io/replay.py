@@ -25,6 +25,11 @@ import click
 from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
 from .messages import ConversionError, Convention, MessageConverter
 from .ros1_terms import Ros1Terms
+from ..driver.bridge import PrologError
+from ..driver.outputs import ConsumerFiles, detections_line
+from . import MissingDependency
+from .bags import typestore
+from .publish import EVENTS_TOPIC, FoxgloveSink, McapSink, Publisher
 
 
 @dataclass
@@ -170,8 +175,6 @@ def feed_messages(engine, bag: Recording, converter: MessageConverter, record_st
     it; a message whose bytes the runtime refuses is converted as text instead
     (`message_event`), or goes to `report(topic, number, reason)` and `stats.rejected` when
     that fails too."""
-    from ..driver.bridge import PrologError
-
     def rejected(topic: str, number: int, reason: str) -> None:
         stats.rejected += 1
         sink.flush()
@@ -253,8 +256,6 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     counted as failed, and the replay goes on. `clock` paces a replay with a rate (default:
     the wall clock). `trace_report()`, if given, returns text printed on standard error before
     the detections per rule and the summary (the counts of `--trace`)."""
-    from ..driver.bridge import PrologError
-    from ..driver.run import ConsumerFiles, detections_line
 
     options = options or BagOptions()
     name = str(path)
@@ -410,8 +411,6 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
 
 def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
     """`retalisc run PROGRAM --bag FILE ...`: `values` are the --bag options (options.py)."""
-    from . import MissingDependency
-
     try:
         return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values), out_bag=values.get("out_bag"),
                           foxglove=values.get("foxglove"), **run_options)
@@ -433,9 +432,6 @@ def _open_sinks(bag: Recording, options: BagOptions, out_bag: Optional[str], fox
     """The Publisher and the sinks of --out-bag and --foxglove (none: (None, []))."""
     if out_bag is None and foxglove is None:
         return None, []
-    from .bags import typestore
-    from .publish import EVENTS_TOPIC, FoxgloveSink, McapSink, Publisher
-
     fallback = typestore("ros1_noetic" if bag.format == "ros1" else DEFAULT_ROS2_STORE)
     publisher = Publisher(bag.typestore, fallback, options.convention)
     sinks: list = []

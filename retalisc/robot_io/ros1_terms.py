@@ -24,6 +24,7 @@ from typing import Callable, Dict, List, Optional, Tuple
 from .data_terms import atom_text
 from .messages import (ARRAY, BASE, HEADER_TYPE, NAME, SEQUENCE, TIME_TYPES, Convention, _fields,
                        topic_functor, type_functor)
+from ..driver.engine import Ros1Bytes
 
 _BASES = {"float32": ("f32", 4), "float64": ("f64", 8), "int8": ("i8", 1), "byte": ("i8", 1),
           "uint8": ("u8", 1), "char": ("u8", 1), "int16": ("i16", 2), "uint16": ("u16", 2),
@@ -85,8 +86,6 @@ class Ros1Terms:
         return text
 
     def _register(self, msgtype: str, topic: str):
-        from ..driver.engine import Ros1Bytes
-
         self._ros1_bytes = Ros1Bytes
         try:
             text = self.schema(msgtype, topic)
