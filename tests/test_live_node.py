@@ -3,7 +3,6 @@ feeding from many threads in arrival order, deliveries published as messages, th
 of thesis A.1 with their refusals, and bytes that are not a message."""
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 import threading
@@ -15,7 +14,7 @@ pytest.importorskip("rosbags", reason="the live tests need rosbags")
 
 from hypothesis import given, settings, strategies as st  # noqa: E402
 
-from live_support import ROOT, retalisc_env  # noqa: E402
+from live_support import retalisc_env  # noqa: E402
 from retalisc.driver.engine import Engine  # noqa: E402
 from retalisc.live.config import ConfigError, parse_config, ros1_type  # noqa: E402
 from retalisc.live.node import LiveNode, Transport  # noqa: E402

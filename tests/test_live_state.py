@@ -173,8 +173,9 @@ def test_a_crashed_node_restarted_gives_the_uninterrupted_output(tmp_path, wire,
     assert "up(" in expected and len(reference_published) >= 4
 
     out = tmp_path / "out.jsonl"
-    state = lambda: LiveState(tmp_path / "state", str(out), snapshot_events=3, snapshot_seconds=float("inf"),
-                              log=lambda text: None)
+    def state():
+        return LiveState(tmp_path / "state", str(out), snapshot_events=3, snapshot_seconds=float("inf"),
+                         log=lambda text: None)
     first, first_transport = node_for(wire, state=state())
     feed(first, range(crash_after), wire)
     crash(first)
@@ -243,7 +244,8 @@ def test_an_idle_node_takes_its_time_based_snapshot(tmp_path):
     state = LiveState(tmp_path / "state", str(out), snapshot_events=1000, snapshot_seconds=1.0, log=lambda text: None)
     node, _ = node_for("cdr", state=state)
     feed(node, range(2), "cdr")
-    snapshots = lambda: sorted((tmp_path / "state").glob("snapshot-*.json"))
+    def snapshots():
+        return sorted((tmp_path / "state").glob("snapshot-*.json"))
     first = snapshots()
     deadline = time.monotonic() + 5
     # (the file is written before the consumer thread marks the journal as taken in)
@@ -355,8 +357,9 @@ def test_outputs_held_by_the_middleware_at_a_crash_are_published_again(tmp_path,
     assert [n for n, _, _ in expected] == sorted(n for n, _, _ in expected) and len(expected) >= 8
 
     out = tmp_path / "out.jsonl"
-    state = lambda: LiveState(tmp_path / "state", str(out), snapshot_events=3, snapshot_seconds=float("inf"),
-                              log=lambda text: None)
+    def state():
+        return LiveState(tmp_path / "state", str(out), snapshot_events=3, snapshot_seconds=float("inf"),
+                         log=lambda text: None)
     first, first_transport = holding_node(state=state())
     feed(first, range(crash_after), "cdr")
     crash(first)                             # what the session held is gone

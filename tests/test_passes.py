@@ -6,8 +6,8 @@ from pathlib import Path
 
 from retalisc.backends.prolog.dump import dump_binary_rule
 from retalisc.compiler import AQ_MODES, AqOptions, compile_source, pass_names
-from retalisc.frontend.errors import RetalisSemanticError, RetalisSyntaxError
-from retalisc.frontend.program import Binary, EventAtom, Where, Window, parse_program, pattern_text
+from retalisc.frontend.errors import RetalisSemanticError
+from retalisc.frontend.program import Binary, Where, Window, parse_program, pattern_text
 from retalisc.frontend.writer import write_term
 from retalisc.passes import apply_rule_windows, binarize, collect_settings, edbc, push_conditions, validate
 from retalisc.passes.pipeline import (ACTIVE_QUERY_PIPELINE, EVENT_PIPELINE, PIPELINE, active_query_passes,

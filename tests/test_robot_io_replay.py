@@ -8,7 +8,6 @@ import os
 import math
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 

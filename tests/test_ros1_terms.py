@@ -22,7 +22,7 @@ from rosbags.typesys import get_types_from_msg  # noqa: E402
 
 from retalisc.driver.bridge import PrologError  # noqa: E402
 from retalisc.driver.engine import Engine, Ros1Bytes  # noqa: E402
-from retalisc.robot_io.bags import typestore, write_bag  # noqa: E402
+from retalisc.robot_io.bags import typestore  # noqa: E402
 from retalisc.robot_io.messages import Convention, MessageConverter  # noqa: E402
 from retalisc.robot_io.ros1_terms import Ros1Terms  # noqa: E402
 

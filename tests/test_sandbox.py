@@ -235,7 +235,7 @@ def test_memory_conditions_are_checked(engine, tmp_path):
     marker = tmp_path / "hacked"
     for request in (f"c_mem(m, smoke(_)-[shell('touch {marker}')], 5, inf)",
                     f"c_mem(m, smoke(_)-shell('touch {marker}'), 5, inf)",
-                    f"memorize(smoke(X), [cleanup(X)], X, m, 5)"):
+                    "memorize(smoke(X), [cleanup(X)], X, m, 5)"):
         with pytest.raises(QueryError) as refused:
             engine.memory(request)
         assert refused.value.kind == "unsafe"

@@ -31,7 +31,7 @@ both. The `at` view bounds mem/2 only. SLR_EXAMPLES sets the number of examples 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Dict, List, Optional, Tuple, Union
 
 import pytest

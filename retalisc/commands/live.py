@@ -145,8 +145,8 @@ def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay,
         except ModuleNotFoundError as error:
             if error.name in ("rospy", "genpy", "genmsg", "rosgraph"):
                 raise MissingDependency(
-                    f"retalisc ros needs ROS 1's rospy (Debian: python3-rospy): run `bash setup.sh`, "
-                    f"then .venv-ros/bin/retalisc ros ...") from None
+                    "retalisc ros needs ROS 1's rospy (Debian: python3-rospy): run `bash setup.sh`, "
+                    "then .venv-ros/bin/retalisc ros ...") from None
             raise
 
     def describe(node):

@@ -14,7 +14,7 @@ import stat
 import sys
 import threading
 import time
-from typing import IO, Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import IO, Iterator, List, Optional, Sequence, Tuple
 
 from .engine import Engine
 from .event_lines import batch_payload, split_lines

@@ -7,7 +7,6 @@ clauses after them.
 """
 from __future__ import annotations
 
-import codecs
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +19,7 @@ from .depth import MAX_TERM_DEPTH, deepest_tree, term_depth
 from .errors import RetalisSyntaxError
 from .operators import (ARGUMENT_PRIORITY, CLAUSE_PRIORITY, ETALIS_ALIASES, EVENT_OPERATORS, STANDARD_OPERATORS,
                         OperatorTable)
-from .terms import NIL, Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
+from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
 
 _GRAMMAR = (Path(__file__).with_name("retalis.lark")).read_text()
 # cache=True: the LALR tables are kept in the temporary directory, keyed by the grammar's hash

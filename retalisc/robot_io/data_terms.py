@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import List, Union
+from typing import Union
 
 from ..frontend.parser import _number, _unescape
 from ..frontend.terms import Atom, Compound, String

@@ -38,7 +38,7 @@ import keyword
 import math
 import re
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from ..frontend.terms import Atom, Compound, String
 from .data_terms import DataTerm, atom_text, float_text, quote_atom, read_data_term

@@ -8,7 +8,6 @@ turns terms into text: each clause is written with operators, one body goal per 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import List
 
 import jinja2
 
