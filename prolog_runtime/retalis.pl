@@ -2,12 +2,10 @@
           [ rtl_program_loaded/1,       % +Module
             rtl_main/0,
             rtl_run_jsonl_file/1,       % +File
-            rtl_run_standard_input/3,   % +AllowControl, +Strict, -Outcome
             rtl_run_event_file/4,       % +File, +AllowControl, +Strict, -Outcome
             rtl_feed_lines/3,           % +Text, +FirstLineNo, -Output
             rtl_feed_lines/4,           % +Text, +FirstLineNo, +Options, -Output
             rtl_process_line/3,         % +Line, +Options, -Outcome
-            rtl_feed_events/2,          % +Events, -Output
             rtl_action/1,               % :Goal
             rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
             rtl_aggregate_initial/2,    % +Function, -Value
@@ -46,8 +44,8 @@ two ways:
   - as a script, `swipl P.pl EVENTS.jsonl [...]`: rtl_main/0 reads the event files (or
     standard input for `-`) and writes the output JSON Lines to standard output, with
     rejected lines and a summary on standard error;
-  - embedded (the Python driver): rtl_feed_lines/3 and rtl_feed_events/2 take a batch and
-    return the output lines as one string.
+  - embedded (the Python driver): rtl_feed_lines/3 takes a batch and returns the output
+    lines as one string.
 */
 
 :- meta_predicate rtl_action(0).
@@ -276,25 +274,17 @@ rtl_run_jsonl_file(File) :-
                        run_stream(In, File),
                        close(In)).
 
-%!  rtl_run_standard_input(+AllowControl:text, +Strict:text, -Outcome:string) is det.
-%
-%   The loop of rtl_run_jsonl_file/1 over standard input, for `retalisc run --events -`
-%   in the retalisc program itself (retalisc/driver/run.py): each line is read, processed
-%   and its output written to standard output here, flushed as soon as no more input is
-%   waiting, with no call from Python per line; lines not processed and warnings go to
-%   standard error as `<stdin>:N: ...`. AllowControl and Strict are `true` or `false`.
-%   Outcome is `stopped` when the run must end (`--strict`, `halt` in program code), else
-%   `done`. Afterwards the output goes to the buffer again, as an Engine wants it.
-
-rtl_run_standard_input(AllowControl, Strict, Outcome) :-
-    rtl_run_event_file(-, AllowControl, Strict, Outcome).
-
 %!  rtl_run_event_file(+File:text, +AllowControl:text, +Strict:text, -Outcome:string) is det.
 %
-%   As rtl_run_standard_input/3, for the event file File (`-`: standard input): the loop
-%   of `swipl PROGRAM.pl FILE`, for `retalisc run --events FILE` in the retalisc program
-%   itself. Lines not processed and warnings go to standard error as `FILE:N: ...`.
-%   Outcome is `output gone` when standard output's reader went away (output_gone/1).
+%   The loop of rtl_run_jsonl_file/1 (`swipl PROGRAM.pl FILE`) over the event file File
+%   (`-`: standard input), for `retalisc run --events FILE` in the retalisc program itself
+%   (retalisc/driver/run.py): each line is read, processed and its output written to
+%   standard output here, flushed as soon as no more input is waiting, with no call from
+%   Python per line; lines not processed and warnings go to standard error as `FILE:N: ...`
+%   (`<stdin>:N: ...`). AllowControl and Strict are `true` or `false`. Outcome is `stopped`
+%   when the run must end (`--strict`, `halt` in program code), `output gone` when standard
+%   output's reader went away (output_gone/1), else `done`. Afterwards the output goes to the
+%   buffer again, as an Engine wants it.
 
 rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     atom_string(File, File0),
@@ -602,13 +592,6 @@ error_text(Error, Text) :-
     ;   format(string(Text), "~q", [Error])
     ).
 
-process_event(Op, Event, Start, End) :-
-    (   Op == add
-    ->  rtl_seen_add(Event, Start, End)
-    ;   ignore(rtl_seen_take(Event, Start, End))
-    ),
-    rtl_input(Op, Event, Start, End).         % then the events raised meanwhile (rtl_raise)
-
 % The end of the input: run or drop the postponed synchronized matches. Errors are
 % reported through Report (called as call(Report, 0, Outcome)).
 end_of_input(Mode, Report) :-
@@ -683,25 +666,6 @@ outcome_kind(rejected(Reason), rejected, Reason).
 outcome_kind(refused(Reason), error, Reason).
 outcome_kind(failed(Reason), error, Reason).
 outcome_kind(halted(Reason), halt, Reason).
-
-%!  rtl_feed_events(+Events:list, -Output:string) is det.
-%
-%   Process a batch of `event(Op, Event, Start, End)` terms; Output as for rtl_feed_lines/3,
-%   with the warnings as `?<TAB>Text` (no line number).
-
-rtl_feed_events(Events, Output) :-
-    rtl_output_to(buffer),
-    with_action_output(forall(member(event(Op, Event, Start, End), Events),
-                              process_event(Op, Event, Start, End))),
-    rtl_take_output(Lines0),
-    rtl_take_warnings(Warnings),
-    findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
-    append(Lines0, Ws, Lines),
-    (   Lines == []
-    ->  Output = ""
-    ;   atomic_list_concat(Lines, "\n", Joined),
-        string_concat(Joined, "\n", Output)
-    ).
 
 %!  rtl_action(:Goal) is det.
 %

@@ -148,3 +148,45 @@ def test_the_checks_see_function_level_and_type_checking_imports(tmp_path, monke
     assert circles({name: {t for t, _ in targets} for name, targets in graph.items()}) == [
         ["retalisc.driver.engine", "retalisc.driver.recovery"]]
     assert layer_of("retalisc.driver.recovery") > layer_of("retalisc.driver.engine")
+
+
+# ---- the pass lists of docs/architecture.md ------------------------------------------------
+
+DOC = ROOT / "docs" / "architecture.md"
+BEGIN = "<!-- pass lists: generated from retalisc/passes/pipeline.py by `python tests/test_architecture.py` -->"
+END = "<!-- end of the pass lists -->"
+
+
+def pass_lists_text() -> str:
+    """The pass lists of `retalisc/passes/pipeline.py`, as docs/architecture.md shows them."""
+    from retalisc.passes import pipeline
+
+    def names(passes) -> str:
+        return ", ".join(f"`{p.name}`" + (f" (`{p.mode}` only)" if getattr(p, "mode", None) else "")
+                         for p in passes)
+
+    return "\n".join([
+        BEGIN,
+        f"- `EVENT_PIPELINE` (event programs): {names(pipeline.EVENT_PIPELINE)}",
+        f"- `ADDED_RULES_PIPELINE` (rules added to a running program): {names(pipeline.ADDED_RULES_PIPELINE)}",
+        f"- `ACTIVE_QUERY_PIPELINE` (definite programs for active queries): {names(pipeline.ACTIVE_QUERY_PIPELINE)}",
+        END,
+    ])
+
+
+def documented_pass_lists(text: str) -> str:
+    start = text.index(BEGIN)
+    return text[start:text.index(END, start) + len(END)]
+
+
+def test_the_documented_pass_lists_are_the_pipelines():
+    assert documented_pass_lists(DOC.read_text(encoding="utf-8")) == pass_lists_text(), (
+        "docs/architecture.md: run `python tests/test_architecture.py` to write the pass lists again")
+
+
+if __name__ == "__main__":          # write the pass lists of docs/architecture.md again
+    import sys
+
+    sys.path.insert(0, str(ROOT))
+    old = DOC.read_text(encoding="utf-8")
+    DOC.write_text(old.replace(documented_pass_lists(old), pass_lists_text()), encoding="utf-8")

@@ -50,9 +50,6 @@ _python_queries = itertools.count(1)
 _API = "rtl_api"        # prolog_runtime/rtl_api.pl: the predicates an Engine calls
 
 
-_unique_module = unique_module_name
-
-
 @dataclass(frozen=True)
 class OutputEvent:
     """One output line: `event` is the term text (writeq), `consumer` is set for subscription
@@ -256,13 +253,13 @@ class Engine:
     def load(cls, program_path: Union[str, Path], bridge: Optional[Bridge] = None) -> "Engine":
         """Compile and load a `.rtl` program file."""
         path = str(program_path)
-        result = compile_file(path, module=_unique_module(path))
+        result = compile_file(path, module=unique_module_name(path))
         return cls.from_compiled(result, bridge)
 
     @classmethod
     def from_source(cls, text: str, name: str = "program.rtl", bridge: Optional[Bridge] = None) -> "Engine":
         """Compile and load program text."""
-        result = compile_source(text, name, module=_unique_module(name))
+        result = compile_source(text, name, module=unique_module_name(name))
         return cls.from_compiled(result, bridge)
 
     @classmethod
