@@ -66,7 +66,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_state).
 :- use_module(rtl_ros1).
 
-:- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
+:- use_module(rtl_feed, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
 
 %!  rtl_api_default_flags(-Out) is det.
 %
