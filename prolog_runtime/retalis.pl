@@ -1,23 +1,24 @@
 :- module(retalis,
           [ rtl_program_loaded/1,       % +Module
             rtl_main/0,
+            rtl_run_jsonl_file/1,       % +File
+            rtl_run_event_file/4,       % +File, +AllowControl, +Strict, -Outcome
+            rtl_feed_lines/3,           % +Text, +FirstLineNo, -Output
+            rtl_feed_lines/4,           % +Text, +FirstLineNo, +Options, -Output
+            rtl_process_line/3,         % +Line, +Options, -Outcome
             rtl_action/1,               % :Goal
             rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
-            rtl_aggregate_initial/2     % +Function, -Value
+            rtl_aggregate_initial/2,    % +Function, -Value
+            rtl_summary/1,              % -Text
+            rtl_summary/2,              % +Seconds, -Text
+            rtl_end_of_input/2,         % +Mode, -Output
+            rtl_heartbeat/2             % +Time, -Output
           ]).
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
-:- reexport(rtl_feed,                     % the line loops (with rtl_api.pl, which uses them)
-            [ rtl_run_jsonl_file/1,     % +File
-              rtl_run_event_file/4,     % +File, +AllowControl, +Strict, -Outcome
-              rtl_feed_lines/3,         % +Text, +FirstLineNo, -Output
-              rtl_feed_lines/4,         % +Text, +FirstLineNo, +Options, -Output
-              rtl_process_line/3,       % +Line, +Options, -Outcome
-              rtl_summary/1,            % -Text
-              rtl_summary/2,            % +Seconds, -Text
-              rtl_end_of_input/2,       % +Mode, -Output
-              rtl_heartbeat/2           % +Time, -Output
-            ]).
-:- use_module(rtl_feed, [rtl_run_files/2, rtl_output_gone/1, error_text/2]).
+% The line loops (shared with rtl_api.pl): this module exports the ones above.
+:- use_module(rtl_feed, [rtl_run_files/2, rtl_run_jsonl_file/1, rtl_run_event_file/4, rtl_feed_lines/3,
+                         rtl_feed_lines/4, rtl_process_line/3, rtl_summary/1, rtl_summary/2,
+                         rtl_end_of_input/2, rtl_heartbeat/2, rtl_output_gone/1, error_text/2]).
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
 :- reexport(rtl_time).

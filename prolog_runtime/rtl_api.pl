@@ -62,7 +62,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_seen).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_time, [rtl_input_interval/6]).
-:- use_module(rtl_horizon, [rtl_take_warnings/1]).
+:- use_module(rtl_horizon, [rtl_take_warnings/1, rtl_warnings_pending/0]).
 :- use_module(rtl_state).
 :- use_module(rtl_ros1).
 
@@ -217,7 +217,7 @@ paced(Events, [Due|Dues], Tick, I, Stop) :-
     ->  Stop = Failure
     ;   Rest == []
     ->  Stop = done
-    ;   ( rtl_ele:rtl_output_line(_) ; rtl_horizon:warning_text(_) )
+    ;   ( rtl_output_pending ; rtl_warnings_pending )
     ->  Stop = paced(I1, Rest, RestDues)
     ;   paced(Rest, RestDues, Tick, I1, Stop)
     ).

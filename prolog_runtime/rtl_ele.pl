@@ -21,6 +21,7 @@
             rtl_close_action_output/0,
             rtl_output_to/1,            % +Sink
             rtl_take_output/1,          % -Lines
+            rtl_output_pending/0,
             rtl_emit/5,                 % +Event, +Start, +End, +Consumer, +Op
             rtl_emit_line/1,            % +Line
             rtl_stat/2,                 % ?Name, ?Value
@@ -32,7 +33,8 @@
             rtl_add_output_hook/1,      % :Hook
             rtl_remove_output_hook/1,   % :Hook
             rtl_add_type_output_hook/2, % +Pattern, :Hook
-            rtl_remove_type_output_hook/2 % +Pattern, :Hook
+            rtl_remove_type_output_hook/2, % +Pattern, :Hook
+            rtl_remove_type_output_hooks/0
           ]).
 
 /** <module> ELE runtime: event ingestion, derivation, output and forgetting
@@ -467,6 +469,13 @@ rtl_remove_type_output_hook(Pattern, Hook) :-
     type_skeleton(Pattern, Skeleton),
     retractall(type_output_hook(Skeleton, Hook)).
 
+%!  rtl_remove_type_output_hooks is det.
+%
+%   Remove the hooks of every type (inside the snapshot of a dry run, rtl_horizon.pl).
+
+rtl_remove_type_output_hooks :-
+    retractall(type_output_hook(_, _)).
+
 type_skeleton(Pattern, Skeleton) :-
     (   compound(Pattern)
     ->  compound_name_arity(Pattern, Name, Arity),
@@ -526,6 +535,14 @@ rtl_emit_line(Line) :-
 
 rtl_take_output(Lines) :-
     findall(L, retract(rtl_output_line(L)), Lines).
+
+%!  rtl_output_pending is semidet.
+%
+%   Some buffered output line waits to be taken (rtl_take_output/1).
+
+rtl_output_pending :-
+    rtl_output_line(_),
+    !.
 
 %!  rtl_stat(?Name, ?Value) is nondet.
 %

@@ -284,7 +284,7 @@ rtl_dry_run(Goal, Retracted, Derived) :-
     setup_call_cleanup(( nb_setval(rtl_dry_run, true),
                          nb_setval(rtl_output_sink, buffer),
                          nb_setval(rtl_output_hooks, false) ),
-                       snapshot(( retractall(rtl_ele:type_output_hook(_, _)),
+                       snapshot(( rtl_ele:rtl_remove_type_output_hooks,
                                   forall(Goal, true),
                                   nb_getval(derived, Derived1),
                                   nb_getval(underived, Retracted1) )),

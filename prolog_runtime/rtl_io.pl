@@ -29,18 +29,14 @@ also names the reason of a rejection. Without the C reader, every line takes the
 
 :- use_module(rtl_time).
 :- use_module(rtl_lines, [rtl_nul_problem/2]).
+:- use_module(rtl_foreign).
 
 :- dynamic fast_reader/0, fast_writer/0.
 
 % The C reader is optional: a runtime without it (not built, another platform) reads
 % every line in Prolog.
 load_fast_reader :-
-    source_location(File, _),                   % (loaded from a .qlf file, the load
-    file_directory_name(File, Dir),             % context is the file that loads this one)
-    atomic_list_concat([Dir, '/foreign/rtl_fastread'], Lib),
-    (   absolute_file_name(Lib, _, [file_type(executable), access(read), file_errors(fail)]),
-        catch(load_foreign_library(Lib), _, fail),     % (use_foreign_library/1 defers the load)
-        current_predicate(rtl_fast_event_line/7)
+    (   rtl_load_foreign(rtl_fastread, rtl_fast_event_line/7)
     ->  retractall(fast_reader),
         assertz(fast_reader),
         fast_writer_present

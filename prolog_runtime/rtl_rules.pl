@@ -4,7 +4,8 @@
             rtl_install_rules/3,        % +Module, +ClausesText, -Ids
             rtl_remove_rule/2,          % +Module, +Id
             rtl_rule_exists/2,          % +Module, +Id
-            rtl_fresh_rule_prefix/2     % +Module, -Prefix
+            rtl_fresh_rule_prefix/2,    % +Module, -Prefix
+            rtl_rule_pred_name/2        % +Id, +Name
           ]).
 
 /** <module> Adding and removing event rules while events flow (ETALIS ins_event_rule)
@@ -168,7 +169,7 @@ rtl_remove_rule(M, Id) :-
                     clause(M:Trigger, Body, Ref),
                     calls_rule(Body, Id) ),
                   erase(Ref))),
-    forall(( M:ele_partial_store(Name, Arity), rule_pred_name(Id, Name) ),
+    forall(( M:ele_partial_store(Name, Arity), rtl_rule_pred_name(Id, Name) ),
            ( functor(Head, Name, Arity),
              retractall(M:Head),
              retractall(M:ele_partial_store(Name, Arity)),
@@ -178,15 +179,15 @@ rtl_remove_rule(M, Id) :-
              ;   true
              ) )),
     (   current_predicate(M:ele_record_store/3)
-    ->  forall(( M:ele_record_store(Name, Arity, Kept), rule_pred_name(Id, Name) ),
+    ->  forall(( M:ele_record_store(Name, Arity, Kept), rtl_rule_pred_name(Id, Name) ),
                retractall(M:ele_record_store(Name, Arity, Kept)))
     ;   true
     ),
-    forall(( current_predicate(M:Name/Arity), rule_pred_name(Id, Name),
+    forall(( current_predicate(M:Name/Arity), rtl_rule_pred_name(Id, Name),
              functor(Head, Name, Arity),
              \+ predicate_property(M:Head, imported_from(_)) ),
            remove_predicate(M, Name, Arity)),
-    rtl_timers_drop(M, rule_pred_name(Id)),
+    rtl_timers_drop(M, rtl_rule_pred_name(Id)),
     retractall(added_rule(M, Id)),
     reschedule_sweep.
 
@@ -206,7 +207,7 @@ calls_rule(Body, Id) :-
     sub_term(Goal, Body),
     callable(Goal),
     functor(Goal, Name, _),
-    rule_pred_name(Id, Name),
+    rtl_rule_pred_name(Id, Name),
     !.
 
 %!  rtl_rule_exists(+Module, +Id) is semidet.
@@ -217,13 +218,17 @@ rtl_rule_exists(M, Id) :-
     (   added_rule(M, Id)
     ->  true
     ;   current_predicate(M:Name/_),
-        rule_pred_name(Id, Name)
+        rtl_rule_pred_name(Id, Name)
     ->  true
     ).
 
-%   Name is `e_<Id>_<digits>` or `e_<Id>_<digits>_<suffix>`, the suffix not starting with
-%   a digit (`e_r1_2_1` belongs to rule `r1_2`, not `r1`).
-rule_pred_name(Id, Name) :-
+%!  rtl_rule_pred_name(+Id, +Name) is semidet.
+%
+%   Name is a predicate generated for the rule labelled Id: `e_<Id>_<digits>` or
+%   `e_<Id>_<digits>_<suffix>`, the suffix not starting with a digit (`e_r1_2_1` belongs to
+%   rule `r1_2`, not `r1`).
+
+rtl_rule_pred_name(Id, Name) :-
     atom(Name),
     atomic_list_concat([e_, Id, '_'], Prefix),
     atom_concat(Prefix, Tail, Name),

@@ -215,7 +215,7 @@ rtl_check_rule(M, Id, Stores, Clauses0) :-
            )),
     copy_term(Clauses0, Clauses),
     findall(N/A, ( member(C, Clauses), clause_head(C, H), callable(H),
-                   functor(H, N, A), rtl_rules:rule_pred_name(Id, N)
+                   functor(H, N, A), rtl_rules:rtl_rule_pred_name(Id, N)
                  ; member(S, Stores), store_pred(S, N/A) ), Local0),
     sort(Local0, Local),
     findall(pred(M, PI), ( member(S, Stores), store_pred(S, PI) ), Writable),
@@ -236,7 +236,7 @@ own_store(Id, kept(Live, A, KA, KB, Order)) :-
 
 own_names(Id, Names, Arity) :-
     integer(Arity),
-    forall(member(N, Names), ( atom(N), rtl_rules:rule_pred_name(Id, N) )).
+    forall(member(N, Names), ( atom(N), rtl_rules:rtl_rule_pred_name(Id, N) )).
 
 store_pred(store(N, A, _), N/A).
 store_pred(record(N, A, _, _), N/A).
@@ -272,7 +272,7 @@ check_head(ele_untrigger(_, _, _), _) :- !.
 check_head(ele_forget_blockers(_), _) :- !.        % a negation's sweep: its body is checked like any
 check_head(Head, Id) :-
     functor(Head, Name, _),
-    rtl_rules:rule_pred_name(Id, Name), !.
+    rtl_rules:rtl_rule_pred_name(Id, Name), !.
 check_head(Head, _) :-
     goal_pi(Head, PI),
     throw(error(rtl_unsafe(PI, head, []), _)).
@@ -467,7 +467,7 @@ runtime_goal(IM, G, M, S, V0, V) :-
 own_step(rtl_policy:G, S) :-
     policy_step(G, Step), !,
     S = st(rule(Id, _, _), Path),
-    (   atom(Step), rtl_rules:rule_pred_name(Id, Step)
+    (   atom(Step), rtl_rules:rtl_rule_pred_name(Id, Step)
     ->  true
     ;   throw(error(rtl_unsafe(Step, not_own_step, Path), _))
     ).
