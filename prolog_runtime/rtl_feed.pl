@@ -38,7 +38,7 @@ rtl_api.pl, which both import it.
 
 %!  rtl_output_gone(@Error) is semidet.
 %
-%  : writing standard output failed because its reader went away
+%   Writing standard output failed because its reader went away
 %   (`swipl OUT.pl FILE | head`). The run then ends at once with status 1, printing
 %   nothing more (no summary), as `retalisc run` does when Python writes the output.
 
