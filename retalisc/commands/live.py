@@ -4,6 +4,7 @@ program, publishes the subscription deliveries and runs until SIGINT or SIGTERM 
 --duration), then prints a summary on standard error."""
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -212,7 +213,6 @@ def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_dela
 
 
 def _master() -> str:
-    import os
     return os.environ.get("ROS_MASTER_URI", "http://localhost:11311")
 
 

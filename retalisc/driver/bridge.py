@@ -641,7 +641,7 @@ class _JanusEngine:
     _QUERY = "retalisc_bridge:bridge(Mode, Goal, Aux, Status, Out, Err)"
 
     def __init__(self) -> None:
-        import janus_swi
+        import janus_swi    # optional: pyswip's C layer serves without it
 
         self._janus = janus_swi
         self._error: type[BaseException] = getattr(janus_swi, "PrologError", RuntimeError)

@@ -25,20 +25,18 @@ import re
 import shutil
 import tempfile
 import threading
+from concurrent.futures import Future
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
+from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, unique_module_name
 from ..runtime_rules import compile_rules
 from . import snapshot
 from .bridge import Bridge, PrologError
 from .values import Term, Time, Value, Variable, parse_term, time_value
-
-if TYPE_CHECKING:
-    from concurrent.futures import Future
 
 __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", "PrologError", "Term",
            "Variable", "Value", "Time"]
@@ -590,8 +588,6 @@ class Engine:
         the clock (event time) reaches `at + timeout` first, kind "dropped" when the input
         ends with `end_of_input(drop_pending=True)`. A goal that does not parse or that the
         sandbox refuses raises QueryError at once."""
-        from concurrent.futures import Future
-
         future: Future = Future()
         query_id = f"py{next(_python_queries)}"
         with self._lock:

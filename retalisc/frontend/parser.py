@@ -7,6 +7,7 @@ clauses after them.
 """
 from __future__ import annotations
 
+import bisect
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -195,8 +196,6 @@ class _Source:
         self.line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
 
     def span_at(self, offset: int) -> Span:
-        import bisect
-
         line = bisect.bisect_right(self.line_starts, offset)
         column = offset - self.line_starts[line - 1] + 1
         return Span(self.file, line, column)

@@ -27,6 +27,7 @@ from __future__ import annotations
 import dataclasses
 import os
 import threading
+import time
 import types as pytypes
 from typing import Dict, Optional, Tuple
 
@@ -112,7 +113,7 @@ def _raw_take():
     """reader -> the CDR bytes of up to 256 valid samples taken, or None without the C layer."""
     if _take is None:
         return None
-    from cyclonedds.core import InstanceState, SampleState, ViewState
+    from cyclonedds.core import InstanceState, SampleState, ViewState    # optional: the `live` extra
 
     mask = SampleState.Any | ViewState.Any | InstanceState.Any
 
@@ -141,7 +142,7 @@ class DdsTransport(Transport):
         self._writers: Dict[str, Tuple[str, object, type]] = {}
 
     def start(self, node: LiveNode) -> None:
-        from cyclonedds.domain import DomainParticipant
+        from cyclonedds.domain import DomainParticipant     # optional (the `live` extra), as below
 
         from cyclonedds.core import WaitSet
 
@@ -226,8 +227,6 @@ class DdsTransport(Transport):
     def flush(self, timeout: float) -> None:
         """Wait (in all at most `timeout` s) until the matched readers acknowledged every
         sample written: a sample still to be repeated by a writer dies with the process."""
-        import time
-
         from cyclonedds.util import duration
 
         deadline = time.monotonic() + timeout

@@ -368,7 +368,7 @@ class LiveNode:
     def _learn_type(self, name: str, definition: Optional[str]) -> None:
         if not definition:
             raise ConversionError(f"unknown message type {ros1_type(name)} (its definition did not come with it)")
-        from rosbags.typesys import get_types_from_msg
+        from rosbags.typesys import get_types_from_msg      # optional: the `ros` extra
 
         types = {key: value for key, value in get_types_from_msg(definition, name).items()
                  if key not in self.store.fielddefs}

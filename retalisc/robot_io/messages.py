@@ -320,7 +320,7 @@ class MessageConverter:
             raise ConversionError(f"{path}: expected a list of {size} elements, not {len(term)}")
         items = [self._value(item, sub, f"{path}[{i}]") for i, item in enumerate(term)]
         if sub[0] == BASE and sub[1][0] not in _STRINGS:
-            import numpy
+            import numpy    # optional: comes with rosbags, for arrays of numbers
             return numpy.array(items, dtype=_numpy_type(sub[1][0]))
         return items
 

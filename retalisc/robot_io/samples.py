@@ -18,6 +18,7 @@ The same arguments give the same messages in every format (ROS 1 headers add `se
 """
 from __future__ import annotations
 
+import argparse
 import math
 import random
 from pathlib import Path
@@ -190,8 +191,6 @@ def shared_bags_dir(root) -> "Path | None":
 def main(argv=None) -> int:
     """`python -m retalisc.robot_io.samples OUT [--format ros1|ros2|mcap] [--seconds S]
     [--tf-rate HZ]`: write the sample recording."""
-    import argparse
-
     parser = argparse.ArgumentParser(prog="python -m retalisc.robot_io.samples",
                                      description="Write the sample recording of the NAO application (thesis A.2).")
     parser.add_argument("out", help="a .bag file (ros1) or a folder to create (ros2, mcap)")
