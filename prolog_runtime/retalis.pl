@@ -16,6 +16,7 @@
           ]).
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 % The line loops (shared with rtl_api.pl): this module exports the ones above.
+:- use_module(rtl_horizon, [rtl_aggregate/4, rtl_aggregate_initial/2]).   % exported here too
 :- use_module(rtl_feed, [rtl_run_files/2, rtl_run_jsonl_file/1, rtl_run_event_file/4, rtl_feed_lines/3,
                          rtl_feed_lines/4, rtl_process_line/3, rtl_summary/1, rtl_summary/2,
                          rtl_end_of_input/2, rtl_heartbeat/2, rtl_output_gone/1, error_text/2]).
@@ -259,33 +260,3 @@ action_error(Error) :-
     ;   print_message(warning, Error),
         fail
     ).
-
-%!  rtl_aggregate(+Function, +Acc0, -Acc, -Value) is det.
-%
-%   One step of an ETALIS aggregate: Function is `count`, `sum(X)`, `min(X)`, `max(X)` or
-%   `avg(X)` with X bound to the new occurrence's value; Acc0 is `none` at the start.
-
-%!  rtl_aggregate_initial(+Function, -Value) is semidet.
-%
-%   The value of an ETALIS aggregate over the empty set, given when the start event opens
-%   it: 0 for `count` and `sum(X)`; `min(X)`, `max(X)` and `avg(X)` have none (ETALIS
-%   gives 100000, -100000: numbers no occurrence had), so they fail and give nothing until
-%   the first occurrence.
-
-rtl_aggregate_initial(count, 0).
-rtl_aggregate_initial(sum(_), 0).
-
-rtl_aggregate(count, Acc0, N, N) :-
-    ( Acc0 == none -> N = 1 ; N is Acc0 + 1 ).
-rtl_aggregate(sum(X), Acc0, S, S) :-
-    ( Acc0 == none -> S = X ; S is Acc0 + X ).
-rtl_aggregate(min(X), Acc0, M, M) :-
-    ( Acc0 == none -> M = X ; M is min(Acc0, X) ).
-rtl_aggregate(max(X), Acc0, M, M) :-
-    ( Acc0 == none -> M = X ; M is max(Acc0, X) ).
-rtl_aggregate(avg(X), Acc0, Sum-N, Avg) :-
-    (   Acc0 == none
-    ->  Sum = X, N = 1
-    ;   Acc0 = Sum0-N0, Sum is Sum0 + X, N is N0 + 1
-    ),
-    Avg is Sum / N.

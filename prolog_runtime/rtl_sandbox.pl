@@ -89,8 +89,8 @@ sandbox:safe_primitive(rtl_sandbox:'$rtl_checked'(_, _, _, _, _, _, _, _)).
 %   effects of a rule). Called are the goals it runs, checked in turn.
 
 builtin(any,  retalis:rtl_action(G), [G]).
-builtin(any,  retalis:rtl_aggregate(_, _, _, _), []).
-builtin(any,  retalis:rtl_aggregate_initial(_, _), []).
+builtin(any,  rtl_horizon:rtl_aggregate(_, _, _, _), []).
+builtin(any,  rtl_horizon:rtl_aggregate_initial(_, _), []).
 builtin(any,  rtl_library:min(_, _, _), []).
 builtin(any,  rtl_library:max(_, _, _), []).
 builtin(any,  rtl_library:datime_minus_datime(_, _, _), []).
