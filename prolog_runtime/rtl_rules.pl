@@ -4,8 +4,7 @@
             rtl_install_rules/3,        % +Module, +ClausesText, -Ids
             rtl_remove_rule/2,          % +Module, +Id
             rtl_rule_exists/2,          % +Module, +Id
-            rtl_fresh_rule_prefix/2,    % +Module, -Prefix
-            rtl_rule_pred_name/2        % +Id, +Name
+            rtl_fresh_rule_prefix/2     % +Module, -Prefix
           ]).
 
 /** <module> Adding and removing event rules while events flow (ETALIS ins_event_rule)
@@ -27,7 +26,7 @@ program file too, so del_event_rule/1 removes those as well.
 :- use_module(library(readutil)).
 :- use_module(rtl_ele).
 :- use_module(rtl_library, [rtl_target_program/2]).
-:- use_module(rtl_sandbox, [rtl_check_rule/4]).
+:- use_module(rtl_sandbox, [rtl_check_rule/4, rtl_rule_pred_name/2]).
 :- use_module(rtl_timers, [rtl_timers_drop/2]).
 
 :- meta_predicate ins_event_rule(:), del_event_rule(:).
@@ -221,33 +220,6 @@ rtl_rule_exists(M, Id) :-
         rtl_rule_pred_name(Id, Name)
     ->  true
     ).
-
-%!  rtl_rule_pred_name(+Id, +Name) is semidet.
-%
-%   Name is a predicate generated for the rule labelled Id: `e_<Id>_<digits>` or
-%   `e_<Id>_<digits>_<suffix>`, the suffix not starting with a digit (`e_r1_2_1` belongs to
-%   rule `r1_2`, not `r1`).
-
-rtl_rule_pred_name(Id, Name) :-
-    atom(Name),
-    atomic_list_concat([e_, Id, '_'], Prefix),
-    atom_concat(Prefix, Tail, Name),
-    atom_codes(Tail, Codes),
-    digits(Codes, Rest),
-    (   Rest == []
-    ->  true
-    ;   Rest = [0'_, C|_],
-        \+ code_type(C, digit)
-    ).
-
-digits([C|Cs], Rest) :-
-    code_type(C, digit), !,
-    digits_(Cs, Rest).
-
-digits_([C|Cs], Rest) :-
-    code_type(C, digit), !,
-    digits_(Cs, Rest).
-digits_(Rest, Rest).
 
 %!  rtl_fresh_rule_prefix(+Module, -Prefix) is det.
 %

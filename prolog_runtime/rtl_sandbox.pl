@@ -1,7 +1,8 @@
 :- module(rtl_sandbox,
           [ rtl_check_goal/3,           % +Policy, +Module, :Goal
             rtl_check_rule/4,           % +Module, +Id, +Stores, +Clauses
-            rtl_unsafe_message/2        % +Error, -Message
+            rtl_unsafe_message/2,       % +Error, -Message
+            rtl_rule_pred_name/2        % +Id, +Name
           ]).
 
 /** <module> Untrusted goals: what code from outside the program file may run
@@ -215,7 +216,7 @@ rtl_check_rule(M, Id, Stores, Clauses0) :-
            )),
     copy_term(Clauses0, Clauses),
     findall(N/A, ( member(C, Clauses), clause_head(C, H), callable(H),
-                   functor(H, N, A), rtl_rules:rtl_rule_pred_name(Id, N)
+                   functor(H, N, A), rtl_rule_pred_name(Id, N)
                  ; member(S, Stores), store_pred(S, N/A) ), Local0),
     sort(Local0, Local),
     findall(pred(M, PI), ( member(S, Stores), store_pred(S, PI) ), Writable),
@@ -236,7 +237,7 @@ own_store(Id, kept(Live, A, KA, KB, Order)) :-
 
 own_names(Id, Names, Arity) :-
     integer(Arity),
-    forall(member(N, Names), ( atom(N), rtl_rules:rtl_rule_pred_name(Id, N) )).
+    forall(member(N, Names), ( atom(N), rtl_rule_pred_name(Id, N) )).
 
 store_pred(store(N, A, _), N/A).
 store_pred(record(N, A, _, _), N/A).
@@ -272,7 +273,7 @@ check_head(ele_untrigger(_, _, _), _) :- !.
 check_head(ele_forget_blockers(_), _) :- !.        % a negation's sweep: its body is checked like any
 check_head(Head, Id) :-
     functor(Head, Name, _),
-    rtl_rules:rtl_rule_pred_name(Id, Name), !.
+    rtl_rule_pred_name(Id, Name), !.
 check_head(Head, _) :-
     goal_pi(Head, PI),
     throw(error(rtl_unsafe(PI, head, []), _)).
@@ -467,7 +468,7 @@ runtime_goal(IM, G, M, S, V0, V) :-
 own_step(rtl_policy:G, S) :-
     policy_step(G, Step), !,
     S = st(rule(Id, _, _), Path),
-    (   atom(Step), rtl_rules:rtl_rule_pred_name(Id, Step)
+    (   atom(Step), rtl_rule_pred_name(Id, Step)
     ->  true
     ;   throw(error(rtl_unsafe(Step, not_own_step, Path), _))
     ).
@@ -665,3 +666,30 @@ message_to_codes(E, Codes) :-
 prolog:error_message(rtl_unsafe(Culprit, Reason, Path)) -->
     { rtl_unsafe_message(rtl_unsafe(Culprit, Reason, Path), Message) },
     [ '~s'-[Message] ].
+
+%!  rtl_rule_pred_name(+Id, +Name) is semidet.
+%
+%   Name is a predicate generated for the rule labelled Id: `e_<Id>_<digits>` or
+%   `e_<Id>_<digits>_<suffix>`, the suffix not starting with a digit (`e_r1_2_1` belongs to
+%   rule `r1_2`, not `r1`).
+
+rtl_rule_pred_name(Id, Name) :-
+    atom(Name),
+    atomic_list_concat([e_, Id, '_'], Prefix),
+    atom_concat(Prefix, Tail, Name),
+    atom_codes(Tail, Codes),
+    digits(Codes, Rest),
+    (   Rest == []
+    ->  true
+    ;   Rest = [0'_, C|_],
+        \+ code_type(C, digit)
+    ).
+
+digits([C|Cs], Rest) :-
+    code_type(C, digit), !,
+    digits_(Cs, Rest).
+
+digits_([C|Cs], Rest) :-
+    code_type(C, digit), !,
+    digits_(Cs, Rest).
+digits_(Rest, Rest).
