@@ -32,7 +32,7 @@ from types import TracebackType
 from typing import TYPE_CHECKING, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, unique_module_name
-from .bridge import Bridge, PrologError
+from .bridge import Bridge, PrologError, ServedCallError
 from .values import Term, Time, Value, Variable, parse_term, time_value
 
 if TYPE_CHECKING:
@@ -201,6 +201,18 @@ def _text(value, what: str) -> str:
     return value
 
 
+def _compile_rules_for_the_runtime(module: str, prefix: str, text: str) -> str:
+    """The rules the runtime adds while it runs (control lines, ins_event_rule/1 in an
+    action: rtl_rules.pl, compile_in_process/4), compiled in this process, not by a
+    `retalisc compile-rules` subprocess."""
+    from ..runtime_rules import RulesRefused, compile_rules_for_the_runtime
+
+    try:
+        return compile_rules_for_the_runtime(module, prefix, text)
+    except RulesRefused as refused:
+        raise ServedCallError(str(refused)) from None
+
+
 class InactiveEngineError(RuntimeError):
     """An Engine was used after another Engine was loaded in the same process."""
 
@@ -222,6 +234,7 @@ class Engine:
         self._lock = threading.RLock()    # one call (and its output delivery) at a time
         self.bridge.active_program = None                # this Engine takes over (see activate)
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")     # constant text, no values
+        self.bridge.serve("compile_rules", _compile_rules_for_the_runtime)
         self._warnings: List[EngineWarning] = []
         self.rules: List[str] = []           # the labels of the event rules, in program order
         if self.bridge.once("current_predicate(rtl_api:rtl_api_default_flags/1)"):   # constant text

@@ -67,13 +67,19 @@ def swipl_command(program_file: str, arguments: List[str]) -> Optional[List[str]
 
 def hand_over(command: List[str]) -> None:
     """Replace this process by `command` (what is written so far leaves first). Returns
-    only when it cannot be started."""
+    only when it cannot be started. A rule added while the events stream (a control line,
+    ins_event_rule/1) is compiled by `retalisc compile-rules` run with `$RETALISC_PYTHON`:
+    unless it is set, this Python, the one that runs `retalisc` (not one the runtime would
+    search for)."""
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
         except (OSError, ValueError):
             pass
+    environment = dict(os.environ)
+    if not environment.get("RETALISC_PYTHON") and sys.executable:
+        environment["RETALISC_PYTHON"] = sys.executable
     try:
-        os.execv(command[0], command)
+        os.execve(command[0], command, environment)
     except OSError:
         return
