@@ -4,13 +4,15 @@ alike: the compiler's pass slr_time_terms for the program and the runtime's rtl_
 prolog_runtime/rtl_goal_arguments.pl. Goals are generated over every construct of that table
 and a few that are not in it (whose arguments stay as written), rewritten by both and compared
 as Prolog terms; then the query `call(place(box, P)^5)`, refused before the runtime used the
-table, answers like the program on each road a query takes."""
+table, answers like the program on each road a query takes. The plunit suite
+prolog_runtime/tests/test_time_goal.pl (rtl_time_goal/2 case by case) is run from here too."""
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from retalisc.driver.engine import Engine
@@ -18,6 +20,7 @@ from retalisc.frontend.goal_arguments import goal_arguments
 from retalisc.frontend.terms import Atom, Compound, Number, Term, Var, make_list, to_prolog
 from retalisc.passes.slr_time_terms import timed_goal
 
+ROOT = Path(__file__).resolve().parent.parent
 PLACE = ("place(box, P)^T :- prev(seen(box, P)^_, T).\n"
          "ok :- call(place(box, _)^5).\n")
 SEEN = '{"event": "seen(box, shelf)", "t": 3}\n'
@@ -62,7 +65,7 @@ def _rewrites_alike(engine: Engine, goal: Term) -> bool:
                               f"rtl_query:rtl_time_goal(Goal0, Query), Query == Program")
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=150, deadline=None)
 @given(goal=_goals)
 def test_the_program_and_the_query_road_rewrite_alike(engine, goal):
     assert _rewrites_alike(engine, goal), to_prolog(goal)
@@ -113,3 +116,10 @@ def test_cli_query_and_synchronized_query(tmp_path):
     assert done.returncode == 0, done.stderr
     answers = [json.loads(line) for line in done.stdout.splitlines() if '"query"' in line]
     assert [(a["status"], a["answers"]) for a in answers] == [("answered", [{"P": "shelf"}])]
+
+
+def test_plunit_rtl_time_goal():
+    proc = subprocess.run(["swipl", "--no-tty", "-q", "-g", "run_tests", "-t", "halt",
+                           str(ROOT / "prolog_runtime" / "tests" / "test_time_goal.pl")],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout
