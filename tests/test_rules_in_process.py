@@ -17,6 +17,7 @@ import pytest
 from retalisc.compiler import compile_source
 from retalisc.driver.bridge import Bridge
 from retalisc.driver.engine import Engine
+from retalisc.driver.swipl_handover import hand_over
 
 from stream_paths import jsonl
 
@@ -120,3 +121,14 @@ def test_served_functions_from_any_thread():
     status = bridge.once(goal.format("test_calls_back", "[]"), "S-R")        # refused, not a deadlock
     assert status.startswith("error-") and "cannot call Prolog" in status
     assert bridge.once(goal.format("test_join", "[1]"), "S") == "error"              # strings only
+
+
+@pytest.mark.parametrize("given", ["", "/opt/other/python"])
+def test_the_hand_over_to_swipl_compiles_rules_with_this_python(monkeypatch, given):
+    """`retalisc run` handed over to `swipl` runs `retalisc compile-rules` with the Python that
+    runs `retalisc` (RETALISC_PYTHON), unless RETALISC_PYTHON says another."""
+    started = []
+    monkeypatch.setenv("RETALISC_PYTHON", given)
+    monkeypatch.setattr(os, "execve", lambda path, argv, env: started.append(env))
+    hand_over(["/bin/true"])
+    assert [env["RETALISC_PYTHON"] for env in started] == [given or sys.executable]
