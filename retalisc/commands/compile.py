@@ -115,7 +115,12 @@ def check_command(program: str, werror: bool) -> None:
     It runs the whole compilation, as `retalisc compile` does, and discards the result: a
     program `check` accepts compiles, and its Prolog loads. Programs that compile but cannot
     mean what they say get warnings (`file:line:col: warning: ...` with a hint)."""
+    from ..load_check import load_error
+
     result = compile_or_exit(program, werror)
+    error = load_error(result, program)
+    if error is not None:
+        report_program_error(error)
     rules = len(result.unit.rules)
     warnings = len(result.warnings)
     noted = f", {warnings} warning{'s' if warnings != 1 else ''}" if warnings else ""

@@ -563,8 +563,9 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                 return Negation(to_pattern(left.args[0], span), to_pattern(items[0], span),
                                 to_pattern(items[1], span), where)
             if isinstance(right, Number):
-                if right.value != right.value or right.value < 0:
-                    raise RetalisSyntaxError("a window length must be a number of seconds, not negative", where)
+                if right.value != right.value or right.value < 0 or right.value == float("inf"):
+                    raise RetalisSyntaxError("a window length must be a finite number of seconds, not negative",
+                                             where)
                 return Window(to_pattern(left, span), right.value, where)
             raise RetalisSyntaxError("'(Pattern).Q' needs a number Q (the window length in seconds)", where)
         if term.arity == 3 and term.name == "aggregate":
