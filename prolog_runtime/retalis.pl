@@ -127,12 +127,28 @@ rtl_main :-
         main_finish(1)
     ;   true
     ),
+    forall(stop_signal(Signal, _), on_signal(Signal, _, retalis:stop_on_signal)),
     catch(main_run(Files, Status),
           Error,
           ( output_gone(Error)
           ->  output_gone_exit
           ;   error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
     main_finish(Status).
+
+%   stop_on_signal(+Signal): SIGTERM or SIGINT ends the run as the end of the input would,
+%   without the rest of the input: the event being processed is dropped where it is (the
+%   handler runs between Prolog calls, and each output line is written by one call, so only
+%   whole lines are in the output buffer), the output written so far is flushed, the summary
+%   printed, and the process ends with status 128 + the signal's number, as a shell reports
+%   a process the signal killed.
+
+stop_signal(term, 15).
+stop_signal(int, 2).
+
+stop_on_signal(Signal) :-
+    stop_signal(Signal, Number),
+    Status is 128 + Number,
+    catch(main_finish(Status), _, rtl_exit(Status)).
 
 %   output_gone(+Error): writing standard output failed because its reader went away
 %   (`swipl OUT.pl FILE | head`). The run then ends at once with status 1, printing

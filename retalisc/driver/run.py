@@ -17,6 +17,7 @@ import time
 from typing import IO, TYPE_CHECKING, Dict, Iterator, List, Optional, Sequence, Tuple
 
 from .event_lines import batch_payload, split_lines
+from .signals import SignalStop, SignalStops
 
 if TYPE_CHECKING:
     from .engine import Engine
@@ -211,7 +212,9 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             lines.append("")
             emit("\n".join(lines))
 
+    stops = SignalStops()
     try:
+        stops.install()
         halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
         if halted:
             print(halted, file=sys.stderr)
@@ -241,11 +244,13 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         else:
             batches = _batches(source, batch_size)
         for first, lines, size in batches:
+            stops.batch_starts()                # a stop signal ends the run after the batch
             if not lines:                       # a heartbeat: nothing arrived
                 target = wall.estimate()
                 if target is not None and target > engine.clock():
                     write(engine.advance_clock(target))
                     sink.flush()
+                stops.batch_ends()
                 continue
             produced, rejected = engine.feed_lines(batch_payload(lines), first, allow_control=allow_control,
                                                    strict=strict)
@@ -264,10 +269,15 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                 sink.flush()
             if rejected and (strict or rejected[-1].kind == "halt"):
                 raise RunStopped()
+            stops.batch_ends()
+        stops.batch_starts()
         end_the_input(engine, write, drop_pending, strict)
     except RunStopped:
         status = 1
+    except SignalStop:
+        pass
     finally:
+        stops.finishing()
         if frozen is not None:
             frozen()
         display.close()
@@ -284,7 +294,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         if text:
             print(text, file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)
-    return status
+    stops.restore()
+    return stops.status(status)
 
 
 def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],
