@@ -132,6 +132,8 @@ rtl_main :-
           Error,
           ( output_gone(Error)
           ->  output_gone_exit
+          ;   output_failed(Error, Why)
+          ->  output_failed_exit(Why)
           ;   error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
     main_finish(Status).
 
@@ -155,6 +157,21 @@ stop_on_signal(Signal) :-
 %   nothing more (no summary), as `retalisc run` does when Python writes the output.
 
 output_gone(error(io_error(write, user_output), context(_, 'Broken pipe'))).
+
+%   output_failed(+Error, -Why): writing standard output failed otherwise (a full disk:
+%   `swipl OUT.pl FILE > /dev/full`). The run ends with the line `retalis: cannot write
+%   standard output: Why`, the summary and status 1.
+
+output_failed(error(io_error(write, user_output), context(_, Why)), Why).
+
+output_failed_exit(Why) :-
+    format(user_error, "retalis: cannot write standard output: ~w~n", [Why]),
+    catch(close(user_output, [force(true)]), _, true),     % what is left cannot be written
+    rtl_close_consumer_files,
+    rtl_close_action_output,
+    rtl_summary(Summary),
+    format(user_error, "~s~n", [Summary]),
+    rtl_exit(1).
 
 output_gone_exit :-
     rtl_close_consumer_files,
@@ -578,6 +595,10 @@ run_event(Op, Event, Start, End, Outcome) :-
             event_text(Event, Text),
             event_failure(Error, Text, Outcome) )).
 
+event_failure(Error, _, _) :-                  % the output cannot be written: the run ends
+    ( output_gone(Error) ; output_failed(Error, _) ),
+    !,
+    throw(Error).
 event_failure(rtl_halted(Why), Text, halted(Reason)) :- !,
     format(string(Reason), "~s while processing ~s", [Why, Text]).
 event_failure(Error, Text, failed(Reason)) :-

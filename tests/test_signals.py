@@ -108,3 +108,28 @@ def test_retalisc_run_with_state_stopped_by_a_signal_goes_on_to_the_same_output(
     assert again.returncode == 0, again.stderr
     lines = out.read_text().splitlines()
     assert [json.loads(line)["event"] for line in lines] == [f"r({i})" for i in range(1, EVENTS + 1)]
+
+
+# A full disk (/dev/full takes no byte): one line saying so, the summary, status 1, no traceback.
+
+def _assert_full_disk(run, name):
+    assert run.returncode == 1, run.stderr
+    assert "Traceback" not in run.stderr and "ERROR" not in run.stderr, run.stderr
+    lines = run.stderr.splitlines()
+    assert f"retalis: cannot write {name}: No space left on device" in lines, run.stderr
+    assert lines[-1].startswith("retalis: ") and " events in" in lines[-1], run.stderr
+
+
+def test_a_full_disk_under_swipl_is_one_line_and_status_1(case, swipl):
+    directory, _, events, compiled = case
+    with open("/dev/full", "wb") as full:
+        run = subprocess.run([swipl, str(compiled), str(events)], stdout=full, stderr=subprocess.PIPE, text=True,
+                             timeout=120)
+    _assert_full_disk(run, "standard output")
+
+
+def test_a_full_disk_under_the_python_driver_is_one_line_and_status_1(case):
+    _, program, events, _ = case
+    run = subprocess.run([*RETALISC, "run", str(program), "--events", str(events), "--out", "/dev/full"],
+                         capture_output=True, text=True, env=_env(), timeout=120)
+    _assert_full_disk(run, "/dev/full")

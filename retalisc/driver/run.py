@@ -213,6 +213,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             emit("\n".join(lines))
 
     stops = SignalStops()
+    full: Optional[OSError] = None
     try:
         stops.install()
         halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
@@ -276,16 +277,20 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         status = 1
     except SignalStop:
         pass
+    except OSError as error:
+        if error.errno not in OUTPUT_FULL:
+            raise
+        full, status = error, 1
     finally:
         stops.finishing()
         if frozen is not None:
             frozen()
         display.close()
-        sink.flush()
+        full = _settled(sink.flush, full)
         if events != "-":
             source.close()
         if sink is not sys.stdout:
-            sink.close()
+            full = _settled(sink.close, full)
         if consumers is not None:
             consumers.close()
         engine.bridge.once("retalis:rtl_close_action_output")
@@ -293,9 +298,28 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         text = report()
         if text:
             print(text, file=sys.stderr)
+    if full is not None:
+        print(f"retalis: cannot write {'standard output' if out == '-' else out}: {full.strerror}", file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)
     stops.restore()
     return stops.status(status)
+
+
+#: The errors of writing to a file system that is full (or a file grown to its limit): the
+#: run ends with `retalis: cannot write OUT: REASON`, the summary and status 1.
+OUTPUT_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
+def _settled(step, full: Optional[OSError]) -> Optional[OSError]:
+    """Run `step` (a flush or close of the output); once the output is full, its error
+    (then that of the run) is kept instead of raised."""
+    try:
+        step()
+    except OSError as error:
+        if error.errno not in OUTPUT_FULL:
+            raise
+        return full or error
+    return full
 
 
 def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],
