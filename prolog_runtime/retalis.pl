@@ -98,7 +98,8 @@ run_declaration(Program, Goal) :-
 %   of the input; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
 %   refused by default); `--strict` ends the run (status 1) at the first line that is
 %   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
-%   `--max-timers=N` (pending timers at most, `inf` for no limit);
+%   `--max-timers=N` (pending timers at most, `inf` for no limit); `--max-event-types=N`
+%   (event types a run takes, default `inf`: rtl_event_types.pl);
 %   `--action-output=FILE` sends what program code prints to FILE instead of standard
 %   error. Exit status: 0 when the input was processed (rejected and failed lines
 %   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
@@ -260,6 +261,12 @@ main_args([Arg|Args], Files) :-
         ;   domain_error(max_timers, N)
         ),
         rtl_set_flag(max_timers, Timers), Files = Rest
+    ;   atom_concat('--max-event-types=', N, Arg)
+    ->  (   N == inf -> Types = inf
+        ;   atom_number(N, Types), integer(Types), Types > 0 -> true
+        ;   domain_error(max_event_types, N)
+        ),
+        rtl_set_flag(max_event_types, Types), Files = Rest
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
@@ -289,10 +296,12 @@ usage_error(Formal) :-
     ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
     ;   Formal = domain_error(max_timers, N)
     ->  format(user_error, "error: --max-timers=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = domain_error(max_event_types, N)
+    ->  format(user_error, "error: --max-event-types=~w: expected a positive integer or inf~n", [N])
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--max-event-types=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
