@@ -336,7 +336,9 @@ rtl_run_standard_input(AllowControl, Strict, Outcome) :-
 %   As rtl_run_standard_input/3, for the event file File (`-`: standard input): the loop
 %   of `swipl PROGRAM.pl FILE`, for `retalisc run --events FILE` in the retalisc program
 %   itself. Lines not processed and warnings go to standard error as `FILE:N: ...`.
-%   Outcome is `output gone` when standard output's reader went away (output_gone/1).
+%   Outcome is `output gone` when standard output's reader went away (output_gone/1), and
+%   `signal N` when the signal N (SIGTERM, SIGINT) stopped the run (the output written so
+%   far flushed, whole lines only); the caller then ends the run with status 128 + N.
 
 rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     atom_string(File, File0),
@@ -347,13 +349,29 @@ rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     set_stream(user_output, encoding(utf8)),
     setup_call_cleanup(
         ( nb_setval(rtl_stream_options, [allow_control(AllowControl), strict(Strict)]),
-          rtl_output_to(print) ),
+          rtl_output_to(print),
+          findall(Signal-Old, ( stop_signal(Signal, _), on_signal(Signal, Old, retalis:signal_ends_loop) ),
+                  Handlers) ),
         catch(( rtl_run_jsonl_file(File), flush_output(user_output), Outcome = "done" ),
               Stop,
               run_stopped(Stop, Outcome)),
-        ( rtl_output_to(buffer),
+        ( forall(member(Signal-Old, Handlers), on_signal(Signal, _, Old)),
+          nb_setval(rtl_stop_signal, []),
+          rtl_output_to(buffer),
           nb_setval(rtl_stream_options, []) )).
 
+%   signal_ends_loop(+Signal): a stop signal during rtl_run_event_file/4 ends the loop
+%   (rtl_signal(Number), which no event failure takes for its own: event_failure/3), also
+%   when program code catches that: the loop looks at rtl_stop_signal after each line.
+
+signal_ends_loop(Signal) :-
+    stop_signal(Signal, Number),
+    nb_setval(rtl_stop_signal, Number),
+    throw(rtl_signal(Number)).
+
+run_stopped(rtl_signal(Number), Outcome) :- !,
+    catch(flush_output(user_output), _, true),
+    format(string(Outcome), "signal ~w", [Number]).
 run_stopped(rtl_stop(_), "stopped") :- !.
 run_stopped(Error, "output gone") :- output_gone(Error), !.
 run_stopped(Error, _) :- throw(Error).
@@ -409,7 +427,11 @@ line_done(Outcome, In, Name, N, Options) :-
         print_warnings(Name, N),
         stop_if_needed(Outcome, Options)
     ),
-    (   Name == '<stdin>' -> flush_if_idle(In) ; true ).
+    (   Name == '<stdin>' -> flush_if_idle(In) ; true ),
+    (   nb_current(rtl_stop_signal, Number), integer(Number)   % one that program code caught
+    ->  throw(rtl_signal(Number))
+    ;   true
+    ).
 
 run_buffered(In, Name, N0, Options, N) :-
     rtl_flag(max_term_depth, MaxDepth),
@@ -604,8 +626,8 @@ run_event(Op, Event, Start, End, Outcome) :-
             event_text(Event, Text),
             event_failure(Error, Text, Outcome) )).
 
-event_failure(Error, _, _) :-                  % the output cannot be written: the run ends
-    ( output_gone(Error) ; output_failed(Error, _) ),
+event_failure(Error, _, _) :-                  % the output cannot be written, a stop signal
+    ( output_gone(Error) ; output_failed(Error, _) ; Error = rtl_signal(_) ),
     !,
     throw(Error).
 event_failure(rtl_halted(Why), Text, halted(Reason)) :- !,
@@ -767,7 +789,8 @@ rtl_action(Goal) :-
 
 % The step limit and halts are not the action's own errors: they end the event.
 action_error(Error) :-
-    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_) )
+    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_)
+        ; Error = rtl_signal(_) )
     ->  throw(Error)
     ;   print_message(warning, Error),
         fail

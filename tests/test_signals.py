@@ -79,12 +79,14 @@ def test_swipl_reading_standard_input_stopped_by_a_signal(case, swipl):
     assert_whole_lines(out, status, stderr, signal.SIGTERM)
 
 
-def test_retalisc_run_handed_over_stopped_by_a_signal(case):
+# handed over to swipl; the runtime's loop run by the Python driver (a --memory is Python's)
+@pytest.mark.parametrize("extra", [[], ["--memory", "c_mem(m1, a(_)-[], 5, 10)"]])
+def test_retalisc_run_to_standard_output_stopped_by_a_signal(case, extra):
     directory, program, events, _ = case
-    out = directory / "handover.jsonl"
+    out = directory / f"stdout_{len(extra)}.jsonl"
     with open(out, "wb") as stdout:
-        status, stderr = _stop_when_written([*RETALISC, "run", str(program), "--events", str(events)], out,
-                                            signal.SIGTERM, stdout=stdout)
+        status, stderr = _stop_when_written([*RETALISC, "run", str(program), "--events", str(events), *extra],
+                                            out, signal.SIGTERM, stdout=stdout)
     assert_whole_lines(out, status, stderr, signal.SIGTERM)
 
 

@@ -234,10 +234,13 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             sink.flush()
             outcome = engine.bridge.apply("retalis", "rtl_run_event_file", events,
                                           "true" if allow_control else "false", "true" if strict else "false")
+            stops.retake()
             if outcome == "output gone":          # the reader of standard output went away
                 raise BrokenPipeError(errno.EPIPE, os.strerror(errno.EPIPE))
             if outcome == "stopped":
                 raise RunStopped()
+            if outcome.startswith("signal "):       # the runtime's loop took the signal itself
+                stops.stopped_by(int(outcome.split()[1]))
         elif heartbeat is not None:
             batches = _heartbeat_batches(source, batch_size, heartbeat)
         elif live:

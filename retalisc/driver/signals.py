@@ -60,6 +60,18 @@ class SignalStops:
             raise SignalStop(self.received)
         self._busy = False
 
+    def retake(self) -> None:
+        """Install these handlers again after a loop run by Prolog, whose own handlers took
+        the stop signals while it ran."""
+        for signum in self._previous:
+            signal.signal(signum, self._handle)
+
+    def stopped_by(self, signum: int) -> None:
+        """The signal `signum` stopped a loop run by Prolog: end the run."""
+        self.received = signum
+        self._busy = True
+        raise SignalStop(signum)
+
     def finishing(self) -> None:
         """From now on (the end of the run) a stop signal is only noted."""
         self._busy = True
