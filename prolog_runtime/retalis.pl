@@ -338,7 +338,8 @@ rtl_run_standard_input(AllowControl, Strict, Outcome) :-
 %   itself. Lines not processed and warnings go to standard error as `FILE:N: ...`.
 %   Outcome is `output gone` when standard output's reader went away (output_gone/1), and
 %   `signal N` when the signal N (SIGTERM, SIGINT) stopped the run (the output written so
-%   far flushed, whole lines only); the caller then ends the run with status 128 + N.
+%   far flushed, whole lines only); the caller then ends the run with status 128 + N;
+%   `output failed: WHY` when standard output cannot be written (a full disk).
 
 rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     atom_string(File, File0),
@@ -374,6 +375,11 @@ run_stopped(rtl_signal(Number), Outcome) :- !,
     format(string(Outcome), "signal ~w", [Number]).
 run_stopped(rtl_stop(_), "stopped") :- !.
 run_stopped(Error, "output gone") :- output_gone(Error), !.
+run_stopped(Error, Outcome) :-
+    output_failed(Error, Why),
+    !,
+    catch(close(user_output, [force(true)]), _, true),     % what is left cannot be written
+    format(string(Outcome), "output failed: ~w", [Why]).
 run_stopped(Error, _) :- throw(Error).
 
 % The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by

@@ -135,3 +135,12 @@ def test_a_full_disk_under_the_python_driver_is_one_line_and_status_1(case):
     run = subprocess.run([*RETALISC, "run", str(program), "--events", str(events), "--out", "/dev/full"],
                          capture_output=True, text=True, env=_env(), timeout=120)
     _assert_full_disk(run, "/dev/full")
+
+
+def test_a_full_disk_under_the_runtimes_loop_run_by_python_is_one_line_and_status_1(case):
+    _, program, events, _ = case
+    with open("/dev/full", "wb") as full:          # a --memory keeps the run in Python
+        run = subprocess.run([*RETALISC, "run", str(program), "--events", str(events), "--memory",
+                              "c_mem(m1, a(_)-[], 5, 10)"], stdout=full, stderr=subprocess.PIPE, text=True,
+                             env=_env(), timeout=120)
+    _assert_full_disk(run, "standard output")

@@ -366,7 +366,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
 
     from .bridge import PrologError
     from .event_lines import batch_payload
-    from .run import Progress, RunStopped, end_the_input, print_summary
+    from .run import OUTPUT_FULL, Progress, RunStopped, end_the_input, print_summary, settle_output
     from .signals import SignalStop, SignalStops
 
     log = log or sys.stderr
@@ -414,6 +414,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
         return manifest
 
     stops = SignalStops()
+    full = None
     try:
         stops.install()
         if restored is None:
@@ -457,16 +458,22 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
         status = 1
     except SignalStop:
         pass
+    except OSError as error:
+        if error.errno not in OUTPUT_FULL:
+            raise
+        full, status = error, 1
     finally:
         stops.finishing()
         display.close()
-        sink.flush()
-        sink.close()
+        full = settle_output(sink.flush, full)
+        full = settle_output(sink.close, full)
         if source is not None:
             source.close()
         if journal is not None:
             journal.close()
         engine.bridge.once("retalis:rtl_close_action_output")
+    if full is not None:
+        print(f"retalis: cannot write {out}: {full.strerror}", file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)
     stops.restore()
     return stops.status(status)

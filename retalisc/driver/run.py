@@ -241,6 +241,8 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                 raise RunStopped()
             if outcome.startswith("signal "):       # the runtime's loop took the signal itself
                 stops.stopped_by(int(outcome.split()[1]))
+            if outcome.startswith("output failed: "):
+                raise OSError(errno.ENOSPC, outcome[len("output failed: "):])
         elif heartbeat is not None:
             batches = _heartbeat_batches(source, batch_size, heartbeat)
         elif live:
@@ -289,11 +291,11 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         if frozen is not None:
             frozen()
         display.close()
-        full = _settled(sink.flush, full)
+        full = settle_output(sink.flush, full)
         if events != "-":
             source.close()
         if sink is not sys.stdout:
-            full = _settled(sink.close, full)
+            full = settle_output(sink.close, full)
         if consumers is not None:
             consumers.close()
         engine.bridge.once("retalis:rtl_close_action_output")
@@ -313,7 +315,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
 OUTPUT_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
 
-def _settled(step, full: Optional[OSError]) -> Optional[OSError]:
+def settle_output(step, full: Optional[OSError]) -> Optional[OSError]:
     """Run `step` (a flush or close of the output); once the output is full, its error
     (then that of the run) is kept instead of raised."""
     try:
