@@ -67,6 +67,20 @@ def test_no_traceback_escapes_the_compiler_for_odd_directive_arguments(priority,
         assert error.span is not None and error.span.file == "fuzz.rtl" and error.span.line >= 1, error.message
 
 
+TOKENS = NUMBERS + ["a", "b(", "X", ")", ",", ".", " ", "\n", "<-", ":-", "seq", "where", "(", "[", "]", "op(",
+                   "xfx", "is", "1e309", "- ", "'q'", "\"s\"", "c_mem(", "not(", ").", "^", "T", "sub(", "|"]
+
+
+@settings(max_examples=120, deadline=None)
+@given(st.lists(st.sampled_from(TOKENS), min_size=1, max_size=30))
+def test_no_traceback_escapes_the_compiler_for_token_soups_with_odd_numbers(tokens):
+    text = "".join(tokens) + "\n"
+    try:
+        compile_source(text, "soup.rtl")
+    except RetalisError as error:
+        assert error.span is not None and error.span.file == "soup.rtl" and error.span.line >= 1, error.message
+
+
 def test_check_on_a_program_that_loads_a_missing_file_is_a_located_error(tmp_path):
     path = tmp_path / "p.rtl"
     path.write_text("p(1).\n:- ensure_loaded(missing_file).\nr <- a seq b.\n")
