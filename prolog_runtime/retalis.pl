@@ -153,6 +153,8 @@ stop_on_signal(Signal) :-
     Status is 128 + Number,
     catch(main_finish(Status), _, rtl_exit(Status)).
 
+signal_while_finishing(_).              % the run ends already: the summary is not cut
+
 %   output_gone(+Error): writing standard output failed because its reader went away
 %   (`swipl OUT.pl FILE | head`). The run then ends at once with status 1, printing
 %   nothing more (no summary), as `retalisc run` does when Python writes the output.
@@ -167,7 +169,7 @@ output_failed(error(io_error(write, user_output), context(_, Why)), Why).
 
 output_failed_exit(Why) :-
     format(user_error, "retalis: cannot write standard output: ~w~n", [Why]),
-    catch(close(user_output, [force(true)]), _, true),     % what is left cannot be written
+    drop_output,
     rtl_close_consumer_files,
     rtl_close_action_output,
     rtl_summary(Summary),
@@ -200,6 +202,7 @@ startup_events :-
     ).
 
 main_finish(Status) :-
+    forall(stop_signal(Signal, _), on_signal(Signal, _, retalis:signal_while_finishing)),
     rtl_close_consumer_files,
     rtl_close_action_output,
     flush_output(user_output),
@@ -378,8 +381,12 @@ run_stopped(Error, "output gone") :- output_gone(Error), !.
 run_stopped(Error, Outcome) :-
     output_failed(Error, Why),
     !,
-    catch(close(user_output, [force(true)]), _, true),     % what is left cannot be written
+    drop_output,
     format(string(Outcome), "output failed: ~w", [Why]).
+
+% What is left in standard output's buffer cannot be written: drop it.
+drop_output :-
+    catch(close(user_output, [force(true)]), _, true).
 run_stopped(Error, _) :- throw(Error).
 
 % The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
