@@ -383,11 +383,11 @@ run_stopped(Error, Outcome) :-
     !,
     drop_output,
     format(string(Outcome), "output failed: ~w", [Why]).
+run_stopped(Error, _) :- throw(Error).
 
 % What is left in standard output's buffer cannot be written: drop it.
 drop_output :-
     catch(close(user_output, [force(true)]), _, true).
-run_stopped(Error, _) :- throw(Error).
 
 % The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
 % rtl_read_line/2, as the Python driver's loops have the runtime cut and decode theirs
