@@ -102,8 +102,9 @@ run_declaration(Program, Goal) :-
 %   (event types a run takes, default `inf`: rtl_event_types.pl);
 %   `--action-output=FILE` sends what program code prints to FILE instead of standard
 %   error. Exit status: 0 when the input was processed (rejected and failed lines
-%   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
-%   usage errors.
+%   included), 1 when the run was stopped (`--strict`, `halt` in program code, standard
+%   output cannot be written), 2 for usage errors, 128 + N when the signal N (SIGTERM,
+%   SIGINT) ended it (stop_on_signal/1).
 %   `--retraction-horizon=SECONDS` (or `inf`) keeps deletions exact that long.
 %   `--detections=L1,L2,...` writes the detections per rule before the summary, the rules
 %   labelled L1, L2, ... first (`retalisc run` hands its runs over with it).
