@@ -1,11 +1,13 @@
 """SIGTERM and SIGINT during a run of the Python driver (docs/runtime.md, "Signals, exit
-statuses, a full disk"): the run ends as at the end of its input, without the rest of it. A
+statuses, a full disk, event types"): the run ends as at the end of its input, without the rest of it. A
 batch being processed is finished (its output written, its journal record and snapshot
 taken), never cut: the signal is only noted while a batch is in hand, and ends the
 run (`SignalStop`) when the batch is done, or at once while the run waits for input. The run
 then flushes its output, prints the summary and exits with 128 + the signal's number, the
 status a shell reports for a process the signal killed, as `swipl PROGRAM.pl` does
-(prolog_runtime/retalis.pl, stop_on_signal/1).
+(prolog_runtime/retalis.pl, stop_on_signal/1). When the runtime's own loop reads the input
+(rtl_run_event_file/4) its Prolog handlers take the signals while it runs, and it reports the
+signal that stopped it (`stopped_by`).
 """
 from __future__ import annotations
 
@@ -17,11 +19,10 @@ STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT)
 
 
 class SignalStop(Exception):
-    """A stop signal ended the run; `status` is the exit status it gives (128 + number)."""
+    """A stop signal ends the run (`SignalStops.status` gives its exit status)."""
 
     def __init__(self, signum: int):
         super().__init__(signal.Signals(signum).name)
-        self.status = 128 + signum
 
 
 class SignalStops:
