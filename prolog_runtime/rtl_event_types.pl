@@ -59,11 +59,9 @@ max_types(Max) :-
 %   (before it is read).
 
 rtl_event_text_refused(Text, Reason) :-
-    max_types(Max),
-    Max \== inf,
+    capped(Max),
     text_type(Text, Name, Arity),
-    \+ known_type(Name, Arity),
-    flag(rtl_event_types, Known, Known),
+    new_type(Name, Arity, Known),
     Known >= Max,
     refusal(Name, Arity, Max, Reason).
 
@@ -73,17 +71,24 @@ rtl_event_text_refused(Text, Reason) :-
 %   (known from now on).
 
 rtl_event_type_refused(Event, Reason) :-
-    max_types(Max),
-    Max \== inf,
+    capped(Max),
     functor(Event, Name, Arity),
-    \+ known_type(Name, Arity),
-    flag(rtl_event_types, Known, Known),
+    new_type(Name, Arity, Known),
     (   Known >= Max
     ->  refusal(Name, Arity, Max, Reason)
     ;   assertz(known_type(Name, Arity)),
         flag(rtl_event_types, _, Known + 1),
         fail
     ).
+
+capped(Max) :-
+    max_types(Max),
+    Max \== inf.
+
+% Name/Arity is not a type of this run, which knows Known types.
+new_type(Name, Arity, Known) :-
+    \+ known_type(Name, Arity),
+    flag(rtl_event_types, Known, Known).
 
 refusal(Name, Arity, Max, Reason) :-
     format(string(Reason), "a new event type ~q beyond the ~D this run takes (--max-event-types)",

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from retalisc.driver.engine import Engine
+from test_signals import compiled_case
 
 ROOT = Path(__file__).resolve().parent.parent
 LINES = ['{"event": "t1(1)", "t": 1}', '{"event": "t2(1)", "t": 2}', '{"event": "t1(2)", "t": 3}',
@@ -22,15 +23,7 @@ REJECTED = {4: "t3/1", 5: "(+)/2", 6: "t2/2"}
 
 @pytest.fixture(scope="module")
 def case(tmp_path_factory):
-    directory = tmp_path_factory.mktemp("types")
-    program = directory / "p.rtl"
-    program.write_text("r(X) <- t1(X).\n")
-    events = directory / "events.jsonl"
-    events.write_text("\n".join(LINES) + "\n")
-    compiled = directory / "p.pl"
-    subprocess.run([sys.executable, "-m", "retalisc", "compile", str(program), "-o", str(compiled)], check=True,
-                   env={**os.environ, "PYTHONPATH": str(ROOT)})
-    return program, events, compiled
+    return compiled_case(tmp_path_factory.mktemp("types"), "r(X) <- t1(X).\n", "\n".join(LINES) + "\n")
 
 
 def assert_capped(run, events):

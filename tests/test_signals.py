@@ -21,16 +21,22 @@ RETALISC = [sys.executable, "-m", "retalisc"]
 EVENTS = 150_000
 
 
+def compiled_case(directory: Path, program_text: str, events_text: str):
+    """(program, events, compiled program) of `program_text` and `events_text` in `directory`."""
+    program = directory / "p.rtl"
+    program.write_text(program_text)
+    events = directory / "events.jsonl"
+    events.write_text(events_text)
+    compiled = directory / "p.pl"
+    subprocess.run([*RETALISC, "compile", str(program), "-o", str(compiled)], check=True, env=_env())
+    return program, events, compiled
+
+
 @pytest.fixture(scope="module")
 def case(tmp_path_factory):
     directory = tmp_path_factory.mktemp("signals")
-    program = directory / "p.rtl"
-    program.write_text("r(X) <- a(X).\n")
-    events = directory / "events.jsonl"
-    events.write_text("".join(f'{{"event": "a({i})", "t": {i}}}\n' for i in range(1, EVENTS + 1)))
-    compiled = directory / "p.pl"
-    subprocess.run([*RETALISC, "compile", str(program), "-o", str(compiled)], check=True, env=_env())
-    return directory, program, events, compiled
+    events = "".join(f'{{"event": "a({i})", "t": {i}}}\n' for i in range(1, EVENTS + 1))
+    return (directory, *compiled_case(directory, "r(X) <- a(X).\n", events))
 
 
 def _env():

@@ -366,7 +366,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
 
     from .bridge import PrologError
     from .event_lines import batch_payload
-    from .run import OUTPUT_FULL, Progress, RunStopped, end_the_input, print_summary, settle_output
+    from .run import Progress, RunStopped, end_the_input, output_full, print_summary, settle_output
     from .signals import SignalStop, SignalStops
 
     log = log or sys.stderr
@@ -459,9 +459,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     except SignalStop:
         pass
     except OSError as error:
-        if error.errno not in OUTPUT_FULL:
-            raise
-        full, status = error, 1
+        full, status = output_full(error), 1
     finally:
         stops.finishing()
         display.close()

@@ -283,9 +283,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     except SignalStop:
         pass
     except OSError as error:
-        if error.errno not in OUTPUT_FULL:
-            raise
-        full, status = error, 1
+        full, status = output_full(error), 1
     finally:
         stops.finishing()
         if frozen is not None:
@@ -315,15 +313,20 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
 OUTPUT_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
 
+def output_full(error: OSError) -> OSError:
+    """`error`, when it says that the output is full; raised again otherwise."""
+    if error.errno not in OUTPUT_FULL:
+        raise error
+    return error
+
+
 def settle_output(step, full: Optional[OSError]) -> Optional[OSError]:
     """Run `step` (a flush or close of the output); once the output is full, its error
     (then that of the run) is kept instead of raised."""
     try:
         step()
     except OSError as error:
-        if error.errno not in OUTPUT_FULL:
-            raise
-        return full or error
+        return full or output_full(error)
     return full
 
 
