@@ -98,11 +98,13 @@ run_declaration(Program, Goal) :-
 %   of the input; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
 %   refused by default); `--strict` ends the run (status 1) at the first line that is
 %   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
-%   `--max-timers=N` (pending timers at most, `inf` for no limit);
+%   `--max-timers=N` (pending timers at most, `inf` for no limit); `--max-event-types=N`
+%   (event types a run takes, default `inf`: rtl_event_types.pl);
 %   `--action-output=FILE` sends what program code prints to FILE instead of standard
 %   error. Exit status: 0 when the input was processed (rejected and failed lines
-%   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
-%   usage errors.
+%   included), 1 when the run was stopped (`--strict`, `halt` in program code, standard
+%   output cannot be written), 2 for usage errors, 128 + N when the signal N (SIGTERM,
+%   SIGINT) ended it (stop_on_signal/1).
 %   `--retraction-horizon=SECONDS` (or `inf`) keeps deletions exact that long.
 %   `--detections=L1,L2,...` writes the detections per rule before the summary, the rules
 %   labelled L1, L2, ... first (`retalisc run` hands its runs over with it).
@@ -127,18 +129,53 @@ rtl_main :-
         main_finish(1)
     ;   true
     ),
+    forall(stop_signal(Signal, _), on_signal(Signal, _, retalis:stop_on_signal)),
     catch(main_run(Files, Status),
           Error,
           ( output_gone(Error)
           ->  output_gone_exit
+          ;   output_failed(Error, Why)
+          ->  output_failed_exit(Why)
           ;   error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
     main_finish(Status).
+
+%   stop_on_signal(+Signal): SIGTERM or SIGINT ends the run as the end of the input would,
+%   without the rest of the input: the event being processed is dropped where it is (the
+%   handler runs between Prolog calls, and each output line is written by one call, so only
+%   whole lines are in the output buffer), the output written so far is flushed, the summary
+%   printed, and the process ends with status 128 + the signal's number, as a shell reports
+%   a process the signal killed.
+
+stop_signal(term, 15).
+stop_signal(int, 2).
+
+stop_on_signal(Signal) :-
+    stop_signal(Signal, Number),
+    Status is 128 + Number,
+    catch(main_finish(Status), _, rtl_exit(Status)).
+
+signal_while_finishing(_).              % the run ends already: the summary is not cut
 
 %   output_gone(+Error): writing standard output failed because its reader went away
 %   (`swipl OUT.pl FILE | head`). The run then ends at once with status 1, printing
 %   nothing more (no summary), as `retalisc run` does when Python writes the output.
 
 output_gone(error(io_error(write, user_output), context(_, 'Broken pipe'))).
+
+%   output_failed(+Error, -Why): writing standard output failed otherwise (a full disk:
+%   `swipl OUT.pl FILE > /dev/full`). The run ends with the line `retalis: cannot write
+%   standard output: Why`, the summary and status 1.
+
+output_failed(error(io_error(write, user_output), context(_, Why)), Why).
+
+output_failed_exit(Why) :-
+    format(user_error, "retalis: cannot write standard output: ~w~n", [Why]),
+    drop_output,
+    rtl_close_consumer_files,
+    rtl_close_action_output,
+    rtl_summary(Summary),
+    format(user_error, "~s~n", [Summary]),
+    rtl_exit(1).
 
 output_gone_exit :-
     rtl_close_consumer_files,
@@ -166,6 +203,7 @@ startup_events :-
     ).
 
 main_finish(Status) :-
+    forall(stop_signal(Signal, _), on_signal(Signal, _, retalis:signal_while_finishing)),
     rtl_close_consumer_files,
     rtl_close_action_output,
     flush_output(user_output),
@@ -227,6 +265,12 @@ main_args([Arg|Args], Files) :-
         ;   domain_error(max_timers, N)
         ),
         rtl_set_flag(max_timers, Timers), Files = Rest
+    ;   atom_concat('--max-event-types=', N, Arg)
+    ->  (   N == inf -> Types = inf
+        ;   atom_number(N, Types), integer(Types), Types > 0 -> true
+        ;   domain_error(max_event_types, N)
+        ),
+        rtl_set_flag(max_event_types, Types), Files = Rest
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
@@ -256,10 +300,12 @@ usage_error(Formal) :-
     ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
     ;   Formal = domain_error(max_timers, N)
     ->  format(user_error, "error: --max-timers=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = domain_error(max_event_types, N)
+    ->  format(user_error, "error: --max-event-types=~w: expected a positive integer or inf~n", [N])
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--max-event-types=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -294,7 +340,10 @@ rtl_run_standard_input(AllowControl, Strict, Outcome) :-
 %   As rtl_run_standard_input/3, for the event file File (`-`: standard input): the loop
 %   of `swipl PROGRAM.pl FILE`, for `retalisc run --events FILE` in the retalisc program
 %   itself. Lines not processed and warnings go to standard error as `FILE:N: ...`.
-%   Outcome is `output gone` when standard output's reader went away (output_gone/1).
+%   Outcome is `output gone` when standard output's reader went away (output_gone/1), and
+%   `signal N` when the signal N (SIGTERM, SIGINT) stopped the run (the output written so
+%   far flushed, whole lines only); the caller then ends the run with status 128 + N;
+%   `output failed: WHY` when standard output cannot be written (a full disk).
 
 rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     atom_string(File, File0),
@@ -305,16 +354,41 @@ rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     set_stream(user_output, encoding(utf8)),
     setup_call_cleanup(
         ( nb_setval(rtl_stream_options, [allow_control(AllowControl), strict(Strict)]),
-          rtl_output_to(print) ),
+          rtl_output_to(print),
+          findall(Signal-Old, ( stop_signal(Signal, _), on_signal(Signal, Old, retalis:signal_ends_loop) ),
+                  Handlers) ),
         catch(( rtl_run_jsonl_file(File), flush_output(user_output), Outcome = "done" ),
               Stop,
               run_stopped(Stop, Outcome)),
-        ( rtl_output_to(buffer),
+        ( forall(member(Signal-Old, Handlers), on_signal(Signal, _, Old)),
+          nb_setval(rtl_stop_signal, []),
+          rtl_output_to(buffer),
           nb_setval(rtl_stream_options, []) )).
 
+%   signal_ends_loop(+Signal): a stop signal during rtl_run_event_file/4 ends the loop
+%   (rtl_signal(Number), which no event failure takes for its own: event_failure/3), also
+%   when program code catches that: the loop looks at rtl_stop_signal after each line.
+
+signal_ends_loop(Signal) :-
+    stop_signal(Signal, Number),
+    nb_setval(rtl_stop_signal, Number),
+    throw(rtl_signal(Number)).
+
+run_stopped(rtl_signal(Number), Outcome) :- !,
+    catch(flush_output(user_output), _, true),
+    format(string(Outcome), "signal ~w", [Number]).
 run_stopped(rtl_stop(_), "stopped") :- !.
 run_stopped(Error, "output gone") :- output_gone(Error), !.
+run_stopped(Error, Outcome) :-
+    output_failed(Error, Why),
+    !,
+    drop_output,
+    format(string(Outcome), "output failed: ~w", [Why]).
 run_stopped(Error, _) :- throw(Error).
+
+% What is left in standard output's buffer cannot be written: drop it.
+drop_output :-
+    catch(close(user_output, [force(true)]), _, true).
 
 % The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
 % rtl_read_line/2, as the Python driver's loops have the runtime cut and decode theirs
@@ -367,7 +441,11 @@ line_done(Outcome, In, Name, N, Options) :-
         print_warnings(Name, N),
         stop_if_needed(Outcome, Options)
     ),
-    (   Name == '<stdin>' -> flush_if_idle(In) ; true ).
+    (   Name == '<stdin>' -> flush_if_idle(In) ; true ),
+    (   nb_current(rtl_stop_signal, Number), integer(Number)   % one that program code caught
+    ->  throw(rtl_signal(Number))
+    ;   true
+    ).
 
 run_buffered(In, Name, N0, Options, N) :-
     rtl_flag(max_term_depth, MaxDepth),
@@ -562,6 +640,10 @@ run_event(Op, Event, Start, End, Outcome) :-
             event_text(Event, Text),
             event_failure(Error, Text, Outcome) )).
 
+event_failure(Error, _, _) :-                  % the output cannot be written, a stop signal
+    ( output_gone(Error) ; output_failed(Error, _) ; Error = rtl_signal(_) ),
+    !,
+    throw(Error).
 event_failure(rtl_halted(Why), Text, halted(Reason)) :- !,
     format(string(Reason), "~s while processing ~s", [Why, Text]).
 event_failure(Error, Text, failed(Reason)) :-
@@ -721,7 +803,8 @@ rtl_action(Goal) :-
 
 % The step limit and halts are not the action's own errors: they end the event.
 action_error(Error) :-
-    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_) )
+    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_)
+        ; Error = rtl_signal(_) )
     ->  throw(Error)
     ;   print_message(warning, Error),
         fail

@@ -82,6 +82,7 @@ flag_default(max_term_depth, 1000).         % nesting of input event terms
 flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_horizon.pl)
 flag_default(flush_timers, false).          % fire pending timers at the end of the input (rtl_timers.pl)
 flag_default(max_timers, 100000).           % pending timers at most (rtl_timers.pl; inf: no limit)
+flag_default(max_event_types, inf).         % event types a run takes (rtl_event_types.pl)
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -165,6 +166,7 @@ rtl_set_flag(Flag, Value) :-
     assertz(flag_value(Flag, Value)),
     (   Flag == echo_input -> nb_setval(rtl_echo_input, Value) ; true ),   % read on every event
     (   Flag == max_steps -> nb_setval(rtl_max_steps, Value) ; true ),     % read on every event
+    (   Flag == max_event_types -> rtl_event_types:rtl_cap_event_types(Value) ; true ),
     (   memberchk(Flag, [max_delay, retraction_horizon]) -> schedule_sweep ; true ).
 
 valid_flag_value(max_delay, V) :-
@@ -183,6 +185,8 @@ valid_flag_value(max_steps, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 valid_flag_value(max_timers, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
+valid_flag_value(max_event_types, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
 valid_flag_value(max_term_depth, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 
@@ -193,7 +197,8 @@ valid_flag_value(max_term_depth, V) :-
 rtl_default_flags :-
     retractall(flag_value(_, _)),
     nb_setval(rtl_echo_input, false),
-    nb_setval(rtl_max_steps, []).
+    nb_setval(rtl_max_steps, []),
+    rtl_event_types:rtl_forget_event_types.
 
 %!  rtl_max_steps(-Steps) is det.
 %

@@ -29,6 +29,7 @@ also names the reason of a rejection. Without the C reader, every line takes the
 
 :- use_module(rtl_time).
 :- use_module(rtl_lines, [rtl_nul_problem/2]).
+:- use_module(rtl_event_types, [rtl_event_text_refused/2, rtl_event_type_refused/2]).
 
 :- dynamic fast_reader/0, fast_writer/0.
 
@@ -378,6 +379,8 @@ rtl_read_event_text(Text, MaxDepth, Event, Problem) :-
     (   MaxDepth \== short,
         too_deep_text(Text, MaxDepth)
     ->  depth_reason(MaxDepth, Problem)
+    ;   rtl_event_text_refused(Text, Reason)          % --max-event-types, before a functor is made
+    ->  Problem = Reason
     ;   catch(read_one_term(Text, Event, Problem), error(Formal, _), read_error(Formal, Problem))
     ->  (   nonvar(Problem)
         ->  true
@@ -385,6 +388,8 @@ rtl_read_event_text(Text, MaxDepth, Event, Problem) :-
         ->  Problem = "\"event\" must be ground (it has variables)"
         ;   \+ callable(Event)
         ->  Problem = "\"event\" must be an atom or a compound term"
+        ;   rtl_event_type_refused(Event, Reason)
+        ->  Problem = Reason
         ;   MaxDepth \== short,
             string_length(Text, Length), Length > MaxDepth,
             term_too_deep(Event, MaxDepth)

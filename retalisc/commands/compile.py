@@ -115,7 +115,12 @@ def check_command(program: str, werror: bool) -> None:
     It runs the whole compilation, as `retalisc compile` does, and discards the result: a
     program `check` accepts compiles, and its Prolog loads. Programs that compile but cannot
     mean what they say get warnings (`file:line:col: warning: ...` with a hint)."""
+    from ..load_check import load_error
+
     result = compile_or_exit(program, werror)
+    error = load_error(result, program)
+    if error is not None:
+        report_program_error(error)
     rules = len(result.unit.rules)
     warnings = len(result.warnings)
     noted = f", {warnings} warning{'s' if warnings != 1 else ''}" if warnings else ""
@@ -182,6 +187,9 @@ Examples:
 @click.option("--max-timers", type=str, default=None, metavar="N",
               help="Timers (absences, alarms) that may be pending at once; one more is not set, but counted "
                    "and reported as a warning (default 100000; 'inf' for no limit).")
+@click.option("--max-event-types", type=str, default=None, metavar="N",
+              help="Distinct event types (Name/Arity) the run takes; a line of a new type beyond them is "
+                   "rejected (default 'inf': SWI-Prolog keeps each type's functor, ~140 bytes, for good).")
 @click.option("--action-output", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Write the text that actions and conditions print to FILE (default: standard error; "
                    "standard output carries only JSON Lines).")
@@ -207,7 +215,7 @@ Examples:
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
-                flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, max_timers, action_output, progress,
+                flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, max_timers, max_event_types, action_output, progress,
                 traces, late_file, no_cache, state, snapshot_every, snapshot_seconds,
                 **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
@@ -239,6 +247,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         output_directory(state, "--state")
     steps = _max_steps(max_steps)
     timers = _max_steps(max_timers, DEFAULT_MAX_TIMERS, "--max-timers")
+    event_types = _max_steps(max_event_types, "inf", "--max-event-types")
     module = unique_module_name(program)        # a second run in one process loads anew
     handover = (bag["bag"] is None and state is None and not (subscriptions or memories or queries or traces)
                 and late_file is None and action_output is None and _runs_in_runtime_loop(events, out, consumer_dir,
@@ -254,6 +263,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     if handover and compiled.file is not None:
         _hand_over_to_swipl(compiled, events, echo_input=echo_input, max_delay=max_delay,
                             retraction_horizon=retraction_horizon, max_steps=steps, max_timers=timers,
+                            max_event_types=event_types,
                             drop_pending=drop_pending, flush_timers=flush_timers, allow_control=allow_control,
                             strict=strict)
     from ..driver.bridge import PrologError
@@ -268,6 +278,8 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         engine.set_flag("max_delay", repr(max_delay))
     engine.set_flag("max_steps", str(steps))
     engine.set_flag("max_timers", str(timers))
+    if event_types != "inf":
+        engine.set_flag("max_event_types", str(event_types))
     if action_output is not None:
         try:
             set_action_output(engine, action_output)
@@ -402,7 +414,8 @@ DEFAULT_MAX_TIMERS = 100_000
 
 
 def _max_steps(text, default=DEFAULT_MAX_STEPS, option="--max-steps"):
-    """`--max-steps N` (or `--max-timers N`): a positive integer or 'inf' (usage error otherwise)."""
+    """`--max-steps N` (or `--max-timers N`, `--max-event-types N`): a positive integer or 'inf'
+    (usage error otherwise)."""
     if text is None:
         return default
     if text.strip() == "inf":

@@ -366,7 +366,8 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
 
     from .bridge import PrologError
     from .event_lines import batch_payload
-    from .run import Progress, RunStopped, end_the_input, print_summary
+    from .run import Progress, RunStopped, end_the_input, output_full, print_summary, settle_output
+    from .signals import SignalStop, SignalStops
 
     log = log or sys.stderr
     started = time.perf_counter()
@@ -412,7 +413,10 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             journal.prune(directory)
         return manifest
 
+    stops = SignalStops()
+    full = None
     try:
+        stops.install()
         if restored is None:
             halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
             if halted:
@@ -423,6 +427,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             snapshot(offset, line)
         since_events, since_time = 0, time.monotonic()
         for first, lines, size, position in batches:
+            stops.batch_starts()                # a stop signal ends the run after the batch
             produced, rejected = engine.feed_lines(batch_payload(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
@@ -446,20 +451,30 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
                 snapshot(offset, line)
                 since_events, since_time = 0, time.monotonic()
+            stops.batch_ends()
+        stops.batch_starts()
         end_the_input(engine, write, drop_pending, strict)
     except RunStopped:
         status = 1
+    except SignalStop:
+        pass
+    except OSError as error:
+        full, status = output_full(error), 1
     finally:
+        stops.finishing()
         display.close()
-        sink.flush()
-        sink.close()
+        full = settle_output(sink.flush, full)
+        full = settle_output(sink.close, full)
         if source is not None:
             source.close()
         if journal is not None:
             journal.close()
         engine.bridge.once("retalis:rtl_close_action_output")
+    if full is not None:
+        print(f"retalis: cannot write {out}: {full.strerror}", file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)
-    return status
+    stops.restore()
+    return stops.status(status)
 
 
 def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int):

@@ -17,6 +17,7 @@ import time
 from typing import IO, TYPE_CHECKING, Dict, Iterator, List, Optional, Sequence, Tuple
 
 from .event_lines import batch_payload, split_lines
+from .signals import SignalStop, SignalStops
 
 if TYPE_CHECKING:
     from .engine import Engine
@@ -211,7 +212,10 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             lines.append("")
             emit("\n".join(lines))
 
+    stops = SignalStops()
+    full: Optional[OSError] = None
     try:
+        stops.install()
         halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
         if halted:
             print(halted, file=sys.stderr)
@@ -230,10 +234,15 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             sink.flush()
             outcome = engine.bridge.apply("retalis", "rtl_run_event_file", events,
                                           "true" if allow_control else "false", "true" if strict else "false")
+            stops.retake()
             if outcome == "output gone":          # the reader of standard output went away
                 raise BrokenPipeError(errno.EPIPE, os.strerror(errno.EPIPE))
             if outcome == "stopped":
                 raise RunStopped()
+            if outcome.startswith("signal "):       # the runtime's loop took the signal itself
+                stops.stopped_by(int(outcome.split()[1]))
+            if outcome.startswith("output failed: "):
+                raise OSError(errno.ENOSPC, outcome[len("output failed: "):])
         elif heartbeat is not None:
             batches = _heartbeat_batches(source, batch_size, heartbeat)
         elif live:
@@ -241,11 +250,13 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         else:
             batches = _batches(source, batch_size)
         for first, lines, size in batches:
+            stops.batch_starts()                # a stop signal ends the run after the batch
             if not lines:                       # a heartbeat: nothing arrived
                 target = wall.estimate()
                 if target is not None and target > engine.clock():
                     write(engine.advance_clock(target))
                     sink.flush()
+                stops.batch_ends()
                 continue
             produced, rejected = engine.feed_lines(batch_payload(lines), first, allow_control=allow_control,
                                                    strict=strict)
@@ -264,18 +275,25 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                 sink.flush()
             if rejected and (strict or rejected[-1].kind == "halt"):
                 raise RunStopped()
+            stops.batch_ends()
+        stops.batch_starts()
         end_the_input(engine, write, drop_pending, strict)
     except RunStopped:
         status = 1
+    except SignalStop:
+        pass
+    except OSError as error:
+        full, status = output_full(error), 1
     finally:
+        stops.finishing()
         if frozen is not None:
             frozen()
         display.close()
-        sink.flush()
+        full = settle_output(sink.flush, full)
         if events != "-":
             source.close()
         if sink is not sys.stdout:
-            sink.close()
+            full = settle_output(sink.close, full)
         if consumers is not None:
             consumers.close()
         engine.bridge.once("retalis:rtl_close_action_output")
@@ -283,8 +301,33 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         text = report()
         if text:
             print(text, file=sys.stderr)
+    if full is not None:
+        print(f"retalis: cannot write {'standard output' if out == '-' else out}: {full.strerror}", file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)
-    return status
+    stops.restore()
+    return stops.status(status)
+
+
+#: The errors of writing to a file system that is full (or a file grown to its limit): the
+#: run ends with `retalis: cannot write OUT: REASON`, the summary and status 1.
+OUTPUT_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
+def output_full(error: OSError) -> OSError:
+    """`error`, when it says that the output is full; raised again otherwise."""
+    if error.errno not in OUTPUT_FULL:
+        raise error
+    return error
+
+
+def settle_output(step, full: Optional[OSError]) -> Optional[OSError]:
+    """Run `step` (a flush or close of the output); once the output is full, its error
+    (then that of the run) is kept instead of raised."""
+    try:
+        step()
+    except OSError as error:
+        return full or output_full(error)
+    return full
 
 
 def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],

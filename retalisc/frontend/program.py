@@ -217,6 +217,16 @@ DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
 # ---- building ---------------------------------------------------------------------------
 
 
+
+#: The longest window or absence a pattern may have, in seconds (about 31.7 million years):
+#: the runtime adds, doubles and compares them with times as floats, which stay finite.
+MAX_SECONDS = 1e15
+
+
+def _bounded_seconds(value) -> bool:
+    """A window length or absence duration: a number from 0 to MAX_SECONDS (not NaN)."""
+    return 0 <= value <= MAX_SECONDS
+
 def parse_program(text: str, file: str) -> Program:
     """Read and classify a whole program. Raises RetalisSyntaxError.
 
@@ -556,15 +566,17 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                     raise RetalisSyntaxError("negation is written not(P).[P1, P2] or not(P).[P1, Seconds]", where)
                 if isinstance(items[1], Number):
                     duration = items[1].value
-                    if duration != duration or duration < 0 or duration == float("inf"):
+                    if not _bounded_seconds(duration):
                         raise RetalisSyntaxError("the duration of an absence not(P).[P1, Seconds] must be a "
-                                                 "finite number of seconds, not negative", span_of(items[1]) or where)
+                                                 f"number of seconds, not negative and at most {MAX_SECONDS:g}",
+                                                 span_of(items[1]) or where)
                     return Absence(to_pattern(left.args[0], span), to_pattern(items[0], span), duration, where)
                 return Negation(to_pattern(left.args[0], span), to_pattern(items[0], span),
                                 to_pattern(items[1], span), where)
             if isinstance(right, Number):
-                if right.value != right.value or right.value < 0:
-                    raise RetalisSyntaxError("a window length must be a number of seconds, not negative", where)
+                if not _bounded_seconds(right.value):
+                    raise RetalisSyntaxError("a window length must be a number of seconds, not negative and "
+                                             f"at most {MAX_SECONDS:g}", where)
                 return Window(to_pattern(left, span), right.value, where)
             raise RetalisSyntaxError("'(Pattern).Q' needs a number Q (the window length in seconds)", where)
         if term.arity == 3 and term.name == "aggregate":
