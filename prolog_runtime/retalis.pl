@@ -19,7 +19,7 @@
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
-:- use_module(rtl_lines, [rtl_read_line/2, rtl_split_lines/2, rtl_utf8_line/2]).
+:- use_module(rtl_lines, [rtl_read_line/3, rtl_split_lines/2, rtl_utf8_line/2, rtl_long_line/4]).
 :- use_module(rtl_horizon, [rtl_warnings_pending/0]).
 :- reexport(rtl_time).
 :- reexport(rtl_raise).
@@ -317,11 +317,11 @@ run_stopped(Error, "output gone") :- output_gone(Error), !.
 run_stopped(Error, _) :- throw(Error).
 
 % The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
-% rtl_read_line/2, as the Python driver's loops have the runtime cut and decode theirs
-% (rtl_lines.pl, docs/runtime.md, "Event input").
+% rtl_read_line/3, as the Python driver's loops have the runtime cut and decode theirs
+% (rtl_lines.pl, docs/runtime.md, "Event input"), each line at most max_line_bytes long.
 run_stream(In, Name) :-
     stream_options(Options),
-    rtl_read_line(In, Line0),
+    read_line(In, Line0),
     without_bom(Line0, Line),
     with_output_buffer(In, with_action_output(run_lines(Line, In, Name, 1, Options))).
 
@@ -357,8 +357,12 @@ run_lines(Line, In, Name, N, Options) :-
     line_done(Outcome, In, Name, N, Options),
     N1 is N + 1,
     run_buffered(In, Name, N1, Options, N2),
-    rtl_read_line(In, Next),
+    read_line(In, Next),
     run_lines(Next, In, Name, N2, Options).
+
+read_line(In, Line) :-
+    rtl_flag(max_line_bytes, MaxBytes),
+    rtl_read_line(In, MaxBytes, Line).
 
 line_done(Outcome, In, Name, N, Options) :-
     (   Outcome == ok
@@ -641,10 +645,9 @@ rtl_feed_lines(Text, First, Output) :-
 rtl_feed_lines(Text, First, Options, Output) :-
     rtl_output_to(buffer),
     rtl_split_lines(Text, Lines0),
-    (   memberchk(bytes(true), Options)
-    ->  maplist(rtl_utf8_line, Lines0, Lines1)
-    ;   Lines1 = Lines0
-    ),
+    ( memberchk(bytes(true), Options) -> Bytes = true ; Bytes = false ),
+    rtl_flag(max_line_bytes, MaxBytes),
+    maplist(fed_line(Bytes, MaxBytes), Lines0, Lines1),
     (   First =:= 1, Lines1 = [L0|Ls]
     ->  without_bom(L0, L1), Lines = [L1|Ls]
     ;   Lines = Lines1
@@ -655,6 +658,15 @@ rtl_feed_lines(Text, First, Options, Output) :-
     exclude(==(""), All0, All),
     atomic_list_concat(All, "\n", Joined),
     (   All == [] -> Output = "" ; string_concat(Joined, "\n", Output) ).
+
+% A line of a batch as rtl_read_line/3 reads it.
+fed_line(Bytes, MaxBytes, Line0, Line) :-
+    (   rtl_long_line(Line0, Bytes, MaxBytes, TooLong)
+    ->  Line = TooLong
+    ;   Bytes == true
+    ->  rtl_utf8_line(Line0, Line)
+    ;   Line = Line0
+    ).
 
 feed_lines([], _, _, []).
 feed_lines([Line|Lines], N, Options, Rejections) :-

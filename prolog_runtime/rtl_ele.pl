@@ -82,6 +82,8 @@ flag_default(max_term_depth, 1000).         % nesting of input event terms
 flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_horizon.pl)
 flag_default(flush_timers, false).          % fire pending timers at the end of the input (rtl_timers.pl)
 flag_default(max_timers, 100000).           % pending timers at most (rtl_timers.pl; inf: no limit)
+flag_default(max_line_bytes, 1048576).      % bytes of an input line at most (rtl_lines.pl)
+flag_default(max_digits, 4300).             % digits in a row in an input line at most (rtl_lines.pl)
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -147,7 +149,9 @@ rtl_clear :-
 %   inferences one input event may take, everything it derives included; `inf` for no
 %   limit; default 1,000,000) and `max_term_depth` (how deep an input event term may be
 %   nested; default 1,000), `max_timers` (how many timers may be pending, absences and
-%   alarms; `inf` for no limit; default 100,000) and `retraction_horizon` (`auto`, seconds or `inf`: how long
+%   alarms; `inf` for no limit; default 100,000), `max_line_bytes` (the longest input line,
+%   default 1,048,576 bytes), `max_digits` (the longest run of digits in an input line or
+%   event text, default 4,300) and `retraction_horizon` (`auto`, seconds or `inf`: how long
 %   deletions stay exact, at least max_delay plus the largest window; rtl_horizon.pl). A bad value raises a type or domain error and changes nothing.
 
 rtl_set_flag(Flag, Value) :-
@@ -182,6 +186,10 @@ valid_flag_value(retraction_horizon, V) :-
 valid_flag_value(max_steps, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 valid_flag_value(max_timers, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
+valid_flag_value(max_line_bytes, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
+valid_flag_value(max_digits, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 valid_flag_value(max_term_depth, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
