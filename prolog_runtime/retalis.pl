@@ -645,9 +645,11 @@ rtl_feed_lines(Text, First, Output) :-
 rtl_feed_lines(Text, First, Options, Output) :-
     rtl_output_to(buffer),
     rtl_split_lines(Text, Lines0),
-    ( memberchk(bytes(true), Options) -> Bytes = true ; Bytes = false ),
-    rtl_flag(max_line_bytes, MaxBytes),
-    maplist(fed_line(Bytes, MaxBytes), Lines0, Lines1),
+    (   memberchk(bytes(true), Options)
+    ->  rtl_flag(max_line_bytes, MaxBytes),
+        maplist(byte_line(MaxBytes), Lines0, Lines1)
+    ;   Lines1 = Lines0                         % (rtl_parse_event_line/3 checks the length)
+    ),
     (   First =:= 1, Lines1 = [L0|Ls]
     ->  without_bom(L0, L1), Lines = [L1|Ls]
     ;   Lines = Lines1
@@ -659,13 +661,11 @@ rtl_feed_lines(Text, First, Options, Output) :-
     atomic_list_concat(All, "\n", Joined),
     (   All == [] -> Output = "" ; string_concat(Joined, "\n", Output) ).
 
-% A line of a batch as rtl_read_line/3 reads it.
-fed_line(Bytes, MaxBytes, Line0, Line) :-
-    (   rtl_long_line(Line0, Bytes, MaxBytes, TooLong)
+% A line of a batch of bytes as rtl_read_line/3 reads it: too long before it is decoded.
+byte_line(MaxBytes, Line0, Line) :-
+    (   rtl_long_line(Line0, true, MaxBytes, TooLong)
     ->  Line = TooLong
-    ;   Bytes == true
-    ->  rtl_utf8_line(Line0, Line)
-    ;   Line = Line0
+    ;   rtl_utf8_line(Line0, Line)
     ).
 
 feed_lines([], _, _, []).

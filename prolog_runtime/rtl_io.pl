@@ -28,7 +28,7 @@ also names the reason of a rejection. Without the C reader, every line takes the
 */
 
 :- use_module(rtl_time).
-:- use_module(rtl_lines, [rtl_nul_problem/2, rtl_digits_problem/3]).
+:- use_module(rtl_lines, [rtl_nul_problem/2, rtl_digits_problem/3, rtl_long_line/4]).
 
 :- dynamic fast_reader/0, fast_writer/0.
 
@@ -84,7 +84,7 @@ rtl_use_fast_reader(false) :-
 %   `error(Reason)` with Reason a string saying what is wrong with the line (one holding a
 %   NUL byte is). Line may also be `not_text(Reason)`, a line that is not UTF-8 text,
 %   or `too_long(Reason)`, a line longer than the flag `max_line_bytes` (rtl_lines.pl):
-%   either is `error(Reason)`. A line with a run of more than `max_digits` digits
+%   either is `error(Reason)`; so is a Line longer than that. A line with a run of more than `max_digits` digits
 %   (rtl_digits_problem/3) is rejected before anything of it is read.
 %
 %   The line must be one JSON object and nothing else; the event a ground term and nothing
@@ -98,6 +98,11 @@ rtl_parse_event_line(Line, Parsed) :-
 rtl_parse_event_line(not_text(Reason), _, Parsed) :- !,
     Parsed = error(Reason).
 rtl_parse_event_line(too_long(Reason), _, Parsed) :- !,
+    Parsed = error(Reason).
+rtl_parse_event_line(Line, _, Parsed) :-        % a line given whole (rtl_feed_lines/4)
+    input_limit(max_line_bytes, MaxBytes),
+    rtl_long_line(Line, false, MaxBytes, too_long(Reason)),
+    !,
     Parsed = error(Reason).
 rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     fast_reader,
