@@ -98,7 +98,8 @@ run_declaration(Program, Goal) :-
 %   of the input; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
 %   refused by default); `--strict` ends the run (status 1) at the first line that is
 %   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
-%   `--max-timers=N` (pending timers at most, `inf` for no limit);
+%   `--max-timers=N` (pending timers at most, `inf` for no limit); `--max-line-bytes=N`,
+%   `--max-digits=N`, `--max-future=SECONDS` (input limits, docs/runtime.md);
 %   `--action-output=FILE` sends what program code prints to FILE instead of standard
 %   error. Exit status: 0 when the input was processed (rejected and failed lines
 %   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
@@ -227,6 +228,8 @@ main_args([Arg|Args], Files) :-
         ;   domain_error(max_timers, N)
         ),
         rtl_set_flag(max_timers, Timers), Files = Rest
+    ;   input_limit_option(Arg, Flag, Value)
+    ->  rtl_set_flag(Flag, Value), Files = Rest
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
@@ -245,6 +248,24 @@ main_args([Arg|Args], Files) :-
     ),
     main_args(Args, Rest).
 
+% --max-line-bytes=N, --max-digits=N (positive integers), --max-future=SECONDS (a number
+% >= 0), each also `inf` (docs/runtime.md, "Input limits").
+input_limit_option(Arg, Flag, Value) :-
+    input_limit_flag(Prefix, Flag),
+    atom_concat(Prefix, Text, Arg),
+    !,
+    (   Text == inf
+    ->  Value = inf
+    ;   catch(atom_number(Text, Value), _, fail),
+        rtl_ele:valid_flag_value(Flag, Value)
+    ->  true
+    ;   domain_error(input_limit(Prefix), Text)
+    ).
+
+input_limit_flag('--max-line-bytes=', max_line_bytes).
+input_limit_flag('--max-digits=', max_digits).
+input_limit_flag('--max-future=', max_future).
+
 set_stream_option(Option) :-
     nb_getval(rtl_stream_options, Options),
     nb_setval(rtl_stream_options, [Option|Options]).
@@ -256,10 +277,12 @@ usage_error(Formal) :-
     ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
     ;   Formal = domain_error(max_timers, N)
     ->  format(user_error, "error: --max-timers=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = domain_error(input_limit(Prefix), Text)
+    ->  format(user_error, "error: ~w~w: expected a positive number or inf~n", [Prefix, Text])
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--max-line-bytes=N] [--max-digits=N] [--max-future=SECONDS] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -383,30 +406,51 @@ run_buffered(In, Name, N0, Options, N) :-
     ).
 
 %   A run of event lines with a time "t" only (items a(Event, T)) is remembered for
-%   retractions in one call (rtl_seen_add_atomic/1), then processed event by event.
+%   retractions in one call (rtl_seen_add_atomic/1), then processed event by event. The run
+%   ends before an event too far in the future (rtl_future_problem/2, for the clock as it
+%   will be when the event's turn comes), which is then rejected on its own.
 
 run_items([], _, _, N, _, N).
 run_items([Item|Items], In, Name, N0, Options, N) :-
-    (   Item = a(_, _)
-    ->  atomic_run([Item|Items], Run, Rest),
-        rtl_seen_add_atomic(Run),
+    (   Item = a(_, _),
+        future_limit(Limit),
+        atomic_run([Item|Items], Limit, Run, Rest),
+        Run \== []
+    ->  rtl_seen_add_atomic(Run),
         run_atomic(Run, Rest, In, Name, N0, Options, N1)
-    ;   Item = l(Line),
-        rtl_process_line(Line, Options, Outcome),
+    ;   (   Item = a(Event, T)
+        ->  rtl_process_parsed(event(add, Event, T, T), Options, Outcome)
+        ;   Item = l(Line),
+            rtl_process_line(Line, Options, Outcome)
+        ),
         item_done(Outcome, Items, In, Name, N0, Options),
         N1 is N0 + 1,
         Rest = Items
     ),
     run_items(Rest, In, Name, N1, Options, N).
 
-atomic_run([Item|Items], Run, Rest) :-
-    (   Item = a(_, _)
+% The latest time an input event may end now (rtl_future_problem/2).
+future_limit(Limit) :-
+    rtl_flag(max_future, Max),
+    (   Max == inf
+    ->  Limit = inf
+    ;   rtl_clock(Clock),
+        get_time(Now),
+        Limit is max(Clock, Now) + Max
+    ).
+
+atomic_run([Item|Items], Limit, Run, Rest) :-
+    (   Item = a(_, T),
+        T =< Limit
     ->  Run = [Item|Run1],
-        atomic_run(Items, Run1, Rest)
+        (   Limit == inf -> Limit1 = inf
+        ;   rtl_flag(max_future, Max), Limit1 is max(Limit, T + Max)
+        ),
+        atomic_run(Items, Limit1, Run1, Rest)
     ;   Run = [],
         Rest = [Item|Items]
     ).
-atomic_run([], [], []).
+atomic_run([], _, [], []).
 
 %   The run is one block of input events (rtl_input_block/1): each event is processed by
 %   rtl_block_input/3 under its own catch/3, with its own step limit, and reported as
@@ -535,10 +579,18 @@ parsed_outcome(rule(Change, Text), Options, Outcome) :-
         ( var(Reason) -> Outcome = ok ; Outcome = rejected(Reason) )
     ;   Outcome = refused("control lines are disabled (pass --allow-control)")
     ).
+parsed_outcome(clock(Time), _, Outcome) :-
+    rtl_future_problem(Time, Reason),
+    !,
+    Outcome = rejected(Reason).
 parsed_outcome(clock(Time), _, Outcome) :-       % a heartbeat in the input (rtl_advance_clock/1)
     catch(( rtl_guarded(rtl_advance_clock(Time)), Outcome = ok ),
           Error,
           event_failure(Error, "the clock line", Outcome)).
+parsed_outcome(event(_, _, _, End), _, Outcome) :-
+    rtl_future_problem(End, Reason),
+    !,
+    Outcome = rejected(Reason).
 parsed_outcome(event(Op, Event, Start, End), _, Outcome) :-
     (   Op == add
     ->  rtl_seen_add(Event, Start, End),

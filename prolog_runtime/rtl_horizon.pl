@@ -168,7 +168,10 @@ rtl_horizon_reset :-
 %
 %   The sweep of live store Name/Arity: every partial match starting before Before moves to
 %   the current kept generation of the store (rtl_forget_kept/2), or is dropped when the
-%   store has none.
+%   store has none, or when it starts more than H + the largest window before the clock: no
+%   deletion inside the horizon can need it (such matches come from events later than the
+%   horizon; kept, they would pile up while the clock stands, after an event far in the
+%   future, and every late event would search them all).
 %
 %   Kept generations: a store's retired matches go to one of its two kept generations
 %   (`_kept_a`, `_kept_b`; the same one for every store) until the kept matches are rotated,
@@ -186,7 +189,8 @@ rtl_retire_store(M, Name, Arity, Before) :-
         ( Generation == a -> Kept = KeptA ; Kept = KeptB ),
         Head =.. [_|Args],
         KeptHead =.. [Kept|Args],               % instantiated by each clause found
-        retire(Order, M, Head, Start, Before, KeptHead)
+        forget_before(Forget),
+        retire(Order, M, Head, Start, Before, Forget, KeptHead)
     ;   forall(( clause(M:Head, true, Ref), Start < Before ), erase(Ref))
     ).
 
@@ -197,13 +201,23 @@ rtl_retire_store(M, Name, Arity, Before) :-
 % no later than the clock when it was stored: the scan stops at the first match that stays
 % (one behind it that could go is retired at a later sweep, at most the window plus the
 % delay bound after it was stored), so a sweep costs what it retires, not the store's size.
-retire(oldest_first, M, Head, Start, Before, KeptHead) :-
+retire(oldest_first, M, Head, Start, Before, Forget, KeptHead) :-
     forall(( clause(M:Head, true, Ref), ( Start < Before -> true ; !, fail ) ),
-           ( erase(Ref), assertz(M:KeptHead) )).
-retire(newest_first, M, Head, Start, Before, KeptHead) :-
+           ( erase(Ref), ( Start < Forget -> true ; assertz(M:KeptHead) ) )).
+retire(newest_first, M, Head, Start, Before, Forget, KeptHead) :-
     findall(KeptHead-Ref, ( clause(M:Head, true, Ref), Start < Before ), Retired),
     reverse(Retired, Oldest),
-    forall(member(K-Ref, Oldest), ( erase(Ref), asserta(M:K) )).
+    forall(member(K-Ref, Oldest), ( erase(Ref), ( Start < Forget -> true ; asserta(M:K) ) )).
+
+% Matches starting before Forget are dropped by a sweep, not kept (rtl_retire_store/4).
+forget_before(Forget) :-
+    rtl_horizon(H),
+    (   H == inf
+    ->  Forget = -inf
+    ;   nb_getval(rtl_clock, Clock),
+        nb_getval(rtl_largest_window, Wmax),
+        Forget is Clock - H - Wmax
+    ).
 
 %!  rtl_forget_kept(+Module, +Clock) is det.
 %
