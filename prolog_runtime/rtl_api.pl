@@ -247,7 +247,9 @@ item_event([OpText, Text, Start0, End0], Op, Event, Start, End) :- !,
     ->  rtl_input_interval(Start0, _, _, Start, End, Problem)
     ;   rtl_input_interval(_, Start0, End0, Start, End, Problem)
     ),
-    (   var(Problem)
+    (   var(Problem), rtl_future_problem(End, Future)       % (the clock before the batch)
+    ->  throw(error(invalid_time(Future), _))
+    ;   var(Problem)
     ->  true
     ;   throw(error(invalid_time(Problem), _))
     ).

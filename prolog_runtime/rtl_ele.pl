@@ -414,7 +414,7 @@ late_check(End, Clock) :-
         (   nb_current(rtl_late_sweep, Due) -> true ; Due = 64 ),
         nb_getval(late, Late),
         (   Late >= Due
-        ->  rtl_collect_garbage,
+        ->  collect_garbage(whole),
             rtl_store_size(Size),
             Next is Late + max(64, Size),
             nb_setval(rtl_late_sweep, Next)
@@ -661,6 +661,12 @@ rtl_store_size(Size) :-
 %   retraction horizon has passed (rtl_horizon.pl).
 
 rtl_collect_garbage :-
+    collect_garbage(stored_order).
+
+% Scan `stored_order`: a store kept oldest first is scanned to its first match that stays
+% (rtl_retire_store/5); `whole`: to its end, for the sweep of late events, whose matches
+% come after those of later events.
+collect_garbage(Scan) :-
     nb_getval(rtl_program, M),
     nb_getval(rtl_clock, Clock),
     rtl_flag(max_delay, Delay),
@@ -668,7 +674,7 @@ rtl_collect_garbage :-
     ->  true
     ;   forall(M:ele_store(Name, Arity, Window),
                ( Before is Clock - Window - Delay,
-                 rtl_retire_store(M, Name, Arity, Before) )),
+                 rtl_retire_store(M, Name, Arity, Before, Scan) )),
         rtl_forget_kept(M, Clock),
         forget_blockers(M, Clock),
         rtl_swept(Clock)
