@@ -401,7 +401,10 @@ rtl_future_problem(End, Problem) :-
     nb_getval(rtl_clock, Clock),
     get_time(Now),
     End > max(Clock, Now) + Max,
-    format(string(Problem), "time ~w is more than ~D seconds after the clock (max_future)", [End, Max]).
+    (   integer(Max)
+    ->  format(string(Problem), "time ~w is more than ~D seconds after the clock (max_future)", [End, Max])
+    ;   format(string(Problem), "time ~w is more than ~w seconds after the clock (max_future)", [End, Max])
+    ).
 
 % A late event counts; every `late_sweep` of them the stores are swept (the clock-driven
 % sweep never runs while only late events come: after one far in the future, their partial

@@ -444,7 +444,7 @@ def _seconds_or_inf(text, option):
         value = -1.0
     if not 0 <= value < float("inf"):
         raise click.BadParameter(f"{text!r}: expected a number of seconds >= 0 or 'inf'", param_hint=option)
-    return repr(value)
+    return str(int(value)) if value.is_integer() else repr(value)     # as `swipl OUT.pl --max-future=S` reads it
 
 
 def post_cli_query(engine, number: int, at: float, goal: str, timeout):
