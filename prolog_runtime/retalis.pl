@@ -19,7 +19,7 @@
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
-:- use_module(rtl_lines, [rtl_read_line/2, rtl_split_lines/2, rtl_utf8_line/2]).
+:- use_module(rtl_lines, [rtl_read_line/3, rtl_split_lines/2, rtl_utf8_line/2, rtl_long_line/4]).
 :- use_module(rtl_horizon, [rtl_warnings_pending/0]).
 :- reexport(rtl_time).
 :- reexport(rtl_raise).
@@ -99,7 +99,8 @@ run_declaration(Program, Goal) :-
 %   refused by default); `--strict` ends the run (status 1) at the first line that is
 %   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
 %   `--max-timers=N` (pending timers at most, `inf` for no limit); `--max-event-types=N`
-%   (event types a run takes, default `inf`: rtl_event_types.pl);
+%   (event types a run takes, default `inf`: rtl_event_types.pl); `--max-line-bytes=N`,
+%   `--max-digits=N`, `--max-future=SECONDS` (input limits, docs/runtime.md);
 %   `--action-output=FILE` sends what program code prints to FILE instead of standard
 %   error. Exit status: 0 when the input was processed (rejected and failed lines
 %   included), 1 when the run was stopped (`--strict`, `halt` in program code, standard
@@ -271,6 +272,8 @@ main_args([Arg|Args], Files) :-
         ;   domain_error(max_event_types, N)
         ),
         rtl_set_flag(max_event_types, Types), Files = Rest
+    ;   input_limit_option(Arg, Flag, Value)
+    ->  rtl_set_flag(Flag, Value), Files = Rest
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
@@ -289,6 +292,24 @@ main_args([Arg|Args], Files) :-
     ),
     main_args(Args, Rest).
 
+% --max-line-bytes=N, --max-digits=N (positive integers), --max-future=SECONDS (a number
+% >= 0), each also `inf` (docs/runtime.md, "Input limits").
+input_limit_option(Arg, Flag, Value) :-
+    input_limit_flag(Prefix, Flag),
+    atom_concat(Prefix, Text, Arg),
+    !,
+    (   Text == inf
+    ->  Value = inf
+    ;   catch(atom_number(Text, Value), _, fail),
+        rtl_ele:valid_flag_value(Flag, Value)
+    ->  true
+    ;   domain_error(input_limit(Prefix), Text)
+    ).
+
+input_limit_flag('--max-line-bytes=', max_line_bytes).
+input_limit_flag('--max-digits=', max_digits).
+input_limit_flag('--max-future=', max_future).
+
 set_stream_option(Option) :-
     nb_getval(rtl_stream_options, Options),
     nb_setval(rtl_stream_options, [Option|Options]).
@@ -302,10 +323,12 @@ usage_error(Formal) :-
     ->  format(user_error, "error: --max-timers=~w: expected a positive integer or inf~n", [N])
     ;   Formal = domain_error(max_event_types, N)
     ->  format(user_error, "error: --max-event-types=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = domain_error(input_limit(Prefix), Text)
+    ->  format(user_error, "error: ~w~w: expected a positive number or inf~n", [Prefix, Text])
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--max-event-types=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--max-event-types=N] [--max-line-bytes=N] [--max-digits=N] [--max-future=SECONDS] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_run_jsonl_file(+File) is det.
@@ -391,11 +414,11 @@ drop_output :-
     catch(close(user_output, [force(true)]), _, true).
 
 % The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
-% rtl_read_line/2, as the Python driver's loops have the runtime cut and decode theirs
-% (rtl_lines.pl, docs/runtime.md, "Event input").
+% rtl_read_line/3, as the Python driver's loops have the runtime cut and decode theirs
+% (rtl_lines.pl, docs/runtime.md, "Event input"), each line at most max_line_bytes long.
 run_stream(In, Name) :-
     stream_options(Options),
-    rtl_read_line(In, Line0),
+    read_line(In, Line0),
     without_bom(Line0, Line),
     with_output_buffer(In, with_action_output(run_lines(Line, In, Name, 1, Options))).
 
@@ -431,8 +454,12 @@ run_lines(Line, In, Name, N, Options) :-
     line_done(Outcome, In, Name, N, Options),
     N1 is N + 1,
     run_buffered(In, Name, N1, Options, N2),
-    rtl_read_line(In, Next),
+    read_line(In, Next),
     run_lines(Next, In, Name, N2, Options).
+
+read_line(In, Line) :-
+    rtl_flag(max_line_bytes, MaxBytes),
+    rtl_read_line(In, MaxBytes, Line).
 
 line_done(Outcome, In, Name, N, Options) :-
     (   Outcome == ok
@@ -457,30 +484,51 @@ run_buffered(In, Name, N0, Options, N) :-
     ).
 
 %   A run of event lines with a time "t" only (items a(Event, T)) is remembered for
-%   retractions in one call (rtl_seen_add_atomic/1), then processed event by event.
+%   retractions in one call (rtl_seen_add_atomic/1), then processed event by event. The run
+%   ends before an event too far in the future (rtl_future_problem/2, for the clock as it
+%   will be when the event's turn comes), which is then rejected on its own.
 
 run_items([], _, _, N, _, N).
 run_items([Item|Items], In, Name, N0, Options, N) :-
-    (   Item = a(_, _)
-    ->  atomic_run([Item|Items], Run, Rest),
-        rtl_seen_add_atomic(Run),
+    (   Item = a(_, _),
+        future_limit(Limit),
+        atomic_run([Item|Items], Limit, Run, Rest),
+        Run \== []
+    ->  rtl_seen_add_atomic(Run),
         run_atomic(Run, Rest, In, Name, N0, Options, N1)
-    ;   Item = l(Line),
-        rtl_process_line(Line, Options, Outcome),
+    ;   (   Item = a(Event, T)
+        ->  rtl_process_parsed(event(add, Event, T, T), Options, Outcome)
+        ;   Item = l(Line),
+            rtl_process_line(Line, Options, Outcome)
+        ),
         item_done(Outcome, Items, In, Name, N0, Options),
         N1 is N0 + 1,
         Rest = Items
     ),
     run_items(Rest, In, Name, N1, Options, N).
 
-atomic_run([Item|Items], Run, Rest) :-
-    (   Item = a(_, _)
+% The latest time an input event may end now (rtl_future_problem/2).
+future_limit(Limit) :-
+    rtl_flag(max_future, Max),
+    (   Max == inf
+    ->  Limit = inf
+    ;   rtl_clock(Clock),
+        get_time(Now),
+        Limit is max(Clock, Now) + Max
+    ).
+
+atomic_run([Item|Items], Limit, Run, Rest) :-
+    (   Item = a(_, T),
+        T =< Limit
     ->  Run = [Item|Run1],
-        atomic_run(Items, Run1, Rest)
+        (   Limit == inf -> Limit1 = inf
+        ;   rtl_flag(max_future, Max), Limit1 is max(Limit, T + Max)
+        ),
+        atomic_run(Items, Limit1, Run1, Rest)
     ;   Run = [],
         Rest = [Item|Items]
     ).
-atomic_run([], [], []).
+atomic_run([], _, [], []).
 
 %   The run is one block of input events (rtl_input_block/1): each event is processed by
 %   rtl_block_input/3 under its own catch/3, with its own step limit, and reported as
@@ -609,10 +657,18 @@ parsed_outcome(rule(Change, Text), Options, Outcome) :-
         ( var(Reason) -> Outcome = ok ; Outcome = rejected(Reason) )
     ;   Outcome = refused("control lines are disabled (pass --allow-control)")
     ).
+parsed_outcome(clock(Time), _, Outcome) :-
+    rtl_future_problem(Time, Reason),
+    !,
+    Outcome = rejected(Reason).
 parsed_outcome(clock(Time), _, Outcome) :-       % a heartbeat in the input (rtl_advance_clock/1)
     catch(( rtl_guarded(rtl_advance_clock(Time)), Outcome = ok ),
           Error,
           event_failure(Error, "the clock line", Outcome)).
+parsed_outcome(event(_, _, _, End), _, Outcome) :-
+    rtl_future_problem(End, Reason),
+    !,
+    Outcome = rejected(Reason).
 parsed_outcome(event(Op, Event, Start, End), _, Outcome) :-
     (   Op == add
     ->  rtl_seen_add(Event, Start, End),
@@ -724,8 +780,9 @@ rtl_feed_lines(Text, First, Options, Output) :-
     rtl_output_to(buffer),
     rtl_split_lines(Text, Lines0),
     (   memberchk(bytes(true), Options)
-    ->  maplist(rtl_utf8_line, Lines0, Lines1)
-    ;   Lines1 = Lines0
+    ->  rtl_flag(max_line_bytes, MaxBytes),
+        maplist(byte_line(MaxBytes), Lines0, Lines1)
+    ;   Lines1 = Lines0                         % (rtl_parse_event_line/3 checks the length)
     ),
     (   First =:= 1, Lines1 = [L0|Ls]
     ->  without_bom(L0, L1), Lines = [L1|Ls]
@@ -737,6 +794,13 @@ rtl_feed_lines(Text, First, Options, Output) :-
     exclude(==(""), All0, All),
     atomic_list_concat(All, "\n", Joined),
     (   All == [] -> Output = "" ; string_concat(Joined, "\n", Output) ).
+
+% A line of a batch of bytes as rtl_read_line/3 reads it: too long before it is decoded.
+byte_line(MaxBytes, Line0, Line) :-
+    (   rtl_long_line(Line0, true, MaxBytes, TooLong)
+    ->  Line = TooLong
+    ;   rtl_utf8_line(Line0, Line)
+    ).
 
 feed_lines([], _, _, []).
 feed_lines([Line|Lines], N, Options, Rejections) :-

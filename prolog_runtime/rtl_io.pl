@@ -28,7 +28,7 @@ also names the reason of a rejection. Without the C reader, every line takes the
 */
 
 :- use_module(rtl_time).
-:- use_module(rtl_lines, [rtl_nul_problem/2]).
+:- use_module(rtl_lines, [rtl_nul_problem/2, rtl_digits_problem/3, rtl_long_line/4]).
 :- use_module(rtl_event_types, [rtl_event_text_refused/2, rtl_event_type_refused/2]).
 
 :- dynamic fast_reader/0, fast_writer/0.
@@ -41,7 +41,7 @@ load_fast_reader :-
     atomic_list_concat([Dir, '/foreign/rtl_fastread'], Lib),
     (   absolute_file_name(Lib, _, [file_type(executable), access(read), file_errors(fail)]),
         catch(load_foreign_library(Lib), _, fail),     % (use_foreign_library/1 defers the load)
-        current_predicate(rtl_fast_event_line/7)
+        current_predicate(rtl_fast_event_line/8)
     ->  retractall(fast_reader),
         assertz(fast_reader),
         fast_writer_present
@@ -65,7 +65,7 @@ fast_writer_present :-
 %   For tests comparing the two.
 
 rtl_use_fast_reader(true) :-
-    (   current_predicate(rtl_fast_event_line/7)
+    (   current_predicate(rtl_fast_event_line/8)
     ->  retractall(fast_reader),
         assertz(fast_reader),
         fast_writer_present
@@ -83,8 +83,10 @@ rtl_use_fast_reader(false) :-
 %   `{"op": "add_rule", "rule": TEXT}` and `{"op": "delete_rule", "rule": LABEL}`,
 %   `clock(Time)` for a clock line `{"op": "clock", "t": T}` (a heartbeat), or
 %   `error(Reason)` with Reason a string saying what is wrong with the line (one holding a
-%   NUL byte is). Line may also be `not_text(Reason)`, a line that is not UTF-8 text
-%   (rtl_lines.pl), which is `error(Reason)`.
+%   NUL byte is). Line may also be `not_text(Reason)`, a line that is not UTF-8 text,
+%   or `too_long(Reason)`, a line longer than the flag `max_line_bytes` (rtl_lines.pl):
+%   either is `error(Reason)`; so is a Line longer than that. A line with a run of more than `max_digits` digits
+%   (rtl_digits_problem/3) is rejected before anything of it is read.
 %
 %   The line must be one JSON object and nothing else; the event a ground term and nothing
 %   else (a final full stop is allowed), nested at most MaxDepth levels deep (default
@@ -96,9 +98,17 @@ rtl_parse_event_line(Line, Parsed) :-
 
 rtl_parse_event_line(not_text(Reason), _, Parsed) :- !,
     Parsed = error(Reason).
+rtl_parse_event_line(too_long(Reason), _, Parsed) :- !,
+    Parsed = error(Reason).
+rtl_parse_event_line(Line, _, Parsed) :-        % a line given whole (rtl_feed_lines/4)
+    input_limit(max_line_bytes, MaxBytes),
+    rtl_long_line(Line, false, MaxBytes, too_long(Reason)),
+    !,
+    Parsed = error(Reason).
 rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     fast_reader,
-    rtl_fast_event_line(Line, MaxDepth, Event, T, S, E, Op),
+    c_limit(max_digits, MaxDigits),
+    rtl_fast_event_line(Line, MaxDepth, MaxDigits, Event, T, S, E, Op),
     (   number(T), var(S), var(E)               % "t": a finite number (the C reader checks)
     ->  Start = T, End = T
     ;   rtl_input_interval(T, S, E, Start, End, Problem),
@@ -113,7 +123,10 @@ rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     ->  Depth = MaxDepth
     ;   Depth = short
     ),
+    input_limit(max_digits, MaxDigits),
     (   rtl_nul_problem(Line, Reason)          % first: split_string/4 takes NUL for layout
+    ->  Parsed = error(Reason)
+    ;   rtl_digits_problem(Line, MaxDigits, Reason)
     ->  Parsed = error(Reason)
     ;   blank_line(Line)
     ->  Parsed = blank
@@ -144,8 +157,23 @@ rtl_parse_event_line(Line, MaxDepth, Parsed) :-
 
 rtl_buffered_lines(Stream, MaxDepth, Items) :-
     (   fast_reader
-    ->  rtl_fast_read_lines(Stream, 4096, MaxDepth, Items)
+    ->  c_limit(max_digits, MaxDigits),
+        c_limit(max_line_bytes, MaxBytes),
+        rtl_fast_read_lines(Stream, 4096, MaxDepth, MaxDigits, MaxBytes, Items)
     ;   Items = []
+    ).
+
+% The value of a limit flag for the C reader: -1 for none (`inf`).
+c_limit(Flag, Limit) :-
+    input_limit(Flag, Value),
+    ( Value == inf -> Limit = -1 ; Limit = Value ).
+
+% An input limit is a flag of the runtime (rtl_ele.pl); this module loaded without it (a
+% test of the readers) reads without limits.
+input_limit(Flag, Value) :-
+    (   current_predicate(rtl_ele:rtl_flag/2)
+    ->  rtl_ele:rtl_flag(Flag, Value)
+    ;   Value = inf
     ).
 
 rule_change("add_rule", add).
@@ -289,16 +317,49 @@ number_run([C|Cs], [C|Run], Rest) :-
 number_run(Cs, [], Cs).
 
 json_pair(Key=Value0, KeyString-Value) :-
-    atom_string(Key, KeyString),
+    atom_string(Key, KeyString0),
+    json_text(KeyString0, KeyString),
     json_value(Value0, Value).
 
 json_value(@(true), true) :- !.
 json_value(@(false), false) :- !.
 json_value(@(null), null) :- !.
+json_value(S0, S) :- string(S0), !, json_text(S0, S).
+json_value(L0, L) :- is_list(L0), !, maplist(json_value, L0, L).
 json_value(V, V).
+
+%   json_text(+Read, -Text) is det.
+%
+%   A string as library(http/json) reads it, with each UTF-16 surrogate pair written as
+%   two escapes (`\\ud83d\\udd25`, what Python's json.dumps writes for a character beyond
+%   U+FFFF) made the one character it stands for, as the same text in UTF-8 reads. A lone
+%   surrogate is no character: the line is rejected (`invalid JSON (a lone surrogate
+%   \\uD83D)`).
+
+json_text(Read, Text) :-
+    string_codes(Read, Codes0),                 % (sub_string/5 cannot take a surrogate)
+    (   member(C, Codes0), surrogate(C)
+    ->  paired_surrogates(Codes0, Codes),
+        string_codes(Text, Codes)
+    ;   Text = Read
+    ).
+
+surrogate(C) :- C >= 0xD800, C =< 0xDFFF.
+
+paired_surrogates([], []).
+paired_surrogates([C|Cs0], [Char|Cs]) :-
+    (   \+ surrogate(C)
+    ->  Char = C, Rest = Cs0
+    ;   C =< 0xDBFF, Cs0 = [Low|Rest], Low >= 0xDC00, Low =< 0xDFFF
+    ->  Char is 0x10000 + ((C - 0xD800) << 10) + (Low - 0xDC00)
+    ;   throw(error(syntax_error(json(lone_surrogate(C))), _))
+    ),
+    paired_surrogates(Rest, Cs).
 
 json_error_reason(syntax_error(json(text_after_the_object)), Reason) :- !,
     Reason = "invalid JSON (text after the object)".
+json_error_reason(syntax_error(json(lone_surrogate(Code))), Reason) :- !,
+    format(string(Reason), "invalid JSON (a lone surrogate \\u~|~`0t~16R~4+)", [Code]).
 json_error_reason(syntax_error(json(What)), Reason) :- !,
     format(string(Reason), "invalid JSON (~w)", [What]).
 json_error_reason(syntax_error(What), Reason) :- !,

@@ -81,11 +81,21 @@ rtl_input_interval(T, S, E, Start, End, Problem) :-
 
 time_problem(Key, T, Reason) :-
     (   integer(T)
-    ->  fail
+    ->  beyond_a_float(Key, T, Reason)
     ;   float(T), T =:= T, abs(T) =\= inf
     ->  fail
     ;   T = [Secs, NSecs], integer(Secs), integer(NSecs)
-    ->  \+ between(0, 999999999, NSecs),
-        format(string(Reason), "\"~s\": nanoseconds must be in [0, 1e9), not ~w", [Key, NSecs])
+    ->  (   beyond_a_float(Key, Secs, Reason)
+        ->  true
+        ;   \+ between(0, 999999999, NSecs),
+            format(string(Reason), "\"~s\": nanoseconds must be in [0, 1e9), not ~w", [Key, NSecs])
+        )
     ;   format(string(Reason), "\"~s\" must be a finite number of seconds or [secs, nsecs]", [Key])
     ).
+
+% An integer number of seconds beyond the largest float (the clock and the windows are
+% computed in floats: such a time would raise float_overflow in every later event).
+beyond_a_float(Key, Seconds, Reason) :-
+    Seconds =\= 0,
+    msb(abs(Seconds)) >= 1024,
+    format(string(Reason), "\"~s\" must be a finite number of seconds or [secs, nsecs] (beyond a float)", [Key]).

@@ -195,17 +195,20 @@ class StateDir:
         return records
 
 
-def _binary_batches(stream, offset: int, first_line: int, batch_size: int):
+def _binary_batches(stream, offset: int, first_line: int, batch_size: int, limit: Optional[int] = None):
     """(first line number, lines, bytes of the batch, byte offset after it) from `offset` of a
     file opened in binary; the lines as bytes without their newlines, made text as `retalisc
-    run` makes them (`event_lines.batch_payload`)."""
+    run` makes them (`event_lines.batch_payload`), each at most `limit` bytes long
+    (`event_lines.read_lines`)."""
+    from .event_lines import read_lines
+
     stream.seek(offset)
     position, number = offset, first_line
     batch, start, size = [], first_line, 0
-    for raw in stream:
-        position += len(raw)
-        size += len(raw)
-        batch.append(raw[:-1] if raw.endswith(b"\n") else raw)
+    for line, taken in read_lines(stream, limit):
+        position += taken
+        size += taken
+        batch.append(line)
         number += 1
         if len(batch) >= batch_size:
             yield start, batch, size, position
@@ -365,7 +368,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     import time
 
     from .bridge import PrologError
-    from .event_lines import batch_payload
+    from .event_lines import batch_payload, max_line_bytes
     from .run import Progress, RunStopped, end_the_input, output_full, print_summary, settle_output
     from .signals import SignalStop, SignalStops
 
@@ -388,11 +391,11 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             path.unlink(missing_ok=True)
     if live:
         source = None
-        batches = _journaled_batches(journal, restored, line, batch_size)
+        batches = _journaled_batches(journal, restored, line, batch_size, max_line_bytes(engine))
         display = Progress(stream=sys.stderr, total=None, enabled=False)
     else:
         source = open(events_path, "rb")
-        batches = _binary_batches(source, offset, line, batch_size)
+        batches = _binary_batches(source, offset, line, batch_size, max_line_bytes(engine))
         display = Progress(stream=sys.stderr, total=os.path.getsize(events_path), enabled=progress)
     status = 0
     name = "<stdin>" if live else events
@@ -477,7 +480,8 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     return stops.status(status)
 
 
-def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int):
+def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int,
+                       limit: Optional[int] = None):
     """As `_binary_batches`, for standard input with a journal: first the journaled lines read
     after the restored snapshot (replayed), then the lines of standard input as they arrive,
     each batch appended to the journal before it is processed. The journal's segment is that
@@ -495,7 +499,7 @@ def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_s
             lines = replayed[start:start + batch_size]
             yield line, lines, 0, 0
             line += len(lines)
-    for _, lines, size in _live_batches(sys.stdin.fileno(), batch_size):
+    for _, lines, size in _live_batches(sys.stdin.fileno(), batch_size, limit):
         journal.append(lines)
         yield line, lines, size, 0
         line += len(lines)

@@ -22,8 +22,9 @@ _LABEL = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
 
 def swipl_arguments(events: str, rules: List[str], echo_input: bool = False, max_delay: Optional[float] = None,
                     retraction_horizon: Optional[float] = None, max_steps="1000000", max_timers="100000",
-                    max_event_types="inf", drop_pending: bool = False, flush_timers: bool = False, allow_control: bool = False,
-                    strict: bool = False) -> Optional[List[str]]:
+                    max_event_types="inf", drop_pending: bool = False, flush_timers: bool = False,
+                    allow_control: bool = False, strict: bool = False,
+                    limits: Optional[dict] = None) -> Optional[List[str]]:
     """The arguments after `swipl PROGRAM.pl` that run as `retalisc run` does with these
     options (prolog_runtime/retalis.pl, rtl_main/0), or None when the runtime's command line
     cannot say them: an events file name the runtime would read as an option, or not UTF-8,
@@ -46,6 +47,8 @@ def swipl_arguments(events: str, rules: List[str], echo_input: bool = False, max
     arguments += [f"--max-steps={max_steps}", f"--max-timers={max_timers}"]
     if max_event_types != "inf":
         arguments.append(f"--max-event-types={max_event_types}")
+    for flag, value in (limits or {}).items():      # the input limits given (max_line_bytes: --max-line-bytes)
+        arguments.append(f"--{flag.replace('_', '-')}={value}")
     if drop_pending:
         arguments.append("--drop-pending")
     if flush_timers:
