@@ -263,3 +263,27 @@ def test_directives_after_one_that_calls_the_runtime_keep_their_order(tmp_path, 
     assert run.returncode == 0, run.stderr
     assert run.stdout.splitlines() == ["first", "third", "fourth", '{"event": "c(1)", "start": 1, "end": 1}',
                                        '{"event": "c(1)", "start": 1, "end": 1, "consumer": "out"}']
+
+
+# ---- ETALIS actions after the pattern -------------------------------------------------------
+
+@pytest.mark.parametrize("after, on_head", [
+    ("d(X) <- a(X) seq b(X) do new_event(e(X)).\n", "d(X) do new_event(e(X)) <- a(X) seq b(X).\n"),
+    ("l 'rule:' d(X) <- a(X) where X > 1 'do' (f(X), g).\n", "l 'rule:' d(X) do (f(X), g) <- a(X) where X > 1.\n"),
+    ("l : d(X) <- (a(X) seq b(X) timestamp t1(T)) 'DO' f(T).\n", "l : d(X) do f(T) <- (a(X) seq b(X) timestamp t1(T)).\n"),
+])
+def test_an_action_after_the_pattern_is_the_action_on_the_head(after, on_head):
+    """ETALIS's parser gives `Head <- P do A` and `Head do A <- P` one meaning: so does retalisc."""
+    statics = ":- dynamic f/1, g/0.\nf(_).\ng.\n"
+    compiled = compile_source(statics + after, "x.rtl").prolog.replace(after.strip(), on_head.strip())
+    assert compiled == compile_source(statics + on_head, "x.rtl").prolog
+
+
+@pytest.mark.parametrize("source, column, words", [
+    ("h(X) do f <- a(X) do g.\n", 14, "a rule has one action"),
+    ("h(X) <- a(X) seq (b(X) do g).\n", 19, "'do' cannot stand inside a pattern"),
+])
+def test_misplaced_actions_are_located_errors(source, column, words):
+    with pytest.raises(RetalisSyntaxError, match=words) as info:
+        compile_source(source, "bad.rtl")
+    assert (info.value.span.line, info.value.span.column) == (1, column)

@@ -431,6 +431,13 @@ def _event_rule(term: Compound, clause: ReadClause, label_term: Optional[Term]) 
     action = None
     if _is(head, "do", 2):
         head, action = head.args
+    if _is(body, "do", 2):
+        # ETALIS writes the action after the pattern too: `Head <- Pattern do Action` (its
+        # parser gives both forms the same meaning: the action runs when the rule fires)
+        if action is not None:
+            raise RetalisSyntaxError("a rule has one action: Head do Action <- Pattern or Head <- Pattern do "
+                                     "Action, not both", span_of(body) or clause.span)
+        body, action = body.args
     head = _strip_time(head)
     if _is(head, ":", 2):
         raise RetalisSyntaxError("the head of an event rule cannot be Module:Event; a label is written "
@@ -621,7 +628,8 @@ _NOT_PATTERNS = {
     (":-", 1): "a pattern is not a directive",
     ("?-", 1): "a pattern is not a directive",
     ("-->", 2): "a pattern is not a grammar rule",
-    ("do", 2): "an action is written on the head: Head do Action <- Pattern",
+    ("do", 2): "an action is written on the head or after the whole pattern: Head do Action <- Pattern or "
+               "Head <- Pattern do Action",
     ("rule:", 2): "a rule label is written before the head: label 'rule:' Head <- Pattern",
 }
 
