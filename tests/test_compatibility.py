@@ -86,6 +86,40 @@ def test_compile_event_file_that_includes_itself(tmp_path):
         compile_file(str(tmp_path / "a.txt"))
 
 
+RELEASE_PATH = "/home/nao/catkin_ws/src/retalis/application_source/eventRules.txt"
+
+
+def test_the_2015_absolute_path_falls_back_to_the_file_beside_the_goal_file(tmp_path):
+    """The NAO goal file as the release published it: its rules by an absolute path on the
+    author's machine. The eventRules.txt beside it is read, with a warning naming both."""
+    nao = ROOT / "examples" / "nao"
+    (tmp_path / "eventRules.txt").write_text((nao / "eventRules.txt").read_text())
+    goals = (nao / "goalPredicates.txt").read_text()
+    assert goals.startswith("compile_event_file('eventRules.txt')\n")
+    program = tmp_path / "goalPredicates.txt"
+    program.write_text(goals.replace("'eventRules.txt'", f"'{RELEASE_PATH}'", 1))
+    published, edited = compile_file(str(program)), compile_file(str(nao / "goalPredicates.txt"))
+    assert [r.source for r in published.unit.program.event_rules] == [r.source for r in edited.unit.program.event_rules]
+    assert {r.span.file for r in published.unit.program.event_rules} == {str(tmp_path / "eventRules.txt")}
+    assert published.warnings[0] == (f"{program}:1:1: warning: compile_event_file: {RELEASE_PATH} does not exist; "
+                                     f"reading {tmp_path / 'eventRules.txt'}, the file of that name beside {program}")
+    run = retalisc("check", program)
+    assert run.returncode == 0 and f"{RELEASE_PATH} does not exist" in run.stderr
+
+
+def test_an_absolute_path_that_exists_is_read_and_one_missing_everywhere_is_an_error(tmp_path):
+    (tmp_path / "rules").mkdir()
+    (tmp_path / "rules" / "eventRules.txt").write_text("c(X) <- a(X).\n")
+    (tmp_path / "eventRules.txt").write_text("d(X) <- a(X).\n")
+    program = tmp_path / "goals.txt"
+    program.write_text(f"compile_event_file('{tmp_path / 'rules' / 'eventRules.txt'}')\n")
+    result = compile_file(str(program))
+    assert [r.head.name for r in result.unit.program.event_rules] == ["c"] and result.warnings == []
+    program.write_text(f"compile_event_file('{RELEASE_PATH[:-4]}_other.txt')\n")
+    with pytest.raises(RetalisSyntaxError, match="cannot read /home/nao/"):
+        compile_file(str(program))
+
+
 # ---- directives that call the runtime ------------------------------------------------------
 
 DIRECTIVES = """c(X) <- a(X) seq b(X).

@@ -129,7 +129,7 @@ class EventRule:
     span: Span
     source: str
     label: Optional[str] = None
-    action: Optional[Term] = None   # `Head do Action <- Pattern`
+    action: Optional[Term] = None   # `Head do Action <- Pattern` or `Head <- Pattern do Action`
     properties: dict = field(default_factory=dict)
     synchronized: Optional[Compound] = None   # `synchronized(E, Q, SyncConds)` head
     subrules: List["EventRule"] = field(default_factory=list)   # ETALIS subpatterns `(H <- P)` in the pattern
@@ -184,6 +184,8 @@ class Program:
     text: str = ""
     # the files its includes read, in order, with the text read (the compile cache checks them)
     included: List[Tuple[str, str]] = field(default_factory=list)
+    # warnings about how it was read (`file:line:col: warning: ...`), shown by check and compile
+    notes: List[str] = field(default_factory=list)
 
     @property
     def event_rules(self) -> List[EventRule]:
@@ -224,20 +226,27 @@ def parse_program(text: str, file: str) -> Program:
     per paragraph (`goalPredicates.txt`), and `compile_event_file(Path)`, which reads the
     clauses of Path (relative to the file that names it) in its place."""
     included: List[Tuple[str, str]] = []
-    program = build_program(_read_with_includes(text, file, [file], included), file, text)
+    notes: List[str] = []
+    program = build_program(_read_with_includes(text, file, [file], included, notes), file, text)
     program.included = included
+    program.notes = notes
     return program
 
 
 def _read_with_includes(text: str, file: str, loading: List[str],
-                        included: List[Tuple[str, str]]) -> List[ReadClause]:
+                        included: List[Tuple[str, str]], notes: List[str]) -> List[ReadClause]:
     clauses = []
     for clause in read_goal_lines(text, file):
         path = _included_file(clause.term)
         if path is None:
             clauses.append(clause)
             continue
-        target = _resolve_include(path, file, clause.span)
+        target = _resolve_include(path, file)
+        beside = _beside(target, file)
+        if beside is not None:
+            notes.append(f"{clause.span}: warning: {_include_name(clause.term)}: {target} does not exist; reading "
+                         f"{beside}, the file of that name beside {file}")
+            target = beside
         if str(target) in loading:
             raise RetalisSyntaxError(f"{_include_name(clause.term)}: {path} is already being read (it includes itself)",
                                      clause.span)
@@ -248,7 +257,7 @@ def _read_with_includes(text: str, file: str, loading: List[str],
             raise RetalisSyntaxError(f"{_include_name(clause.term)}: cannot read {path} ({target}): {reason}",
                                      clause.span) from None
         included.append((str(target), text_read))
-        clauses.extend(_read_with_includes(text_read, str(target), loading + [str(target)], included))
+        clauses.extend(_read_with_includes(text_read, str(target), loading + [str(target)], included, notes))
     return clauses
 
 
@@ -272,9 +281,22 @@ def _include_name(term: Term) -> str:
     return (term.args[0] if _is(term, ":-", 1) else term).name
 
 
-def _resolve_include(path: str, file: str, span: Span) -> Path:
-    base = Path(file).parent if file and not file.startswith("<") else Path.cwd()
-    return (base / path) if not Path(path).is_absolute() else Path(path)
+def _resolve_include(path: str, file: str) -> Path:
+    return (_directory_of(file) / path) if not Path(path).is_absolute() else Path(path)
+
+
+def _directory_of(file: str) -> Path:
+    return Path(file).parent if file and not file.startswith("<") else Path.cwd()
+
+
+def _beside(target: Path, file: str) -> Optional[Path]:
+    """The Retalis 2015 goal file names its rules by an absolute path on the author's machine
+    (`compile_event_file('/home/<user>/catkin_ws/.../eventRules.txt')`): when that path is
+    missing, the file of the same name beside the file that names it, if there is one."""
+    if not target.is_absolute() or target.exists():
+        return None
+    beside = _directory_of(file) / target.name
+    return beside if beside.is_file() and beside != target else None
 
 
 # A paragraph: text between blank lines.
