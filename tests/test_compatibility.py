@@ -321,3 +321,35 @@ def test_misplaced_actions_are_located_errors(source, column, words):
     with pytest.raises(RetalisSyntaxError, match=words) as info:
         compile_source(source, "bad.rtl")
     assert (info.value.span.line, info.value.span.column) == (1, column)
+
+
+# ---- ETALIS's prolog(Goal) steps and library predicates -------------------------------------
+
+def test_prolog_steps_of_a_sequence_are_conditions():
+    """ETALIS's `P seq prolog(G)` and `prolog(G) seq P` call G when P is detected: `P where G`."""
+    source = ("low(M) <- a(X) seq b(Y) 'seq' prolog(min(X, Y, M)).\n"
+              "high(M) <- prolog(max(X, Y, M)) seq (a(X) seq b(Y)).\n")
+    assert _lines(source, [("a(3)", 1), ("b(2)", 2)]) == [("low(2)", 1, 2), ("high(3)", 1, 2)]
+
+
+@pytest.mark.parametrize("source, column, words", [
+    ("h <- a and prolog(true).\n", 12, "prolog\\(Goal\\) is a step of a sequence"),
+    ("h <- prolog(true) seq prolog(true).\n", 6, "prolog\\(Goal\\) needs an event pattern beside it"),
+])
+def test_prolog_steps_elsewhere_are_located_errors(source, column, words):
+    with pytest.raises(RetalisSyntaxError, match=words) as info:
+        compile_source(source, "bad.rtl")
+    assert (info.value.span.line, info.value.span.column) == (1, column)
+
+
+def test_an_undefined_predicate_in_a_prolog_step_is_a_warning_and_a_reported_error(tmp_path):
+    """It failed silently before: `prolog(...)` was read as an event that never occurs."""
+    program = tmp_path / "p.event"
+    program.write_text("g(Y) <- a(X) seq prolog(no_such(X, Y)).\nok(X) <- b(X).\n")
+    assert any("this condition calls no_such/2" in w for w in compile_source(program.read_text(), str(program)).warnings)
+    events = tmp_path / "events.jsonl"
+    events.write_text('{"event": "a(1)", "t": 1}\n{"event": "a(2)", "t": 2}\n{"event": "b(3)", "t": 3}\n')
+    run = retalisc("run", program, "--events", events)
+    assert f"{events}:1: error: " in run.stderr and "no_such/2" in run.stderr
+    assert f"{events}:2: error: " in run.stderr
+    assert run.stdout.splitlines() == ['{"event": "ok(3)", "start": 3, "end": 3}'] and "2 failed" in run.stderr

@@ -554,12 +554,22 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                                      where)
         if term.name == "not":
             raise RetalisSyntaxError("negation is written not(N).[P1, P2]: no N between P1 and P2", where)
+        if term.arity == 1 and term.name == "prolog":
+            raise RetalisSyntaxError("prolog(Goal) is a step of a sequence, after or before a pattern: "
+                                     "P seq prolog(Goal) (it means P where Goal)", where)
         if term.arity == 2 and term.name == "seq" and _is(term.args[1], "star_times", 1):
             repeated = to_pattern(term.args[1].args[0], span)
             return Binary("seq", to_pattern(term.args[0], span),
                           Aggregate(Atom("count"), repeated, Var(f"StarTimes_{next(_STAR_COUNTER)}"),
                                     span_of(term.args[1]) or where, True),
                           where)
+        if term.arity == 2 and term.name == "seq" and any(_is(side, "prolog", 1) for side in term.args):
+            # ETALIS: `P seq prolog(Goal)` (and `prolog(Goal) seq P`) calls Goal when P is detected
+            left, right = term.args
+            goal, pattern = (right, left) if _is(right, "prolog", 1) else (left, right)
+            if _is(pattern, "prolog", 1):
+                raise RetalisSyntaxError("prolog(Goal) needs an event pattern beside it: P seq prolog(Goal)", where)
+            return Where(to_pattern(pattern, span), goal.args[0], where)
         if term.arity == 2 and term.name in BINARY_OPERATORS:
             return Binary(term.name, to_pattern(term.args[0], span), to_pattern(term.args[1], span), where)
         if term.arity == 2 and term.name == "where":
