@@ -22,10 +22,11 @@ from .terms import Atom, Compound, Number, Span, Term, Var, indicator, list_item
 
 Indicator = Tuple[str, int]
 
-#: Builtins allowed in rule bodies: evaluated in place, left to right, like Prolog does.
+#: Builtins allowed in rule bodies: evaluated where their arguments are bound (the aq_join_order
+#: pass places them), like XSB does.
 BUILTINS: Set[Indicator] = {
     ("<", 2), (">", 2), ("=<", 2), (">=", 2), ("=:=", 2), ("=\\=", 2),
-    ("is", 2), ("=", 2), ("==", 2), ("\\==", 2), ("true", 0),
+    ("is", 2), ("=", 2), ("\\=", 2), ("==", 2), ("\\==", 2), ("true", 0),
 }
 
 #: Constructs that make a program non-definite, with the reason given to the user.
@@ -36,7 +37,6 @@ REJECTED: Dict[Indicator, str] = {
     (";", 2): "disjunction (;) is not allowed: write one rule per alternative",
     ("->", 2): "if-then-else (->) is not allowed in a definite program",
     ("*->", 2): "soft-cut (*->) is not allowed in a definite program",
-    ("\\=", 2): "\\= is negation of unification and not definite",
     ("call", 1): "meta-calls are not allowed in a definite program",
     ("findall", 3): "findall/3 is not allowed in a definite program",
     ("forall", 2): "forall/2 is not allowed in a definite program",
