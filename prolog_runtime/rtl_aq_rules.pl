@@ -11,7 +11,7 @@ is checked here before anything of it is installed:
 
   - its body is a conjunction of literals of the program's predicates (those the generated
     program lists in '$aq_kind'/2, or the head's own predicate) and of the definite builtins
-    (comparison, `is`, `=`, `\=`, `==`, `\==`, `true`), or `\+` of a builtin.  Nothing else can
+    (comparison, term order, `is`, `=`, `\=`, `==`, `\==`, `true`), or `\+` of a builtin.  Nothing else can
     run: no meta-call, no side effect, no library predicate.  This is stricter than
     rtl_sandbox.pl (which lets safe library predicates through), because a rule body of an
     active query is a definite program;
@@ -39,6 +39,10 @@ builtin(_ = _).
 builtin(_ \= _).
 builtin(_ == _).
 builtin(_ \== _).
+builtin(_ @< _).
+builtin(_ @> _).
+builtin(_ @=< _).
+builtin(_ @>= _).
 builtin(true).
 
 %!  aq_rule_check(+Rule, -Literals) is det.

@@ -41,7 +41,7 @@ from .unit import AqUnit
 name = "aq_join_order"
 
 MAX_HEAD_VARS = 4
-_ORDER_SENSITIVE = {"==", "\\==", "\\=", "\\+"}
+_ORDER_SENSITIVE = {"==", "\\==", "\\=", "\\+", "@<", "@>", "@=<", "@>="}
 
 
 def _vars(term) -> Set[str]:
