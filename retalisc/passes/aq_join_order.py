@@ -75,11 +75,11 @@ def place_builtins(rule: Rule) -> List[Literal]:
     placed, waiting = _placed(rule.body, set(), set())
     if waiting:
         # ready only once the call binds head variables: where they first make it ready
-        placed, waiting = _placed(rule.body, {id(lit) for lit in waiting}, _vars(rule.head))
+        placed, waiting = _placed(rule.body, {id(lit) for lit, _ in waiting}, _vars(rule.head))
     for lit, bound in waiting:
         unbound = sorted(_needed(lit) - bound)
         raise program_error(
-            f"{write_term(lit.term, 999)}: no order of this body binds {', '.join(unbound)} before the test "
+            f"{write_term(lit.term, 999)}: no order of this body binds {', '.join(unbound)} before this goal "
             f"(neither the head nor a literal of the body binds {'it' if len(unbound) == 1 else 'them'}): "
             "it would raise an instantiation error", lit.term, rule.span)
     return placed
