@@ -353,3 +353,14 @@ def test_an_undefined_predicate_in_a_prolog_step_is_a_warning_and_a_reported_err
     assert f"{events}:1: error: " in run.stderr and "no_such/2" in run.stderr
     assert f"{events}:2: error: " in run.stderr
     assert run.stdout.splitlines() == ['{"event": "ok(3)", "start": 3, "end": 3}'] and "2 failed" in run.stderr
+
+
+def test_etalis_library_predicates_are_callable_from_rules_added_at_run_time():
+    """Added rules are untrusted (the sandbox checks what they call): the library is allowed."""
+    engine = Engine.from_source("start <- go.\n", "lib.rtl")
+    engine.add_rules("late(D) <- seen(T) where (less_datime(T, datime(2020,1,2,0,0,0)), "
+                     "datime_plus_sec(T, 60, D), is_datime(D), equal_datime(D, D), "
+                     "between_datime(T, datime(2019,1,1,0,0,0), D), datime_minus_sec(D, 60, T)).\n")
+    assert [o.event for o in engine.feed_batch([("seen(datime(2020,1,1,23,59,30))", 1),
+                                                ("seen(datime(2020,1,3,0,0,0))", 2)])] == \
+        ["late(datime(2020,1,2,0,0,30))"]
