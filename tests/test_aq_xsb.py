@@ -6,10 +6,9 @@ arguments are bound, and the normalisation of disjunction and if-then-else."""
 from __future__ import annotations
 
 import json
-import os
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 from click.testing import CliRunner
 
@@ -18,7 +17,8 @@ from retalisc.compiler import AqOptions, compile_source
 from retalisc.frontend.definite import read_definite_program
 from retalisc.passes.aq_normalise import normalise
 from retalisc.frontend.terms import to_prolog
-from test_aq_support import run_all
+from test_aq_join import check as check_against_swi
+from test_aq_negation import SETTINGS
 
 
 def run_aq(tmp_path, program: str, script: str, mode: str = "tabled"):
@@ -129,11 +129,16 @@ def test_too_many_alternatives_is_a_located_error():
     ("e(X), assertz(e(2))", "side effects (assertz)"),
 ])
 def test_non_definite_bodies_are_refused_with_a_location(body, message):
-    source = f"e(1).\np(X) :- {body}.\n"
+    assert_refused(f"e(1).\np(X) :- {body}.\n", "p.pl:2:", message)
+
+
+def assert_refused(source: str, where: str, message: str) -> None:
+    """The compiler refuses program `p.pl` with an error at `where` (`p.pl:L:C: error: `, as
+    `retalisc aq` prints it) that says `message`."""
     with pytest.raises(Exception) as info:
         compile_source(source, "p.pl", active_queries=AqOptions("tabled"))
     text = info.value.render(source)
-    assert text.startswith("p.pl:2:") and message in text, text
+    assert text.startswith(where) and message in text, text
 
 
 # ---- directives -----------------------------------------------------------------------------
@@ -147,11 +152,7 @@ def test_non_definite_bodies_are_refused_with_a_location(body, message):
     (":- initialization(main).", "other directives run code"),
 ])
 def test_directives_that_change_the_program_are_refused_with_the_reason(directive, message):
-    source = f"e(1).\n{directive}\np(X) :- e(X).\n"
-    with pytest.raises(Exception) as info:
-        compile_source(source, "p.pl", active_queries=AqOptions("tabled"))
-    text = info.value.render(source)
-    assert text.startswith("p.pl:2:4: error: ") and message in text, text
+    assert_refused(f"e(1).\n{directive}\np(X) :- e(X).\n", "p.pl:2:4: error: ", message)
 
 
 def test_double_quotes_apply_to_the_clauses_after_the_flag():
@@ -183,11 +184,7 @@ def test_builtins_wait_for_the_literals_that_bind_them(tmp_path, mode):
     ("e(X), W is V + 1, W > X", 15, "V"),
 ])
 def test_a_test_no_order_binds_is_a_located_error(body, column, unbound):
-    source = f"e(1).\np(X) :- {body}.\n"
-    with pytest.raises(Exception) as info:
-        compile_source(source, "p.pl", active_queries=AqOptions("tabled"))
-    text = info.value.render(source)
-    assert text.startswith(f"p.pl:2:{column}: error: ") and f"binds {unbound} before this goal" in text, text
+    assert_refused(f"e(1).\np(X) :- {body}.\n", f"p.pl:2:{column}: error: ", f"binds {unbound} before this goal")
 
 
 def test_a_test_of_head_variables_stays_for_the_call_to_bind():
@@ -246,26 +243,13 @@ def mixed_case(draw, recursive):
     return source, goals, steps
 
 
-MIXED_SETTINGS = settings(max_examples=int(os.environ.get("AQ_EXAMPLES", "12")), deadline=None,
-                          suppress_health_check=[HealthCheck.too_slow])
-
-
-def _check_mixed(source, goals, steps, mode, subsumption=False):
-    inc, orc, scr, stats = run_all(source, goals, steps, mode, subsumption)
-    for key in orc:
-        assert inc[key] == orc[key], f"step {key}: incremental {inc[key]} != SWI tabling {orc[key]}\n{source}{steps}"
-        assert scr[key] == orc[key], f"step {key}: scratch {scr[key]} != SWI tabling {orc[key]}\n{source}{steps}"
-    for key in ("tables", "consumers", "fact_records", "cstates"):
-        assert f"{key}=0" in stats, stats
-
-
-@MIXED_SETTINGS
+@SETTINGS
 @given(mixed_case(recursive=True), st.sampled_from([("tabled", False), ("tabled", True), ("naive", False)]))
 def test_rules_for_stored_predicates_match_swi_tabling(case, variant):
-    _check_mixed(*case, *variant)
+    check_against_swi(*case, *variant)
 
 
-@MIXED_SETTINGS
+@SETTINGS
 @given(mixed_case(recursive=False))
 def test_rules_for_stored_predicates_match_swi_tabling_optimized(case):
-    _check_mixed(*case, "optimized")
+    check_against_swi(*case, "optimized")

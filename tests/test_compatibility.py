@@ -316,8 +316,10 @@ def test_an_action_after_the_pattern_is_the_action_on_the_head(after, on_head):
 @pytest.mark.parametrize("source, column, words", [
     ("h(X) do f <- a(X) do g.\n", 14, "a rule has one action"),
     ("h(X) <- a(X) seq (b(X) do g).\n", 19, "'do' cannot stand inside a pattern"),
+    ("h <- a and prolog(true).\n", 12, "prolog\\(Goal\\) is a step of a sequence"),
+    ("h <- prolog(true) seq prolog(true).\n", 6, "prolog\\(Goal\\) needs an event pattern beside it"),
 ])
-def test_misplaced_actions_are_located_errors(source, column, words):
+def test_misplaced_actions_and_prolog_steps_are_located_errors(source, column, words):
     with pytest.raises(RetalisSyntaxError, match=words) as info:
         compile_source(source, "bad.rtl")
     assert (info.value.span.line, info.value.span.column) == (1, column)
@@ -330,16 +332,6 @@ def test_prolog_steps_of_a_sequence_are_conditions():
     source = ("low(M) <- a(X) seq b(Y) 'seq' prolog(min(X, Y, M)).\n"
               "high(M) <- prolog(max(X, Y, M)) seq (a(X) seq b(Y)).\n")
     assert _lines(source, [("a(3)", 1), ("b(2)", 2)]) == [("low(2)", 1, 2), ("high(3)", 1, 2)]
-
-
-@pytest.mark.parametrize("source, column, words", [
-    ("h <- a and prolog(true).\n", 12, "prolog\\(Goal\\) is a step of a sequence"),
-    ("h <- prolog(true) seq prolog(true).\n", 6, "prolog\\(Goal\\) needs an event pattern beside it"),
-])
-def test_prolog_steps_elsewhere_are_located_errors(source, column, words):
-    with pytest.raises(RetalisSyntaxError, match=words) as info:
-        compile_source(source, "bad.rtl")
-    assert (info.value.span.line, info.value.span.column) == (1, column)
 
 
 def test_an_undefined_predicate_in_a_prolog_step_is_a_warning_and_a_reported_error(tmp_path):
