@@ -1761,7 +1761,8 @@ query_has(Id, A) :-
 %   Add the rule `H :- B` (checked by rtl_aq_rules: untrusted) and propagate
 %   what it derives to every active query: the rule is activated for every
 %   table whose goal unifies with H.  Adding a rule that is there already
-%   (a variant) does nothing.  Throws aq_rule_error(Message) for a rule that
+%   (a variant) does nothing.  A first rule for a predicate with stored facts
+%   only makes it a mixed one first (mixed_predicate/1).  Throws aq_rule_error(Message) for a rule that
 %   may not be added.
 aq_add_rule(Rule0) :-
     copy_term(Rule0, Rule),
