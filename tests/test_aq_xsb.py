@@ -216,7 +216,8 @@ FACTS = st.one_of(st.tuples(st.sampled_from(CONSTS), st.sampled_from(CONSTS)).ma
 #: not in the optimized mode, which does not terminate on recursion.
 MIXED_RULES = ["(f(X) :- e(0, X))", "(f(Y) :- e(X, Y), X < Y)"]
 RECURSIVE_RULES = ["(e(X, Y) :- f(X), f(Y), X \\= Y)", "(f(Y) :- e(X, Y), f(X))", "(e(X, Z) :- e(X, Y), e(Y, Z))"]
-PROGRAM_RULES = ["q(X) :- f(X), e(X, Y), Y > 0.", "r(X, Y) :- e(X, Y), f(Y).", "s(X) :- X \\== 1, f(X)."]
+PROGRAM_RULES = ["q(X) :- f(X), e(X, Y), Y > 0.", "r(X, Y) :- e(X, Y), f(Y).", "s(X) :- X \\== 1, f(X).",
+                 "t(X) :- e(X, _), \\+ f(X)."]
 
 
 @st.composite
@@ -237,7 +238,7 @@ def mixed_case(draw, recursive):
             steps.append(("+", rule))
         else:
             steps.append((draw(st.sampled_from("+-")), draw(FACTS)))
-    goals = draw(st.lists(st.sampled_from(["q(X)", "r(X, Y)", "s(X)", "f(X)", "e(X, Y)", "e(0, X)"]),
+    goals = draw(st.lists(st.sampled_from(["q(X)", "r(X, Y)", "s(X)", "t(X)", "f(X)", "e(X, Y)", "e(0, X)"]),
                           min_size=1, max_size=3, unique=True))
     source = ":- dynamic e/2, f/1.\n" + "\n".join(PROGRAM_RULES + [f + "." for f in facts]) + "\n"
     return source, goals, steps
