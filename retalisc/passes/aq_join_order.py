@@ -49,12 +49,17 @@ def _vars(term) -> Set[str]:
 
 
 def _builtin_ready(lit: Literal, bound: Set[str]) -> bool:
+    return _needed(lit) <= bound
+
+
+def _needed(lit: Literal) -> Set[str]:
+    """The variables a builtin needs bound: none for `=`, the right side's for `is`, else all."""
     term = lit.term
     if isinstance(term, Compound) and term.name == "=" and term.arity == 2:
-        return True
+        return set()
     if isinstance(term, Compound) and term.name == "is" and term.arity == 2:
-        return _vars(term.args[1]) <= bound
-    return _vars(term) <= bound
+        return _vars(term.args[1])
+    return _vars(term)
 
 
 def _bind(lit: Literal, bound: Set[str]) -> None:
@@ -112,16 +117,6 @@ def _placed(body: List[Literal], late: Set[int], head: Set[str]):
         else:
             place(lit)
     return placed, [(lit, bound | head if id(lit) in late else bound) for lit in waiting]
-
-
-def _needed(lit: Literal) -> Set[str]:
-    """The variables a builtin needs bound (what _builtin_ready asks for)."""
-    term = lit.term
-    if isinstance(term, Compound) and term.name == "=" and term.arity == 2:
-        return set()
-    if isinstance(term, Compound) and term.name == "is" and term.arity == 2:
-        return _vars(term.args[1])
-    return _vars(term)
 
 
 def _written_order_ok(body: List[Literal], bound0: Set[str]) -> bool:
