@@ -24,6 +24,7 @@
             rtl_memory_type/2,          % ?Id, -Name/Arity
             rtl_with_view/2,            % +Z, :Goal
             rtl_with_needs/2,           % :Goal, -Needs
+            rtl_slr_clock_moved/1,      % +Clock
             rtl_slr_clear/0
           ]).
 
@@ -257,7 +258,6 @@ rtl_memory(Id, Pattern-Conds, Template, N, L) :-
 rtl_memory_size(Id, Size) :-
     current_program(M),
     id_handle(M, Id, H),
-    expire(H),
     bounds(H, First, Last),
     Size is Last - First + 1.
 
@@ -289,8 +289,7 @@ rtl_memory_last_end(Id, End) :-
 rtl_memory_records(Id, Records) :-
     current_program(M),
     (   id_handle(M, Id, H)
-    ->  expire(H),
-        bounds(H, First, Last),
+    ->  bounds(H, First, Last),
         findall(T^[S, E], ( between(First, Last, Number), key(H, Number, Key),
                             record(Key, S, E, T) ), Records)
     ;   existence_error(memory_instance, Id)
@@ -303,7 +302,9 @@ rtl_ele:clear_hook :-
     forall(id_handle(M, _, H),
            ( bounds(H, First, Last),
              forall(between(First, Last, Number), ( key(H, Number, Key), retractall(record(Key, _, _, _)) )),
-             reset_bounds(H) )).
+             reset_bounds(H) )),
+    NoExpiry is inf,
+    nb_setval(rtl_slr_next_expiry, NoExpiry).
 
 %!  rtl_slr_clear is det.
 %
@@ -384,23 +385,29 @@ all_goals([G|Gs], M) :-
     all_goals(Gs, M).
 
 add_record(H, M, Id, N, L, Options, Start, End, Template) :-
-    (   L \== inf,
-        rtl_clock(Clock),
-        End < Clock - L
+    rtl_clock(Clock),
+    bounds_term(H, B),
+    B = bounds(First, Last, LastEnd),
+    (   rtl_beyond_bound(End, Clock, L)
     ->  true                                     % outside the time limit already
-    ;   bounds_term(H, B),
-        B = bounds(First, Last, LastEnd),
-        (   Last < First
+    ;   N \== inf,
+        End =< LastEnd,
+        Last - First + 1 >= N,
+        key(H, First, FirstKey),
+        record(FirstKey, S1, E1, T1),
+        \+ record_after(End, Start, Template, E1, S1, T1)
+    ->  true                                     % full, and older than every record it keeps
+    ;   (   Last < First
         ->  Number = First,
             nb_setarg(2, B, First),
             nb_setarg(3, B, End)
-        ;   End >= LastEnd
+        ;   ( End > LastEnd ; End =:= LastEnd, \+ before_last(H, Last, End, Start, Template) )
         ->  Number is Last + 1,
             nb_setarg(2, B, Number),
             nb_setarg(3, B, End)
-        ;   last_not_after(H, First, Last, End, Before),    % a late record goes after
-            Point is Before + 1,                            % every record ending at or before it
-            make_room(H, B, First, Last, Point, Number)     % (never last: LastEnd stays)
+        ;   last_not_after_record(H, First, Last, End, Start, Template, Before),
+            Point is Before + 1,                            % a late record goes after every
+            make_room(H, B, First, Last, Point, Number)     % record not after it (never last)
         ),
         key(H, Number, Key),
         assertz(record(Key, Start, End, Template)),
@@ -408,10 +415,44 @@ add_record(H, M, Id, N, L, Options, Start, End, Template) :-
         ->  true
         ;   forget_over_count(H, B, N, M, Id, Options)
         ),
-        forget_expired(H, B, L, M, Id, Options),
-        (   arg(1, B, F1), F1 =< Number
-        ->  recorded(M, Id, Options, Start, End, Template)
-        ;   true                                 % older than every record it would keep
+        recorded(M, Id, Options, Start, End, Template),
+        (   L == inf
+        ->  true
+        ;   arg(1, B, F1),
+            key(H, F1, K1),
+            record(K1, _, OldestEnd, _),
+            note_expiry(OldestEnd, L)
+        )
+    ).
+
+%   The order of records: by end time, then start time, then the standard order of the
+%   templates, so that what a memory holds (its N latest) and which record prev and next
+%   meet first among equal end times depend on the events, not on their arrival order.
+%   Records equal in all three are indistinguishable.
+record_after(E, S, T, E1, S1, T1) :-
+    (   E =\= E1 -> E > E1
+    ;   S =\= S1 -> S > S1
+    ;   T @> T1
+    ).
+
+% The new record [Start, End] of Template goes before record Last, which ends at End too.
+before_last(H, Last, End, Start, Template) :-
+    key(H, Last, Key),
+    record(Key, S1, E1, T1),
+    record_after(E1, S1, T1, End, Start, Template).
+
+% The last number whose record is not after [Start, End] of Template (First - 1 if none).
+last_not_after_record(H, Low, High, End, Start, Template, Number) :-
+    (   Low > High
+    ->  Number = High
+    ;   Mid is (Low + High) >> 1,
+        key(H, Mid, Key),
+        record(Key, S, E, T),
+        (   record_after(E, S, T, End, Start, Template)
+        ->  High1 is Mid - 1,
+            last_not_after_record(H, Low, High1, End, Start, Template, Number)
+        ;   Low1 is Mid + 1,
+            last_not_after_record(H, Low1, High, End, Start, Template, Number)
         )
     ).
 
@@ -452,21 +493,16 @@ forget_over_count(H, B, N, M, Id, Options) :-
     ;   true
     ).
 
-forget_expired(_, _, inf, _, _, _) :- !.
 forget_expired(H, B, L, M, Id, Options) :-
     rtl_clock(Clock),
-    Horizon is Clock - L,
-    forget_before(H, B, Horizon, M, Id, Options).
-
-forget_before(H, B, Horizon, M, Id, Options) :-
     arg(1, B, First),
     arg(2, B, Last),
     (   First =< Last,
         key(H, First, Key),
         record(Key, _, End, _),
-        End < Horizon
+        rtl_beyond_bound(End, Clock, L)
     ->  forget_first(H, B, First, M, Id, Options),
-        forget_before(H, B, Horizon, M, Id, Options)
+        forget_expired(H, B, L, M, Id, Options)
     ;   true
     ).
 
@@ -527,13 +563,43 @@ close_gap(H, B, First, Last, Gap) :-
         )
     ).
 
-% Drop the records of a time-limited instance that have left its window.
-expire(H) :-
-    instance(H, M, Id, _, _, _, _, L, Options),
-    (   L == inf
+% ---- forgetting by time -------------------------------------------------------------------
+%
+% A record of an instance with time limit L is forgotten when the clock moves beyond L
+% seconds after its end (rtl_beyond_bound/3), at that clock move, with its
+% memory_record_forgotten event: rtl_ele calls rtl_slr_clock_moved/1 before the event that
+% moved the clock is processed (and on a heartbeat), so every query, rule and timer from
+% then on sees the memory without it, and a consumer of the memory events hears of it when
+% it happens (the last clock move of the input included), not at the next record. The
+% global rtl_slr_next_expiry is the earliest due time `End + L` of an oldest record: a
+% clock move that passes none costs one comparison in rtl_ele.
+
+%!  rtl_slr_clock_moved(+Clock) is det.
+%
+%   The clock moved to Clock, past rtl_slr_next_expiry: forget the records of every
+%   time-limited instance that lie beyond its limit, and compute the next due time.
+
+rtl_slr_clock_moved(_) :-
+    NoExpiry is inf,
+    nb_setval(rtl_slr_next_expiry, NoExpiry),
+    forall(( instance(H, M, Id, _, _, _, _, L, Options), L \== inf ),
+           ( bounds_term(H, B),
+             forget_expired(H, B, L, M, Id, Options),
+             arg(1, B, First),
+             arg(2, B, Last),
+             (   First =< Last
+             ->  key(H, First, Key),
+                 record(Key, _, End, _),
+                 note_expiry(End, L)
+             ;   true
+             ) )).
+
+% The oldest record of an instance with time limit L ends at End: it is due at End + L.
+note_expiry(End, L) :-
+    Due is End + L,
+    (   nb_current(rtl_slr_next_expiry, Next), number(Next), Next =< Due
     ->  true
-    ;   bounds_term(H, B),
-        forget_expired(H, B, L, M, Id, Options)
+    ;   nb_setval(rtl_slr_next_expiry, Due)
     ).
 
 % ---- memory events -----------------------------------------------------------------------
@@ -568,7 +634,6 @@ mem(Id, Event) :-
     view(View),
     id_handle(M, Id, H),
     \+ Id = '$stream'(_),
-    expire(H),
     bounds(H, First, Last),
     needs(H, View),
     between(First, Last, Number),
@@ -651,13 +716,11 @@ next_inf(Id, Event, T1, T2, Zs) :-
 
 latest(H, Event, Z) :-
     needs(H, Z),
-    expire(H),
     bounds(H, First, Last),
     last_not_after(H, First, Last, Z, From),
     scan_down(From, First, H, Event).
 
 earliest(H, Event, Zs, Ze) :-
-    expire(H),
     bounds(H, First, Last),
     first_not_before(H, First, Last, Zs, From),
     (   scan_up(From, Last, H, Event, Ze)
@@ -738,14 +801,14 @@ first_not_before(H, Low, High, Z, Number) :-
         )
     ).
 
-% An event pattern against a record: `E^[T1, T2]`, `E^T` (start and end T, as in event
-% patterns) or E.
+% An event pattern against a record: `E^[T1, T2]` (start and end), `E^T` (T is the end
+% time, as `E^T` in event patterns binds the end of an event's interval) or E.
 match(Event, S, E, T) :-
     (   nonvar(Event), Event = Pattern^Time
     ->  Pattern = T,
         (   nonvar(Time), Time = [T1, T2]
         ->  T1 = S, T2 = E
-        ;   Time = S, Time = E
+        ;   Time = E
         )
     ;   Event = T
     ).

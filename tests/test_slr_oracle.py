@@ -10,23 +10,25 @@ a history of every type) are answered by the runtime and by `Model`, a brute-for
 evaluation of the definitions over plain Python lists.
 
 What a memory holds (Def. 21): among the matching events present, those whose end time is
-within the last L seconds of the clock (the largest end time processed), and of those the N
-latest by end time; among equal end times the later-arriving one counts as later (the
-runtime's documented rule, so ties are generated freely). With no retraction that is a
-function of the set of events present (`held_by_definition`, checked against the model).
+within the last L seconds of the clock (the largest end time processed; a record ending at
+E is gone once E + L < clock), and of those the N latest by end time; among equal end times
+records go by start time, then by the standard order of terms of the record (the runtime's
+documented rule: order-free, so ties are generated freely and arrival orders do not show).
+With no retraction that is a function of the set of events present (`held_by_definition`,
+checked against the model).
 Retractions make it depend on history, and the model follows the runtime's choice:
 
   * an event that a count or time limit has forgotten stays forgotten: retracting a held
     record frees a place but does not bring the forgotten older record back;
   * a retraction removes one held record equal to the event's record (same template, start
-    and end; the earliest such by end time and arrival), whichever event it came from
+    and end; equal records are indistinguishable), whichever event it came from
     (records do not remember their event). Retracting an event whose own record was
     forgotten therefore removes an equal record of another event if one is held; the model
     does the same. Only events present (added and not yet retracted) are retracted.
 
 prev(Id, E, Zs) is the latest record ending =< Zs that unifies with E, next(Id, E, Zs, Ze)
-the earliest ending in [Zs, Ze] that unifies; `E^T` needs start = end = T, `E^[S, T]` binds
-both. The `at` view bounds mem/2 only. SLR_EXAMPLES sets the number of examples (default 150).
+the earliest ending in [Zs, Ze] that unifies (in the order of records); `E^T` binds T to
+the end time (as `E^T` in event patterns does), `E^[S, T]` binds both. The `at` view bounds mem/2 only. SLR_EXAMPLES sets the number of examples (default 150).
 """
 from __future__ import annotations
 
@@ -125,8 +127,7 @@ class Query:
         if b is None or self.times is None:
             return b
         if self.times[0] == "pt":
-            b = unify(self.times[1], record.start, b)
-            return None if b is None else unify(self.times[1], record.end, b)
+            return unify(self.times[1], record.end, b)
         b = unify(self.times[1], record.start, b)
         return None if b is None else unify(self.times[2], record.end, b)
 
@@ -153,12 +154,31 @@ class Event:
         return text(self.value())
 
 
+def standard_order_key(value: Value) -> tuple:
+    """Prolog's standard order of terms for the values here: numbers < atoms < compounds,
+    compounds by arity, then name, then arguments."""
+    if isinstance(value, tuple):
+        return (2, len(value[1]), value[0], tuple(standard_order_key(a) for a in value[1]))
+    if isinstance(value, str):
+        return (1, value)
+    return (0, value)
+
+
 @dataclass(frozen=True)
 class Record:
     end: float
-    seq: int                    # arrival number: among equal end times the later arrival is later
     start: float
     value: Value
+
+    def order(self) -> tuple:
+        """The order of records: end time, then start time, then the record's standard order."""
+        return (self.end, self.start, standard_order_key(self.value))
+
+
+def beyond_bound(end: float, clock: float, bound: Optional[float]) -> bool:
+    """docs/runtime.md: a time `end` lies beyond `bound` seconds behind the clock when
+    end + bound < clock (a bound of None is inf)."""
+    return bound is not None and end + bound < clock
 
 
 @dataclass(frozen=True)
@@ -217,12 +237,12 @@ class MemoryModel:
         self.spec = spec
         self.held: List[Record] = []
 
-    def add(self, event: Event, seq: int, clock: float) -> None:
+    def add(self, event: Event, clock: float) -> None:
         value = self.spec.record_value(event)
         if value is None:
             return
-        self.held.append(Record(event.end, seq, event.start, value))
-        self.held.sort(key=lambda r: (r.end, r.seq))
+        self.held.append(Record(event.end, event.start, value))
+        self.held.sort(key=Record.order)
         if self.spec.n is not None:
             self.held = self.held[-self.spec.n:]
         self.held = self.within_limit(self.held, clock)
@@ -237,16 +257,16 @@ class MemoryModel:
     def within_limit(self, records: List[Record], clock: float) -> List[Record]:
         if self.spec.limit is None:
             return records
-        return [r for r in records if r.end >= clock - self.spec.limit]
+        return [r for r in records if not beyond_bound(r.end, clock, self.spec.limit)]
 
     def records(self, clock: float) -> List[Record]:
         return self.within_limit(self.held, clock)
 
     def held_by_definition(self, arrivals: List[Tuple[int, Event]], clock: float) -> List[Record]:
         """Def. 21 as a function of the events present (valid when none was retracted)."""
-        matching = [Record(e.end, seq, e.start, self.spec.record_value(e)) for seq, e in arrivals
+        matching = [Record(e.end, e.start, self.spec.record_value(e)) for _, e in arrivals
                     if self.spec.record_value(e) is not None]
-        kept = sorted(self.within_limit(matching, clock), key=lambda r: (r.end, r.seq))
+        kept = sorted(self.within_limit(matching, clock), key=Record.order)
         return kept if self.spec.n is None else kept[len(kept) - self.spec.n:] if len(kept) > self.spec.n else kept
 
 
@@ -258,11 +278,11 @@ class Model:
         self.clock = float("-inf")
 
     def run(self, ops: List[Tuple[str, Event]]) -> None:
-        for seq, (op, event) in enumerate(ops):
+        for op, event in ops:
             if op == "add":
                 self.clock = max(self.clock, event.end)
                 for m in self.memories.values():
-                    m.add(event, seq, self.clock)
+                    m.add(event, self.clock)
             else:
                 for m in self.memories.values():
                     m.retract(event)
