@@ -208,7 +208,15 @@ check_instance(Id, Pattern, Conds, N, L, Options, Culprit) :-
     ;   throw(error(domain_error(time_limit, L),
                     context(Culprit, 'a time limit is a number of seconds >= 0 or inf')))
     ),
-    must_be(list, Options).
+    (   is_list(Options), forall(member(O, Options), memory_option(O)) -> true
+    ;   throw(error(domain_error(memory_options, Options),
+                    context(Culprit, 'the options are a list of record_events(true) or record_events(false)')))
+    ).
+
+memory_option(O) :-
+    nonvar(O),
+    O = record_events(B),
+    ( B == true ; B == false ), !.
 
 %!  d_mem(?IdPattern) is det.
 %!  delete_memory(?IdPattern) is det.

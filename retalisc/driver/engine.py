@@ -655,7 +655,9 @@ class Engine:
 
     def memory(self, request: str) -> None:
         """Create or delete memory instances: `request` is the text of `c_mem(Id, Event-Conds, N, L)`,
-        `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)` or `delete_memory(IdPattern)`.
+        `c_mem(Id, Event-Conds, N, L, Options)` (Options: `[record_events(true)]` raises
+        memory_record_added/2 and memory_record_forgotten/2), `memorize(Event, Conds, Template,
+        Id, N)`, `d_mem(IdPattern)` or `delete_memory(IdPattern)`.
         The conditions must pass the sandbox; QueryError says why a request was refused."""
         with self._lock:
             _raise_if_refused(self._call("rtl_api_memory", _text(request, "a memory request")))
