@@ -32,19 +32,24 @@
 
 A *memory instance* keeps a selected history of the event flow: the events (input or
 derived) that unify with its pattern and satisfy its conditions, recorded in its template
-form, at most the N most recent by end time and only those whose end time is within the
-last L seconds of the component's clock (the largest end time processed; event time).
+form, at most the N most recent in the order of records and only those whose end time is
+not beyond L seconds behind the component's clock (the largest end time processed; event
+time; rtl_time:rtl_beyond_bound/3). The *order of records* is by end time, then start time,
+then the standard order of the templates (record_after/6): ties are broken by the events,
+not by their arrival, so without deletions what an instance holds does not depend on the
+arrival order (Def. 21).
 
 Cost model (thesis 5.2.1, 5.2.2):
 
-  - Records of instance H are numbered in end-time order, First..Last, and stored as
+  - Records of instance H are numbered in the order of records, First..Last, and stored as
     `record(Key, Start, End, Template)` with `Key = H * 2^40 + Number`: the first-argument
     index finds a record by (instance, number) in constant time.
   - An event that arrives in end-time order is appended (number Last+1): constant time.
     A late event is inserted at its place by binary search, moving the records on the
     shorter side of it by one number: the cost grows with how late it is, not with the
     size of the memory.
-  - Forgetting takes the record numbered First: constant time.
+  - Forgetting takes the record numbered First: constant time. Forgetting by time happens
+    when the clock moves (rtl_slr_clock_moved/1), not when the instance is next used.
   - prev/next find their starting point by binary search on the numbers (logarithmic)
     and then walk towards older/newer records until one unifies with the pattern.
   - Instances are found per event through one dynamic predicate per event type
@@ -57,7 +62,10 @@ when something can receive them (an event rule or a subscription on them):
 `memory_created(Pattern, Conds, Template, Id, N)`, `memory_deleted(Id)`,
 `memory_updated(Id, End)` for every record added, and, for instances created with the
 option `record_events(true)`, `memory_record_added(Id, Record)` and
-`memory_record_forgotten(Id, Record)` with the record's own interval.
+`memory_record_forgotten(Id, Record)` with the record's own interval: one for every record
+that enters and one for every record that leaves (by the count limit, by the time limit as
+the clock moves, or by a deletion); a late record that a full instance does not keep raises
+none.
 
 Queries see the records a memory holds. mem/2 also respects the *stream view* of the
 query being answered (rtl_with_view/2, Def. 16-18): only records whose end time is at
@@ -635,7 +643,7 @@ listened(M, Event) :-
 %
 %   Event unifies with a record of a memory instance whose id unifies with Id, oldest
 %   first, within the stream view of the query (end time at most its Z). Event may be
-%   written `E^T` or `E^[T1, T2]` to reach the record's time.
+%   written `E^T` (T the end time) or `E^[T1, T2]` to reach the record's time.
 
 mem(Id, Event) :-
     current_program(M),
