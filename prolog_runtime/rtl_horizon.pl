@@ -91,7 +91,7 @@ rtl_swept(Clock) :-
     nb_getval(rtl_late_delay, Delay),
     nb_getval(rtl_late_before, swept(Clock0, Delay0)),
     (   number(Delay), number(Clock),
-        Clock - Delay > Clock0 - Delay0         % the latest, if the bound changed
+        (   Clock0 =:= -inf -> true ; Clock - Delay > Clock0 - Delay0 )   % the latest, if the bound changed
     ->  nb_setval(rtl_late_before, swept(Clock, Delay))
     ;   true
     ).
