@@ -598,6 +598,20 @@ def test_queries_agree_with_the_model(engine, data):
         assert engine.query_all(goal, at=at) == expected, f"{goal} at {at}\n{story}"
 
 
+def _assert_same_answers(engine, data, specs, shuffled, in_order) -> None:
+    """The queries drawn for these memories answer the same after both deliveries."""
+    model = Model(specs + STREAMS)
+    model.run(shuffled)
+    cases = data.draw(query_cases(specs, model), label="queries")
+    goals = [(f"mem({s.ident}, E^[S, T])", None) for s in specs] + [(goal, at) for goal, at, _ in cases]
+    answers = []
+    for ops in (in_order, shuffled):
+        _reset(engine, specs)
+        _feed(engine, ops)
+        answers.append([engine.query_all(goal, at=at) for goal, at in goals])
+    assert answers[0] == answers[1], _describe(specs, shuffled)
+
+
 @settings(SETTINGS, max_examples=max(EXAMPLES // 2, 1))
 @given(st.data())
 def test_arrival_order_does_not_matter_without_forgetting(engine, data):
@@ -610,17 +624,7 @@ def test_arrival_order_does_not_matter_without_forgetting(engine, data):
     shuffled = data.draw(deliveries(evs), label="delivery")
     retracted = [e for op, e in shuffled if op == "retract"]
     in_order = [("add", e) for e in sorted(evs, key=lambda e: e.end)] + [("retract", e) for e in retracted]
-    model = Model(specs + STREAMS)
-    model.run(shuffled)
-    cases = data.draw(query_cases(specs, model), label="queries")
-    goals = [(f"mem({s.ident}, E^[S, T])", None) for s in specs] + [(goal, at) for goal, at, _ in cases]
-
-    answers = []
-    for ops in (in_order, shuffled):
-        _reset(engine, specs)
-        _feed(engine, ops)
-        answers.append([engine.query_all(goal, at=at) for goal, at in goals])
-    assert answers[0] == answers[1], _describe(specs, shuffled)
+    _assert_same_answers(engine, data, specs, shuffled, in_order)
 
 
 def test_the_model_is_not_trivial(engine):
@@ -705,23 +709,7 @@ def test_arrival_order_does_not_show_through_ties_or_limits(engine, data):
     specs = [data.draw(memory_spec(i, types), label=f"memory {i}") for i in range(data.draw(st.integers(1, 3)))]
     shuffled = data.draw(deliveries(evs, retract=False), label="delivery")
     in_order = [("add", e) for e in sorted(evs, key=lambda e: e.end)]
-    model = Model(specs + STREAMS)
-    model.run(shuffled)
-    cases = data.draw(query_cases(specs, model), label="queries")
-    goals = [(f"mem({s.ident}, E^[S, T])", None) for s in specs] + [(goal, at) for goal, at, _ in cases]
-    answers = []
-    for ops in (in_order, shuffled):
-        _reset(engine, specs)
-        _feed(engine, ops)
-        answers.append([engine.query_all(goal, at=at) for goal, at in goals])
-    assert answers[0] == answers[1], _describe(specs, shuffled)
-
-
-def _memory_engine(program: str, ops) -> Engine:
-    e = Engine.from_source(program)
-    for text_, start, end in ops:
-        e.feed(text_, start, end)
-    return e
+    _assert_same_answers(engine, data, specs, shuffled, in_order)
 
 
 def test_a_record_leaves_by_time_at_the_clock_move_that_passes_it():
