@@ -723,6 +723,7 @@ def test_a_record_leaves_by_time_at_the_clock_move_that_passes_it():
     e.feed("p(6)", 15)
     e.feed("p(7)", 19)                               # 15 + 4 is not before 19: p(6) stays
     assert e.query_all("mem(m, p(X))") == [{"X": "6"}, {"X": "7"}]
+    assert [o.event for o in e.advance_clock(30)] == ["forgotten(p(6))", "forgotten(p(7))"]   # a heartbeat too
 
 
 def test_a_late_record_a_full_memory_does_not_keep_raises_nothing():

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Dict, List, Optional, Tuple
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from retalisc.driver.engine import Engine
@@ -125,8 +125,7 @@ def _lateness_ok(arrivals: List[Ev], delays: Dict[str, int]) -> bool:
 def test_synchronized_matches_are_released_when_each_condition_is_met(case):
     dp, dq, arrivals = case
     delays = {"p": dp, "q": dq}
-    if not _lateness_ok(arrivals, delays):           # the reordering of a type may exceed the bound
-        return
+    assume(_lateness_ok(arrivals, delays))           # the reordering of a type could exceed the bound
     engine = _engine(dp, dq)
     got: Dict[int, List[str]] = {}
     for i, e in enumerate(arrivals):
@@ -176,3 +175,17 @@ def test_a_record_ending_exactly_at_t_does_not_release_the_match():
     out = _feed_all(engine, [("trig(a)", 4), ("p(0)", 4), ("q(0)", 4), ("q(1)", 4), ("p(2)", 5),
                              ("q(3)", 4.5)])
     assert out == [[], [], [], [], [], ["sb(a,4,1,2)"]]
+
+
+def test_a_synchronized_query_waits_for_an_event_exactly_at_the_delay_bound():
+    """Issue 40 item 4, the query side: `--query 3 'prev(m, p(a, V)^T, 3)'` with
+    max_delay(p/2, 2) and trig(a)@3, z@5, p(a, 1)@3, z@9 answers p(a, 1), as the in-order
+    run does: at clock 5 the p(a, 1) ending at 3 may still come (exactly 2 s late)."""
+    engine = Engine.from_source("max_delay(p/2, 2).\nc_mem(m, p(_, _)-[], inf, inf).\n", "sync_query_bound.rtl")
+    future = engine.query_synchronized("prev(m, p(a, V)^T, 3)", at=3)
+    for text, t in [("trig(a)", 3), ("z", 5)]:
+        engine.feed(text, t)
+    assert not future.done()
+    engine.feed("p(a, 1)", 3)
+    engine.feed("z", 9)
+    assert future.result(timeout=0) == [{"V": "1", "T": "3"}]

@@ -703,8 +703,9 @@ class Engine:
 
     def advance_clock(self, time: Number) -> List[OutputEvent]:
         """A heartbeat: move the clock to `time` (event time, seconds) without an event, if
-        that is later than the clock; the timers it passes (absences, alarms) fire. Returns
-        what they produced."""
+        that is later than the clock; the timers it passes (absences, alarms) fire and the
+        memory records it puts beyond their time limit are forgotten. Returns what they
+        produced."""
         if isinstance(time, bool) or not isinstance(time, (int, float)) or not math.isfinite(time):
             raise ValueError(f"advance_clock needs a finite number of seconds, not {time!r}")
         with self._lock:
