@@ -76,6 +76,7 @@ Def. 18). A time argument that is not bound raises an instantiation error.
 :- use_module(rtl_ele).
 :- use_module(rtl_time).
 :- use_module(rtl_raise).
+:- use_module(rtl_time_index).
 :- use_module(rtl_subscriptions, [rtl_subscribed/1]).
 
 :- meta_predicate rtl_with_view(+, 0), rtl_with_needs(0, -).
@@ -247,6 +248,7 @@ remove_instance(M, H, Id) :-
     retractall(id_handle(M, Id, H)),
     retractall(stream_memory(M, _, _, H)),
     unwatch(M, Pattern, H),
+    unschedule_expiry(H, M),
     bounds_key(H, BKey),
     nb_delete(BKey),
     retractall(bounds_name(H, _)),
@@ -319,6 +321,7 @@ rtl_ele:clear_hook :-
            ( bounds(H, First, Last),
              forall(between(First, Last, Number), ( key(H, Number, Key), retractall(record(Key, _, _, _)) )),
              reset_bounds(H) )),
+    forall(retract(expiry(H, M, Due)), time_index_remove(slr_expiry, M, Due, H)),
     NoExpiry is inf,
     nb_setval(rtl_slr_next_expiry, NoExpiry).
 
@@ -432,13 +435,7 @@ add_record(H, M, Id, N, L, Options, Start, End, Template) :-
         ;   forget_over_count(H, B, N, M, Id, Options)
         ),
         recorded(M, Id, Options, Start, End, Template),
-        (   L == inf
-        ->  true
-        ;   arg(1, B, F1),
-            key(H, F1, K1),
-            record(K1, _, OldestEnd, _),
-            note_expiry(OldestEnd, L)
-        )
+        schedule_expiry(H, M, L)
     ).
 
 %   The order of records: by end time, then start time, then the standard order of the
@@ -542,6 +539,8 @@ remove_record(H, M, Id, Options, Start, End, Template) :-
     ->  key(H, Number, Key),
         retract(record(Key, S, E, T)),
         close_gap(H, B, First, Last, Number),
+        instance(H, _, _, _, _, _, _, L, _),
+        schedule_expiry(H, M, L),
         (   memberchk(record_events(true), Options)
         ->  memory_event(M, memory_record_forgotten(Id, T), S, E)
         ;   true
@@ -586,36 +585,68 @@ close_gap(H, B, First, Last, Gap) :-
 % memory_record_forgotten event: rtl_ele calls rtl_slr_clock_moved/1 before the event that
 % moved the clock is processed (and on a heartbeat), so every query, rule and timer from
 % then on sees the memory without it, and a consumer of the memory events hears of it when
-% it happens (the last clock move of the input included), not at the next record. The
-% global rtl_slr_next_expiry is the earliest due time `End + L` of an oldest record: a
-% clock move that passes none costs one comparison in rtl_ele.
+% it happens (the last clock move of the input included), not at the next record.
+%
+% Each time-limited instance with records has one entry in the time index `slr_expiry`
+% (rtl_time_index.pl) under its program, at the due time `End + L` of its oldest record
+% (expiry/3 says which), so a clock move costs what it forgets, not the number of
+% instances. The global rtl_slr_next_expiry is a time before which nothing is due: a clock
+% move that does not pass it costs one comparison in rtl_ele.
+
+% expiry(H, Program, Due): the entry of instance H in the time index slr_expiry
+:- dynamic expiry/3.
 
 %!  rtl_slr_clock_moved(+Clock) is det.
 %
-%   The clock moved to Clock, past rtl_slr_next_expiry: forget the records of every
-%   time-limited instance that lie beyond its limit, and compute the next due time.
+%   The clock moved to Clock, past rtl_slr_next_expiry: forget the records of the
+%   time-limited instances that lie beyond their limits.
 
-rtl_slr_clock_moved(_) :-
-    NoExpiry is inf,
-    nb_setval(rtl_slr_next_expiry, NoExpiry),
-    forall(( instance(H, M, Id, _, _, _, _, L, Options), L \== inf ),
-           ( bounds_term(H, B),
-             forget_expired(H, B, L, M, Id, Options),
-             arg(1, B, First),
-             arg(2, B, Last),
-             (   First =< Last
-             ->  key(H, First, Key),
-                 record(Key, _, End, _),
-                 note_expiry(End, L)
-             ;   true
-             ) )).
+rtl_slr_clock_moved(Clock) :-
+    rtl_program(M),
+    time_index_take(slr_expiry, M, <, Clock, Due),
+    forall(member(H, Due),
+           (   retract(expiry(H, M, _)),
+               instance(H, M, Id, _, _, _, _, L, Options)
+           ->  bounds_term(H, B),
+               forget_expired(H, B, L, M, Id, Options),
+               schedule_expiry(H, M, L)
+           ;   true
+           )),
+    (   time_index_count(slr_expiry, M, 0)
+    ->  NoExpiry is inf,
+        nb_setval(rtl_slr_next_expiry, NoExpiry)
+    ;   nb_setval(rtl_slr_next_expiry, Clock)    % every entry left is due at Clock or later
+    ).
 
-% The oldest record of an instance with time limit L ends at End: it is due at End + L.
-note_expiry(End, L) :-
-    Due is End + L,
-    (   nb_current(rtl_slr_next_expiry, Next), number(Next), Next =< Due
+% schedule_expiry(+H, +Program, +L): the records of instance H changed; its entry in the
+% index is due when its oldest record is.
+schedule_expiry(_, _, inf) :- !.
+schedule_expiry(H, M, L) :-
+    bounds(H, First, Last),
+    (   First =< Last
+    ->  key(H, First, Key),
+        record(Key, _, End, _),
+        Due is End + L                          % rtl_beyond_bound/3's sum
+    ;   Due = none
+    ),
+    (   expiry(H, M, Old), Old == Due
     ->  true
-    ;   nb_setval(rtl_slr_next_expiry, Due)
+    ;   unschedule_expiry(H, M),
+        (   Due == none
+        ->  true
+        ;   assertz(expiry(H, M, Due)),
+            time_index_add(slr_expiry, M, Due, H),
+            (   nb_current(rtl_slr_next_expiry, Next), number(Next), Next =< Due
+            ->  true
+            ;   nb_setval(rtl_slr_next_expiry, Due)
+            )
+        )
+    ).
+
+unschedule_expiry(H, M) :-
+    (   retract(expiry(H, M, Old))
+    ->  time_index_remove(slr_expiry, M, Old, H)
+    ;   true
     ).
 
 % ---- memory events -----------------------------------------------------------------------
