@@ -65,6 +65,7 @@ deletion is too late).
 :- use_module(rtl_io).
 :- use_module(rtl_horizon).
 :- use_module(rtl_timers).
+:- use_module(rtl_time, [rtl_beyond_bound/3]).
 
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
@@ -285,6 +286,10 @@ rtl_event(Event, Start, End) :-
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_linkval(rtl_clock, End),
+        (   nb_current(rtl_slr_next_expiry, Expiry), Expiry < End   % a memory record to forget
+        ->  rtl_slr:rtl_slr_clock_moved(End)
+        ;   true
+        ),
         (   nb_current(rtl_next_timer, Due), Due < End      % a timer due before the event
         ->  rtl_timers_run(before)
         ;   true
@@ -339,9 +344,8 @@ started_before_sweep(Type, Start, End) :-
 
 beyond_delay(End) :-
     rtl_flag(max_delay, Delay),
-    Delay \== inf,
     nb_getval(rtl_clock, Clock),
-    End < Clock - Delay.
+    rtl_beyond_bound(End, Clock, Delay).
 
 %!  rtl_started_after(+Time:number) is semidet.
 %
@@ -386,6 +390,10 @@ rtl_advance_clock(Time) :-
     nb_getval(rtl_clock, Clock0),
     (   Time > Clock0
     ->  nb_setval(rtl_clock, Time),
+        (   nb_current(rtl_slr_next_expiry, Expiry), Expiry < Time
+        ->  rtl_slr:rtl_slr_clock_moved(Time)
+        ;   true
+        ),
         rtl_timers_run(after),
         nb_getval(rtl_next_sweep, Next),
         (   Time >= Next -> periodic_sweep ; true )
@@ -417,7 +425,7 @@ rtl_future_problem(End, Problem) :-
 % many late events as the stores hold matches, at least 64: sweeps cost one event each.
 late_check(End, Clock) :-
     rtl_flag(max_delay, Delay),
-    (   Delay \== inf, End < Clock - Delay
+    (   rtl_beyond_bound(End, Clock, Delay)
     ->  rtl_count(late),
         (   nb_current(rtl_late_sweep, Due) -> true ; Due = 64 ),
         nb_getval(late, Late),

@@ -64,6 +64,7 @@ record, and deleting an A or a P replays the P's of the affected accumulators
 */
 
 :- use_module(library(pairs), [pairs_values/2]).
+:- use_module(rtl_time, [rtl_beyond_bound/3]).
 
 :- meta_predicate rtl_dry_run(0, -, -), rtl_take_instance(:, +).
 
@@ -78,20 +79,20 @@ record, and deleting an A or a P replays the P's of the affected accumulators
 %   compiled rules of windowed steps, once per arriving instance: one comparison.
 
 rtl_late(End) :-
-    nb_getval(rtl_late_before, Before),
-    End < Before.
+    nb_getval(rtl_late_before, swept(Clock, Delay)),
+    rtl_beyond_bound(End, Clock, Delay).
 
 %!  rtl_swept(+Clock) is det.
 %
 %   A sweep at Clock retired partial matches: instances that ended more than max_delay
-%   before it are late from now on.
+%   before it (rtl_time:rtl_beyond_bound/3) are late from now on.
 
 rtl_swept(Clock) :-
     nb_getval(rtl_late_delay, Delay),
-    nb_getval(rtl_late_before, Before0),
-    (   number(Delay), number(Clock), Clock - Delay > Before0   % the largest, if the bound changed
-    ->  Before is Clock - Delay,
-        nb_setval(rtl_late_before, Before)
+    nb_getval(rtl_late_before, swept(Clock0, Delay0)),
+    (   number(Delay), number(Clock),
+        (   Clock0 =:= -inf -> true ; Clock - Delay > Clock0 - Delay0 )   % the latest, if the bound changed
+    ->  nb_setval(rtl_late_before, swept(Clock, Delay))
     ;   true
     ).
 
@@ -159,7 +160,7 @@ program_fact(M, Goal) :-
 
 rtl_horizon_reset :-
     NoClock is -inf,
-    nb_setval(rtl_late_before, NoClock),
+    nb_setval(rtl_late_before, swept(NoClock, 0)),
     nb_setval(rtl_complete_since, NoClock),
     nb_setval(rtl_kept_generation, a),
     nb_setval(rtl_kept_rotated, none).
@@ -292,7 +293,7 @@ rtl_retraction_too_late(End) :-
     H \== inf,
     nb_getval(rtl_clock, Clock),
     number(Clock),
-    End < Clock - H.
+    rtl_beyond_bound(End, Clock, H).
 
 %!  rtl_dry_run(:Goal, -Retracted:integer, -Derived:integer) is det.
 %

@@ -142,7 +142,8 @@ pair_json(Name=Value, Field) :-
 %!  rtl_memory_request(+Text:string, -Error) is det.
 %
 %   Create or delete memory instances on request from outside: Text is one of
-%   `c_mem(Id, Query, N, L)`, `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)`
+%   `c_mem(Id, Query, N, L)`, `c_mem(Id, Query, N, L, Options)`,
+%   `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)`
 %   or `delete_memory(IdPattern)`. The conditions of a new instance must pass the
 %   sandbox. Error is unbound on success, else `syntax(Message)`, `unsafe(Message)` or
 %   `failed(Message)`; nothing is created then.
@@ -161,12 +162,14 @@ rtl_memory_request(Text, Error) :-
                   ( message_text(Raised, Message), Error = failed(Message) ))
         ;   Error = Result
         )
-    ;   format(string(Message), "~q is not c_mem/4, memorize/5, d_mem/1 or delete_memory/1", [Request]),
+    ;   format(string(Message), "~q is not c_mem/4, c_mem/5, memorize/5, d_mem/1 or delete_memory/1", [Request]),
         Error = syntax(Message)
     ).
 
 memory_request_conditions(c_mem(_, Query, _, _), Conds) :-
     (   nonvar(Query), Query = _-Conds0 -> Conds = Conds0 ; Conds = [] ).
+memory_request_conditions(c_mem(Id, Query, N, L, _), Conds) :-
+    memory_request_conditions(c_mem(Id, Query, N, L), Conds).
 memory_request_conditions(memorize(_, Conds, _, _, _), Conds).
 memory_request_conditions(d_mem(_), []).
 memory_request_conditions(delete_memory(_), []).

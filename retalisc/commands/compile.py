@@ -155,7 +155,7 @@ Examples:
               help="Subscribe CONSUMER to the events matching QUERY (Event or Event-[Goals]), delivered "
                    "as TEMPLATE (default: the event). Repeatable.")
 @click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
-              help="Create a memory instance before the events (c_mem/4, memorize/5; d_mem/1 deletes one). "
+              help="Create a memory instance before the events (c_mem/4, c_mem/5, memorize/5; d_mem/1 deletes one). "
                    "Repeatable.")
 @click.option("--query", "queries", multiple=True, nargs=2, type=(float, str), metavar="Z GOAL",
               help="Post the synchronized query <GOAL, Z> before the events; its answers are written as "

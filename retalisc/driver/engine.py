@@ -668,7 +668,9 @@ class Engine:
 
     def memory(self, request: str) -> None:
         """Create or delete memory instances: `request` is the text of `c_mem(Id, Event-Conds, N, L)`,
-        `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)` or `delete_memory(IdPattern)`.
+        `c_mem(Id, Event-Conds, N, L, Options)` (Options: `[record_events(true)]` raises
+        memory_record_added/2 and memory_record_forgotten/2), `memorize(Event, Conds, Template,
+        Id, N)`, `d_mem(IdPattern)` or `delete_memory(IdPattern)`.
         The conditions must pass the sandbox; QueryError says why a request was refused."""
         with self._lock:
             _raise_if_refused(self._call("rtl_api_memory", _text(request, "a memory request")))
@@ -714,8 +716,9 @@ class Engine:
 
     def advance_clock(self, time: Number) -> List[OutputEvent]:
         """A heartbeat: move the clock to `time` (event time, seconds) without an event, if
-        that is later than the clock; the timers it passes (absences, alarms) fire. Returns
-        what they produced."""
+        that is later than the clock; the timers it passes (absences, alarms) fire and the
+        memory records it puts beyond their time limit are forgotten. Returns what they
+        produced."""
         if isinstance(time, bool) or not isinstance(time, (int, float)) or not math.isfinite(time):
             raise ValueError(f"advance_clock needs a finite number of seconds, not {time!r}")
         with self._lock:
