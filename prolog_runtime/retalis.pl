@@ -19,7 +19,8 @@
 :- use_module(rtl_horizon, [rtl_aggregate/4, rtl_aggregate_initial/2]).   % exported here too
 :- use_module(rtl_feed, [rtl_run_files/2, rtl_run_jsonl_file/1, rtl_run_event_file/4, rtl_feed_lines/3,
                          rtl_feed_lines/4, rtl_process_line/3, rtl_summary/1, rtl_summary/2,
-                         rtl_end_of_input/2, rtl_heartbeat/2, rtl_output_gone/1, error_text/2]).
+                         rtl_end_of_input/2, rtl_heartbeat/2, rtl_output_gone/1, rtl_output_failed/2,
+                         rtl_drop_output/0, rtl_stop_signal/2, error_text/2]).
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
 :- reexport(rtl_time).
@@ -99,11 +100,14 @@ run_declaration(Program, Goal) :-
 %   of the input; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
 %   refused by default); `--strict` ends the run (status 1) at the first line that is
 %   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
-%   `--max-timers=N` (pending timers at most, `inf` for no limit);
+%   `--max-timers=N` (pending timers at most, `inf` for no limit); `--max-event-types=N`
+%   (event types a run takes, default `inf`: rtl_event_types.pl); `--max-line-bytes=N`,
+%   `--max-digits=N`, `--max-future=SECONDS` (input limits, docs/runtime.md);
 %   `--action-output=FILE` sends what program code prints to FILE instead of standard
 %   error. Exit status: 0 when the input was processed (rejected and failed lines
-%   included), 1 when the run was stopped (`--strict`, `halt` in program code), 2 for
-%   usage errors.
+%   included), 1 when the run was stopped (`--strict`, `halt` in program code, standard
+%   output cannot be written), 2 for usage errors, 128 + N when the signal N (SIGTERM,
+%   SIGINT) ended it (stop_on_signal/1).
 %   `--retraction-horizon=SECONDS` (or `inf`) keeps deletions exact that long.
 %   `--detections=L1,L2,...` writes the detections per rule before the summary, the rules
 %   labelled L1, L2, ... first (`retalisc run` hands its runs over with it).
@@ -128,12 +132,42 @@ rtl_main :-
         main_finish(1)
     ;   true
     ),
+    forall(rtl_stop_signal(Signal, _), on_signal(Signal, _, retalis:stop_on_signal)),
     catch(rtl_run_files(Files, Status),
           Error,
           ( rtl_output_gone(Error)
           ->  output_gone_exit
+          ;   rtl_output_failed(Error, Why)
+          ->  output_failed_exit(Why)
           ;   error_text(Error, Text), format(user_error, "error: ~s~n", [Text]), Status = 1 )),
     main_finish(Status).
+
+%   stop_on_signal(+Signal): SIGTERM or SIGINT ends the run as the end of the input would,
+%   without the rest of the input: the event being processed is dropped where it is (the
+%   handler runs between Prolog calls, and each output line is written by one call, so only
+%   whole lines are in the output buffer), the output written so far is flushed, the summary
+%   printed, and the process ends with status 128 + the signal's number, as a shell reports
+%   a process the signal killed.
+
+stop_on_signal(Signal) :-
+    rtl_stop_signal(Signal, Number),
+    Status is 128 + Number,
+    catch(main_finish(Status), _, rtl_exit(Status)).
+
+signal_while_finishing(_).              % the run ends already: the summary is not cut
+
+%   output_failed_exit(+Why): writing standard output failed otherwise than by its reader
+%   going away (rtl_output_failed/2: a full disk, `swipl OUT.pl FILE > /dev/full`). The run
+%   ends with the line `retalis: cannot write standard output: Why`, the summary and status 1.
+
+output_failed_exit(Why) :-
+    format(user_error, "retalis: cannot write standard output: ~w~n", [Why]),
+    rtl_drop_output,
+    rtl_close_consumer_files,
+    rtl_close_action_output,
+    rtl_summary(Summary),
+    format(user_error, "~s~n", [Summary]),
+    rtl_exit(1).
 
 output_gone_exit :-
     rtl_close_consumer_files,
@@ -141,6 +175,7 @@ output_gone_exit :-
     rtl_exit(1).
 
 main_finish(Status) :-
+    forall(rtl_stop_signal(Signal, _), on_signal(Signal, _, retalis:signal_while_finishing)),
     rtl_close_consumer_files,
     rtl_close_action_output,
     flush_output(user_output),
@@ -202,6 +237,14 @@ main_args([Arg|Args], Files) :-
         ;   domain_error(max_timers, N)
         ),
         rtl_set_flag(max_timers, Timers), Files = Rest
+    ;   atom_concat('--max-event-types=', N, Arg)
+    ->  (   N == inf -> Types = inf
+        ;   atom_number(N, Types), integer(Types), Types > 0 -> true
+        ;   domain_error(max_event_types, N)
+        ),
+        rtl_set_flag(max_event_types, Types), Files = Rest
+    ;   input_limit_option(Arg, Flag, Value)
+    ->  rtl_set_flag(Flag, Value), Files = Rest
     ;   atom_concat('--action-output=', File, Arg)
     ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
         Files = Rest
@@ -220,6 +263,24 @@ main_args([Arg|Args], Files) :-
     ),
     main_args(Args, Rest).
 
+% --max-line-bytes=N, --max-digits=N (positive integers), --max-future=SECONDS (a number
+% >= 0), each also `inf` (docs/runtime.md, "Input limits").
+input_limit_option(Arg, Flag, Value) :-
+    input_limit_flag(Prefix, Flag),
+    atom_concat(Prefix, Text, Arg),
+    !,
+    (   Text == inf
+    ->  Value = inf
+    ;   catch(atom_number(Text, Value), _, fail),
+        rtl_valid_flag_value(Flag, Value)
+    ->  true
+    ;   domain_error(input_limit(Prefix), Text)
+    ).
+
+input_limit_flag('--max-line-bytes=', max_line_bytes).
+input_limit_flag('--max-digits=', max_digits).
+input_limit_flag('--max-future=', max_future).
+
 set_stream_option(Option) :-
     nb_getval(rtl_stream_options, Options),
     nb_setval(rtl_stream_options, [Option|Options]).
@@ -231,10 +292,14 @@ usage_error(Formal) :-
     ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
     ;   Formal = domain_error(max_timers, N)
     ->  format(user_error, "error: --max-timers=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = domain_error(max_event_types, N)
+    ->  format(user_error, "error: --max-event-types=~w: expected a positive integer or inf~n", [N])
+    ;   Formal = domain_error(input_limit(Prefix), Text)
+    ->  format(user_error, "error: ~w~w: expected a positive number or inf~n", [Prefix, Text])
     ;   Formal = action_output(File, E)
     ->  error_text(error(E, _), Why),
         format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
+    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--max-event-types=N] [--max-line-bytes=N] [--max-digits=N] [--max-future=SECONDS] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
     ).
 
 %!  rtl_action(:Goal) is det.
@@ -255,7 +320,8 @@ rtl_action(Goal) :-
 
 % The step limit and halts are not the action's own errors: they end the event.
 action_error(Error) :-
-    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_) )
+    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_)
+        ; Error = rtl_signal(_) )
     ->  throw(Error)
     ;   print_message(warning, Error),
         fail

@@ -62,6 +62,7 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_seen).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_time, [rtl_input_interval/6]).
+:- use_module(rtl_lines, [rtl_digits_problem/3]).
 :- use_module(rtl_horizon, [rtl_take_warnings/1, rtl_warnings_pending/0]).
 :- use_module(rtl_state).
 :- use_module(rtl_ros1).
@@ -246,7 +247,9 @@ item_event([OpText, Text, Start0, End0], Op, Event, Start, End) :- !,
     ->  rtl_input_interval(Start0, _, _, Start, End, Problem)
     ;   rtl_input_interval(_, Start0, End0, Start, End, Problem)
     ),
-    (   var(Problem)
+    (   var(Problem), rtl_future_problem(End, Future)       % (the clock before the batch)
+    ->  throw(error(invalid_time(Future), _))
+    ;   var(Problem)
     ->  true
     ;   throw(error(invalid_time(Problem), _))
     ).
@@ -262,7 +265,11 @@ item_term([Handle, Bytes], Event) :-
     ;   true                                % unbound: no text gives that (events are ground)
     ).
 item_term(Text, Event) :-
-    rtl_read_event(Text, Event).
+    rtl_flag(max_digits, MaxDigits),            % (as an event line's text: rtl_io.pl)
+    (   string(Text), rtl_digits_problem(Text, MaxDigits, Problem)
+    ->  throw(error(syntax_error(Problem), _))
+    ;   rtl_read_event(Text, Event)
+    ).
 
 %!  rtl_api_ros1_schema(+SchemaText, -Handle:string) is det.
 %

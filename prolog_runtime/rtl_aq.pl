@@ -885,9 +885,8 @@ release_buffer :-
 %   The answers before the update are the answers now without what it added
 %   and with what it deleted (as notified, held back in the buffer).
 reevaluate_queries :-
-    findall(Id-G, aq_q(Id, G, _, _), Queries),
     findall(Id-Old,
-            ( member(Id-_, Queries),
+            ( aq_q(Id, _, _, _),
               aq_answers(Id, Now),
               findall(A, aq_buf(Id, add, A), Added0), sort(Added0, Added),
               findall(A, aq_buf(Id, delete, A), Deleted0), sort(Deleted0, Deleted),
@@ -896,7 +895,15 @@ reevaluate_queries :-
             ),
             Olds),
     retractall(aq_buf(_, _, _)),
+    register_again(Olds).
+
+%   Every query registered again, from the facts, and the difference from its answers
+%   before (Olds: Id-Answers) notified.  The notifications not yet taken stay.
+register_again(Olds) :-
+    findall(Id-G, aq_q(Id, G, _, _), Queries),
+    findall(aq_ev(Id, Op, A), aq_ev(Id, Op, A), Pending),
     aq_reset,
+    maplist(assertz, Pending),
     forall(member(Id-G, Queries), aq_register(Id, G, _)),
     forall(member(Id-Old, Olds),
            ( aq_answers(Id, New),
@@ -1754,14 +1761,18 @@ query_has(Id, A) :-
 %   Add the rule `H :- B` (checked by rtl_aq_rules: untrusted) and propagate
 %   what it derives to every active query: the rule is activated for every
 %   table whose goal unifies with H.  Adding a rule that is there already
-%   (a variant) does nothing.  Throws aq_rule_error(Message) for a rule that
+%   (a variant) does nothing.  A first rule for a predicate with stored facts
+%   only makes it a mixed one first (mixed_predicate/1).  Throws aq_rule_error(Message) for a rule that
 %   may not be added.
 aq_add_rule(Rule0) :-
     copy_term(Rule0, Rule),
-    aq_rule_check(Rule, Lits0),
+    aq_rule_check(Rule, _),
     (   aq_rule(_, R, _), R =@= Rule
     ->  true
-    ;   (   aq_conf(mode, naive) -> maplist(as_call, Lits0, Lits) ; Lits = Lits0 ),
+    ;   Rule = (H0 :- _),
+        mixed_predicate(H0),
+        aq_rule_check(Rule, Lits0),             % the kinds of its literals as they are now
+        (   aq_conf(mode, naive) -> maplist(as_call, Lits0, Lits) ; Lits = Lits0 ),
         flag(aq_rule_id, N0, N0 + 1),
         N is N0 + 1,
         aq_rule_clauses(Rule, Lits, N, Clauses),
@@ -1774,6 +1785,71 @@ aq_add_rule(Rule0) :-
         Clauses = [Act|_],
         neg_update(activate_rule(insert, Act))
     ).
+
+%   A predicate with stored facts only that gets a rule becomes a mixed one, as a dynamic
+%   predicate does under XSB's incremental tabling: its literals, resolved in place against
+%   the stored facts so far, go through a table from now on, with one more rule that reads
+%   its stored facts (the rule the compiler adds for a predicate with rules and facts).  The
+%   generated clauses that wait on its facts are rewritten to wait on its table, and the
+%   active queries are evaluated again (their answers stay: the predicate's answers are its
+%   facts until the new rule is activated).  The naive mode reads every stored predicate
+%   through a table already.
+mixed_predicate(H) :-
+    functor(H, N, A), functor(P, N, A),
+    (   \+ aq_conf(mode, naive),
+        user:'$aq_kind'(P, fact)
+    ->  findall(Id-Old, ( aq_q(Id, _, _, _), aq_answers(Id, Old) ), Olds),
+        retract(user:'$aq_kind'(P, fact)),
+        assertz(user:'$aq_kind'(P, call)),
+        forall(generated_clause(Head), rewrite_waits(P, Head)),
+        flag(aq_rule_id, K0, K0 + 1),
+        K is K0 + 1,
+        aq_rule_clauses((P :- P), [fact(P)], K, Clauses),
+        maplist(assert_clause, Clauses, _),
+        retractall(aq_fact_only(_, _, _)),
+        register_again(Olds)
+    ;   true
+    ).
+
+generated_clause('$aq_act'(_, _)).
+generated_clause('$aq_go'(_, _, _)).
+generated_clause('$aq_final'(_, _, _, _, _, _)).
+
+%   Every clause of Head that waits on P's facts, waiting on P's table instead (the clause
+%   references of rules added at run time follow).
+rewrite_waits(P, Head) :-
+    forall(clause(user:Head, Body, Ref),
+           (   mixed_head(P, Head, Head1),
+               mixed_goal(P, Body, Body1),
+               Head1-Body1 \== Head-Body
+           ->  assertz(user:(Head1 :- Body1), New),
+               erase(Ref),
+               forall(( aq_rule(N, R, Refs), memberchk(Ref, Refs) ),
+                      ( retract(aq_rule(N, R, Refs)),
+                        maplist(replaced_ref(Ref, New), Refs, Refs1),
+                        assertz(aq_rule(N, R, Refs1)) ))
+           ;   true
+           )).
+
+replaced_ref(Old, New, Ref, Ref1) :-
+    (   Ref == Old -> Ref1 = New ; Ref1 = Ref ).
+
+mixed_head(P, '$aq_final'(H, T, S, fact, L, C), '$aq_final'(H, T, S, call, L, C)) :-
+    of_predicate(L, P), !.
+mixed_head(_, Head, Head).
+
+mixed_goal(_, G, G) :- var(G), !.
+mixed_goal(P, M:G0, M:G) :- !, mixed_goal(P, G0, G).
+mixed_goal(P, (A0, B0), (A, B)) :- !, mixed_goal(P, A0, A), mixed_goal(P, B0, B).
+mixed_goal(P, (A0 ; B0), (A ; B)) :- !, mixed_goal(P, A0, A), mixed_goal(P, B0, B).
+mixed_goal(P, (A0 -> B0), (A -> B)) :- !, mixed_goal(P, A0, A), mixed_goal(P, B0, B).
+mixed_goal(P, aq_wait_fact(L, S), aq_wait_call(L, S)) :- of_predicate(L, P), !.
+mixed_goal(P, aq_wait_neg(fact, L, S, Str), aq_wait_neg(call, L, S, Str)) :- of_predicate(L, P), !.
+mixed_goal(_, G, G).
+
+of_predicate(L, P) :-
+    nonvar(L),
+    \+ L \= P.
 
 %   The steps of the join states (join_step/4) as the clauses are now.
 join_steps_changed :-

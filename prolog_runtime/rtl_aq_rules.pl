@@ -11,13 +11,13 @@ is checked here before anything of it is installed:
 
   - its body is a conjunction of literals of the program's predicates (those the generated
     program lists in '$aq_kind'/2, or the head's own predicate) and of the definite builtins
-    (comparison, `is`, `=`, `==`, `\==`, `true`), or `\+` of a builtin.  Nothing else can
+    (comparison, term order, `is`, `=`, `\=`, `==`, `\==`, `true`), or `\+` of a builtin.  Nothing else can
     run: no meta-call, no side effect, no library predicate.  This is stricter than
     rtl_sandbox.pl (which lets safe library predicates through), because a rule body of an
     active query is a definite program;
-  - its head is a predicate with rules in the program, or a new predicate (not a builtin, a
-    system predicate, a name starting with `$`, or a predicate with stored facts only, whose
-    literals the generated code resolves against the stored facts).
+  - its head is a predicate of the program (one with stored facts only becomes a mixed one:
+    rtl_aq's aq_add_rule/1) or a new predicate, not a builtin, a system predicate or a name
+    starting with `$`.
 
 aq_rule_clauses/4 then produces the same clauses the compiler generates for a program rule
 (retalisc/backends/prolog/aq_backend.py): the activation '$aq_act'(H, T), one
@@ -36,8 +36,13 @@ builtin(_ =:= _).
 builtin(_ =\= _).
 builtin(_ is _).
 builtin(_ = _).
+builtin(_ \= _).
 builtin(_ == _).
 builtin(_ \== _).
+builtin(_ @< _).
+builtin(_ @> _).
+builtin(_ @=< _).
+builtin(_ @>= _).
 builtin(true).
 
 %!  aq_rule_check(+Rule, -Literals) is det.
@@ -62,11 +67,6 @@ check_head(H) :-
     functor(H, N, A),
     (   builtin(H) ; predicate_property(system:H, defined) ; sub_atom(N, 0, 1, _, $) ), !,
     format(atom(M), 'cannot define ~q (a builtin or system predicate)', [N/A]),
-    throw(aq_rule_error(M)).
-check_head(H) :-
-    functor(H, N, A), functor(G, N, A),
-    user:'$aq_kind'(G, fact), !,
-    format(atom(M), '~q has stored facts only: its literals are resolved against the facts, so a rule for it must be in the program', [N/A]),
     throw(aq_rule_error(M)).
 check_head(_).
 

@@ -10,9 +10,11 @@
             rtl_underived/3,            % +Event, +Start, +End
             rtl_clock/1,                % -Clock
             rtl_advance_clock/1,        % +Time
+            rtl_future_problem/2,       % +End, -Problem
             rtl_started_after/1,        % +Time
             rtl_blockers_due/4,         % +Step, +Partner, +Clock, -Before
             rtl_set_flag/2,             % +Flag, +Value
+            rtl_valid_flag_value/2,     % +Flag, @Value
             rtl_flag/2,                 % ?Flag, ?Value
             rtl_max_steps/1,            % -Steps
             rtl_default_flags/0,
@@ -30,6 +32,7 @@
             rtl_detections/1,           % -Pairs
             rtl_store_size/1,           % -Clauses
             rtl_collect_garbage/0,
+            rtl_collect_garbage/1,      % +Scan
             rtl_add_output_hook/1,      % :Hook
             rtl_remove_output_hook/1,   % :Hook
             rtl_add_type_output_hook/2, % +Pattern, :Hook
@@ -66,6 +69,7 @@ deletion is too late).
 :- use_module(rtl_io).
 :- use_module(rtl_horizon).
 :- use_module(rtl_timers).
+:- use_module(rtl_time, [rtl_beyond_bound/3]).
 
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
@@ -84,6 +88,10 @@ flag_default(max_term_depth, 1000).         % nesting of input event terms
 flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_horizon.pl)
 flag_default(flush_timers, false).          % fire pending timers at the end of the input (rtl_timers.pl)
 flag_default(max_timers, 100000).           % pending timers at most (rtl_timers.pl; inf: no limit)
+flag_default(max_event_types, inf).         % event types a run takes (rtl_event_types.pl)
+flag_default(max_line_bytes, 1048576).      % bytes of an input line at most (rtl_lines.pl)
+flag_default(max_digits, 4300).             % digits in a row in an input line at most (rtl_lines.pl)
+flag_default(max_future, 86400).            % seconds an input event may end after the clock
 
 %!  rtl_use_program(+Module) is det.
 %
@@ -113,6 +121,7 @@ rtl_reset :-
     nb_setval(rtl_next_sweep, inf),
     nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
     forall(counter(S), nb_setval(S, 0)),
+    nb_setval(rtl_late_sweep, 64),
     forget_detections,
     forget_blocker_sweeps,
     rtl_horizon_reset,
@@ -149,7 +158,11 @@ rtl_clear :-
 %   inferences one input event may take, everything it derives included; `inf` for no
 %   limit; default 1,000,000) and `max_term_depth` (how deep an input event term may be
 %   nested; default 1,000), `max_timers` (how many timers may be pending, absences and
-%   alarms; `inf` for no limit; default 100,000) and `retraction_horizon` (`auto`, seconds or `inf`: how long
+%   alarms; `inf` for no limit; default 100,000), `max_line_bytes` (the longest input line,
+%   default 1,048,576 bytes), `max_digits` (the longest run of digits in an input line or
+%   event text, default 4,300), `max_future` (seconds an input event may end after the
+%   clock or the wall clock, the later of the two; default 86,400; rtl_future_problem/2)
+%   and `retraction_horizon` (`auto`, seconds or `inf`: how long
 %   deletions stay exact, at least max_delay plus the largest window; rtl_horizon.pl). A bad value raises a type or domain error and changes nothing.
 
 rtl_set_flag(Flag, Value) :-
@@ -157,7 +170,7 @@ rtl_set_flag(Flag, Value) :-
     ->  true
     ;   domain_error(retalis_flag, Flag)
     ),
-    (   valid_flag_value(Flag, Value)
+    (   rtl_valid_flag_value(Flag, Value)
     ->  true
     ;   var(Value)
     ->  instantiation_error(Value)
@@ -167,25 +180,34 @@ rtl_set_flag(Flag, Value) :-
     assertz(flag_value(Flag, Value)),
     (   Flag == echo_input -> nb_setval(rtl_echo_input, Value) ; true ),   % read on every event
     (   Flag == max_steps -> nb_setval(rtl_max_steps, Value) ; true ),     % read on every event
+    (   Flag == max_event_types -> rtl_event_types:rtl_cap_event_types(Value) ; true ),
     (   memberchk(Flag, [max_delay, retraction_horizon]) -> schedule_sweep ; true ).
 
-valid_flag_value(max_delay, V) :-
+rtl_valid_flag_value(max_delay, V) :-
     (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
-valid_flag_value(echo_input, V) :-
+rtl_valid_flag_value(echo_input, V) :-
     ( V == true ; V == false ), !.
-valid_flag_value(flush_timers, V) :-
+rtl_valid_flag_value(flush_timers, V) :-
     ( V == true ; V == false ), !.
-valid_flag_value(event_consumption_policy, V) :-
+rtl_valid_flag_value(event_consumption_policy, V) :-
     atom(V), memberchk(V, [unrestricted, recent, chronological]).
-valid_flag_value(query_time_limit, V) :-
+rtl_valid_flag_value(query_time_limit, V) :-
     number(V), V > 0, V =\= inf.
-valid_flag_value(retraction_horizon, V) :-
+rtl_valid_flag_value(retraction_horizon, V) :-
     (   V == auto -> true ; V == inf -> true ; number(V), V >= 0, V =\= inf ).
-valid_flag_value(max_steps, V) :-
+rtl_valid_flag_value(max_steps, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
-valid_flag_value(max_timers, V) :-
+rtl_valid_flag_value(max_timers, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
-valid_flag_value(max_term_depth, V) :-
+rtl_valid_flag_value(max_event_types, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
+rtl_valid_flag_value(max_line_bytes, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
+rtl_valid_flag_value(max_future, V) :-
+    (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
+rtl_valid_flag_value(max_digits, V) :-
+    (   V == inf -> true ; integer(V), V > 0 ).
+rtl_valid_flag_value(max_term_depth, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 
 %!  rtl_default_flags is det.
@@ -195,7 +217,8 @@ valid_flag_value(max_term_depth, V) :-
 rtl_default_flags :-
     retractall(flag_value(_, _)),
     nb_setval(rtl_echo_input, false),
-    nb_setval(rtl_max_steps, []).
+    nb_setval(rtl_max_steps, []),
+    rtl_event_types:rtl_forget_event_types.
 
 %!  rtl_max_steps(-Steps) is det.
 %
@@ -267,6 +290,10 @@ rtl_event(Event, Start, End) :-
     nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_linkval(rtl_clock, End),
+        (   nb_current(rtl_slr_next_expiry, Expiry), Expiry < End   % a memory record to forget
+        ->  rtl_slr:rtl_slr_clock_moved(End)
+        ;   true
+        ),
         (   nb_current(rtl_next_timer, Due), Due < End      % a timer due before the event
         ->  rtl_timers_run(before)
         ;   true
@@ -321,9 +348,8 @@ started_before_sweep(Type, Start, End) :-
 
 beyond_delay(End) :-
     rtl_flag(max_delay, Delay),
-    Delay \== inf,
     nb_getval(rtl_clock, Clock),
-    End < Clock - Delay.
+    rtl_beyond_bound(End, Clock, Delay).
 
 %!  rtl_started_after(+Time:number) is semidet.
 %
@@ -368,15 +394,54 @@ rtl_advance_clock(Time) :-
     nb_getval(rtl_clock, Clock0),
     (   Time > Clock0
     ->  nb_setval(rtl_clock, Time),
+        (   nb_current(rtl_slr_next_expiry, Expiry), Expiry < Time
+        ->  rtl_slr:rtl_slr_clock_moved(Time)
+        ;   true
+        ),
         rtl_timers_run(after),
         nb_getval(rtl_next_sweep, Next),
         (   Time >= Next -> periodic_sweep ; true )
     ;   true
     ).
 
+%!  rtl_future_problem(+End:number, -Problem:string) is semidet.
+%
+%   An input event (or clock line) ending at End lies too far in the future to be taken:
+%   more than the flag `max_future` seconds after the clock and after the wall clock. The
+%   first event of a run (no clock yet) is measured against the wall clock alone, so that a
+%   time base of its own (seconds from 0) or of the epoch (ROS stamps) both start freely,
+%   while a time such as 1e300, after which every event would be late, is refused.
+
+rtl_future_problem(End, Problem) :-
+    rtl_flag(max_future, Max),
+    Max \== inf,
+    nb_getval(rtl_clock, Clock),
+    get_time(Now),
+    End > max(Clock, Now) + Max,
+    (   integer(Max)
+    ->  format(string(Problem), "time ~w is more than ~D seconds after the clock (max_future)", [End, Max])
+    ;   format(string(Problem), "time ~w is more than ~w seconds after the clock (max_future)", [End, Max])
+    ).
+
+% A late event counts; every `late_sweep` of them the stores are swept (the clock-driven
+% sweep never runs while only late events come: after one far in the future, their partial
+% matches would pile up, and each event would search them all). The next sweep waits for as
+% many late events as the stores hold matches, at least 64: sweeps cost one event each.
 late_check(End, Clock) :-
     rtl_flag(max_delay, Delay),
-    (   Delay \== inf, End < Clock - Delay -> rtl_count(late) ; true ).
+    (   rtl_beyond_bound(End, Clock, Delay)
+    ->  rtl_count(late),
+        (   nb_current(rtl_late_sweep, Due) -> true ; Due = 64 ),
+        nb_getval(late, Late),
+        (   Late >= Due
+        ->  rtl_collect_garbage(whole),
+            rtl_store_size(Size),
+            Next is Late + max(64, Size),
+            nb_setval(rtl_late_sweep, Next)
+        ;   true
+        )
+    ;   true
+    ).
 
 %!  rtl_retract_event(+Event, +Start, +End) is det.
 %
@@ -624,6 +689,7 @@ rtl_store_size(Size) :-
                   Size).
 
 %!  rtl_collect_garbage is det.
+%!  rtl_collect_garbage(+Scan) is det.
 %
 %   Retire the partial matches of windowed steps that can no longer take part in a match
 %   with an event within the delay bound (their start lies more than Window + max_delay
@@ -631,6 +697,12 @@ rtl_store_size(Size) :-
 %   retraction horizon has passed (rtl_horizon.pl).
 
 rtl_collect_garbage :-
+    rtl_collect_garbage(stored_order).
+
+% Scan `stored_order`: a store kept oldest first is scanned to its first match that stays
+% (rtl_retire_store/5); `whole`: to its end, for the sweep of late events, whose matches
+% come after those of later events.
+rtl_collect_garbage(Scan) :-
     nb_getval(rtl_program, M),
     nb_getval(rtl_clock, Clock),
     rtl_flag(max_delay, Delay),
@@ -638,7 +710,7 @@ rtl_collect_garbage :-
     ->  true
     ;   forall(M:ele_store(Name, Arity, Window),
                ( Before is Clock - Window - Delay,
-                 rtl_retire_store(M, Name, Arity, Before) )),
+                 rtl_retire_store(M, Name, Arity, Before, Scan) )),
         rtl_forget_kept(M, Clock),
         forget_blockers(M, Clock),
         rtl_swept(Clock)

@@ -10,13 +10,16 @@
             rtl_end_of_input/2,         % +Mode, -Output
             rtl_heartbeat/2,            % +Time, -Output
             rtl_output_gone/1,          % @Error
+            rtl_output_failed/2,        % @Error, -Why
+            rtl_drop_output/0,
+            rtl_stop_signal/2,          % ?Signal, ?Number
             error_text/2                % +Error, -Text
           ]).
 :- use_module(library(apply)).
 :- use_module(library(lists)).
 :- use_module(rtl_ele).
 :- use_module(rtl_io).
-:- use_module(rtl_lines, [rtl_read_line/2, rtl_split_lines/2, rtl_utf8_line/2]).
+:- use_module(rtl_lines, [rtl_read_line/3, rtl_split_lines/2, rtl_utf8_line/2, rtl_long_line/4]).
 :- use_module(rtl_horizon).
 :- use_module(rtl_time).
 :- use_module(rtl_raise).
@@ -43,6 +46,30 @@ rtl_api.pl, which both import it.
 %   nothing more (no summary), as `retalisc run` does when Python writes the output.
 
 rtl_output_gone(error(io_error(write, user_output), context(_, 'Broken pipe'))).
+
+%!  rtl_output_failed(@Error, -Why) is semidet.
+%
+%   Writing standard output failed otherwise (a full disk: `swipl OUT.pl FILE > /dev/full`).
+%   The run ends with the line `retalis: cannot write standard output: Why`, the summary and
+%   status 1.
+
+rtl_output_failed(error(io_error(write, user_output), context(_, Why)), Why).
+
+%!  rtl_drop_output is det.
+%
+%   What is left in standard output's buffer cannot be written: drop it.
+
+rtl_drop_output :-
+    catch(close(user_output, [force(true)]), _, true).
+
+%!  rtl_stop_signal(?Signal, ?Number) is nondet.
+%
+%   The signals that stop a run (SIGTERM, SIGINT) with their numbers: the run ends as the
+%   end of the input would, without the rest of the input, and the process with status
+%   128 + Number (retalis.pl's rtl_main/0; rtl_run_event_file/4 for `retalisc run`).
+
+rtl_stop_signal(term, 15).
+rtl_stop_signal(int, 2).
 
 %!  rtl_run_files(+Files:list, -Status:integer) is det.
 %
@@ -93,8 +120,11 @@ rtl_run_jsonl_file(File) :-
 %   Python per line; lines not processed and warnings go to standard error as `FILE:N: ...`
 %   (`<stdin>:N: ...`). AllowControl and Strict are `true` or `false`. Outcome is `stopped`
 %   when the run must end (`--strict`, `halt` in program code), `output gone` when standard
-%   output's reader went away (rtl_output_gone/1), else `done`. Afterwards the output goes to the
-%   buffer again, as an Engine wants it.
+%   output's reader went away (rtl_output_gone/1), `signal N` when the signal N (SIGTERM,
+%   SIGINT) stopped the run (the output written so far flushed, whole lines only; the caller
+%   then ends the run with status 128 + N), `output failed: WHY` when standard output cannot
+%   be written (a full disk), else `done`. Afterwards the output goes to the buffer again, as
+%   an Engine wants it.
 
 rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     atom_string(File, File0),
@@ -105,23 +135,44 @@ rtl_run_event_file(File0, AllowControl0, Strict0, Outcome) :-
     set_stream(user_output, encoding(utf8)),
     setup_call_cleanup(
         ( nb_setval(rtl_stream_options, [allow_control(AllowControl), strict(Strict)]),
-          rtl_output_to(print) ),
+          rtl_output_to(print),
+          findall(Signal-Old, ( rtl_stop_signal(Signal, _), on_signal(Signal, Old, rtl_feed:signal_ends_loop) ),
+                  Handlers) ),
         catch(( rtl_run_jsonl_file(File), flush_output(user_output), Outcome = "done" ),
               Stop,
               run_stopped(Stop, Outcome)),
-        ( rtl_output_to(buffer),
+        ( forall(member(Signal-Old, Handlers), on_signal(Signal, _, Old)),
+          nb_setval(rtl_stop_signal, []),
+          rtl_output_to(buffer),
           nb_setval(rtl_stream_options, []) )).
 
+%   signal_ends_loop(+Signal): a stop signal during rtl_run_event_file/4 ends the loop
+%   (rtl_signal(Number), which no event failure takes for its own: event_failure/3), also
+%   when program code catches that: the loop looks at rtl_stop_signal after each line.
+
+signal_ends_loop(Signal) :-
+    rtl_stop_signal(Signal, Number),
+    nb_setval(rtl_stop_signal, Number),
+    throw(rtl_signal(Number)).
+
+run_stopped(rtl_signal(Number), Outcome) :- !,
+    catch(flush_output(user_output), _, true),
+    format(string(Outcome), "signal ~w", [Number]).
 run_stopped(rtl_stop(_), "stopped") :- !.
 run_stopped(Error, "output gone") :- rtl_output_gone(Error), !.
+run_stopped(Error, Outcome) :-
+    rtl_output_failed(Error, Why),
+    !,
+    rtl_drop_output,
+    format(string(Outcome), "output failed: ~w", [Why]).
 run_stopped(Error, _) :- throw(Error).
 
 % The input is read as bytes (ISO Latin-1) and each line cut and decoded as UTF-8 by
-% rtl_read_line/2, as the Python driver's loops have the runtime cut and decode theirs
-% (rtl_lines.pl, docs/runtime.md, "Event input").
+% rtl_read_line/3, as the Python driver's loops have the runtime cut and decode theirs
+% (rtl_lines.pl, docs/runtime.md, "Event input"), each line at most max_line_bytes long.
 run_stream(In, Name) :-
     stream_options(Options),
-    rtl_read_line(In, Line0),
+    read_line(In, Line0),
     without_bom(Line0, Line),
     with_output_buffer(In, with_action_output(run_lines(Line, In, Name, 1, Options))).
 
@@ -157,8 +208,12 @@ run_lines(Line, In, Name, N, Options) :-
     line_done(Outcome, In, Name, N, Options),
     N1 is N + 1,
     run_buffered(In, Name, N1, Options, N2),
-    rtl_read_line(In, Next),
+    read_line(In, Next),
     run_lines(Next, In, Name, N2, Options).
+
+read_line(In, Line) :-
+    rtl_flag(max_line_bytes, MaxBytes),
+    rtl_read_line(In, MaxBytes, Line).
 
 line_done(Outcome, In, Name, N, Options) :-
     (   Outcome == ok
@@ -167,7 +222,11 @@ line_done(Outcome, In, Name, N, Options) :-
         print_warnings(Name, N),
         stop_if_needed(Outcome, Options)
     ),
-    (   Name == '<stdin>' -> flush_if_idle(In) ; true ).
+    (   Name == '<stdin>' -> flush_if_idle(In) ; true ),
+    (   nb_current(rtl_stop_signal, Number), integer(Number)   % one that program code caught
+    ->  throw(rtl_signal(Number))
+    ;   true
+    ).
 
 run_buffered(In, Name, N0, Options, N) :-
     rtl_flag(max_term_depth, MaxDepth),
@@ -179,30 +238,51 @@ run_buffered(In, Name, N0, Options, N) :-
     ).
 
 %   A run of event lines with a time "t" only (items a(Event, T)) is remembered for
-%   retractions in one call (rtl_seen_add_atomic/1), then processed event by event.
+%   retractions in one call (rtl_seen_add_atomic/1), then processed event by event. The run
+%   ends before an event too far in the future (rtl_future_problem/2, for the clock as it
+%   will be when the event's turn comes), which is then rejected on its own.
 
 run_items([], _, _, N, _, N).
 run_items([Item|Items], In, Name, N0, Options, N) :-
-    (   Item = a(_, _)
-    ->  atomic_run([Item|Items], Run, Rest),
-        rtl_seen_add_atomic(Run),
+    (   Item = a(_, _),
+        future_limit(Limit),
+        atomic_run([Item|Items], Limit, Run, Rest),
+        Run \== []
+    ->  rtl_seen_add_atomic(Run),
         run_atomic(Run, Rest, In, Name, N0, Options, N1)
-    ;   Item = l(Line),
-        rtl_process_line(Line, Options, Outcome),
+    ;   (   Item = a(Event, T)
+        ->  rtl_process_parsed(event(add, Event, T, T), Options, Outcome)
+        ;   Item = l(Line),
+            rtl_process_line(Line, Options, Outcome)
+        ),
         item_done(Outcome, Items, In, Name, N0, Options),
         N1 is N0 + 1,
         Rest = Items
     ),
     run_items(Rest, In, Name, N1, Options, N).
 
-atomic_run([Item|Items], Run, Rest) :-
-    (   Item = a(_, _)
+% The latest time an input event may end now (rtl_future_problem/2).
+future_limit(Limit) :-
+    rtl_flag(max_future, Max),
+    (   Max == inf
+    ->  Limit = inf
+    ;   rtl_clock(Clock),
+        get_time(Now),
+        Limit is max(Clock, Now) + Max
+    ).
+
+atomic_run([Item|Items], Limit, Run, Rest) :-
+    (   Item = a(_, T),
+        T =< Limit
     ->  Run = [Item|Run1],
-        atomic_run(Items, Run1, Rest)
+        (   Limit == inf -> Limit1 = inf
+        ;   rtl_flag(max_future, Max), Limit1 is max(Limit, T + Max)
+        ),
+        atomic_run(Items, Limit1, Run1, Rest)
     ;   Run = [],
         Rest = [Item|Items]
     ).
-atomic_run([], [], []).
+atomic_run([], _, [], []).
 
 %   The run is one block of input events (rtl_input_block/1): each event is processed by
 %   rtl_block_input/3 under its own catch/3, with its own step limit, and reported as
@@ -331,10 +411,18 @@ parsed_outcome(rule(Change, Text), Options, Outcome) :-
         ( var(Reason) -> Outcome = ok ; Outcome = rejected(Reason) )
     ;   Outcome = refused("control lines are disabled (pass --allow-control)")
     ).
+parsed_outcome(clock(Time), _, Outcome) :-
+    rtl_future_problem(Time, Reason),
+    !,
+    Outcome = rejected(Reason).
 parsed_outcome(clock(Time), _, Outcome) :-       % a heartbeat in the input (rtl_advance_clock/1)
     catch(( rtl_guarded(rtl_advance_clock(Time)), Outcome = ok ),
           Error,
           event_failure(Error, "the clock line", Outcome)).
+parsed_outcome(event(_, _, _, End), _, Outcome) :-
+    rtl_future_problem(End, Reason),
+    !,
+    Outcome = rejected(Reason).
 parsed_outcome(event(Op, Event, Start, End), _, Outcome) :-
     (   Op == add
     ->  rtl_seen_add(Event, Start, End),
@@ -362,6 +450,10 @@ run_event(Op, Event, Start, End, Outcome) :-
             event_text(Event, Text),
             event_failure(Error, Text, Outcome) )).
 
+event_failure(Error, _, _) :-                  % the output cannot be written, a stop signal
+    ( rtl_output_gone(Error) ; rtl_output_failed(Error, _) ; Error = rtl_signal(_) ),
+    !,
+    throw(Error).
 event_failure(rtl_halted(Why), Text, halted(Reason)) :- !,
     format(string(Reason), "~s while processing ~s", [Why, Text]).
 event_failure(Error, Text, failed(Reason)) :-
@@ -435,8 +527,9 @@ rtl_feed_lines(Text, First, Options, Output) :-
     rtl_output_to(buffer),
     rtl_split_lines(Text, Lines0),
     (   memberchk(bytes(true), Options)
-    ->  maplist(rtl_utf8_line, Lines0, Lines1)
-    ;   Lines1 = Lines0
+    ->  rtl_flag(max_line_bytes, MaxBytes),
+        maplist(byte_line(MaxBytes), Lines0, Lines1)
+    ;   Lines1 = Lines0                         % (rtl_parse_event_line/3 checks the length)
     ),
     (   First =:= 1, Lines1 = [L0|Ls]
     ->  without_bom(L0, L1), Lines = [L1|Ls]
@@ -448,6 +541,13 @@ rtl_feed_lines(Text, First, Options, Output) :-
     exclude(==(""), All0, All),
     atomic_list_concat(All, "\n", Joined),
     (   All == [] -> Output = "" ; string_concat(Joined, "\n", Output) ).
+
+% A line of a batch of bytes as rtl_read_line/3 reads it: too long before it is decoded.
+byte_line(MaxBytes, Line0, Line) :-
+    (   rtl_long_line(Line0, true, MaxBytes, TooLong)
+    ->  Line = TooLong
+    ;   rtl_utf8_line(Line0, Line)
+    ).
 
 feed_lines([], _, _, []).
 feed_lines([Line|Lines], N, Options, Rejections) :-

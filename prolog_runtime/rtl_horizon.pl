@@ -5,7 +5,7 @@
             rtl_horizon/1,              % -Seconds
             rtl_horizon_setup/3,        % +Module, +MaxDelay, +Flag
             rtl_horizon_reset/0,
-            rtl_retire_store/4,         % +Module, +Name, +Arity, +Before
+            rtl_retire_store/5,         % +Module, +Name, +Arity, +Before, +Scan
             rtl_forget_kept/2,          % +Module, +Clock
             rtl_retraction_too_late/1,  % +End
             rtl_dry_run/3,              % :Goal, -Retracted, -Derived
@@ -66,6 +66,7 @@ record, and deleting an A or a P replays the P's of the affected accumulators
 */
 
 :- use_module(library(pairs), [pairs_values/2]).
+:- use_module(rtl_time, [rtl_beyond_bound/3]).
 
 :- meta_predicate rtl_dry_run(0, -, -), rtl_take_instance(:, +).
 
@@ -80,20 +81,20 @@ record, and deleting an A or a P replays the P's of the affected accumulators
 %   compiled rules of windowed steps, once per arriving instance: one comparison.
 
 rtl_late(End) :-
-    nb_getval(rtl_late_before, Before),
-    End < Before.
+    nb_getval(rtl_late_before, swept(Clock, Delay)),
+    rtl_beyond_bound(End, Clock, Delay).
 
 %!  rtl_swept(+Clock) is det.
 %
 %   A sweep at Clock retired partial matches: instances that ended more than max_delay
-%   before it are late from now on.
+%   before it (rtl_time:rtl_beyond_bound/3) are late from now on.
 
 rtl_swept(Clock) :-
     nb_getval(rtl_late_delay, Delay),
-    nb_getval(rtl_late_before, Before0),
-    (   number(Delay), number(Clock), Clock - Delay > Before0   % the largest, if the bound changed
-    ->  Before is Clock - Delay,
-        nb_setval(rtl_late_before, Before)
+    nb_getval(rtl_late_before, swept(Clock0, Delay0)),
+    (   number(Delay), number(Clock),
+        (   Clock0 =:= -inf -> true ; Clock - Delay > Clock0 - Delay0 )   % the latest, if the bound changed
+    ->  nb_setval(rtl_late_before, swept(Clock, Delay))
     ;   true
     ).
 
@@ -161,16 +162,21 @@ program_fact(M, Goal) :-
 
 rtl_horizon_reset :-
     NoClock is -inf,
-    nb_setval(rtl_late_before, NoClock),
+    nb_setval(rtl_late_before, swept(NoClock, 0)),
     nb_setval(rtl_complete_since, NoClock),
     nb_setval(rtl_kept_generation, a),
     nb_setval(rtl_kept_rotated, none).
 
-%!  rtl_retire_store(+Module, +Name, +Arity, +Before) is det.
+%!  rtl_retire_store(+Module, +Name, +Arity, +Before, +Scan) is det.
 %
 %   The sweep of live store Name/Arity: every partial match starting before Before moves to
 %   the current kept generation of the store (rtl_forget_kept/2), or is dropped when the
-%   store has none.
+%   store has none. Scan is `stored_order` (the clock-driven sweep: an oldest-first store is
+%   scanned to its first match that stays) or `whole` (the sweep of late events, rtl_ele.pl:
+%   every match is looked at, and one that ends more than H + the largest window before the
+%   clock is dropped, not kept: no deletion inside the horizon can need it. Such matches come
+%   from events later than the horizon; kept, they would pile up while the clock stands,
+%   after an event far in the future, and every late event would search them all).
 %
 %   Kept generations: a store's retired matches go to one of its two kept generations
 %   (`_kept_a`, `_kept_b`; the same one for every store) until the kept matches are rotated,
@@ -179,7 +185,7 @@ rtl_horizon_reset :-
 %   match thus stays between one and two rotation periods, at least as long as a deletion
 %   inside the horizon may need it.
 
-rtl_retire_store(M, Name, Arity, Before) :-
+rtl_retire_store(M, Name, Arity, Before, Scan) :-
     functor(Head, Name, Arity),
     StartArg is Arity - 1,
     arg(StartArg, Head, Start),
@@ -188,7 +194,12 @@ rtl_retire_store(M, Name, Arity, Before) :-
         ( Generation == a -> Kept = KeptA ; Kept = KeptB ),
         Head =.. [_|Args],
         KeptHead =.. [Kept|Args],               % instantiated by each clause found
-        retire(Order, M, Head, Start, Before, KeptHead)
+        (   Scan == whole
+        ->  forget_before(Forget),
+            ( Order == oldest_first -> Keep = assertz ; Keep = asserta ),
+            retire_every(M, Head, Start, Before, Forget, KeptHead, Keep)
+        ;   retire(Order, M, Head, Start, Before, KeptHead)
+        )
     ;   forall(( clause(M:Head, true, Ref), Start < Before ), erase(Ref))
     ).
 
@@ -203,9 +214,29 @@ retire(oldest_first, M, Head, Start, Before, KeptHead) :-
     forall(( clause(M:Head, true, Ref), ( Start < Before -> true ; !, fail ) ),
            ( erase(Ref), assertz(M:KeptHead) )).
 retire(newest_first, M, Head, Start, Before, KeptHead) :-
+    retire_every(M, Head, Start, Before, -inf, KeptHead, asserta).
+
+% Every match of the store starting before Before, wherever it is, kept by Keep (asserta/1
+% or assertz/1: in the order of the store) unless it ends before Forget.
+retire_every(M, Head, Start, Before, Forget, KeptHead, Keep) :-
     findall(KeptHead-Ref, ( clause(M:Head, true, Ref), Start < Before ), Retired),
-    reverse(Retired, Oldest),
-    forall(member(K-Ref, Oldest), ( erase(Ref), asserta(M:K) )).
+    ( Keep == asserta -> reverse(Retired, Ordered) ; Ordered = Retired ),
+    forall(member(K-Ref, Ordered), ( erase(Ref), kept(K, M, Forget, Keep) )).
+
+kept(K, M, Forget, Keep) :-
+    functor(K, _, Arity),
+    arg(Arity, K, End),
+    (   End < Forget -> true ; call(Keep, M:K) ).
+
+% Matches ending before Forget are dropped by the sweep of late events, not kept.
+forget_before(Forget) :-
+    rtl_horizon(H),
+    (   H == inf
+    ->  Forget = -inf
+    ;   nb_getval(rtl_clock, Clock),
+        nb_getval(rtl_largest_window, Wmax),
+        Forget is Clock - H - Wmax
+    ).
 
 %!  rtl_forget_kept(+Module, +Clock) is det.
 %
@@ -264,7 +295,7 @@ rtl_retraction_too_late(End) :-
     H \== inf,
     nb_getval(rtl_clock, Clock),
     number(Clock),
-    End < Clock - H.
+    rtl_beyond_bound(End, Clock, H).
 
 %!  rtl_dry_run(:Goal, -Retracted:integer, -Derived:integer) is det.
 %

@@ -6,7 +6,8 @@
             rtl_event_json/6,            % +Event, +Start, +End, +Consumer, +Op, -JsonString
             rtl_write_event_line/4,      % +Stream, +Event, +Start, +End
             rtl_json_string_escape/2,    % +Text, -Escaped
-            rtl_use_fast_reader/1        % +Bool
+            rtl_use_fast_reader/1,       % +Bool
+            rtl_fast_reader_used/0
           ]).
 
 /** <module> Event JSON Lines in and out (docs/runtime.md, "Event input" and "Output")
@@ -28,7 +29,8 @@ also names the reason of a rejection. Without the C reader, every line takes the
 */
 
 :- use_module(rtl_time).
-:- use_module(rtl_lines, [rtl_nul_problem/2]).
+:- use_module(rtl_lines, [rtl_nul_problem/2, rtl_digits_problem/3, rtl_long_line/4]).
+:- use_module(rtl_event_types, [rtl_event_text_refused/2, rtl_event_type_refused/2]).
 :- use_module(rtl_foreign).
 
 :- dynamic fast_reader/0, fast_writer/0.
@@ -36,7 +38,7 @@ also names the reason of a rejection. Without the C reader, every line takes the
 % The C reader is optional: a runtime without it (not built, another platform) reads
 % every line in Prolog.
 load_fast_reader :-
-    (   rtl_load_foreign(rtl_fastread, rtl_fast_event_line/7)
+    (   rtl_load_foreign(rtl_fastread, rtl_fast_event_line/8)
     ->  retractall(fast_reader),
         assertz(fast_reader),
         fast_writer_present
@@ -60,7 +62,7 @@ fast_writer_present :-
 %   For tests comparing the two.
 
 rtl_use_fast_reader(true) :-
-    (   current_predicate(rtl_fast_event_line/7)
+    (   current_predicate(rtl_fast_event_line/8)
     ->  retractall(fast_reader),
         assertz(fast_reader),
         fast_writer_present
@@ -70,6 +72,13 @@ rtl_use_fast_reader(false) :-
     retractall(fast_reader),
     retractall(fast_writer).
 
+%!  rtl_fast_reader_used is semidet.
+%
+%   The common case of event lines is read in C now (rtl_use_fast_reader/1).
+
+rtl_fast_reader_used :-
+    fast_reader.
+
 %!  rtl_parse_event_line(+Line:string, -Parsed) is det.
 %!  rtl_parse_event_line(+Line:string, +MaxDepth:integer, -Parsed) is det.
 %
@@ -78,8 +87,10 @@ rtl_use_fast_reader(false) :-
 %   `{"op": "add_rule", "rule": TEXT}` and `{"op": "delete_rule", "rule": LABEL}`,
 %   `clock(Time)` for a clock line `{"op": "clock", "t": T}` (a heartbeat), or
 %   `error(Reason)` with Reason a string saying what is wrong with the line (one holding a
-%   NUL byte is). Line may also be `not_text(Reason)`, a line that is not UTF-8 text
-%   (rtl_lines.pl), which is `error(Reason)`.
+%   NUL byte is). Line may also be `not_text(Reason)`, a line that is not UTF-8 text,
+%   or `too_long(Reason)`, a line longer than the flag `max_line_bytes` (rtl_lines.pl):
+%   either is `error(Reason)`; so is a Line longer than that. A line with a run of more than `max_digits` digits
+%   (rtl_digits_problem/3) is rejected before anything of it is read.
 %
 %   The line must be one JSON object and nothing else; the event a ground term and nothing
 %   else (a final full stop is allowed), nested at most MaxDepth levels deep (default
@@ -91,9 +102,17 @@ rtl_parse_event_line(Line, Parsed) :-
 
 rtl_parse_event_line(not_text(Reason), _, Parsed) :- !,
     Parsed = error(Reason).
+rtl_parse_event_line(too_long(Reason), _, Parsed) :- !,
+    Parsed = error(Reason).
+rtl_parse_event_line(Line, _, Parsed) :-        % a line given whole (rtl_feed_lines/4)
+    input_limit(max_line_bytes, MaxBytes),
+    rtl_long_line(Line, false, MaxBytes, too_long(Reason)),
+    !,
+    Parsed = error(Reason).
 rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     fast_reader,
-    rtl_fast_event_line(Line, MaxDepth, Event, T, S, E, Op),
+    c_limit(max_digits, MaxDigits),
+    rtl_fast_event_line(Line, MaxDepth, MaxDigits, Event, T, S, E, Op),
     (   number(T), var(S), var(E)               % "t": a finite number (the C reader checks)
     ->  Start = T, End = T
     ;   rtl_input_interval(T, S, E, Start, End, Problem),
@@ -108,7 +127,10 @@ rtl_parse_event_line(Line, MaxDepth, Parsed) :-
     ->  Depth = MaxDepth
     ;   Depth = short
     ),
+    input_limit(max_digits, MaxDigits),
     (   rtl_nul_problem(Line, Reason)          % first: split_string/4 takes NUL for layout
+    ->  Parsed = error(Reason)
+    ;   rtl_digits_problem(Line, MaxDigits, Reason)
     ->  Parsed = error(Reason)
     ;   blank_line(Line)
     ->  Parsed = blank
@@ -139,8 +161,23 @@ rtl_parse_event_line(Line, MaxDepth, Parsed) :-
 
 rtl_buffered_lines(Stream, MaxDepth, Items) :-
     (   fast_reader
-    ->  rtl_fast_read_lines(Stream, 4096, MaxDepth, Items)
+    ->  c_limit(max_digits, MaxDigits),
+        c_limit(max_line_bytes, MaxBytes),
+        rtl_fast_read_lines(Stream, 4096, MaxDepth, MaxDigits, MaxBytes, Items)
     ;   Items = []
+    ).
+
+% The value of a limit flag for the C reader: -1 for none (`inf`).
+c_limit(Flag, Limit) :-
+    input_limit(Flag, Value),
+    ( Value == inf -> Limit = -1 ; Limit = Value ).
+
+% An input limit is a flag of the runtime (rtl_ele.pl); this module loaded without it (a
+% test of the readers) reads without limits.
+input_limit(Flag, Value) :-
+    (   current_predicate(rtl_ele:rtl_flag/2)
+    ->  rtl_ele:rtl_flag(Flag, Value)
+    ;   Value = inf
     ).
 
 rule_change("add_rule", add).
@@ -284,16 +321,49 @@ number_run([C|Cs], [C|Run], Rest) :-
 number_run(Cs, [], Cs).
 
 json_pair(Key=Value0, KeyString-Value) :-
-    atom_string(Key, KeyString),
+    atom_string(Key, KeyString0),
+    json_text(KeyString0, KeyString),
     json_value(Value0, Value).
 
 json_value(@(true), true) :- !.
 json_value(@(false), false) :- !.
 json_value(@(null), null) :- !.
+json_value(S0, S) :- string(S0), !, json_text(S0, S).
+json_value(L0, L) :- is_list(L0), !, maplist(json_value, L0, L).
 json_value(V, V).
+
+%   json_text(+Read, -Text) is det.
+%
+%   A string as library(http/json) reads it, with each UTF-16 surrogate pair written as
+%   two escapes (`\\ud83d\\udd25`, what Python's json.dumps writes for a character beyond
+%   U+FFFF) made the one character it stands for, as the same text in UTF-8 reads. A lone
+%   surrogate is no character: the line is rejected (`invalid JSON (a lone surrogate
+%   \\uD83D)`).
+
+json_text(Read, Text) :-
+    string_codes(Read, Codes0),                 % (sub_string/5 cannot take a surrogate)
+    (   member(C, Codes0), surrogate(C)
+    ->  paired_surrogates(Codes0, Codes),
+        string_codes(Text, Codes)
+    ;   Text = Read
+    ).
+
+surrogate(C) :- C >= 0xD800, C =< 0xDFFF.
+
+paired_surrogates([], []).
+paired_surrogates([C|Cs0], [Char|Cs]) :-
+    (   \+ surrogate(C)
+    ->  Char = C, Rest = Cs0
+    ;   C =< 0xDBFF, Cs0 = [Low|Rest], Low >= 0xDC00, Low =< 0xDFFF
+    ->  Char is 0x10000 + ((C - 0xD800) << 10) + (Low - 0xDC00)
+    ;   throw(error(syntax_error(json(lone_surrogate(C))), _))
+    ),
+    paired_surrogates(Rest, Cs).
 
 json_error_reason(syntax_error(json(text_after_the_object)), Reason) :- !,
     Reason = "invalid JSON (text after the object)".
+json_error_reason(syntax_error(json(lone_surrogate(Code))), Reason) :- !,
+    format(string(Reason), "invalid JSON (a lone surrogate \\u~|~`0t~16R~4+)", [Code]).
 json_error_reason(syntax_error(json(What)), Reason) :- !,
     format(string(Reason), "invalid JSON (~w)", [What]).
 json_error_reason(syntax_error(What), Reason) :- !,
@@ -374,6 +444,8 @@ rtl_read_event_text(Text, MaxDepth, Event, Problem) :-
     (   MaxDepth \== short,
         too_deep_text(Text, MaxDepth)
     ->  depth_reason(MaxDepth, Problem)
+    ;   rtl_event_text_refused(Text, Reason)          % --max-event-types, before a functor is made
+    ->  Problem = Reason
     ;   catch(read_one_term(Text, Event, Problem), error(Formal, _), read_error(Formal, Problem))
     ->  (   nonvar(Problem)
         ->  true
@@ -381,6 +453,8 @@ rtl_read_event_text(Text, MaxDepth, Event, Problem) :-
         ->  Problem = "\"event\" must be ground (it has variables)"
         ;   \+ callable(Event)
         ->  Problem = "\"event\" must be an atom or a compound term"
+        ;   rtl_event_type_refused(Event, Reason)
+        ->  Problem = Reason
         ;   MaxDepth \== short,
             string_length(Text, Length), Length > MaxDepth,
             term_too_deep(Event, MaxDepth)

@@ -194,23 +194,55 @@ chain_step(Next, Acc, P) :-
 
 identity_pose([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]).
 
-%!  time_fraction(+T1:number, +T2:number, +T:number, -Fraction:float) is det.
+%!  time_fraction(+T1, +T2, +T, -Fraction:float) is det.
 %
 %   `Fraction = (T - T1) / (T2 - T1)`: 0 at T1, 1 at T2, below 0 before T1 and above
-%   1 after T2. When `T1 =:= T2` Fraction is 0.0 (whatever T is). Times are numbers of
-%   seconds (see rtl_time:rtl_time_seconds/2 for other time formats).
+%   1 after T2. When T1 and T2 are the same time Fraction is 0.0 (whatever T is). A time is
+%   a number of seconds, a ROS stamp `[Sec, NSec]` or a `datime/7` term (nanoseconds in its
+%   counter). The differences are taken first and exactly (each time as the exact rational
+%   it stands for: a float's own value, a stamp's `Sec + NSec/10^9`), then divided, and
+%   only the quotient is rounded to a float: no precision is lost to the size of epoch
+%   seconds (a float time near 1.4e9 is only good to 2.4e-7 s, so times given as floats
+%   carry that uncertainty in themselves; stamps none).
 
 time_fraction(T1, T2, T, F) :-
-    Ctx = time_fraction/4,
-    check_number(Ctx, T1),
-    check_number(Ctx, T2),
-    check_number(Ctx, T),
-    time_fraction_(T1, T2, T, F).
+    time_fraction_(time_fraction/4, T1, T2, T, F).
 
-time_fraction_(T1, T2, T, F) :-
-    (   T1 =:= T2
+time_fraction_(Ctx, T1, T2, T, F) :-
+    exact_time(Ctx, T1, X1),
+    exact_time(Ctx, T2, X2),
+    exact_time(Ctx, T, X),
+    exact_fraction(X1, X2, X, F).
+
+exact_fraction(X1, X2, X, F) :-
+    (   X1 =:= X2
     ->  F = 0.0
-    ;   F is float((T - T1) / (T2 - T1))
+    ;   F is float((X - X1) / (X2 - X1))
+    ).
+
+% exact_time(+Ctx, +Time, -Exact): Time as an exact rational number of seconds.
+exact_time(Ctx, T, X) :-
+    (   var(T)
+    ->  throw(error(instantiation_error, context(rtl_math:Ctx, _)))
+    ;   integer(T)
+    ->  X = T
+    ;   float(T)
+    ->  (   T =:= T, abs(T) =\= inf
+        ->  X is rational(T)
+        ;   throw(error(type_error(time, T), context(rtl_math:Ctx, 'a time must be finite')))
+        )
+    ;   T = [S, NS], integer(S), integer(NS), between(0, 999999999, NS)
+    ->  X is S + NS rdiv 1000000000
+    ;   T = datime(Y, Mo, D, H, Mi, Sec, NS), integer(NS), between(0, 999999999, NS),
+        rtl_time_seconds(datime(Y, Mo, D, H, Mi, Sec), Base)
+    ->  X is rational(Base) + NS rdiv 1000000000
+    ;   rtl_time_seconds(T, Secs)
+    ->  X is rational(Secs)
+    ;   T = datime(_, _, _, _, _, _, NS)
+    ->  throw(error(domain_error(datime_nanoseconds, NS), context(rtl_math:Ctx,
+                    'the counter of datime/7 is the nanoseconds of the stamp, an integer in [0, 10^9)')))
+    ;   throw(error(type_error(time, T), context(rtl_math:Ctx,
+                    'a time is seconds, [Secs, NSecs] or datime/7')))
     ).
 
 %!  pose_interpolate(+T1:number, +Pose1:list, +T2:number, +Pose2:list, +T:number,
@@ -232,16 +264,16 @@ time_fraction_(T1, T2, T, F) :-
 
 pose_interpolate(T1, P1, T2, P2, T, P) :-
     Ctx = pose_interpolate/6,
-    check_number(Ctx, T1),
-    check_number(Ctx, T2),
-    check_number(Ctx, T),
+    exact_time(Ctx, T1, X1),
+    exact_time(Ctx, T2, X2),
+    exact_time(Ctx, T, X),
     check_pose(Ctx, P1),
     check_pose(Ctx, P2),
-    (   ( T =:= T1 ; T1 =:= T2 )
+    (   ( X =:= X1 ; X1 =:= X2 )
     ->  P = P1
-    ;   T =:= T2
+    ;   X =:= X2
     ->  P = P2
-    ;   time_fraction_(T1, T2, T, F),
+    ;   exact_fraction(X1, X2, X, F),
         P1 = [V1, Q1],
         P2 = [V2, Q2],
         lerp_list(V1, V2, F, V),
@@ -262,28 +294,23 @@ pose_interpolate(T1, P1, T2, P2, T, P) :-
 %   (new_event(E, Sec, NSec) gives `Sec + NSec/10^9`), and so do the record times that
 %   prev/5, next/6 and next_inf/5 return. The time arguments below accept a number of
 %   seconds, a ROS stamp `[Sec, NSec]` or a `datime/7` term (read as rtl_time:
-%   rtl_time_seconds/2 reads it, the counter being ETALIS's tie breaker).
+%   rtl_time_seconds/2 reads it: the counter is the stamp's nanoseconds, checked).
 
 %!  datime_interpolate(+T1, +T2, +T, -Fraction:float) is det.
 %
 %   `Fraction = (T - T1) / (T2 - T1)`, the position of T between T1 and T2 (0 at T1, 1 at
 %   T2, outside [0, 1] before T1 or after T2). When T1 and T2 are the same time Fraction
-%   is 0.0. Two ROS stamps are subtracted in integer nanoseconds, so no precision is lost
-%   to the size of epoch seconds.
+%   is 0.0. As time_fraction/4: the times are subtracted exactly before the division, so
+%   no precision is lost to the size of epoch seconds.
 %
 %   @error type_error(time, X) for an argument that is not a time.
-%   @error evaluation_error(float_overflow) when T1 and T2 are so close (numbers below
-%   a nanosecond apart) that Fraction is beyond the largest float.
+%   @error domain_error(datime_nanoseconds, C) for a datime/7 whose counter C is not an
+%   integer in [0, 10^9).
+%   @error evaluation_error(float_overflow) when T1 and T2 are so close that Fraction is
+%   beyond the largest float.
 
 datime_interpolate(T1, T2, T, F) :-
-    Ctx = datime_interpolate/4,
-    time_ns(Ctx, T1, N1),
-    time_ns(Ctx, T2, N2),
-    time_ns(Ctx, T, N),
-    (   N1 =:= N2
-    ->  F = 0.0
-    ;   F is float((N - N1) / (N2 - N1))
-    ).
+    time_fraction_(datime_interpolate/4, T1, T2, T, F).
 
 %!  convert_to_datime(+Stamp, -Time:number) is det.
 %
@@ -348,17 +375,6 @@ transform_quaternion(Poses, [V, QN]) :-
 unit_chain_step(Ctx, [V, Q0], Acc, P) :-
     quat_normalize_(Ctx, Q0, Q),
     pose_compose_(Acc, [V, Q], P).
-
-time_ns(Ctx, T, N) :-
-    (   var(T)
-    ->  throw(error(instantiation_error, context(rtl_math:Ctx, _)))
-    ;   T = [S, NS], integer(S), integer(NS)
-    ->  N is S * 1000000000 + NS
-    ;   rtl_time_seconds(T, Secs)
-    ->  N is Secs * 1.0e9
-    ;   throw(error(type_error(time, T), context(rtl_math:Ctx,
-                    'a time is seconds, [Secs, NSecs] or datime/7')))
-    ).
 
                  /*******************************
                  *   UNCHECKED IMPLEMENTATION   *

@@ -22,6 +22,7 @@ not start with `_`), in the order they appear in the goal.
 
 :- use_module(library(time), [call_with_time_limit/2]).
 :- use_module(rtl_sandbox).
+:- use_module(rtl_goal_arguments).
 :- use_module(rtl_text).
 :- use_module(rtl_ele).
 :- use_module(rtl_slr).
@@ -141,7 +142,8 @@ pair_json(Name=Value, Field) :-
 %!  rtl_memory_request(+Text:string, -Error) is det.
 %
 %   Create or delete memory instances on request from outside: Text is one of
-%   `c_mem(Id, Query, N, L)`, `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)`
+%   `c_mem(Id, Query, N, L)`, `c_mem(Id, Query, N, L, Options)`,
+%   `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)`
 %   or `delete_memory(IdPattern)`. The conditions of a new instance must pass the
 %   sandbox. Error is unbound on success, else `syntax(Message)`, `unsafe(Message)` or
 %   `failed(Message)`; nothing is created then.
@@ -160,12 +162,14 @@ rtl_memory_request(Text, Error) :-
                   ( message_text(Raised, Message), Error = failed(Message) ))
         ;   Error = Result
         )
-    ;   format(string(Message), "~q is not c_mem/4, memorize/5, d_mem/1 or delete_memory/1", [Request]),
+    ;   format(string(Message), "~q is not c_mem/4, c_mem/5, memorize/5, d_mem/1 or delete_memory/1", [Request]),
         Error = syntax(Message)
     ).
 
 memory_request_conditions(c_mem(_, Query, _, _), Conds) :-
     (   nonvar(Query), Query = _-Conds0 -> Conds = Conds0 ; Conds = [] ).
+memory_request_conditions(c_mem(Id, Query, N, L, _), Conds) :-
+    memory_request_conditions(c_mem(Id, Query, N, L), Conds).
 memory_request_conditions(memorize(_, Conds, _, _, _), Conds).
 memory_request_conditions(d_mem(_), []).
 memory_request_conditions(delete_memory(_), []).
@@ -286,41 +290,37 @@ answer_object(Pairs, Object) :-
 
 %!  rtl_time_goal(+Goal0, -Goal) is det.
 %
-%   Rewrite the time terms of a goal: `E^[T1, T2]` as E with T1 and T2 added as its last
-%   two arguments, `E^T` as E with T, T added; through `,`, `;`, `->`, `\+` and the goal
-%   arguments of findall/3, forall/2, aggregate_all/3, once/1 and ignore/1. The arguments
-%   of prev, next and mem stay as they are: there `^` is data.
+%   Rewrite the time terms of a goal as the compiler rewrites those of the program
+%   (retalisc/passes/slr_time_terms.py): `E^[T1, T2]` as E with T1 and T2 added as its last
+%   two arguments, `E^T` as E with T, T added; through the goal arguments of the control
+%   constructs and meta-predicates of rtl_goal_arguments/3, the table both read. The
+%   arguments of prev, next and mem stay as they are: there `^` is data.
 
 rtl_time_goal(G, G) :-
     var(G), !.
-rtl_time_goal((A, B), (A1, B1)) :- !,
-    rtl_time_goal(A, A1), rtl_time_goal(B, B1).
-rtl_time_goal((A ; B), (A1 ; B1)) :- !,
-    rtl_time_goal(A, A1), rtl_time_goal(B, B1).
-rtl_time_goal((A -> B), (A1 -> B1)) :- !,
-    rtl_time_goal(A, A1), rtl_time_goal(B, B1).
-rtl_time_goal(\+ A, \+ A1) :- !,
-    rtl_time_goal(A, A1).
-rtl_time_goal(findall(T, G, L), findall(T, G1, L)) :- !,
-    rtl_time_goal(G, G1).
-rtl_time_goal(forall(C, A), forall(C1, A1)) :- !,
-    rtl_time_goal(C, C1), rtl_time_goal(A, A1).
-rtl_time_goal(aggregate_all(S, G, R), aggregate_all(S, G1, R)) :- !,
-    rtl_time_goal(G, G1).
-rtl_time_goal(once(G), once(G1)) :- !,
-    rtl_time_goal(G, G1).
-rtl_time_goal(ignore(G), ignore(G1)) :- !,
-    rtl_time_goal(G, G1).
 rtl_time_goal(E^Time, Goal) :-
     callable(E), !,
-    (   nonvar(Time), Time = [T1, T2]
+    (   is_list(Time), Time = [T1, T2]
     ->  true
     ;   T1 = Time, T2 = Time
     ),
     E =.. List0,
     append(List0, [T1, T2], List),
     Goal =.. List.
+rtl_time_goal(G0, G) :-
+    compound(G0),
+    compound_name_arity(G0, Name, Arity),
+    rtl_goal_arguments(Name, Arity, Positions), !,
+    compound_name_arguments(G0, Name, Args0),
+    timed_arguments(Args0, 1, Positions, Args),
+    compound_name_arguments(G, Name, Args).
 rtl_time_goal(G, G).
+
+timed_arguments([], _, _, []).
+timed_arguments([A0|As0], I, Positions, [A|As]) :-
+    (   memberchk(I, Positions) -> rtl_time_goal(A0, A) ; A = A0 ),
+    I1 is I + 1,
+    timed_arguments(As0, I1, Positions, As).
 
 message_text(Error, Text) :-
     (   catch(message_to_codes(Error, Codes), _, fail)

@@ -9,10 +9,12 @@
 
 /** <module> Adding and removing event rules while events flow (ETALIS ins_event_rule)
 
-ins_event_rule/1 compiles an event rule with the retalisc compiler (`retalisc
-compile-rules`, run as a subprocess) and adds the generated clauses to the running
-program; del_event_rule/1 removes every clause, trigger and stored partial match of a rule.
-The Python driver compiles in-process and calls rtl_install_rules/3 and
+ins_event_rule/1 compiles an event rule with the retalisc compiler and adds the generated
+clauses to the running program; del_event_rule/1 removes every clause, trigger and stored
+partial match of a rule. When the runtime runs inside a Python process that serves the
+compiler (retalisc/driver/bridge.py, an Engine), the rule compiles there, in-process;
+otherwise (`swipl PROGRAM.pl`) `retalisc compile-rules` runs as a subprocess. The Python
+driver's own Engine.add_rules compiles in-process and calls rtl_install_rules/3 and
 rtl_remove_rule/2 directly.
 
 A rule added at runtime starts with empty stores: it sees only the events processed after
@@ -42,10 +44,11 @@ program file too, so del_event_rule/1 removes those as well.
 %   permission error when a rule with the same label exists, and a
 %   `retalis_compile_error` with the compiler's message for a bad rule.
 %
-%   The compiler is run as `PYTHON -m retalisc compile-rules`, PYTHON being the
-%   environment variable `RETALISC_PYTHON`, the Python that compiled the program, the
-%   `.venv` next to the runtime, the Python of the installation the runtime was installed
-%   into (`PREFIX/bin/python3` for `PREFIX/lib/pythonX.Y/site-packages/retalisc/prolog_runtime`),
+%   Inside a Python process, the compiler of that process compiles the rule (see
+%   compile_in_process/4). Otherwise it is run as `PYTHON -m retalisc compile-rules`,
+%   PYTHON being the environment variable `RETALISC_PYTHON`, the `.venv` next to the
+%   runtime, the Python of the installation the runtime was installed into
+%   (`PREFIX/bin/python3` for `PREFIX/lib/pythonX.Y/site-packages/retalisc/prolog_runtime`),
 %   or `python3`, whichever is found first.
 
 ins_event_rule(Caller:Rule) :-
@@ -238,7 +241,7 @@ rtl_fresh_rule_prefix(M, Prefix) :-
     ;   Prefix = Candidate
     ).
 
-% ---- the compiler subprocess -----------------------------------------------------------
+% ---- the compiler: in-process or a subprocess -------------------------------------------
 
 rule_text(Rule, Text) :-
     (   var(Rule)
@@ -256,7 +259,26 @@ rule_text(Rule, Text) :-
     ).
 
 run_compiler(M, Prefix, Text, Clauses) :-
-    compiler_python(M, Python),
+    (   compile_in_process(M, Prefix, Text, Clauses)
+    ->  true
+    ;   compile_in_subprocess(M, Prefix, Text, Clauses)
+    ).
+
+%   The Python process the runtime is embedded in serves its compiler as `compile_rules`
+%   (retalisc_bridge:python_call/4, defined by retalisc/driver/bridge.py; an Engine serves
+%   it): the rule compiles there, without starting a process. Fails when nothing serves it.
+compile_in_process(M, Prefix, Text, Clauses) :-
+    current_predicate(retalisc_bridge:python_call/4),
+    atom_string(M, Module),
+    retalisc_bridge:python_call(compile_rules, [Module, Prefix, Text], Status, Result),
+    (   Status == ok
+    ->  Clauses = Result
+    ;   Status == error
+    ->  throw(error(retalis_compile_error(Result), context(ins_event_rule/1, Text)))
+    ).
+
+compile_in_subprocess(M, Prefix, Text, Clauses) :-
+    compiler_python(Python),
     compiler_directory(Dir),
     setup_call_cleanup(
         process_create(Python, ['-m', retalisc, 'compile-rules', '--module', M,
@@ -282,10 +304,8 @@ run_compiler(M, Prefix, Text, Clauses) :-
 prolog:error_message(retalis_compile_error(Message)) -->
     [ 'the event rule does not compile:~n~s'-[Message] ].
 
-compiler_python(M, Python) :-
+compiler_python(Python) :-
     (   getenv('RETALISC_PYTHON', P), P \== ''
-    ->  Python = P
-    ;   catch(M:ele_compiler_python(P), _, fail)
     ->  Python = P
     ;   runtime_root(Root),
         directory_file_path(Root, '.venv/bin/python', P),

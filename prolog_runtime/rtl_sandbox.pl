@@ -95,6 +95,12 @@ builtin(any,  rtl_horizon:rtl_aggregate_initial(_, _), []).
 builtin(any,  rtl_library:min(_, _, _), []).
 builtin(any,  rtl_library:max(_, _, _), []).
 builtin(any,  rtl_library:datime_minus_datime(_, _, _), []).
+builtin(any,  rtl_library:is_datime(_), []).
+builtin(any,  rtl_library:less_datime(_, _), []).
+builtin(any,  rtl_library:equal_datime(_, _), []).
+builtin(any,  rtl_library:between_datime(_, _, _), []).
+builtin(any,  rtl_library:datime_plus_sec(_, _, _), []).
+builtin(any,  rtl_library:datime_minus_sec(_, _, _), []).
 builtin(any,  rtl_time:rtl_time_seconds(_, _), []).
 builtin(any,  rtl_time:rtl_interval_seconds(_, _, _), []).
 builtin(any,  rtl_ele:rtl_flag(_, _), []).

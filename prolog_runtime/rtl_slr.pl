@@ -24,6 +24,7 @@
             rtl_memory_type/2,          % ?Id, -Name/Arity
             rtl_with_view/2,            % +Z, :Goal
             rtl_with_needs/2,           % :Goal, -Needs
+            rtl_slr_clock_moved/1,      % +Clock
             rtl_slr_clear/0
           ]).
 
@@ -31,19 +32,24 @@
 
 A *memory instance* keeps a selected history of the event flow: the events (input or
 derived) that unify with its pattern and satisfy its conditions, recorded in its template
-form, at most the N most recent by end time and only those whose end time is within the
-last L seconds of the component's clock (the largest end time processed; event time).
+form, at most the N most recent in the order of records and only those whose end time is
+not beyond L seconds behind the component's clock (the largest end time processed; event
+time; rtl_time:rtl_beyond_bound/3). The *order of records* is by end time, then start time,
+then the standard order of the templates (record_after/6): ties are broken by the events,
+not by their arrival, so without deletions what an instance holds does not depend on the
+arrival order (Def. 21).
 
 Cost model (thesis 5.2.1, 5.2.2):
 
-  - Records of instance H are numbered in end-time order, First..Last, and stored as
+  - Records of instance H are numbered in the order of records, First..Last, and stored as
     `record(Key, Start, End, Template)` with `Key = H * 2^40 + Number`: the first-argument
     index finds a record by (instance, number) in constant time.
   - An event that arrives in end-time order is appended (number Last+1): constant time.
     A late event is inserted at its place by binary search, moving the records on the
     shorter side of it by one number: the cost grows with how late it is, not with the
     size of the memory.
-  - Forgetting takes the record numbered First: constant time.
+  - Forgetting takes the record numbered First: constant time. Forgetting by time happens
+    when the clock moves (rtl_slr_clock_moved/1), not when the instance is next used.
   - prev/next find their starting point by binary search on the numbers (logarithmic)
     and then walk towards older/newer records until one unifies with the pattern.
   - Instances are found per event through one dynamic predicate per event type
@@ -56,7 +62,10 @@ when something can receive them (an event rule or a subscription on them):
 `memory_created(Pattern, Conds, Template, Id, N)`, `memory_deleted(Id)`,
 `memory_updated(Id, End)` for every record added, and, for instances created with the
 option `record_events(true)`, `memory_record_added(Id, Record)` and
-`memory_record_forgotten(Id, Record)` with the record's own interval.
+`memory_record_forgotten(Id, Record)` with the record's own interval: one for every record
+that enters and one for every record that leaves (by the count limit, by the time limit as
+the clock moves, or by a deletion); a late record that a full instance does not keep raises
+none.
 
 Queries see the records a memory holds. mem/2 also respects the *stream view* of the
 query being answered (rtl_with_view/2, Def. 16-18): only records whose end time is at
@@ -67,6 +76,7 @@ Def. 18). A time argument that is not bound raises an instantiation error.
 :- use_module(rtl_ele).
 :- use_module(rtl_time).
 :- use_module(rtl_raise).
+:- use_module(rtl_time_index).
 :- use_module(rtl_subscriptions, [rtl_subscribed/1]).
 
 :- meta_predicate rtl_with_view(+, 0), rtl_with_needs(0, -).
@@ -207,7 +217,15 @@ check_instance(Id, Pattern, Conds, N, L, Options, Culprit) :-
     ;   throw(error(domain_error(time_limit, L),
                     context(Culprit, 'a time limit is a number of seconds >= 0 or inf')))
     ),
-    must_be(list, Options).
+    (   is_list(Options), forall(member(O, Options), memory_option(O)) -> true
+    ;   throw(error(domain_error(memory_options, Options),
+                    context(Culprit, 'the options are a list of record_events(true) or record_events(false)')))
+    ).
+
+memory_option(O) :-
+    nonvar(O),
+    O = record_events(B),
+    ( B == true ; B == false ), !.
 
 %!  d_mem(?IdPattern) is det.
 %!  delete_memory(?IdPattern) is det.
@@ -230,6 +248,7 @@ remove_instance(M, H, Id) :-
     retractall(id_handle(M, Id, H)),
     retractall(stream_memory(M, _, _, H)),
     unwatch(M, Pattern, H),
+    unschedule_expiry(H, M),
     bounds_key(H, BKey),
     nb_delete(BKey),
     retractall(bounds_name(H, _)),
@@ -257,7 +276,6 @@ rtl_memory(Id, Pattern-Conds, Template, N, L) :-
 rtl_memory_size(Id, Size) :-
     current_program(M),
     id_handle(M, Id, H),
-    expire(H),
     bounds(H, First, Last),
     Size is Last - First + 1.
 
@@ -289,8 +307,7 @@ rtl_memory_last_end(Id, End) :-
 rtl_memory_records(Id, Records) :-
     current_program(M),
     (   id_handle(M, Id, H)
-    ->  expire(H),
-        bounds(H, First, Last),
+    ->  bounds(H, First, Last),
         findall(T^[S, E], ( between(First, Last, Number), key(H, Number, Key),
                             record(Key, S, E, T) ), Records)
     ;   existence_error(memory_instance, Id)
@@ -303,7 +320,10 @@ rtl_ele:clear_hook :-
     forall(id_handle(M, _, H),
            ( bounds(H, First, Last),
              forall(between(First, Last, Number), ( key(H, Number, Key), retractall(record(Key, _, _, _)) )),
-             reset_bounds(H) )).
+             reset_bounds(H) )),
+    forall(retract(expiry(H, M, Due)), time_index_remove(slr_expiry, M, Due, H)),
+    NoExpiry is inf,
+    nb_setval(rtl_slr_next_expiry, NoExpiry).
 
 %!  rtl_slr_clear is det.
 %
@@ -384,23 +404,29 @@ all_goals([G|Gs], M) :-
     all_goals(Gs, M).
 
 add_record(H, M, Id, N, L, Options, Start, End, Template) :-
-    (   L \== inf,
-        rtl_clock(Clock),
-        End < Clock - L
+    rtl_clock(Clock),
+    bounds_term(H, B),
+    B = bounds(First, Last, LastEnd),
+    (   rtl_beyond_bound(End, Clock, L)
     ->  true                                     % outside the time limit already
-    ;   bounds_term(H, B),
-        B = bounds(First, Last, LastEnd),
-        (   Last < First
+    ;   N \== inf,
+        End =< LastEnd,
+        Last - First + 1 >= N,
+        key(H, First, FirstKey),
+        record(FirstKey, S1, E1, T1),
+        \+ record_after(End, Start, Template, E1, S1, T1)
+    ->  true                                     % full, and older than every record it keeps
+    ;   (   Last < First
         ->  Number = First,
             nb_setarg(2, B, First),
             nb_setarg(3, B, End)
-        ;   End >= LastEnd
+        ;   ( End > LastEnd ; End =:= LastEnd, \+ before_last(H, Last, End, Start, Template) )
         ->  Number is Last + 1,
             nb_setarg(2, B, Number),
             nb_setarg(3, B, End)
-        ;   last_not_after(H, First, Last, End, Before),    % a late record goes after
-            Point is Before + 1,                            % every record ending at or before it
-            make_room(H, B, First, Last, Point, Number)     % (never last: LastEnd stays)
+        ;   last_not_after_record(H, First, Last, End, Start, Template, Before),
+            Point is Before + 1,                            % a late record goes after every
+            make_room(H, B, First, Last, Point, Number)     % record not after it (never last)
         ),
         key(H, Number, Key),
         assertz(record(Key, Start, End, Template)),
@@ -408,10 +434,38 @@ add_record(H, M, Id, N, L, Options, Start, End, Template) :-
         ->  true
         ;   forget_over_count(H, B, N, M, Id, Options)
         ),
-        forget_expired(H, B, L, M, Id, Options),
-        (   arg(1, B, F1), F1 =< Number
-        ->  recorded(M, Id, Options, Start, End, Template)
-        ;   true                                 % older than every record it would keep
+        recorded(M, Id, Options, Start, End, Template),
+        schedule_expiry(H, M, L)
+    ).
+
+%   The order of records: by end time, then start time, then the standard order of the
+%   templates, so that what a memory holds (its N latest) and which record prev and next
+%   meet first among equal end times depend on the events, not on their arrival order.
+%   Records equal in all three are indistinguishable.
+record_after(E, S, T, E1, S1, T1) :-
+    (   E =\= E1 -> E > E1
+    ;   S =\= S1 -> S > S1
+    ;   T @> T1
+    ).
+
+% The new record [Start, End] of Template goes before record Last, which ends at End too.
+before_last(H, Last, End, Start, Template) :-
+    key(H, Last, Key),
+    record(Key, S1, E1, T1),
+    record_after(E1, S1, T1, End, Start, Template).
+
+% The last number whose record is not after [Start, End] of Template (First - 1 if none).
+last_not_after_record(H, Low, High, End, Start, Template, Number) :-
+    (   Low > High
+    ->  Number = High
+    ;   Mid is (Low + High) >> 1,
+        key(H, Mid, Key),
+        record(Key, S, E, T),
+        (   record_after(E, S, T, End, Start, Template)
+        ->  High1 is Mid - 1,
+            last_not_after_record(H, Low, High1, End, Start, Template, Number)
+        ;   Low1 is Mid + 1,
+            last_not_after_record(H, Low1, High, End, Start, Template, Number)
         )
     ).
 
@@ -452,21 +506,16 @@ forget_over_count(H, B, N, M, Id, Options) :-
     ;   true
     ).
 
-forget_expired(_, _, inf, _, _, _) :- !.
 forget_expired(H, B, L, M, Id, Options) :-
     rtl_clock(Clock),
-    Horizon is Clock - L,
-    forget_before(H, B, Horizon, M, Id, Options).
-
-forget_before(H, B, Horizon, M, Id, Options) :-
     arg(1, B, First),
     arg(2, B, Last),
     (   First =< Last,
         key(H, First, Key),
         record(Key, _, End, _),
-        End < Horizon
+        rtl_beyond_bound(End, Clock, L)
     ->  forget_first(H, B, First, M, Id, Options),
-        forget_before(H, B, Horizon, M, Id, Options)
+        forget_expired(H, B, L, M, Id, Options)
     ;   true
     ).
 
@@ -490,6 +539,8 @@ remove_record(H, M, Id, Options, Start, End, Template) :-
     ->  key(H, Number, Key),
         retract(record(Key, S, E, T)),
         close_gap(H, B, First, Last, Number),
+        instance(H, _, _, _, _, _, _, L, _),
+        schedule_expiry(H, M, L),
         (   memberchk(record_events(true), Options)
         ->  memory_event(M, memory_record_forgotten(Id, T), S, E)
         ;   true
@@ -527,13 +578,75 @@ close_gap(H, B, First, Last, Gap) :-
         )
     ).
 
-% Drop the records of a time-limited instance that have left its window.
-expire(H) :-
-    instance(H, M, Id, _, _, _, _, L, Options),
-    (   L == inf
+% ---- forgetting by time -------------------------------------------------------------------
+%
+% A record of an instance with time limit L is forgotten when the clock moves beyond L
+% seconds after its end (rtl_beyond_bound/3), at that clock move, with its
+% memory_record_forgotten event: rtl_ele calls rtl_slr_clock_moved/1 before the event that
+% moved the clock is processed (and on a heartbeat), so every query, rule and timer from
+% then on sees the memory without it, and a consumer of the memory events hears of it when
+% it happens (the last clock move of the input included), not at the next record.
+%
+% Each time-limited instance with records has one entry in the time index `slr_expiry`
+% (rtl_time_index.pl) under its program, at the due time `End + L` of its oldest record
+% (expiry/3 says which), so a clock move costs what it forgets, not the number of
+% instances. The global rtl_slr_next_expiry is a time before which nothing is due: a clock
+% move that does not pass it costs one comparison in rtl_ele.
+
+% expiry(H, Program, Due): the entry of instance H in the time index slr_expiry
+:- dynamic expiry/3.
+
+%!  rtl_slr_clock_moved(+Clock) is det.
+%
+%   The clock moved to Clock, past rtl_slr_next_expiry: forget the records of the
+%   time-limited instances that lie beyond their limits.
+
+rtl_slr_clock_moved(Clock) :-
+    rtl_program(M),
+    time_index_take(slr_expiry, M, <, Clock, Due),
+    forall(member(H, Due),
+           (   retract(expiry(H, M, _)),
+               instance(H, M, Id, _, _, _, _, L, Options)
+           ->  bounds_term(H, B),
+               forget_expired(H, B, L, M, Id, Options),
+               schedule_expiry(H, M, L)
+           ;   true
+           )),
+    (   time_index_count(slr_expiry, M, 0)
+    ->  NoExpiry is inf,
+        nb_setval(rtl_slr_next_expiry, NoExpiry)
+    ;   nb_setval(rtl_slr_next_expiry, Clock)    % every entry left is due at Clock or later
+    ).
+
+% schedule_expiry(+H, +Program, +L): the records of instance H changed; its entry in the
+% index is due when its oldest record is.
+schedule_expiry(_, _, inf) :- !.
+schedule_expiry(H, M, L) :-
+    bounds(H, First, Last),
+    (   First =< Last
+    ->  key(H, First, Key),
+        record(Key, _, End, _),
+        Due is End + L                          % rtl_beyond_bound/3's sum
+    ;   Due = none
+    ),
+    (   expiry(H, M, Old), Old == Due
     ->  true
-    ;   bounds_term(H, B),
-        forget_expired(H, B, L, M, Id, Options)
+    ;   unschedule_expiry(H, M),
+        (   Due == none
+        ->  true
+        ;   assertz(expiry(H, M, Due)),
+            time_index_add(slr_expiry, M, Due, H),
+            (   nb_current(rtl_slr_next_expiry, Next), number(Next), Next =< Due
+            ->  true
+            ;   nb_setval(rtl_slr_next_expiry, Due)
+            )
+        )
+    ).
+
+unschedule_expiry(H, M) :-
+    (   retract(expiry(H, M, Old))
+    ->  time_index_remove(slr_expiry, M, Old, H)
+    ;   true
     ).
 
 % ---- memory events -----------------------------------------------------------------------
@@ -561,14 +674,13 @@ listened(M, Event) :-
 %
 %   Event unifies with a record of a memory instance whose id unifies with Id, oldest
 %   first, within the stream view of the query (end time at most its Z). Event may be
-%   written `E^T` or `E^[T1, T2]` to reach the record's time.
+%   written `E^T` (T the end time) or `E^[T1, T2]` to reach the record's time.
 
 mem(Id, Event) :-
     current_program(M),
     view(View),
     id_handle(M, Id, H),
     \+ Id = '$stream'(_),
-    expire(H),
     bounds(H, First, Last),
     needs(H, View),
     between(First, Last, Number),
@@ -651,13 +763,11 @@ next_inf(Id, Event, T1, T2, Zs) :-
 
 latest(H, Event, Z) :-
     needs(H, Z),
-    expire(H),
     bounds(H, First, Last),
     last_not_after(H, First, Last, Z, From),
     scan_down(From, First, H, Event).
 
 earliest(H, Event, Zs, Ze) :-
-    expire(H),
     bounds(H, First, Last),
     first_not_before(H, First, Last, Zs, From),
     (   scan_up(From, Last, H, Event, Ze)
@@ -738,14 +848,14 @@ first_not_before(H, Low, High, Z, Number) :-
         )
     ).
 
-% An event pattern against a record: `E^[T1, T2]`, `E^T` (start and end T, as in event
-% patterns) or E.
+% An event pattern against a record: `E^[T1, T2]` (start and end), `E^T` (T is the end
+% time, as `E^T` in event patterns binds the end of an event's interval) or E.
 match(Event, S, E, T) :-
     (   nonvar(Event), Event = Pattern^Time
     ->  Pattern = T,
         (   nonvar(Time), Time = [T1, T2]
         ->  T1 = S, T2 = E
-        ;   Time = S, Time = E
+        ;   Time = E
         )
     ;   Event = T
     ).

@@ -20,7 +20,9 @@ to time T when
 
   - an input event `updated(Name/Arity)` with time at least T has been processed (a producer
     says it has sent everything up to then), or
-  - the clock minus the type's delay bound is at least T. The delay bound of a type is
+  - T lies beyond the type's delay bound behind the clock (`T + Delay < Clock`,
+    rtl_time:rtl_beyond_bound/3): an event ending at T would be late now, while one exactly
+    Delay seconds late is still within the bound and may come. The delay bound of a type is
     declared with `max_delay(Name/Arity, Seconds)`, or learned with
     `max_delay(Name/Arity, learn)` as the largest delay seen so far (the clock when the
     event arrived minus its end time, Def. 25-26); otherwise it is the flag `max_delay`.
@@ -34,8 +36,10 @@ is derived over the match's interval, once. A match that must wait is *postponed
 matches and the event flow go on.
 
 Postponed matches wait on monitors: one per (memory, time) still missing, woken by the
-memory's record additions (rtl_slr's memory_update_hook/4), and one deadline per match (the
-largest Time plus the delay bound), checked as the clock moves. Both are kept in time
+memory's record additions (rtl_slr's memory_update_hook/4), and one deadline per such
+condition (its Time plus the delay bound of its memory's events), checked as the clock
+moves: a condition is cleared by whichever comes first, and the match is released when its
+last condition is cleared. Both are kept in time
 indexes (rtl_time_index.pl), so a record or a clock step costs what it wakes, not the
 number of matches waiting (thousands when producers are seconds late). At the end of the input
 every history is complete, so rtl_sync_finish(run) runs the matches still postponed, in time
@@ -50,14 +54,19 @@ order; rtl_sync_finish(drop) discards them.
 :- meta_predicate rtl_synchronized(+, 0, +, +, +), rtl_synchronized_retract(+, 0, +, +, +),
                   rtl_postpone(+, +, 1).
 
-% pending(N, Event, Query, Start, End, Deadline): its open conditions are condition(N, _, _)
+% pending(N, Event, Query, Start, End, Until): match N, its open conditions being
+% condition(N, _, _, _); Until is the time a '$call' wait gives up (`inf`: never, and for
+% rules), in the time index `until` under Program (item N)
 :- dynamic pending/6.
-% condition(N, MemoryId, Time): match N waits until memory MemoryId is up to date for Time;
-% its monitor is in the time index `monitor` under Program-MemoryId (item N-Time), or, for
-% a query ('$call'), which any new record may satisfy, call_monitor(Program-MemoryId, N)
-:- dynamic condition/3.
+% condition(N, MemoryId, Time, Due): match N waits until memory MemoryId is up to date for
+% Time. Its monitor is in the time index `monitor` under Program-MemoryId (item N-Time), or,
+% for a query ('$call'), which any new record may satisfy, call_monitor(Program-MemoryId, N);
+% Due (`inf`: none) is when the delay bound of the memory's events completes its history up
+% to Time, in the time index `deadline` under Program (item N-MemoryId-Time): each
+% condition has its own deadline, so one met by the clock is cleared when the clock passes
+% it, whatever the other conditions of the match wait for.
+:- dynamic condition/4.
 :- dynamic call_monitor/2.
-% Deadlines are in the time index `deadline` under Program (item N).
 % declared_delay(Program, Name, Arity, Seconds or learn)
 :- dynamic declared_delay/4.
 % learned_delay(Program, Name, Arity, Seconds)
@@ -159,10 +168,8 @@ rtl_history_complete(Name/Arity, T) :-
     (   updated_until(M, Name, Arity, U), U >= T
     ->  true
     ;   rtl_type_delay(Name/Arity, Delay),
-        Delay \== inf,
         rtl_clock(Clock),
-        Clock =\= -inf,                         % no event processed yet
-        Clock - Delay >= T
+        rtl_beyond_bound(T, Clock, Delay)       % an event ending at T would be late now
     ).
 
 %   The type output hook of availability: `updated(Type)` events, and the events of the
@@ -211,46 +218,38 @@ rtl_synchronized(Event, Query, SyncConds, Start, End) :-
     ).
 
 park(Event, Query, Open, Start, End) :-
-    (   flag(rtl_sync_match, N0, N0 + 1),
-        N is N0 + 1,
-        deadline(Open, Deadline0),
-        (   Event = '$call'(_, Until), Until \== inf
-        ->  ( Deadline0 == inf -> Deadline = Until ; Deadline is min(Deadline0, Until) )
-        ;   Deadline = Deadline0
-        ),
-        Query = M:_,
-        assertz(pending(N, Event, Query, Start, End, Deadline)),
-        forall(member(Id-T, Open), add_condition(M, N, Event, Id, T)),
-        add_deadline(M, N, Deadline),
-        rtl_add_output_hook(rtl_sync:clock_moved)
-    ).
+    flag(rtl_sync_match, N0, N0 + 1),
+    N is N0 + 1,
+    (   Event = '$call'(_, Until0) -> Until = Until0 ; Until = inf ),
+    Query = M:_,
+    assertz(pending(N, Event, Query, Start, End, Until)),
+    forall(member(Id-T, Open), add_condition(M, N, Event, Id, T)),
+    (   Until == inf -> true ; time_index_add(until, M, Until, N) ),
+    rtl_add_output_hook(rtl_sync:clock_moved).
 
 add_condition(M, N, Event, Id, T) :-
-    assertz(condition(N, Id, T)),
+    condition_due(Id-T, Due),
+    assertz(condition(N, Id, T, Due)),
     (   Event = '$call'(_, _)
     ->  assertz(call_monitor(M-Id, N))
     ;   time_index_add(monitor, M-Id, T, N-T)
-    ).
+    ),
+    (   Due == inf -> true ; time_index_add(deadline, M, Due, N-Id-T) ).
 
 remove_condition(M, N, Id, T) :-
-    retract(condition(N, Id, T)),
+    retract(condition(N, Id, T, Due)),
     (   retract(call_monitor(M-Id, N))
     ->  true
     ;   time_index_remove(monitor, M-Id, T, N-T)
-    ).
+    ),
+    (   Due == inf -> true ; time_index_remove(deadline, M, Due, N-Id-T) ).
 
-add_deadline(M, N, Deadline) :-
-    (   Deadline == inf -> true ; time_index_add(deadline, M, Deadline, N) ).
-
-remove_deadline(M, N, Deadline) :-
-    (   Deadline == inf -> true ; time_index_remove(deadline, M, Deadline, N) ).
-
-% Remove match N with its conditions, monitors and deadline; the last one removes the hook.
+% Remove match N with its conditions, monitors and deadlines; the last one removes the hook.
 unpark(N, Event, Query, Start, End) :-
-    retract(pending(N, Event, Query, Start, End, Deadline)),
+    retract(pending(N, Event, Query, Start, End, Until)),
     Query = M:_,
-    forall(condition(N, Id, T), remove_condition(M, N, Id, T)),
-    remove_deadline(M, N, Deadline),
+    forall(condition(N, Id, T, _), remove_condition(M, N, Id, T)),
+    (   Until == inf -> true ; time_index_remove(until, M, Until, N) ),
     (   pending(_, _, _, _, _, _) -> true ; rtl_remove_output_hook(rtl_sync:clock_moved) ).
 
 %!  rtl_synchronized_retract(+Event, :Query, +SyncConds, +Start, +End) is det.
@@ -279,12 +278,18 @@ sync_condition(Cond, Id-T) :-
                     context(synchronized/3, 'a synchronization condition is [MemoryId, Time], both bound')))
     ).
 
-% A memory is up to date for time T when it has a record that ends after T, or when nothing
-% ending at or before T can arrive any more.
 %!  rtl_up_to_date(+Condition) is semidet.
 %
 %   Condition `MemoryId-Time` holds: the memory has a record that ends after Time, or the
 %   history of the events it records is complete up to Time, or the input has ended.
+%
+%   A record that ends exactly at Time is not enough, although prev and next at Time count
+%   it (their bounds are inclusive): several events of one type may end at the same time
+%   (the transforms of one tf message share a stamp), and a second one arriving after the
+%   first may change what prev and next answer at Time (among equal end times the order is
+%   that of the records, rtl_slr). Only a record ending after Time shows, under the thesis's
+%   assumption that the events of a type arrive in the order of their end times, that every
+%   record ending at or before Time has come.
 
 rtl_up_to_date(Id-T) :-
     (   rtl_input_ended
@@ -296,16 +301,13 @@ rtl_up_to_date(Id-T) :-
     ;   throw(error(existence_error(memory_instance, Id), context(synchronized/3, _)))
     ).
 
-% When the histories of the open conditions will be complete by their delay bounds now.
-deadline(Open, Deadline) :-
-    foldl(condition_deadline, Open, -inf, Deadline).
-
-condition_deadline(Id-T, D0, D) :-
+% condition_due(+Condition, -Due): the clock passing Due (strictly) completes the history of
+% the condition's memory up to its time by the delay bound now (`inf`: it never does).
+condition_due(Id-T, Due) :-
     (   T \== inf, rtl_memory_type(Id, Type), rtl_type_delay(Type, Delay), Delay \== inf
-    ->  D1 is T + Delay
-    ;   D1 = inf
-    ),
-    (   D1 == inf -> D = inf ; D0 == inf -> D = inf ; D is max(D0, D1) ).
+    ->  Due is T + Delay                        % rtl_beyond_bound/3's sum
+    ;   Due = inf
+    ).
 
 release('$call'(Action, _), _, _, _) :- !,
     call(Action, ready).
@@ -343,44 +345,51 @@ rtl_slr:memory_update_hook(M, Id, _, End) :-
 woken(_, N, call) :- !,
     release_pending(N).          % a query: evaluate it again, it says what it still needs
 woken(Id, N, T) :-
-    (   retract(condition(N, Id, T)),
-        \+ condition(N, _, _)
-    ->  release_pending(N)
+    (   pending(N, _, M:_, _, _, _),
+        condition(N, Id, T, _)
+    ->  remove_condition(M, N, Id, T),
+        (   condition(N, _, _, _) -> true ; release_pending(N) )
     ;   true
     ).
 
-%   The output hook while matches are postponed: release those whose histories are
-%   complete now that the clock has moved.
+%   The output hook while matches are postponed: the conditions whose deadlines the clock
+%   has passed are met now (unless a learned delay grew: then they wait for the new one),
+%   and a match whose last condition that was is released; queries whose time is up get
+%   `timeout`.
 clock_moved(_, _, _, add) :- !,
     rtl_clock(Clock),
     rtl_program(M),
-    time_index_take(deadline, M, =<, Clock, Due),
-    forall(member(N, Due), recheck(N)).
+    time_index_take(deadline, M, <, Clock, Due),
+    forall(member(N-Id-T, Due), condition_due_passed(M, N, Id, T)),
+    time_index_take(until, M, =<, Clock, TimedOut),
+    forall(member(N, TimedOut), timed_out(N)).
 clock_moved(_, _, _, _).
 
-% A learned delay may have grown, or an `updated` event come: check the open conditions
-% of match N again; release it when all hold, else move its deadline (which clock_moved
-% may have taken out of the index already: removing it again does nothing).
-recheck(N) :-
-    findall(Id-T, condition(N, Id, T), Open0),
-    exclude(rtl_up_to_date, Open0, Open),
-    (   Open == []
-    ->  release_pending(N)
-    ;   pending(N, '$call'(Action, Until), _, _, _, _),
-        Until \== inf, rtl_clock(Clock), Clock >= Until
+condition_due_passed(M, N, Id, T) :-
+    (   retract(condition(N, Id, T, _))           % its deadline entry was taken
+    ->  (   rtl_up_to_date(Id-T)
+        ->  (   retract(call_monitor(M-Id, N)) -> true ; time_index_remove(monitor, M-Id, T, N-T) ),
+            (   condition(N, _, _, _) -> true ; release_pending(N) )
+        ;   condition_due(Id-T, Due),           % the delay bound grew
+            assertz(condition(N, Id, T, Due)),
+            (   Due == inf -> true ; time_index_add(deadline, M, Due, N-Id-T) )
+        )
+    ;   true
+    ).
+
+timed_out(N) :-
+    (   pending(N, '$call'(Action, _), _, _, _, _)
     ->  forget(N),
         call(Action, timeout)
-    ;   retract(pending(N, Event, Query, Start, End, Deadline0))
-    ->  Query = M:_,
-        forall(( member(Id-T, Open0), \+ memberchk(Id-T, Open) ), remove_condition(M, N, Id, T)),
-        remove_deadline(M, N, Deadline0),
-        deadline(Open, Deadline1),
-        (   Event = '$call'(_, Until), Until \== inf
-        ->  ( Deadline1 == inf -> NewDeadline = Until ; NewDeadline is min(Deadline1, Until) )
-        ;   NewDeadline = Deadline1
-        ),
-        assertz(pending(N, Event, Query, Start, End, NewDeadline)),
-        add_deadline(M, N, NewDeadline)
+    ;   true
+    ).
+
+% An `updated` event came: check the open conditions of match N again, release it when all
+% hold.
+recheck(N) :-
+    (   pending(N, _, M:_, _, _, _)
+    ->  forall(( condition(N, Id, T, _), rtl_up_to_date(Id-T) ), remove_condition(M, N, Id, T)),
+        (   condition(N, _, _, _) -> true ; release_pending(N) )
     ;   true
     ).
 

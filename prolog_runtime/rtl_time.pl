@@ -1,22 +1,46 @@
 :- module(rtl_time,
           [ rtl_time_seconds/2,          % +TimeIn, -Seconds
             rtl_interval_seconds/3,      % +IntervalIn, -Start, -End
-            rtl_input_interval/6         % ?T, ?Start, ?End, -StartSec, -EndSec, -Problem
+            rtl_input_interval/6,        % ?T, ?Start, ?End, -StartSec, -EndSec, -Problem
+            rtl_beyond_bound/3           % +End, +Clock, +Bound
           ]).
 
 /** <module> Time stamps at the edges of Retalis
 
 Inside the runtime every time is a number of seconds (integer or float). At the edges we
 also accept ROS stamps `[Secs, NSecs]` and the `datime(Y, M, D, H, Min, S, Counter)` terms of
-the original ETALIS/Retalis, which we read as UTC seconds since the epoch (the counter,
-ETALIS's tie breaker within one second, is added as a fraction of a millisecond so that
-order within a second is kept).
+the original Retalis, which we read as UTC seconds since the epoch. The counter holds the
+nanoseconds within the second, as in the 2015 release (thesis A.2.5: "Counter encodes
+nanoseconds since seconds (i.e. stamp.nsec in ROS messages)"): an integer in [0, 10^9),
+checked, so that a datime/7 and a ROS stamp of the same instant are the same time.
+
+The delay bound and every other "how far behind the clock" bound (a memory's time limit,
+the retraction horizon) are read the same way, by rtl_beyond_bound/3.
 */
+
+%!  rtl_beyond_bound(+End:number, +Clock:number, +Bound) is semidet.
+%
+%   A time End lies beyond Bound seconds (a number, or `inf`: never) behind Clock:
+%   `End + Bound < Clock`. An event that ends at End and arrives when the clock is Clock
+%   is *late* (it breaks a delay bound Bound) exactly then; an event exactly Bound seconds
+%   late is within the bound. So the history up to End is complete once End is beyond the
+%   bound (no event ending at or before End can arrive within it any more), a record of a
+%   memory with time limit Bound is forgotten then, and a deletion is too late then. Due
+%   times kept in indexes (timers, deadlines) are `End + Bound`, due once strictly before
+%   the clock: the same sum, so they agree with this test to the last bit.
+
+rtl_beyond_bound(End, Clock, Bound) :-
+    Bound \== inf,
+    (   abs(End) =\= inf
+    ->  End + Bound < Clock
+    ;   End < Clock                             % -inf: beyond once the clock started; inf: never
+    ).
 
 %!  rtl_time_seconds(+Time, -Seconds:number) is semidet.
 %
-%   Seconds for a time written as a number, `[Secs, NSecs]` or `datime/7` (`datime/6`).
-%   Fails for anything else.
+%   Seconds for a time written as a number, `[Secs, NSecs]` or `datime/7` (`datime/6`;
+%   the counter of datime/7 is nanoseconds, an integer in [0, 10^9)). Fails for anything
+%   else.
 
 rtl_time_seconds(T, T) :-
     number(T), !.
@@ -26,10 +50,13 @@ rtl_time_seconds([Secs, NSecs], Seconds) :-
     ->  Seconds = Secs
     ;   Seconds is Secs + NSecs / 1.0e9
     ).
-rtl_time_seconds(datime(Y, M, D, H, Min, S, Counter), Seconds) :-
-    number(Counter), !,
+rtl_time_seconds(datime(Y, M, D, H, Min, S, NSecs), Seconds) :-
+    integer(NSecs), between(0, 999999999, NSecs), !,
     rtl_time_seconds(datime(Y, M, D, H, Min, S), Base),
-    Seconds is Base + Counter / 1.0e6.
+    (   NSecs =:= 0
+    ->  Seconds = Base
+    ;   Seconds is Base + NSecs / 1.0e9           % as a ROS stamp [Base, NSecs]
+    ).
 rtl_time_seconds(datime(Y, M, D, H, Min, S), Seconds) :-
     maplist(number, [Y, M, D, H, Min, S]),
     date_time_stamp(date(Y, M, D, H, Min, S, 0, -, -), Stamp),
@@ -81,11 +108,21 @@ rtl_input_interval(T, S, E, Start, End, Problem) :-
 
 time_problem(Key, T, Reason) :-
     (   integer(T)
-    ->  fail
+    ->  beyond_a_float(Key, T, Reason)
     ;   float(T), T =:= T, abs(T) =\= inf
     ->  fail
     ;   T = [Secs, NSecs], integer(Secs), integer(NSecs)
-    ->  \+ between(0, 999999999, NSecs),
-        format(string(Reason), "\"~s\": nanoseconds must be in [0, 1e9), not ~w", [Key, NSecs])
+    ->  (   beyond_a_float(Key, Secs, Reason)
+        ->  true
+        ;   \+ between(0, 999999999, NSecs),
+            format(string(Reason), "\"~s\": nanoseconds must be in [0, 1e9), not ~w", [Key, NSecs])
+        )
     ;   format(string(Reason), "\"~s\" must be a finite number of seconds or [secs, nsecs]", [Key])
     ).
+
+% An integer number of seconds beyond the largest float (the clock and the windows are
+% computed in floats: such a time would raise float_overflow in every later event).
+beyond_a_float(Key, Seconds, Reason) :-
+    Seconds =\= 0,
+    msb(abs(Seconds)) >= 1024,
+    format(string(Reason), "\"~s\" must be a finite number of seconds or [secs, nsecs] (beyond a float)", [Key]).

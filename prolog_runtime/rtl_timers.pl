@@ -76,8 +76,10 @@ rtl_timer_cancel(Goal) :-
 %!  rtl_absence_wait(+Close:number, :Goal) is det.
 %
 %   An absence whose period ends at Close: Goal decides it once the clock has passed
-%   Close + max_delay (no blocker ending by Close can arrive within the delay bound any
-%   more). With `max_delay` `inf` it is decided only by rtl_timers_flush/0.
+%   Close + max_delay (Close is beyond the delay bound, rtl_time:rtl_beyond_bound/3: no
+%   blocker ending by Close can arrive within the bound any more; the `after` timer at that
+%   sum is due exactly then). With `max_delay` `inf` it is decided only by
+%   rtl_timers_flush/0.
 
 rtl_absence_wait(Close, Goal) :-
     rtl_ele:rtl_flag(max_delay, Delay),

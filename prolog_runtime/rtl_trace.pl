@@ -460,7 +460,7 @@ change(erase, Kind, What) :- !,
 change(retract, Kind, What) :-
     (   in_ancestor(rtl_horizon:rtl_dry_run/3)
     ->  What = ignore
-    ;   in_ancestor(rtl_ele:rtl_collect_garbage/0)          % the periodic sweep
+    ;   in_ancestor(rtl_ele:rtl_collect_garbage/1)              % a sweep (clock-driven or of late events)
     ->  ( Kind == live -> What = expired ; What = dropped )
     ;   in_ancestor(rtl_policy:rtl_policy_drop_twins/2)
     ->  What = replaced

@@ -100,6 +100,7 @@ def _compile(text: str, file: str, output_name: str, dump_after: Optional[str], 
     from .passes.unit import Unit
 
     unit = Unit(parse_program(text, file), module or module_name(file), target=target_predicates())
+    unit.warnings.extend(unit.program.notes)
     unit = run_pipeline(unit, EVENT_PIPELINE, _dumper(dump_after, dump))
     return CompileResult(render_program(unit, output_name), unit, list(unit.warnings))
 

@@ -10,7 +10,9 @@ clauses to add to the program's module, each rule introduced by a marker:
 
 `Window` is `none` for a store without a window. The runtime (`prolog_runtime/rtl_rules.pl`)
 reads this text, checks that no rule `Id` exists yet and asserts the clauses; unlabelled
-rules are named `<prefix>_<n>` so that the runtime can keep their ids fresh.
+rules are named `<prefix>_<n>` so that the runtime can keep their ids fresh. The runtime gets
+the text from `retalisc compile-rules` (a subprocess of a standalone `swipl PROGRAM.pl`) or,
+inside a Python process, from `compile_rules_for_the_runtime` (served by the Engine).
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from dataclasses import dataclass
 from typing import List
 
 from .compiler import compile_added_rules
+from .frontend.errors import RetalisError
 
 
 @dataclass
@@ -34,4 +37,20 @@ def compile_rules(text: str, module: str, prefix: str = "rt", file: str = "<rule
     return CompiledRules(result.prolog, [generated.rule_id for generated in result.unit.generated])
 
 
-__all__ = ["CompiledRules", "compile_rules"]
+class RulesRefused(Exception):
+    """The rules do not compile; the text is the message (`FILE:LINE:COL: ...`)."""
+
+
+def compile_rules_for_the_runtime(module: str, prefix: str, text: str, file: str = "ins_event_rule") -> str:
+    """The text of the rules in `text` compiled for `module` (rtl_rules.pl reads it), what
+    `retalisc compile-rules --module MODULE --rule-prefix PREFIX --name FILE` writes; raises
+    RulesRefused with what that command prints when they do not compile."""
+    try:
+        return compile_rules(text, module, prefix, file).text
+    except RetalisError as error:
+        raise RulesRefused(error.render()) from None
+    except ValueError as error:
+        raise RulesRefused(f"error: {error}") from None
+
+
+__all__ = ["CompiledRules", "RulesRefused", "compile_rules", "compile_rules_for_the_runtime"]

@@ -12,6 +12,7 @@ from typing import Dict, List, Tuple
 from retalisc.compiler import AqOptions, compile_source
 from retalisc.frontend.definite import read_definite_program as load_program
 from retalisc.frontend.terms import Atom, Compound, Term, to_prolog
+from retalisc.frontend.terms import variables as _variables
 
 SWIPL = shutil.which("swipl") or "swipl"
 
@@ -51,13 +52,48 @@ def oracle_rules(source: str, extra=()) -> str:
         # `true` last: SWI-Prolog 9.0.4 compiles a last call wrongly after a `\+` in which
         # a variable first occurs (`p(0) :- \+ f(Y), e(Y, Y).` calls e/2 with one argument
         # set; docs/active_queries.md, "Fifth round")
-        body = [to_prolog(_rename(lit.term, preds)) for lit in rule.body] + ["true"]
+        body = [to_prolog(_rename(g, preds)) for g in tests_last(rule.body)] + ["true"]
         lines.append(f"{to_prolog(_rename(rule.head, preds))} :- {', '.join(body)}.")
     for name, arity in sorted(preds):
         if (name, arity) in program.dynamic:
             args = ", ".join(f"A{i}" for i in range(arity))
             lines.append(f"o_{name}({args}) :- {name}({args}).")
     return "\n".join(lines) + "\n"
+
+
+_BUILTINS = {"<", ">", "=<", ">=", "=:=", "=\\=", "is", "=", "\\=", "==", "\\==", "@<", "@>", "@=<", "@>="}
+
+
+def tests_last(body) -> List[Term]:
+    """The goals of a body as SWI-Prolog can run them: a builtin written before the literals that
+    bind its arguments (XSB style, `X < Y, e(X, Y)`) goes to the end of the body, where every
+    variable of a range-restricted rule is bound (SWI-Prolog would raise an instantiation error
+    where it stands). A test means the same wherever its arguments are bound."""
+    bound: set = set()
+    kept, moved = [], []
+    for lit in body:
+        term = lit.term
+        names = {v.name for v in _variables(term)}
+        if not _only_builtins(term):
+            needed = set()
+        elif term.name == "is":
+            needed = {v.name for v in _variables(term.args[1])}
+        elif term.name == "=":
+            needed = set()
+        else:
+            needed = names          # a test, or a control construct over builtins
+        if needed <= bound:
+            kept.append(term)
+            bound |= names
+        else:
+            moved.append(term)
+    return kept + moved
+
+
+def _only_builtins(term: Term) -> bool:
+    if isinstance(term, Compound) and (term.name, term.arity) in _CONTROL:
+        return all(_only_builtins(a) for a in term.args)
+    return isinstance(term, Compound) and term.name in _BUILTINS and term.arity == 2
 
 
 def oracle_goal(goal: str, source: str, extra=()) -> str:

@@ -109,11 +109,11 @@ def test_min_max_and_datime_minus_datime():
     out = engine.feed_batch([
         ("v(5, 2)", 1),
         ("v(1.5, 1.5)", 2),
-        ("two(datime(2020,1,1,0,0,10,999), datime(2020,1,1,0,1,0,0))", 3),   # counter ignored, |diff|
+        ("two(datime(2020,1,1,0,0,10,999), datime(2020,1,1,0,1,0,0))", 3),   # counter ignored, T1 - T2 (ETALIS)
         ("two([100, 900000000], [40, 0])", 4),                                # ROS stamps
         ("two(datime(1000, 3), datime(990, 1))", 5),                          # ETALIS compact datime/2
     ])
-    assert [e for e, _, _ in events(out)] == ["m(2,5)", "m(1.5,1.5)", "d(50)", "d(60)", "d(10)"]
+    assert [e for e, _, _ in events(out)] == ["m(2,5)", "m(1.5,1.5)", "d(-50)", "d(60)", "d(10)"]
 
 
 def test_ins_static_rule_and_del_static_rule_change_what_conditions_see():

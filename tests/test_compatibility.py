@@ -86,6 +86,40 @@ def test_compile_event_file_that_includes_itself(tmp_path):
         compile_file(str(tmp_path / "a.txt"))
 
 
+RELEASE_PATH = "/home/nao/catkin_ws/src/retalis/application_source/eventRules.txt"
+
+
+def test_the_2015_absolute_path_falls_back_to_the_file_beside_the_goal_file(tmp_path):
+    """The NAO goal file as the release published it: its rules by an absolute path on the
+    author's machine. The eventRules.txt beside it is read, with a warning naming both."""
+    nao = ROOT / "examples" / "nao"
+    (tmp_path / "eventRules.txt").write_text((nao / "eventRules.txt").read_text())
+    goals = (nao / "goalPredicates.txt").read_text()
+    assert goals.startswith("compile_event_file('eventRules.txt')\n")
+    program = tmp_path / "goalPredicates.txt"
+    program.write_text(goals.replace("'eventRules.txt'", f"'{RELEASE_PATH}'", 1))
+    published, edited = compile_file(str(program)), compile_file(str(nao / "goalPredicates.txt"))
+    assert [r.source for r in published.unit.program.event_rules] == [r.source for r in edited.unit.program.event_rules]
+    assert {r.span.file for r in published.unit.program.event_rules} == {str(tmp_path / "eventRules.txt")}
+    assert published.warnings[0] == (f"{program}:1:1: warning: compile_event_file: {RELEASE_PATH} does not exist; "
+                                     f"reading {tmp_path / 'eventRules.txt'}, the file of that name beside {program}")
+    run = retalisc("check", program)
+    assert run.returncode == 0 and f"{RELEASE_PATH} does not exist" in run.stderr
+
+
+def test_an_absolute_path_that_exists_is_read_and_one_missing_everywhere_is_an_error(tmp_path):
+    (tmp_path / "rules").mkdir()
+    (tmp_path / "rules" / "eventRules.txt").write_text("c(X) <- a(X).\n")
+    (tmp_path / "eventRules.txt").write_text("d(X) <- a(X).\n")
+    program = tmp_path / "goals.txt"
+    program.write_text(f"compile_event_file('{tmp_path / 'rules' / 'eventRules.txt'}')\n")
+    result = compile_file(str(program))
+    assert [r.head.name for r in result.unit.program.event_rules] == ["c"] and result.warnings == []
+    program.write_text(f"compile_event_file('{RELEASE_PATH[:-4]}_other.txt')\n")
+    with pytest.raises(RetalisSyntaxError, match="cannot read /home/nao/"):
+        compile_file(str(program))
+
+
 # ---- directives that call the runtime ------------------------------------------------------
 
 DIRECTIVES = """c(X) <- a(X) seq b(X).
@@ -263,3 +297,62 @@ def test_directives_after_one_that_calls_the_runtime_keep_their_order(tmp_path, 
     assert run.returncode == 0, run.stderr
     assert run.stdout.splitlines() == ["first", "third", "fourth", '{"event": "c(1)", "start": 1, "end": 1}',
                                        '{"event": "c(1)", "start": 1, "end": 1, "consumer": "out"}']
+
+
+# ---- ETALIS actions after the pattern -------------------------------------------------------
+
+@pytest.mark.parametrize("after, on_head", [
+    ("d(X) <- a(X) seq b(X) do new_event(e(X)).\n", "d(X) do new_event(e(X)) <- a(X) seq b(X).\n"),
+    ("l 'rule:' d(X) <- a(X) where X > 1 'do' (f(X), g).\n", "l 'rule:' d(X) do (f(X), g) <- a(X) where X > 1.\n"),
+    ("l : d(X) <- (a(X) seq b(X) timestamp t1(T)) 'DO' f(T).\n", "l : d(X) do f(T) <- (a(X) seq b(X) timestamp t1(T)).\n"),
+])
+def test_an_action_after_the_pattern_is_the_action_on_the_head(after, on_head):
+    """ETALIS's parser gives `Head <- P do A` and `Head do A <- P` one meaning: so does retalisc."""
+    statics = ":- dynamic f/1, g/0.\nf(_).\ng.\n"
+    compiled = compile_source(statics + after, "x.rtl").prolog.replace(after.strip(), on_head.strip())
+    assert compiled == compile_source(statics + on_head, "x.rtl").prolog
+
+
+@pytest.mark.parametrize("source, column, words", [
+    ("h(X) do f <- a(X) do g.\n", 14, "a rule has one action"),
+    ("h(X) <- a(X) seq (b(X) do g).\n", 19, "'do' cannot stand inside a pattern"),
+    ("h <- a and prolog(true).\n", 12, "prolog\\(Goal\\) is a step of a sequence"),
+    ("h <- prolog(true) seq prolog(true).\n", 6, "prolog\\(Goal\\) needs an event pattern beside it"),
+])
+def test_misplaced_actions_and_prolog_steps_are_located_errors(source, column, words):
+    with pytest.raises(RetalisSyntaxError, match=words) as info:
+        compile_source(source, "bad.rtl")
+    assert (info.value.span.line, info.value.span.column) == (1, column)
+
+
+# ---- ETALIS's prolog(Goal) steps and library predicates -------------------------------------
+
+def test_prolog_steps_of_a_sequence_are_conditions():
+    """ETALIS's `P seq prolog(G)` and `prolog(G) seq P` call G when P is detected: `P where G`."""
+    source = ("low(M) <- a(X) seq b(Y) 'seq' prolog(min(X, Y, M)).\n"
+              "high(M) <- prolog(max(X, Y, M)) seq (a(X) seq b(Y)).\n")
+    assert _lines(source, [("a(3)", 1), ("b(2)", 2)]) == [("low(2)", 1, 2), ("high(3)", 1, 2)]
+
+
+def test_an_undefined_predicate_in_a_prolog_step_is_a_warning_and_a_reported_error(tmp_path):
+    """It failed silently before: `prolog(...)` was read as an event that never occurs."""
+    program = tmp_path / "p.event"
+    program.write_text("g(Y) <- a(X) seq prolog(no_such(X, Y)).\nok(X) <- b(X).\n")
+    assert any("this condition calls no_such/2" in w for w in compile_source(program.read_text(), str(program)).warnings)
+    events = tmp_path / "events.jsonl"
+    events.write_text('{"event": "a(1)", "t": 1}\n{"event": "a(2)", "t": 2}\n{"event": "b(3)", "t": 3}\n')
+    run = retalisc("run", program, "--events", events)
+    assert f"{events}:1: error: " in run.stderr and "no_such/2" in run.stderr
+    assert f"{events}:2: error: " in run.stderr
+    assert run.stdout.splitlines() == ['{"event": "ok(3)", "start": 3, "end": 3}'] and "2 failed" in run.stderr
+
+
+def test_etalis_library_predicates_are_callable_from_rules_added_at_run_time():
+    """Added rules are untrusted (the sandbox checks what they call): the library is allowed."""
+    engine = Engine.from_source("start <- go.\n", "lib.rtl")
+    engine.add_rules("late(D) <- seen(T) where (less_datime(T, datime(2020,1,2,0,0,0)), "
+                     "datime_plus_sec(T, 60, D), is_datime(D), equal_datime(D, D), "
+                     "between_datime(T, datime(2019,1,1,0,0,0), D), datime_minus_sec(D, 60, T)).\n")
+    assert [o.event for o in engine.feed_batch([("seen(datime(2020,1,1,23,59,30))", 1),
+                                                ("seen(datime(2020,1,3,0,0,0))", 2)])] == \
+        ["late(datime(2020,1,2,0,0,30))"]

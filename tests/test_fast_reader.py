@@ -34,7 +34,7 @@ compare_line(Line, T0-D0, T-D) :-
     rtl_parse_event_line(Line, 1000, Slow),
     rtl_use_fast_reader(true),
     rtl_parse_event_line(Line, 1000, Fast),
-    (   rtl_io:rtl_fast_event_line(Line, 1000, _, _, _, _, _) -> T is T0 + 1 ; T = T0 ),
+    (   rtl_io:rtl_fast_event_line(Line, 1000, -1, _, _, _, _, _) -> T is T0 + 1 ; T = T0 ),
     (   Slow == Fast
     ->  D = D0
     ;   D is D0 + 1,

@@ -16,7 +16,8 @@ from retalisc.driver.active_queries import ActiveQueries
 
 # recursion (tables with answers of answers), left recursion (states that are joins of a
 # consumer with its table, without goal records), a stored-fact query, a rule added and
-# removed at run time (its clause references are in the state), a negation
+# removed at run time (its clause references are in the state), a negation, a rule for a
+# predicate with stored facts only (its clauses rewritten to wait on its table)
 PROGRAM = """\
 path(X, Y) :- edge(X, Y).
 path(X, Y) :- edge(X, Z), path(Z, Y).
@@ -37,7 +38,8 @@ def write_script(path, commands, seed):
     registered again), edges asserted and retracted, a rule added and removed, comments."""
     rng = random.Random(seed)
     lines = ["?q1 path(X, Y).", "?q2 reach(X).", "?q3 path(1, Y).", "?q4 lonely(X).", "?q5 edge(X, 3).",
-             "?q6 weight(W).", "?q7 lpath(0, Y)."]
+             "?q6 weight(W).", "?q7 lpath(0, Y).",
+             "+(w(X) :- node(X), X > 5)."]      # w/1 had stored facts only: now a mixed predicate
     edges, rule, q3 = set(), False, True
     while len(lines) < commands:
         r = rng.random()

@@ -7,7 +7,10 @@ R1 * exp(F * log(R1^T R2)) (axis and angle of the relative rotation), never quat
 One swipl subprocess evaluates a whole batch of cases."""
 from __future__ import annotations
 
+import calendar
+import datetime
 import math
+from fractions import Fraction
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -225,3 +228,79 @@ def test_transform_quaternion_marker_in_world(driver):
         h = h @ hom(pose)
     assert np.allclose(v, h[:3, 3], atol=1e-12)
     assert values(driver, ["transform_quaternion([], Out)"]) == [[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]]
+
+
+# ---- exact interpolation at ROS times (issue 40 item 5) ------------------------------------------
+
+def _exact(t) -> Fraction:
+    """The exact time a time term stands for: a float's own value, a stamp's Sec + NSec/10^9,
+    a datime/7's UTC seconds + Counter/10^9 (the counter is nanoseconds)."""
+    if isinstance(t, tuple) and t[0] == "datime":
+        _, y, mo, d, h, mi, s, ns = t
+        base = calendar.timegm((y, mo, d, h, mi, s, 0, 0, 0))
+        return Fraction(base) + Fraction(ns, 10**9)
+    if isinstance(t, list):
+        return Fraction(t[0]) + Fraction(t[1], 10**9)
+    return Fraction(t)
+
+
+def _time_text(t) -> str:
+    if isinstance(t, tuple):
+        return "datime(" + ", ".join(str(a) for a in t[1:]) + ")"
+    return pl(t)
+
+
+@st.composite
+def epoch_time(draw, base: int):
+    """A time within a few ms of `base` (epoch-sized seconds) as a float, a stamp or a datime/7."""
+    ns = base * 10**9 + draw(st.integers(0, 5_000_000))
+    sec, nsec = divmod(ns, 10**9)
+    form = draw(st.sampled_from(["float", "stamp", "stamp", "datime"]))
+    if form == "float":
+        return sec + nsec / 1e9
+    if form == "stamp":
+        return [sec, nsec]
+    y, mo, d, h, mi, s = datetime.datetime.fromtimestamp(sec, datetime.timezone.utc).timetuple()[:6]
+    return ("datime", y, mo, d, h, mi, s, nsec)
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(1_400_000_000, 1_500_000_000).flatmap(
+    lambda base: st.lists(st.tuples(epoch_time(base), epoch_time(base), epoch_time(base)), min_size=1, max_size=20)))
+def test_interpolation_subtracts_exactly_before_it_divides(driver, cases):
+    """datime_interpolate/4, time_fraction/4 and pose_interpolate/6 give the fraction of the
+    exact times, rounded once: floats taken at their own value, stamps and datime/7 exact."""
+    goals = []
+    for a, b, t in cases:
+        args = f"{_time_text(a)}, {_time_text(b)}, {_time_text(t)}"
+        goals += [f"datime_interpolate({args}, Out)", f"time_fraction({args}, Out)",
+                  f"pose_interpolate({_time_text(a)}, [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]], {_time_text(b)}, "
+                  f"[[1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]], {_time_text(t)}, [[Out|_]|_])"]
+    got = values(driver, goals)
+    for i, (a, b, t) in enumerate(cases):
+        x1, x2, x = _exact(a), _exact(b), _exact(t)
+        f = 0.0 if x1 == x2 else float((x - x1) / (x2 - x1))
+        pose_f = 0.0 if x == x1 or x1 == x2 else 1.0 if x == x2 else f
+        assert got[3 * i:3 * i + 3] == [f, f, pose_f], (a, b, t)
+
+
+def test_the_issue_40_interpolation_value(driver):
+    """The fraction of the floats' own values (the oracle: Fraction arithmetic), not of their
+    nanoseconds rounded at epoch size (0.5000984639621898)."""
+    x1, x2, x = (Fraction(v) for v in (1433161805.0, 1433161805.0026, 1433161805.0013))
+    assert float((x - x1) / (x2 - x1)) == 0.500045850527281
+    assert values(driver, ["datime_interpolate(1433161805.0, 1433161805.0026, 1433161805.0013, Out)"]) \
+        == [0.500045850527281]
+
+
+def test_the_datime_counter_is_nanoseconds_and_is_checked(driver):
+    """A 2015-style datime/7 carries the stamp's nanoseconds in its counter (thesis A.2.5):
+    it is the same time as the stamp, and a counter outside [0, 10^9) is refused."""
+    got = run(driver, [
+        "datime_interpolate([1433161805, 0], [1433161805, 2600000], datime(2015, 6, 1, 12, 30, 5, 1300000), Out)",
+        "convert_to_datime(datime(1970, 1, 1, 0, 0, 10, 500000000), Out)",
+        "datime_interpolate(0, 1, datime(2015, 6, 1, 12, 30, 5, 1000000000), Out)",
+        "datime_interpolate(0, 1, datime(2015, 6, 1, 12, 30, 5, 1.5), Out)",
+    ])
+    assert got[:2] == [("ok", 0.5), ("ok", 10.5)]
+    assert all(kind == "error" and "datime_nanoseconds" in text for kind, text in got[2:])

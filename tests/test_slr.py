@@ -62,10 +62,9 @@ def test_interval_records_and_their_time_terms():
     e = _engine("c_mem(m, x(_)-[], inf, inf).\n")
     e.feed_batch([("x(1)", 1, 4), ("x(2)", 3, 3)])
     assert _values(e.query_all("mem(m, x(V)^[S, T])"), "V", "S", "T") == [("2", "3", "3"), ("1", "1", "4")]
-    assert e.query_all("mem(m, x(V)^3)") == [{"V": "2"}]      # E^T: start = end = T
-    assert e.query_all("mem(m, x(V)^4)") == []
-    # x(1)^[1, 4] ends later but does not unify with a point: prev skips it
-    assert e.query("prev(m, x(V)^T, 4)") == {"V": "2", "T": "3"}
+    assert e.query_all("mem(m, x(V)^3)") == [{"V": "2"}]      # E^T: T is the end time,
+    assert e.query_all("mem(m, x(V)^4)") == [{"V": "1"}]      # as `E^T` in event patterns
+    assert e.query("prev(m, x(V)^T, 4)") == {"V": "1", "T": "4"}
     assert e.query("prev(m, x(V)^[S, T], 4)") == {"V": "1", "S": "1", "T": "4"}
     assert e.query("prev(m, x(V)^[S, 3], 4)") == {"V": "2", "S": "3"}
 

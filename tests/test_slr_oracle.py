@@ -10,27 +10,30 @@ a history of every type) are answered by the runtime and by `Model`, a brute-for
 evaluation of the definitions over plain Python lists.
 
 What a memory holds (Def. 21): among the matching events present, those whose end time is
-within the last L seconds of the clock (the largest end time processed), and of those the N
-latest by end time; among equal end times the later-arriving one counts as later (the
-runtime's documented rule, so ties are generated freely). With no retraction that is a
-function of the set of events present (`held_by_definition`, checked against the model).
+within the last L seconds of the clock (the largest end time processed; a record ending at
+E is gone once E + L < clock), and of those the N latest by end time; among equal end times
+records go by start time, then by the standard order of terms of the record (the runtime's
+documented rule: order-free, so ties are generated freely and arrival orders do not show).
+With no retraction that is a function of the set of events present (`held_by_definition`,
+checked against the model).
 Retractions make it depend on history, and the model follows the runtime's choice:
 
   * an event that a count or time limit has forgotten stays forgotten: retracting a held
     record frees a place but does not bring the forgotten older record back;
   * a retraction removes one held record equal to the event's record (same template, start
-    and end; the earliest such by end time and arrival), whichever event it came from
+    and end; equal records are indistinguishable), whichever event it came from
     (records do not remember their event). Retracting an event whose own record was
     forgotten therefore removes an equal record of another event if one is held; the model
     does the same. Only events present (added and not yet retracted) are retracted.
 
 prev(Id, E, Zs) is the latest record ending =< Zs that unifies with E, next(Id, E, Zs, Ze)
-the earliest ending in [Zs, Ze] that unifies; `E^T` needs start = end = T, `E^[S, T]` binds
-both. The `at` view bounds mem/2 only. SLR_EXAMPLES sets the number of examples (default 150).
+the earliest ending in [Zs, Ze] that unifies (in the order of records); `E^T` binds T to
+the end time (as `E^T` in event patterns does), `E^[S, T]` binds both. The `at` view bounds mem/2 only. SLR_EXAMPLES sets the number of examples (default 150).
 """
 from __future__ import annotations
 
 import os
+from collections import Counter
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Tuple, Union
 
@@ -53,6 +56,8 @@ TYPES: Dict[str, Tuple[list, ...]] = {
 # forms its clause uses); memories are created for each example through Engine.memory.
 PROGRAM = """
 uses_histories(T) :- prev(a(_, _), T), prev(b(_), T), next(c(_, _), T, inf).
+added(Id, R) <- memory_record_added(Id, R).
+forgotten(Id, R) <- memory_record_forgotten(Id, R).
 """
 
 Value = Union[int, str, tuple]          # int, atom, or (functor, (args...))
@@ -125,8 +130,7 @@ class Query:
         if b is None or self.times is None:
             return b
         if self.times[0] == "pt":
-            b = unify(self.times[1], record.start, b)
-            return None if b is None else unify(self.times[1], record.end, b)
+            return unify(self.times[1], record.end, b)
         b = unify(self.times[1], record.start, b)
         return None if b is None else unify(self.times[2], record.end, b)
 
@@ -153,12 +157,31 @@ class Event:
         return text(self.value())
 
 
+def standard_order_key(value: Value) -> tuple:
+    """Prolog's standard order of terms for the values here: numbers < atoms < compounds,
+    compounds by arity, then name, then arguments."""
+    if isinstance(value, tuple):
+        return (2, len(value[1]), value[0], tuple(standard_order_key(a) for a in value[1]))
+    if isinstance(value, str):
+        return (1, value)
+    return (0, value)
+
+
 @dataclass(frozen=True)
 class Record:
     end: float
-    seq: int                    # arrival number: among equal end times the later arrival is later
     start: float
     value: Value
+
+    def order(self) -> tuple:
+        """The order of records: end time, then start time, then the record's standard order."""
+        return (self.end, self.start, standard_order_key(self.value))
+
+
+def beyond_bound(end: float, clock: float, bound: Optional[float]) -> bool:
+    """docs/runtime.md: a time `end` lies beyond `bound` seconds behind the clock when
+    end + bound < clock (a bound of None is inf)."""
+    return bound is not None and end + bound < clock
 
 
 @dataclass(frozen=True)
@@ -172,13 +195,14 @@ class MemorySpec:
     n: Optional[int]            # None: inf
     limit: Optional[float]      # None: inf
 
-    def request(self) -> str:
+    def request(self, record_events: bool = False) -> str:
         pattern = f"{self.type_name}({', '.join(pattern_text(p) for p in self.pattern)})"
         conds = f"[{self.cond[0]} {self.cond[1]} {text(self.cond[2])}]" if self.cond else "[]"
         n = "inf" if self.n is None else str(self.n)
         if self.kind == "c_mem":
             limit = "inf" if self.limit is None else repr(self.limit)
-            return f"c_mem({self.ident}, {pattern}-{conds}, {n}, {limit})"
+            options = ", [record_events(true)]" if record_events else ""
+            return f"c_mem({self.ident}, {pattern}-{conds}, {n}, {limit}{options})"
         template = "_" if self.template is None else pattern_text(("term", self.template[0], self.template[1]))
         return f"memorize({pattern}, {conds}, {template}, {self.ident}, {n})"
 
@@ -217,12 +241,12 @@ class MemoryModel:
         self.spec = spec
         self.held: List[Record] = []
 
-    def add(self, event: Event, seq: int, clock: float) -> None:
+    def add(self, event: Event, clock: float) -> None:
         value = self.spec.record_value(event)
         if value is None:
             return
-        self.held.append(Record(event.end, seq, event.start, value))
-        self.held.sort(key=lambda r: (r.end, r.seq))
+        self.held.append(Record(event.end, event.start, value))
+        self.held.sort(key=Record.order)
         if self.spec.n is not None:
             self.held = self.held[-self.spec.n:]
         self.held = self.within_limit(self.held, clock)
@@ -237,16 +261,16 @@ class MemoryModel:
     def within_limit(self, records: List[Record], clock: float) -> List[Record]:
         if self.spec.limit is None:
             return records
-        return [r for r in records if r.end >= clock - self.spec.limit]
+        return [r for r in records if not beyond_bound(r.end, clock, self.spec.limit)]
 
     def records(self, clock: float) -> List[Record]:
         return self.within_limit(self.held, clock)
 
     def held_by_definition(self, arrivals: List[Tuple[int, Event]], clock: float) -> List[Record]:
         """Def. 21 as a function of the events present (valid when none was retracted)."""
-        matching = [Record(e.end, seq, e.start, self.spec.record_value(e)) for seq, e in arrivals
+        matching = [Record(e.end, e.start, self.spec.record_value(e)) for _, e in arrivals
                     if self.spec.record_value(e) is not None]
-        kept = sorted(self.within_limit(matching, clock), key=lambda r: (r.end, r.seq))
+        kept = sorted(self.within_limit(matching, clock), key=Record.order)
         return kept if self.spec.n is None else kept[len(kept) - self.spec.n:] if len(kept) > self.spec.n else kept
 
 
@@ -258,11 +282,11 @@ class Model:
         self.clock = float("-inf")
 
     def run(self, ops: List[Tuple[str, Event]]) -> None:
-        for seq, (op, event) in enumerate(ops):
+        for op, event in ops:
             if op == "add":
                 self.clock = max(self.clock, event.end)
                 for m in self.memories.values():
-                    m.add(event, seq, self.clock)
+                    m.add(event, self.clock)
             else:
                 for m in self.memories.values():
                     m.retract(event)
@@ -441,12 +465,12 @@ def engine():
     return Engine.from_source(PROGRAM, "slr_oracle.rtl")
 
 
-def _reset(engine: Engine, specs: List[MemorySpec]) -> None:
+def _reset(engine: Engine, specs: List[MemorySpec], record_events: bool = False) -> None:
     engine.bridge.once(f"retalis:rtl_use_program({engine.module})")   # other tests may load programs
     engine.clear()
     engine.memory("d_mem(_)")
     for spec in specs:
-        engine.memory(spec.request())
+        engine.memory(spec.request(record_events))
 
 
 def _feed(engine: Engine, ops: List[Tuple[str, Event]]) -> None:
@@ -574,6 +598,20 @@ def test_queries_agree_with_the_model(engine, data):
         assert engine.query_all(goal, at=at) == expected, f"{goal} at {at}\n{story}"
 
 
+def _assert_same_answers(engine, data, specs, shuffled, in_order) -> None:
+    """The queries drawn for these memories answer the same after both deliveries."""
+    model = Model(specs + STREAMS)
+    model.run(shuffled)
+    cases = data.draw(query_cases(specs, model), label="queries")
+    goals = [(f"mem({s.ident}, E^[S, T])", None) for s in specs] + [(goal, at) for goal, at, _ in cases]
+    answers = []
+    for ops in (in_order, shuffled):
+        _reset(engine, specs)
+        _feed(engine, ops)
+        answers.append([engine.query_all(goal, at=at) for goal, at in goals])
+    assert answers[0] == answers[1], _describe(specs, shuffled)
+
+
 @settings(SETTINGS, max_examples=max(EXAMPLES // 2, 1))
 @given(st.data())
 def test_arrival_order_does_not_matter_without_forgetting(engine, data):
@@ -586,17 +624,7 @@ def test_arrival_order_does_not_matter_without_forgetting(engine, data):
     shuffled = data.draw(deliveries(evs), label="delivery")
     retracted = [e for op, e in shuffled if op == "retract"]
     in_order = [("add", e) for e in sorted(evs, key=lambda e: e.end)] + [("retract", e) for e in retracted]
-    model = Model(specs + STREAMS)
-    model.run(shuffled)
-    cases = data.draw(query_cases(specs, model), label="queries")
-    goals = [(f"mem({s.ident}, E^[S, T])", None) for s in specs] + [(goal, at) for goal, at, _ in cases]
-
-    answers = []
-    for ops in (in_order, shuffled):
-        _reset(engine, specs)
-        _feed(engine, ops)
-        answers.append([engine.query_all(goal, at=at) for goal, at in goals])
-    assert answers[0] == answers[1], _describe(specs, shuffled)
+    _assert_same_answers(engine, data, specs, shuffled, in_order)
 
 
 def test_the_model_is_not_trivial(engine):
@@ -616,3 +644,124 @@ def test_the_model_is_not_trivial(engine):
     assert engine.query_all("prev(a(q, X)^T, 10)") == [{"X": "0", "T": "4"}]     # the stream keeps all
     assert _texts(model.stream_prev(Query(("term", "a", [("const", "q"), ("var", "X")]), ("pt", ("var", "T"))), 10)) \
         == [{"X": "0", "T": "4"}]
+
+
+# ---- memory events (thesis 4.2.4) ---------------------------------------------------------
+
+def _announced(model: Model, idents: List[str], before: Dict[str, List[Record]]) -> Counter:
+    """What the memory events of one input must say: every record a memory holds now and did
+    not hold before was added, every one it held before and holds no more was forgotten
+    (by count, by time as the clock moved, or by a deletion)."""
+    out: Counter = Counter()
+    for i in idents:
+        old, new = Counter(before[i]), Counter(model.records(i))
+        for r, k in (new - old).items():
+            out[("added", i, text(r.value))] += k
+        for r, k in (old - new).items():
+            out[("forgotten", i, text(r.value))] += k
+    return out
+
+
+@settings(SETTINGS, max_examples=max(EXAMPLES // 3, 1))
+@given(st.data())
+def test_memory_events_announce_every_change_when_it_happens(engine, data):
+    """Items 1 and 2 of issue 40: memory_record_added/forgotten say exactly how the records
+    of a memory (with record_events(true)) change with each input, in that input: a record
+    leaves by its time limit when the clock moves beyond it (whatever event moved it), and a
+    late record that a full memory does not keep is neither added nor forgotten."""
+    evs = data.draw(events(), label="events")
+    types = {e.name for e in evs}
+    specs = []
+    for i in range(data.draw(st.integers(1, 2))):
+        spec = data.draw(memory_spec(i, types), label=f"memory {i}")
+        specs.append(MemorySpec(spec.ident, "c_mem", spec.type_name, spec.pattern, spec.cond, None, spec.n,
+                                data.draw(st.one_of(st.none(), st.sampled_from([0, 1, 2, 3.5, 5])), label="L")))
+    ops = data.draw(deliveries(evs), label="delivery")
+    _reset(engine, specs, record_events=True)
+    model = Model(specs)
+    idents = [s.ident for s in specs]
+    story = "\n".join(s.request(True) for s in specs)
+    for op, event in ops:
+        before = {i: list(model.records(i)) for i in idents}
+        model.run([(op, event)])
+        produced = engine.feed(event.text(), event.start, event.end, op)
+        said = Counter((o.name, text(_value(o.args[0])), text(_value(o.args[1]))) for o in produced
+                       if o.op == "add" and o.name in ("added", "forgotten"))
+        story += f"\n{op} {event.text()}^[{event.start},{event.end}]"
+        assert said == _announced(model, idents, before), story
+
+
+def _value(arg) -> Value:
+    """An argument of an output event (engine.Term, atom str or number) as a Value."""
+    if isinstance(arg, (str, int)):
+        return arg
+    return (arg.name, tuple(_value(a) for a in arg.args))
+
+
+@settings(SETTINGS, max_examples=max(EXAMPLES // 3, 1))
+@given(st.data())
+def test_arrival_order_does_not_show_through_ties_or_limits(engine, data):
+    """Item 6 of issue 40: without deletions what a memory holds is a function of the events
+    (Def. 21), equal end times and count and time limits included, so any arrival order gives
+    the answers of the end-time order."""
+    evs = data.draw(events(), label="events")
+    types = {e.name for e in evs}
+    specs = [data.draw(memory_spec(i, types), label=f"memory {i}") for i in range(data.draw(st.integers(1, 3)))]
+    shuffled = data.draw(deliveries(evs, retract=False), label="delivery")
+    in_order = [("add", e) for e in sorted(evs, key=lambda e: e.end)]
+    _assert_same_answers(engine, data, specs, shuffled, in_order)
+
+
+def test_a_record_leaves_by_time_at_the_clock_move_that_passes_it():
+    """Issue 40 item 1: L = 4, p(1)@1 then z(1)@10: forgotten at z(1)@10, not at the next p."""
+    e = Engine.from_source("c_mem(m, p(_)-[], inf, 4, [record_events(true)]).\n"
+                           "forgotten(R) <- memory_record_forgotten(m, R).\n")
+    assert [o.event for o in e.feed("p(1)", 1)] == []
+    assert [o.event for o in e.feed("z(1)", 10)] == ["forgotten(p(1))"]
+    assert e.query_all("mem(m, X)") == []
+    assert [o.event for o in e.feed("p(5)", 13)] == []
+    e.feed("p(6)", 15)
+    e.feed("p(7)", 19)                               # 15 + 4 is not before 19: p(6) stays
+    assert e.query_all("mem(m, p(X))") == [{"X": "6"}, {"X": "7"}]
+    assert [o.event for o in e.advance_clock(30)] == ["forgotten(p(6))", "forgotten(p(7))"]   # a heartbeat too
+
+
+def test_a_late_record_a_full_memory_does_not_keep_raises_nothing():
+    """Issue 40 item 2: N = 1, p(2)@2 then the late p(1)@1: no event at all for p(1)."""
+    e = Engine.from_source("c_mem(m, p(_)-[], 1, inf, [record_events(true)]).\n"
+                           "added(R) <- memory_record_added(m, R).\n"
+                           "forgotten(R) <- memory_record_forgotten(m, R).\n")
+    assert [o.event for o in e.feed("p(2)", 2)] == ["added(p(2))"]
+    assert [o.event for o in e.feed("p(1)", 1)] == []
+    assert e.query_all("mem(m, p(X))") == [{"X": "2"}]
+
+
+def test_equal_end_times_are_ordered_by_start_then_record_not_by_arrival():
+    """Issue 40 item 6: with N = 2 and three records ending at 5, either arrival order keeps
+    the two greatest by (start, standard order), and prev at 5 answers the greatest."""
+    answers = []
+    for order in (["p(c)", "p(a)", "p(b)"], ["p(b)", "p(c)", "p(a)"]):
+        e = Engine.from_source("c_mem(m, p(_)-[], 2, inf).\n")
+        for ev in order:
+            e.feed(ev, 5)
+        e.feed("p(z)", 4, 5)                          # starts earlier: goes first, and is forgotten
+        answers.append((e.query_all("mem(m, p(X))"), e.query("prev(m, p(X), 5)")))
+    assert answers[0] == answers[1] == ([{"X": "b"}, {"X": "c"}], {"X": "c"})
+
+
+def test_e_caret_t_binds_the_end_time_as_in_event_patterns():
+    """Issue 40 item 6: an instant given as start 2, end 2.0, and an interval [1, 3]."""
+    e = Engine.from_source("c_mem(m, p(_)-[], inf, inf).\n")
+    e.feed("p(1)", 2, 2.0)
+    e.feed("p(2)", 1, 3)
+    assert e.query_all("mem(m, p(X)^T)") == [{"X": "1", "T": "2.0"}, {"X": "2", "T": "3"}]
+    assert e.query("prev(m, p(X)^T, 3)") == {"X": "2", "T": "3"}
+
+
+def test_engine_memory_accepts_c_mem_5_and_checks_its_options():
+    """Issue 40 item 6: Engine.memory() takes the c_mem/5 form programs accept."""
+    e = Engine.from_source("added(R) <- memory_record_added(m, R).\n")
+    e.memory("c_mem(m, p(_)-[], inf, inf, [record_events(true)])")
+    assert [o.event for o in e.feed("p(1)", 1)] == ["added(p(1))"]
+    with pytest.raises(Exception, match="record_events"):
+        e.memory("c_mem(m2, p(_)-[], inf, inf, [record_events(maybe)])")

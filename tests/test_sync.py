@@ -41,7 +41,8 @@ def test_the_clock_passing_the_delay_bound_completes_a_history():
         _feed(engine, ['{"event": "tf(odom, base, 0)", "t": 0}', '{"event": "tf(base, cam, 100)", "t": 0}',
                        '{"event": "marker(m1, 1000)", "t": 0.5}'])
         assert _feed(engine, ['{"event": "other", "t": 0.9}']) == []
-        assert _feed(engine, ['{"event": "other", "t": 1.0}']) == ["pose(m1,1100)"]
+        assert _feed(engine, ['{"event": "other", "t": 1.0}']) == []   # a tf at 0.5 is 0.5 s late: still in time
+        assert _feed(engine, ['{"event": "other", "t": 1.01}']) == ["pose(m1,1100)"]
     finally:
         engine.set_flag("max_delay", "1.0")
 
@@ -65,7 +66,8 @@ def test_a_declared_delay_per_type_completes_the_history():
     engine = Engine.from_source(AVAILABILITY)
     assert _events(engine, ("tf(a, 1)", 0.0), ("marker(m1)", 1.0)) == []
     assert _events(engine, ("noise", 1.1)) == []
-    assert _events(engine, ("noise", 1.2)) == ["seen(m1,1)"]      # 1.2 - 0.2 >= 1.0: no tf up to 1.0 can come
+    assert _events(engine, ("noise", 1.2)) == []                  # a tf at 1.0 would be 0.2 s late: in time
+    assert _events(engine, ("noise", 1.25)) == ["seen(m1,1)"]     # 1.0 + 0.2 < 1.25: no tf up to 1.0 can come
 
 
 def test_an_updated_event_completes_the_history():
@@ -81,7 +83,8 @@ def test_a_learned_delay_grows_with_the_largest_delay_seen():
     assert engine.query("rtl_type_delay(odom/1, D)") == {"D": "2.0"}
     assert _events(engine, ("arm(a)", 5.5)) == []
     assert _events(engine, ("noise", 7.0)) == []                             # 7 - 2 < 5.5
-    assert _events(engine, ("noise", 7.5)) == ["moved(a,2)"]
+    assert _events(engine, ("noise", 7.5)) == []                             # exactly 2 s: in time
+    assert _events(engine, ("noise", 7.6)) == ["moved(a,2)"]
 
 
 QUERIES = """
@@ -212,7 +215,9 @@ def test_extrapolation_waits_until_t_plus_one_plus_the_delay_bound():
     future = engine.query_synchronized("tf(base, rcf, L)^10.5", at=10.5)
     engine.feed_batch([("noise", 12.4)])
     assert not future.done()                                        # a base-rcf in [10.5, 11.5] may still come
-    engine.feed_batch([("noise", 12.5)])                            # 10.5 + 1 + max delay 1
+    engine.feed_batch([("noise", 12.5)])                            # 10.5 + 1 + max delay 1: a base-rcf
+    assert not future.done()                                        # at 11.5 is exactly 1 s late, in time
+    engine.feed_batch([("noise", 12.51)])
     assert future.result(timeout=0) == [{"L": "[10,0,0]"}]
 
 

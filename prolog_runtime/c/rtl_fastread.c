@@ -1,7 +1,7 @@
 /*  rtl_fastread: the common case of an event line, read in C.
 
-    rtl_fast_event_line(+Line, +MaxDepth, -Event, -T, -Start, -End, -Op) succeeds for a
-    line such as
+    rtl_fast_event_line(+Line, +MaxDepth, +MaxDigits, -Event, -T, -Start, -End, -Op)
+    succeeds for a line such as
 
         {"event": "pose(r1, [1.5, -2], 'Frame A')", "t": 12.5}
 
@@ -21,7 +21,8 @@
         caller checks the time values themselves)
       - "op": "add" or "retract" (unbound Op when absent)
 
-    Only ASCII: a byte outside 0x20..0x7e anywhere in the line fails.
+    Only ASCII: a byte outside 0x20..0x7e anywhere in the line fails, and so does a run of
+    more than MaxDigits digits (-1: no limit) anywhere in it (rtl_io.pl rejects it).
 
     rtl_fast_event_json(+Event, +Start, +End, -Json) is the common output line, written
     as rtl_io:rtl_event_json/6 writes it for no consumer and Op `add`:
@@ -334,10 +335,14 @@ typedef struct {
 static atom_t atom_add, atom_retract;
 
 /* The common case of one event line [text, text+len) into *out; FALSE for the others. */
-static int read_event_line(const char *text, size_t len, int depth_limit, event_line *out)
-{ for (size_t i = 0; i < len; i++)
+static int read_event_line(const char *text, size_t len, int depth_limit, long max_digits,
+                           event_line *out)
+{ long digits = 0;
+  for (size_t i = 0; i < len; i++)
   { unsigned char c = (unsigned char)text[i];
     if ( (c < 0x20 && !is_json_space((char)c)) || c > 0x7e ) return FALSE;
+    digits = is_digit((char)c) ? digits + 1 : 0;
+    if ( max_digits >= 0 && digits > max_digits ) return FALSE;   /* rejected by rtl_io.pl */
   }
 
   reader r = { text, text + len, depth_limit };
@@ -396,16 +401,18 @@ static int read_event_line(const char *text, size_t len, int depth_limit, event_
 }
 
 static foreign_t
-pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
+pl_fast_event_line(term_t line, term_t max_depth, term_t max_digits, term_t event, term_t t_out,
                    term_t start_out, term_t end_out, term_t op_out)
 { char *text;
   size_t len;
   int depth_limit;
+  long digit_limit;
   event_line l;
 
   if ( !PL_get_nchars(line, &len, &text, CVT_STRING|CVT_ATOM) ) return FALSE;
-  if ( !PL_get_integer(max_depth, &depth_limit) ) return FALSE;
-  if ( !read_event_line(text, len, depth_limit, &l) ) return FALSE;
+  if ( !PL_get_integer(max_depth, &depth_limit) || !PL_get_long(max_digits, &digit_limit) )
+    return FALSE;
+  if ( !read_event_line(text, len, depth_limit, digit_limit, &l) ) return FALSE;
   if ( !PL_unify(event, l.event) ) return FALSE;
   if ( l.seen[K_T] && !PL_unify(t_out, l.times[0]) ) return FALSE;
   if ( l.seen[K_START] && !PL_unify(start_out, l.times[1]) ) return FALSE;
@@ -416,9 +423,10 @@ pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
 
 /* ---- a block of lines ---------------------------------------------------------------- */
 
-/* rtl_fast_read_lines(+Stream, +MaxLines, +MaxDepth, -Items): the complete lines already in
-   the input buffer of Stream (a UTF-8 text stream), at most MaxLines, taken from the stream
-   without waiting for more input: Items is a list of
+/* rtl_fast_read_lines(+Stream, +MaxLines, +MaxDepth, +MaxDigits, +MaxBytes, -Items): the
+   complete lines already in the input buffer of Stream (a UTF-8 text stream), at most
+   MaxLines, taken from the stream without waiting for more input (MaxDigits: the longest
+   run of digits, MaxBytes: the longest line, -1 for no limit): Items is a list of
 
      a(Event, T)    an event line of the common case (above) with "t" a number, no "start",
                     "end", and "op" absent or "add": what rtl_parse_event_line/3 reads as
@@ -427,15 +435,19 @@ pl_fast_event_line(term_t line, term_t max_depth, term_t event, term_t t_out,
 
    Items is [] when the buffer holds no complete line. Only lines of bytes 0x01..0x7f are
    taken (they read the same in every encoding this accepts); the block ends before any
-   other line, which the caller then reads with read_line_to_string/2. The line is cut as
+   other line and before a line longer than MaxBytes, which the caller then reads (and
+   rejects) with rtl_read_line/3. The line is cut as
    read_line_to_string/2 cuts it: at the newline, without '\r's at either end. */
 static foreign_t
-pl_fast_read_lines(term_t stream, term_t max_lines, term_t max_depth, term_t items)
+pl_fast_read_lines(term_t stream, term_t max_lines, term_t max_depth, term_t max_digits,
+                   term_t max_bytes, term_t items)
 { IOSTREAM *s;
   int limit, depth_limit;
+  long digit_limit, byte_limit;
   int ok = TRUE;
 
-  if ( !PL_get_integer_ex(max_lines, &limit) || !PL_get_integer_ex(max_depth, &depth_limit) )
+  if ( !PL_get_integer_ex(max_lines, &limit) || !PL_get_integer_ex(max_depth, &depth_limit) ||
+       !PL_get_long_ex(max_digits, &digit_limit) || !PL_get_long_ex(max_bytes, &byte_limit) )
     return FALSE;
   if ( !PL_get_stream(stream, &s, SIO_INPUT) ) return FALSE;
   term_t tail = PL_copy_term_ref(items);
@@ -449,6 +461,7 @@ pl_fast_read_lines(term_t stream, term_t max_lines, term_t max_depth, term_t ite
     { char *start = s->bufp;
       char *nl = memchr(start, '\n', (size_t)(s->limitp - start));
       if ( !nl ) break;
+      if ( byte_limit >= 0 && nl - start > byte_limit ) break;
       int plain = TRUE;
       for (char *p = start; p < nl; p++)
       { unsigned char c = (unsigned char)*p;
@@ -463,7 +476,7 @@ pl_fast_read_lines(term_t stream, term_t max_lines, term_t max_depth, term_t ite
       fid_t fid = PL_open_foreign_frame();
       event_line l;
       term_t item = PL_new_term_ref();
-      if ( read_event_line(b, (size_t)(e - b), depth_limit, &l) &&
+      if ( read_event_line(b, (size_t)(e - b), depth_limit, digit_limit, &l) &&
            l.seen[K_T] && !l.seen[K_START] && !l.seen[K_END] && l.op != atom_retract &&
            PL_is_number(l.times[0]) )
         ok = PL_cons_functor(item, f_a, l.event, l.times[0]);
@@ -734,8 +747,8 @@ install_t
 install_rtl_fastread(void)
 { atom_add = PL_new_atom("add");                  /* registered: never garbage collected */
   atom_retract = PL_new_atom("retract");
-  PL_register_foreign("rtl_fast_read_lines", 4, pl_fast_read_lines, 0);
-  PL_register_foreign("rtl_fast_event_line", 7, pl_fast_event_line, 0);
+  PL_register_foreign("rtl_fast_read_lines", 6, pl_fast_read_lines, 0);
+  PL_register_foreign("rtl_fast_event_line", 8, pl_fast_event_line, 0);
   PL_register_foreign("rtl_fast_event_json", 4, pl_fast_event_json, 0);
   PL_register_foreign("rtl_fast_write_event", 4, pl_fast_write_event, 0);
   PL_register_foreign("rtl_fast_plain_text", 2, pl_fast_plain_text, 0);

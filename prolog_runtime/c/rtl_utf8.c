@@ -6,10 +6,19 @@
     bad(Column, Byte): the first byte that does not start a well-formed character, and its
     column (1 + the characters before it). rtl_lines.pl has the same in Prolog, used when
     this library is not built.
+
+    rtl_read_line_bytes(+Stream, +MaxBytes, -Line): the next line of Stream (read as ISO
+    Latin-1: one byte a code), without its newline, as a string of codes 0..255; or
+    `too_long` when it has more than MaxBytes bytes (-1: no limit), the rest of the line
+    skipped to its newline without being kept; `end_of_file` at the end. At most MaxBytes
+    bytes of a line are held.
 */
 
+#include <SWI-Stream.h>
 #include <SWI-Prolog.h>
 #include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
 
 /* The length of the well-formed character at s (at most n bytes), or 0. */
 static size_t
@@ -55,7 +64,45 @@ pl_utf8_decode(term_t bytes, term_t result)
   return PL_unify_chars(result, PL_STRING|REP_UTF8, n, text);
 }
 
+static foreign_t
+pl_read_line_bytes(term_t stream, term_t max_bytes, term_t line)
+{ IOSTREAM *s;
+  long limit;
+  char *buf = NULL;
+  size_t len = 0, size = 0;
+  int too_long = FALSE, ok = TRUE;
+  int c = EOF;
+
+  if ( !PL_get_long_ex(max_bytes, &limit) ) return FALSE;
+  if ( !PL_get_stream(stream, &s, SIO_INPUT) ) return FALSE;
+  if ( s->encoding != ENC_ISO_LATIN_1 && s->encoding != ENC_OCTET )
+  { PL_release_stream(s);
+    return PL_domain_error("iso_latin_1_stream", stream);
+  }
+  while ( (c = Sgetc(s)) != EOF && c != '\n' )
+  { if ( too_long ) continue;
+    if ( limit >= 0 && len >= (size_t)limit ) { too_long = TRUE; continue; }
+    if ( len == size )
+    { size_t new_size = size ? 2 * size : 256;
+      if ( limit >= 0 && new_size > (size_t)limit ) new_size = (size_t)limit;
+      char *grown = realloc(buf, new_size);
+      if ( !grown ) { ok = FALSE; break; }
+      buf = grown;
+      size = new_size;
+    }
+    buf[len++] = (char)c;
+  }
+  if ( !PL_release_stream(s) ) ok = FALSE;      /* a read error raises here */
+  else if ( !ok ) ok = PL_resource_error("memory");
+  else if ( c == EOF && len == 0 && !too_long ) ok = PL_unify_atom_chars(line, "end_of_file");
+  else if ( too_long ) ok = PL_unify_atom_chars(line, "too_long");
+  else ok = PL_unify_chars(line, PL_STRING, len, buf ? buf : "");
+  free(buf);
+  return ok;
+}
+
 install_t
 install_rtl_utf8(void)
 { PL_register_foreign("rtl_utf8_decode", 2, pl_utf8_decode, 0);
+  PL_register_foreign("rtl_read_line_bytes", 3, pl_read_line_bytes, 0);
 }

@@ -238,10 +238,10 @@ test(bad_pose, error(domain_error(pose, [[1, 2, 3]]))) :-
 test(bad_pose_in_chain, error(domain_error(quaternion, [0, 1]))) :-
     pose_chain([[[0, 0, 0], [0, 0, 0, 1]], [[0, 0, 0], [0, 1]]], _).
 
-test(bad_time, error(type_error(number, later))) :-
+test(bad_time, error(type_error(time, later))) :-
     pose_interpolate(0, [[0, 0, 0], [0, 0, 0, 1]], 1, [[0, 0, 0], [0, 0, 0, 1]], later, _).
 
-test(bad_time_fraction, error(type_error(number, '1'))) :-
+test(bad_time_fraction, error(type_error(time, '1'))) :-
     time_fraction(0, '1', 0.5, _).
 
 :- end_tests(rtl_math_errors).

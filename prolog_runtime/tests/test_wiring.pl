@@ -75,6 +75,13 @@ wiring_problems(Directory, Problems) :-
 known_upward_call(rtl_timers, rtl_ele:rtl_flag/2).
 known_upward_call(rtl_timers, rtl_ele:rtl_count/1).
 known_upward_call(rtl_horizon, rtl_ele:rtl_remove_type_output_hooks/0).
+known_upward_call(rtl_io, rtl_ele:rtl_flag/2).                 % the input limits (h-limits)
+%   and the ones the last merge of main brought: rtl_ele tells rtl_slr that the clock moved
+%   past a memory record's expiry (h-slr), and the cap on event types turns rtl_io's C reader
+%   off and on again (h-misc, rtl_ele sets the cap: rtl_set_flag/2).
+known_upward_call(rtl_ele, rtl_slr:rtl_slr_clock_moved/1).
+known_upward_call(rtl_event_types, rtl_io:rtl_use_fast_reader/1).
+known_upward_call(rtl_event_types, rtl_io:rtl_fast_reader_used/0).
 
 %   qualified_reference(+Predicates, +Modules, -Module, -Other, -Indicator): a clause of a
 %   predicate of module Predicates, written in module Module (another one for a clause of a

@@ -116,7 +116,12 @@ def check_command(program: str, werror: bool) -> None:
     It runs the whole compilation, as `retalisc compile` does, and discards the result: a
     program `check` accepts compiles, and its Prolog loads. Programs that compile but cannot
     mean what they say get warnings (`file:line:col: warning: ...` with a hint)."""
+    from ..load_check import load_error
+
     result = compile_or_exit(program, werror)
+    error = load_error(result, program)
+    if error is not None:
+        report_program_error(error)
     rules = len(result.unit.rules)
     warnings = len(result.warnings)
     noted = f", {warnings} warning{'s' if warnings != 1 else ''}" if warnings else ""
@@ -151,7 +156,7 @@ Examples:
               help="Subscribe CONSUMER to the events matching QUERY (Event or Event-[Goals]), delivered "
                    "as TEMPLATE (default: the event). Repeatable.")
 @click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
-              help="Create a memory instance before the events (c_mem/4, memorize/5; d_mem/1 deletes one). "
+              help="Create a memory instance before the events (c_mem/4, c_mem/5, memorize/5; d_mem/1 deletes one). "
                    "Repeatable.")
 @click.option("--query", "queries", multiple=True, nargs=2, type=(float, str), metavar="Z GOAL",
               help="Post the synchronized query <GOAL, Z> before the events; its answers are written as "
@@ -183,6 +188,18 @@ Examples:
 @click.option("--max-timers", type=str, default=None, metavar="N",
               help="Timers (absences, alarms) that may be pending at once; one more is not set, but counted "
                    "and reported as a warning (default 100000; 'inf' for no limit).")
+@click.option("--max-event-types", type=str, default=None, metavar="N",
+              help="Distinct event types (Name/Arity) the run takes; a line of a new type beyond them is "
+                   "rejected (default 'inf': SWI-Prolog keeps each type's functor, ~140 bytes, for good).")
+@click.option("--max-line-bytes", type=str, default=None, metavar="N",
+              help="The longest input line, in bytes; a longer one is rejected, read without being kept "
+                   "(default 1048576; 'inf' for no limit; docs/runtime.md, \"Input limits\").")
+@click.option("--max-digits", type=str, default=None, metavar="N",
+              help="The longest run of digits in an input line (a number's size); a line with a longer one is "
+                   "rejected before any number of it is read (default 4300; 'inf' for no limit).")
+@click.option("--max-future", type=str, default=None, metavar="SECONDS",
+              help="How far after the clock (and the wall clock) an input event may end; a later one is "
+                   "rejected (default 86400; 'inf' for no limit).")
 @click.option("--action-output", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Write the text that actions and conditions print to FILE (default: standard error; "
                    "standard output carries only JSON Lines).")
@@ -208,7 +225,8 @@ Examples:
 @bag_options
 def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
                 consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
-                flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, max_timers, action_output, progress,
+                flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, max_timers,
+                max_event_types, max_line_bytes, max_digits, max_future, action_output, progress,
                 traces, late_file, no_cache, state, snapshot_every, snapshot_seconds,
                 **bag) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
@@ -240,6 +258,11 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         output_directory(state, "--state")
     steps = _max_steps(max_steps)
     timers = _max_steps(max_timers, DEFAULT_MAX_TIMERS, "--max-timers")
+    event_types = _max_steps(max_event_types, "inf", "--max-event-types")
+    limits = {"max_line_bytes": _max_steps(max_line_bytes, None, "--max-line-bytes"),
+              "max_digits": _max_steps(max_digits, None, "--max-digits"),
+              "max_future": _seconds_or_inf(max_future, "--max-future")}
+    limits = {flag: value for flag, value in limits.items() if value is not None}
     module = unique_module_name(program)        # a second run in one process loads anew
     handover = (bag["bag"] is None and state is None and not (subscriptions or memories or queries or traces)
                 and late_file is None and action_output is None and _runs_in_runtime_loop(events, out, consumer_dir,
@@ -255,8 +278,9 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     if handover and compiled.file is not None:
         _hand_over_to_swipl(compiled, events, echo_input=echo_input, max_delay=max_delay,
                             retraction_horizon=retraction_horizon, max_steps=steps, max_timers=timers,
+                            max_event_types=event_types,
                             drop_pending=drop_pending, flush_timers=flush_timers, allow_control=allow_control,
-                            strict=strict)
+                            strict=strict, limits=limits)
     from ..driver.bridge import PrologError
     from ..driver.engine import Engine
     from ..driver.run import run_event_file, set_action_output
@@ -269,6 +293,10 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         engine.set_flag("max_delay", repr(max_delay))
     engine.set_flag("max_steps", str(steps))
     engine.set_flag("max_timers", str(timers))
+    if event_types != "inf":
+        engine.set_flag("max_event_types", str(event_types))
+    for flag, value in limits.items():
+        engine.set_flag(flag, str(value))
     if action_output is not None:
         try:
             set_action_output(engine, action_output)
@@ -401,7 +429,8 @@ DEFAULT_MAX_TIMERS = 100_000
 
 
 def _max_steps(text, default=DEFAULT_MAX_STEPS, option="--max-steps"):
-    """`--max-steps N` (or `--max-timers N`): a positive integer or 'inf' (usage error otherwise)."""
+    """`--max-steps N` (or `--max-timers N`, `--max-event-types N`): a positive integer or 'inf'
+    (usage error otherwise)."""
     if text is None:
         return default
     if text.strip() == "inf":
@@ -413,6 +442,21 @@ def _max_steps(text, default=DEFAULT_MAX_STEPS, option="--max-steps"):
     if value <= 0:
         raise click.BadParameter(f"{text!r}: expected a positive integer or 'inf'", param_hint=option)
     return value
+
+
+def _seconds_or_inf(text, option):
+    """`--max-future SECONDS`: a finite number >= 0 or 'inf' (None when not given)."""
+    if text is None:
+        return None
+    if text.strip() == "inf":
+        return "inf"
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0 <= value < float("inf"):
+        raise click.BadParameter(f"{text!r}: expected a number of seconds >= 0 or 'inf'", param_hint=option)
+    return str(int(value)) if value.is_integer() else repr(value)     # as `swipl OUT.pl --max-future=S` reads it
 
 
 def post_cli_query(engine, number: int, at: float, goal: str, timeout):

@@ -5,8 +5,7 @@ import sys
 
 import click
 
-from ..frontend.errors import RetalisError
-from ..runtime_rules import compile_rules
+from ..runtime_rules import RulesRefused, compile_rules_for_the_runtime
 
 
 @click.command("compile-rules", epilog="""\b
@@ -22,14 +21,11 @@ def compile_rules_command(module: str, rule_prefix: str, name: str) -> None:
     runtime's ins_event_rule/1)."""
     text = sys.stdin.read()
     try:
-        result = compile_rules(text, module, rule_prefix, name)
-    except RetalisError as error:
-        click.echo(error.render(), err=True)
+        compiled = compile_rules_for_the_runtime(module, rule_prefix, text, name)
+    except RulesRefused as refused:
+        click.echo(str(refused), err=True)
         sys.exit(2)
-    except ValueError as error:
-        click.echo(f"error: {error}", err=True)
-        sys.exit(2)
-    click.echo(result.text, nl=False)
+    click.echo(compiled, nl=False)
 
 
 COMMANDS = [compile_rules_command]

@@ -53,6 +53,20 @@ loaded), so we load ``pyswip/core.py`` on its own and call ``PL_initialise``
 ourselves.  If some other code already imported ``pyswip`` we simply reuse the
 engine it started.
 
+Calls from Prolog into Python
+-----------------------------
+:meth:`Bridge.serve` offers a Python function to the Prolog side, which calls it
+as ``retalisc_bridge:python_call(+Name, +Args, -Status, -Result)``: Args a list
+of strings (or atoms), Result a string; Status is ``ok``, ``error`` (Result is
+the message: the function raised) or ``unknown`` (nothing is served under
+Name).  The runtime compiles the rules added at run time this way
+(prolog_runtime/rtl_rules.pl).  With the pyswip backend ``python_call/4`` is a
+foreign predicate (a ctypes callback, which takes the GIL: the Python thread
+waiting for the request released it in its C call); the janus backend does not
+define it.  A served function runs while the bridge's lock is held by the
+waiting caller, so it must not call Prolog: a bridge call from it raises
+PrologError instead of waiting for ever.
+
 Protocol
 --------
 The helpers run the request inside ``catch/3`` in the owner thread and report
@@ -71,9 +85,9 @@ import subprocess
 import sys
 import threading
 from types import ModuleType
-from typing import Any, ClassVar, Optional, Union
+from typing import Any, Callable, ClassVar, List, Optional, Tuple, Union
 
-__all__ = ["Bridge", "PrologError", "GoalFailed"]
+__all__ = ["Bridge", "PrologError", "GoalFailed", "ServedCallError"]
 
 
 class PrologError(RuntimeError):
@@ -463,6 +477,7 @@ class _PyswipEngine:
         self._pred = predicate(b"bridge", 6, b"retalisc_bridge")
         self._apply_pred = predicate(b"bridge_apply", 6, b"retalisc_bridge")
         self._claim_pred = predicate(b"claim_caller", 1, b"retalisc_bridge")
+        self._register_python_call(lib)
 
     def claim_caller(self) -> bool:
         """Run every later request in the calling thread (retalisc_bridge:claim_caller/1,
@@ -479,6 +494,47 @@ class _PyswipEngine:
         finally:
             self._discard_frame(fid)
             self._release_strings(mark)
+
+    def _register_python_call(self, lib: ctypes.CDLL) -> None:
+        """Define retalisc_bridge:python_call/4 (see the module documentation) as a foreign
+        predicate that calls the functions of Bridge.serve."""
+        new_ref = _fn(lib, "PL_new_term_ref", _term_t)
+        get_nchars = _fn(lib, "PL_get_nchars", ctypes.c_int, _term_t, ctypes.POINTER(ctypes.c_size_t),
+                         ctypes.POINTER(ctypes.c_void_p), ctypes.c_uint)
+        get_list = _fn(lib, "PL_get_list", ctypes.c_int, _term_t, _term_t, _term_t)
+        get_nil = _fn(lib, "PL_get_nil", ctypes.c_int, _term_t)
+        copy_ref = _fn(lib, "PL_copy_term_ref", _term_t, _term_t)
+        unify_atom = _fn(lib, "PL_unify_atom_chars", ctypes.c_int, _term_t, ctypes.c_char_p)
+        unify_chars = _fn(lib, "PL_unify_chars", ctypes.c_int, _term_t, ctypes.c_int, ctypes.c_size_t,
+                          ctypes.c_char_p)
+        string_flags = self._string_type | _REP_UTF8
+        text_flags = _CVT_ATOM | _CVT_STRING | _REP_UTF8 | _BUF_DISCARDABLE
+
+        def text(t: int) -> Optional[str]:
+            length, pointer = ctypes.c_size_t(), ctypes.c_void_p()
+            if not get_nchars(t, ctypes.byref(length), ctypes.byref(pointer), text_flags):
+                return None
+            return ctypes.string_at(pointer.value or 0, length.value).decode("utf-8")
+
+        def python_call(name_ref: int, args_ref: int, status_ref: int, result_ref: int) -> int:
+            name, args = text(name_ref), []
+            head, tail = new_ref(), copy_ref(args_ref)
+            while get_list(tail, head, tail):
+                args.append(text(head))
+            if name is None or None in args or not get_nil(tail):
+                status, result = "error", "python_call/4: a name and a list of strings, please"
+            else:
+                status, result = _served_call(name, args)
+            data = result.encode("utf-8")
+            return int(unify_atom(status_ref, status.encode()) and
+                       unify_chars(result_ref, string_flags, len(data), data))
+
+        callback_type = ctypes.CFUNCTYPE(ctypes.c_size_t, _term_t, _term_t, _term_t, _term_t)
+        self._python_call = callback_type(python_call)     # kept alive as long as Prolog may call it
+        register = _fn(lib, "PL_register_foreign_in_module", ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p,
+                       ctypes.c_int, ctypes.c_void_p, ctypes.c_int)
+        if not register(b"retalisc_bridge", b"python_call", 4, ctypes.cast(self._python_call, ctypes.c_void_p), 0):
+            raise PrologError("cannot define retalisc_bridge:python_call/4")
 
     @staticmethod
     def _init_prolog(lib: ctypes.CDLL, core: ModuleType) -> None:
@@ -720,13 +776,43 @@ def _shared_state() -> ModuleType:
         state = ModuleType(_STATE_MODULE)
         state.engine = None
         state.lock = threading.RLock()
+        state.served = {}
         state = sys.modules.setdefault(_STATE_MODULE, state)
     return state
+
+
+_serving = threading.local()      # .active: this thread runs a function Prolog called
+
+
+def _served_call(name: str, args: List[str]) -> Tuple[str, str]:
+    """(Status, Result) of retalisc_bridge:python_call/4 for the function served as `name`."""
+    function = getattr(_shared_state(), "served", {}).get(name)
+    if function is None:
+        return "unknown", f"no Python function is served as {name!r}"
+    _serving.active = True
+    try:
+        return "ok", function(*args)
+    except ServedCallError as error:
+        return "error", str(error)
+    except Exception as error:       # a bug in the function: Prolog gets its name and message
+        return "error", f"{name}: {type(error).__name__}: {error}"
+    finally:
+        _serving.active = False
+
+
+def _not_serving() -> None:
+    if getattr(_serving, "active", False):
+        raise PrologError("a Python function called from Prolog (Bridge.serve) cannot call Prolog")
 
 
 # --------------------------------------------------------------------------
 # Public interface
 # --------------------------------------------------------------------------
+
+class ServedCallError(Exception):
+    """Raised by a function offered with Bridge.serve: its text is the message Prolog gets
+    (Status `error`), without the exception's name."""
+
 
 class Bridge:
     """Process-wide handle on the embedded SWI-Prolog (one engine per process).
@@ -783,6 +869,7 @@ class Bridge:
             return claim()
 
     def _call(self, mode: int, goal: str, aux: str) -> tuple[int, Any]:
+        _not_serving()
         with self._lock:
             status, out, term = self._engine.run(mode, goal, aux)
         if status == _ERROR:
@@ -798,6 +885,7 @@ class Bridge:
         their text, other terms as ``write`` text. Raises :class:`GoalFailed`
         when the goal fails, :class:`PrologError` when it raises.
         """
+        _not_serving()
         with self._lock:
             status, out, term = self._engine.apply(module, name, args)
         if status == _ERROR:
@@ -805,6 +893,18 @@ class Bridge:
         if status != _OK:
             raise GoalFailed(f"goal failed: {module}:{name}/{len(args) + 1}")
         return out
+
+    def serve(self, name: str, function: Callable[..., str]) -> bool:
+        """Offer `function` to Prolog as `retalisc_bridge:python_call(Name, Args, Status,
+        Result)` (see the module documentation): it is called with the strings of Args and
+        returns the text of Result; raising ServedCallError gives Status `error` with its
+        message. Replaces what was served as `name`. Returns whether Prolog can call it (not
+        with the janus backend)."""
+        state = _shared_state()
+        if not hasattr(state, "served"):        # a state made by an older copy of this module
+            state.served = {}
+        state.served[name] = function
+        return self.backend == "pyswip"
 
     def consult(self, path: Union[str, "os.PathLike[str]"]) -> None:
         """Load a Prolog file into ``user``; errors printed while loading are raised."""

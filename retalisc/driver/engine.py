@@ -33,9 +33,9 @@ from types import TracebackType
 from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, unique_module_name
-from ..runtime_rules import compile_rules
+from ..runtime_rules import RulesRefused, compile_rules, compile_rules_for_the_runtime
 from . import snapshot
-from .bridge import Bridge, PrologError
+from .bridge import Bridge, PrologError, ServedCallError
 from .values import Term, Time, Value, Variable, parse_term, time_value
 
 __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", "PrologError", "Term",
@@ -198,6 +198,16 @@ def _text(value, what: str) -> str:
     return value
 
 
+def _compile_rules_for_the_runtime(module: str, prefix: str, text: str) -> str:
+    """The rules the runtime adds while it runs (control lines, ins_event_rule/1 in an
+    action: rtl_rules.pl, compile_in_process/4), compiled in this process, not by a
+    `retalisc compile-rules` subprocess."""
+    try:
+        return compile_rules_for_the_runtime(module, prefix, text)
+    except RulesRefused as refused:
+        raise ServedCallError(str(refused)) from None
+
+
 class InactiveEngineError(RuntimeError):
     """An Engine was used after another Engine was loaded in the same process."""
 
@@ -219,6 +229,7 @@ class Engine:
         self._lock = threading.RLock()    # one call (and its output delivery) at a time
         self.bridge.active_program = None                # this Engine takes over (see activate)
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")     # constant text, no values
+        self.bridge.serve("compile_rules", _compile_rules_for_the_runtime)
         self._warnings: List[EngineWarning] = []
         self.rules: List[str] = []           # the labels of the event rules, in program order
         if self.bridge.once("current_predicate(rtl_api:rtl_api_default_flags/1)"):   # constant text
@@ -648,7 +659,9 @@ class Engine:
 
     def memory(self, request: str) -> None:
         """Create or delete memory instances: `request` is the text of `c_mem(Id, Event-Conds, N, L)`,
-        `memorize(Event, Conds, Template, Id, N)`, `d_mem(IdPattern)` or `delete_memory(IdPattern)`.
+        `c_mem(Id, Event-Conds, N, L, Options)` (Options: `[record_events(true)]` raises
+        memory_record_added/2 and memory_record_forgotten/2), `memorize(Event, Conds, Template,
+        Id, N)`, `d_mem(IdPattern)` or `delete_memory(IdPattern)`.
         The conditions must pass the sandbox; QueryError says why a request was refused."""
         with self._lock:
             _raise_if_refused(self._call("rtl_api_memory", _text(request, "a memory request")))
@@ -694,8 +707,9 @@ class Engine:
 
     def advance_clock(self, time: Number) -> List[OutputEvent]:
         """A heartbeat: move the clock to `time` (event time, seconds) without an event, if
-        that is later than the clock; the timers it passes (absences, alarms) fire. Returns
-        what they produced."""
+        that is later than the clock; the timers it passes (absences, alarms) fire and the
+        memory records it puts beyond their time limit are forgotten. Returns what they
+        produced."""
         if isinstance(time, bool) or not isinstance(time, (int, float)) or not math.isfinite(time):
             raise ValueError(f"advance_clock needs a finite number of seconds, not {time!r}")
         with self._lock:

@@ -17,7 +17,7 @@ from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, 
                                 Window)
 from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
 from .engine import Engine, OutputEvent, Rejection
-from .event_lines import batch_payload
+from .event_lines import batch_payload, max_line_bytes, read_lines
 from ..frontend.writer import write_term
 from ..frontend.program import walk_pattern
 
@@ -81,8 +81,9 @@ class Explainer:
         bridge.apply("rtl_trace", "rtl_trace_start")
         try:
             with open(events, "rb") as source:         # lines read as `retalisc run` reads them
-                for number, raw in enumerate(source, start=1):
-                    line = batch_payload([raw[:-1] if raw.endswith(b"\n") else raw])
+                lines = read_lines(source, max_line_bytes(self.engine))
+                for number, (raw, _) in enumerate(lines, start=1):
+                    line = batch_payload([raw])
                     feed = "rtl_trace_feed_byte_line" if isinstance(line, bytes) else "rtl_trace_feed_line"
                     output = bridge.apply("rtl_trace", feed, line, number)
                     for text in output.splitlines():

@@ -18,9 +18,10 @@ from ..robot_io.messages import MessageConverter
 from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages, open_recording
 from ..robot_io.ros1_terms import Ros1Terms
 from .bridge import PrologError
-from .event_lines import batch_payload
+from .event_lines import batch_payload, max_line_bytes, read_lines
 from .outputs import detections_line
-from .run import Progress, RunStopped, _live_batches, end_the_input, print_summary
+from .run import Progress, RunStopped, _live_batches, end_the_input, output_full, print_summary, settle_output
+from .signals import SignalStop, SignalStops
 from .snapshot import STATE_FORMAT, StateError, fsync_directory, replace_atomically
 
 
@@ -135,17 +136,18 @@ class StateDir:
         return records
 
 
-def _binary_batches(stream, offset: int, first_line: int, batch_size: int):
+def _binary_batches(stream, offset: int, first_line: int, batch_size: int, limit: Optional[int] = None):
     """(first line number, lines, bytes of the batch, byte offset after it) from `offset` of a
     file opened in binary; the lines as bytes without their newlines, made text as `retalisc
-    run` makes them (`event_lines.batch_payload`)."""
+    run` makes them (`event_lines.batch_payload`), each at most `limit` bytes long
+    (`event_lines.read_lines`)."""
     stream.seek(offset)
     position, number = offset, first_line
     batch, start, size = [], first_line, 0
-    for raw in stream:
-        position += len(raw)
-        size += len(raw)
-        batch.append(raw[:-1] if raw.endswith(b"\n") else raw)
+    for line, taken in read_lines(stream, limit):
+        position += taken
+        size += taken
+        batch.append(line)
         number += 1
         if len(batch) >= batch_size:
             yield start, batch, size, position
@@ -321,11 +323,11 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             path.unlink(missing_ok=True)
     if live:
         source = None
-        batches = _journaled_batches(journal, restored, line, batch_size)
+        batches = _journaled_batches(journal, restored, line, batch_size, max_line_bytes(engine))
         display = Progress(stream=sys.stderr, total=None, enabled=False)
     else:
         source = open(events_path, "rb")
-        batches = _binary_batches(source, offset, line, batch_size)
+        batches = _binary_batches(source, offset, line, batch_size, max_line_bytes(engine))
         display = Progress(stream=sys.stderr, total=os.path.getsize(events_path), enabled=progress)
     status = 0
     name = "<stdin>" if live else events
@@ -346,7 +348,10 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             journal.prune(directory)
         return manifest
 
+    stops = SignalStops()
+    full = None
     try:
+        stops.install()
         if restored is None:
             halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
             if halted:
@@ -357,6 +362,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             snapshot(offset, line)
         since_events, since_time = 0, time.monotonic()
         for first, lines, size, position in batches:
+            stops.batch_starts()                # a stop signal ends the run after the batch
             produced, rejected = engine.feed_lines(batch_payload(lines), first, allow_control=allow_control,
                                                    strict=strict)
             write(produced)
@@ -380,23 +386,34 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
                 snapshot(offset, line)
                 since_events, since_time = 0, time.monotonic()
+            stops.batch_ends()
+        stops.batch_starts()
         end_the_input(engine, write, drop_pending, strict)
     except RunStopped:
         status = 1
+    except SignalStop:
+        pass
+    except OSError as error:
+        full, status = output_full(error), 1
     finally:
+        stops.finishing()
         display.close()
-        sink.flush()
-        sink.close()
+        full = settle_output(sink.flush, full)
+        full = settle_output(sink.close, full)
         if source is not None:
             source.close()
         if journal is not None:
             journal.close()
         engine.bridge.once("retalis:rtl_close_action_output")
+    if full is not None:
+        print(f"retalis: cannot write {out}: {full.strerror}", file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)
-    return status
+    stops.restore()
+    return stops.status(status)
 
 
-def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int):
+def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int,
+                       limit: Optional[int] = None):
     """As `_binary_batches`, for standard input with a journal: first the journaled lines read
     after the restored snapshot (replayed), then the lines of standard input as they arrive,
     each batch appended to the journal before it is processed. The journal's segment is that
@@ -412,7 +429,7 @@ def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_s
             lines = replayed[start:start + batch_size]
             yield line, lines, 0, 0
             line += len(lines)
-    for _, lines, size in _live_batches(sys.stdin.fileno(), batch_size):
+    for _, lines, size in _live_batches(sys.stdin.fileno(), batch_size, limit):
         journal.append(lines)
         yield line, lines, size, 0
         line += len(lines)

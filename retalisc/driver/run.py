@@ -17,23 +17,34 @@ import time
 from typing import IO, Iterator, List, Optional, Sequence, Tuple
 
 from .engine import Engine
-from .event_lines import batch_payload, split_lines
+from .event_lines import batch_payload, max_line_bytes, read_lines, split_lines, too_long_line
 from .outputs import ConsumerFiles, detections_line
+from .signals import SignalStop, SignalStops
 
 PROGRESS_THRESHOLD = 5_000_000     # bytes of input before a progress display is worth it
 
 
-def _batches(stream: IO[bytes], batch_size: int) -> Iterator[Tuple[int, List[bytes], int]]:
+def _batches(stream: IO[bytes], batch_size: int, limit: Optional[int] = None
+             ) -> Iterator[Tuple[int, List[bytes], int]]:
     """(first line number, lines, bytes read) per batch of a file read as bytes; the lines
-    without their newlines (`event_lines.batch_payload` makes them the runtime's text)."""
+    without their newlines (`event_lines.batch_payload` makes them the runtime's text), each
+    at most `limit` bytes long (`event_lines.read_lines`)."""
     first = 1
+    if limit is None:
+        while True:
+            batch = list(itertools.islice(stream, batch_size))
+            if not batch:
+                return
+            data = b"".join(batch)
+            yield first, split_lines(data), len(data)
+            first += len(batch)
+    lines = read_lines(stream, limit)
     while True:
-        batch = list(itertools.islice(stream, batch_size))
-        if not batch:
+        read = list(itertools.islice(lines, batch_size))
+        if not read:
             return
-        data = b"".join(batch)
-        yield first, split_lines(data), len(data)
-        first += len(batch)
+        yield first, [line for line, _ in read], sum(size for _, size in read)
+        first += len(read)
 
 
 def _is_live(events: str, source: IO[str]) -> bool:
@@ -48,14 +59,17 @@ def _is_live(events: str, source: IO[str]) -> bool:
     return stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode) or stat.S_ISCHR(mode)
 
 
-def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[bytes], int]]:
+def _live_batches(fd: int, batch_size: int, limit: Optional[int] = None) -> Iterator[Tuple[int, List[bytes], int]]:
     """(first line number, lines, bytes read) per batch of a live input: the complete lines
     that have arrived, as soon as they are there. A blocking read returns everything that
     is waiting, so a batch holds more than one line only while input was already waiting (at
     most `batch_size` lines). No `select` per line: only lines left over from a batch that
-    was full wait for a look at what has arrived since."""
+    was full wait for a look at what has arrived since. A line longer than `limit` bytes is
+    `too_long_line(limit)`: of its bytes, those after the first `limit` + 1 are dropped as
+    they arrive."""
     chunk_size = 1 << 16
     pending = b""
+    skipping = False                        # in a line too long, dropping it to its newline
     lines: List[bytes] = []
     first = 1
     at_end = unterminated = False
@@ -64,18 +78,35 @@ def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[bytes], 
             if lines and not select.select([fd], [], [], 0)[0]:
                 break
             chunk = os.read(fd, chunk_size)
+            if skipping and chunk:
+                newline = chunk.find(b"\n")
+                if newline < 0:
+                    continue
+                lines.append(too_long_line(limit))
+                chunk, skipping = chunk[newline + 1:], False
+                if not chunk:
+                    continue
             if not chunk:
                 at_end = True
-                if pending:                 # a last line without a newline
+                if skipping:
+                    lines.append(too_long_line(limit))
+                    skipping, unterminated = False, True
+                elif pending:               # a last line without a newline
                     lines.append(pending)
                     pending, unterminated = b"", True
             elif b"\n" in chunk:
                 *complete, pending = (pending + chunk).split(b"\n")
+                if limit is not None:
+                    complete = [line if len(line) <= limit else too_long_line(limit) for line in complete]
                 lines += complete
+                if limit is not None and len(pending) > limit:
+                    pending, skipping = b"", True
                 if len(chunk) < chunk_size:
                     break                   # the read took all that was waiting
             else:
                 pending += chunk
+                if limit is not None and len(pending) > limit:
+                    pending, skipping = b"", True
         if not lines:
             return
         part, lines = lines[:batch_size], lines[batch_size:]
@@ -84,16 +115,16 @@ def _live_batches(fd: int, batch_size: int) -> Iterator[Tuple[int, List[bytes], 
         first += len(part)
 
 
-def _heartbeat_batches(stream: IO[bytes], batch_size: int, heartbeat: float
+def _heartbeat_batches(stream: IO[bytes], batch_size: int, heartbeat: float, limit: Optional[int] = None
                        ) -> Iterator[Tuple[int, List[bytes], int]]:
     """As `_batches`, for a live source: a batch is what has arrived when the reader catches
     up (not `batch_size` lines), and a batch with no lines (first line number 0) comes every
     `heartbeat` seconds while nothing arrives. A thread reads the lines."""
-    lines: "queue.Queue[Optional[bytes]]" = queue.Queue()
+    lines: "queue.Queue[Optional[Tuple[bytes, int]]]" = queue.Queue()
 
     def read():
         try:
-            for line in stream:
+            for line in read_lines(stream, limit):
                 lines.put(line)
         finally:
             lines.put(None)
@@ -112,8 +143,8 @@ def _heartbeat_batches(stream: IO[bytes], batch_size: int, heartbeat: float
             if item is None:
                 ended = True
                 break
-            batch.append(item[:-1] if item.endswith(b"\n") else item)
-            size += len(item)
+            batch.append(item[0])
+            size += item[1]
             if len(batch) >= batch_size:
                 break
             try:
@@ -210,7 +241,10 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             lines.append("")
             emit("\n".join(lines))
 
+    stops = SignalStops()
+    full: Optional[OSError] = None
     try:
+        stops.install()
         halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
         if halted:
             print(halted, file=sys.stderr)
@@ -229,22 +263,29 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             sink.flush()
             outcome = engine.bridge.apply("retalis", "rtl_run_event_file", events,
                                           "true" if allow_control else "false", "true" if strict else "false")
+            stops.retake()
             if outcome == "output gone":          # the reader of standard output went away
                 raise BrokenPipeError(errno.EPIPE, os.strerror(errno.EPIPE))
             if outcome == "stopped":
                 raise RunStopped()
+            if outcome.startswith("signal "):       # the runtime's loop took the signal itself
+                stops.stopped_by(int(outcome.split()[1]))
+            if outcome.startswith("output failed: "):
+                raise OSError(errno.ENOSPC, outcome[len("output failed: "):])
         elif heartbeat is not None:
-            batches = _heartbeat_batches(source, batch_size, heartbeat)
+            batches = _heartbeat_batches(source, batch_size, heartbeat, max_line_bytes(engine))
         elif live:
-            batches = _live_batches(fd, batch_size)
+            batches = _live_batches(fd, batch_size, max_line_bytes(engine))
         else:
-            batches = _batches(source, batch_size)
+            batches = _batches(source, batch_size, max_line_bytes(engine))
         for first, lines, size in batches:
+            stops.batch_starts()                # a stop signal ends the run after the batch
             if not lines:                       # a heartbeat: nothing arrived
                 target = wall.estimate()
                 if target is not None and target > engine.clock():
                     write(engine.advance_clock(target))
                     sink.flush()
+                stops.batch_ends()
                 continue
             produced, rejected = engine.feed_lines(batch_payload(lines), first, allow_control=allow_control,
                                                    strict=strict)
@@ -263,18 +304,25 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
                 sink.flush()
             if rejected and (strict or rejected[-1].kind == "halt"):
                 raise RunStopped()
+            stops.batch_ends()
+        stops.batch_starts()
         end_the_input(engine, write, drop_pending, strict)
     except RunStopped:
         status = 1
+    except SignalStop:
+        pass
+    except OSError as error:
+        full, status = output_full(error), 1
     finally:
+        stops.finishing()
         if frozen is not None:
             frozen()
         display.close()
-        sink.flush()
+        full = settle_output(sink.flush, full)
         if events != "-":
             source.close()
         if sink is not sys.stdout:
-            sink.close()
+            full = settle_output(sink.close, full)
         if consumers is not None:
             consumers.close()
         engine.bridge.once("retalis:rtl_close_action_output")
@@ -282,8 +330,33 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         text = report()
         if text:
             print(text, file=sys.stderr)
+    if full is not None:
+        print(f"retalis: cannot write {'standard output' if out == '-' else out}: {full.strerror}", file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)
-    return status
+    stops.restore()
+    return stops.status(status)
+
+
+#: The errors of writing to a file system that is full (or a file grown to its limit): the
+#: run ends with `retalis: cannot write OUT: REASON`, the summary and status 1.
+OUTPUT_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
+def output_full(error: OSError) -> OSError:
+    """`error`, when it says that the output is full; raised again otherwise."""
+    if error.errno not in OUTPUT_FULL:
+        raise error
+    return error
+
+
+def settle_output(step, full: Optional[OSError]) -> Optional[OSError]:
+    """Run `step` (a flush or close of the output); once the output is full, its error
+    (then that of the run) is kept instead of raised."""
+    try:
+        step()
+    except OSError as error:
+        return full or output_full(error)
+    return full
 
 
 def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],

@@ -22,8 +22,9 @@ _LABEL = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
 
 def swipl_arguments(events: str, rules: List[str], echo_input: bool = False, max_delay: Optional[float] = None,
                     retraction_horizon: Optional[float] = None, max_steps="1000000", max_timers="100000",
-                    drop_pending: bool = False, flush_timers: bool = False, allow_control: bool = False,
-                    strict: bool = False) -> Optional[List[str]]:
+                    max_event_types="inf", drop_pending: bool = False, flush_timers: bool = False,
+                    allow_control: bool = False, strict: bool = False,
+                    limits: Optional[dict] = None) -> Optional[List[str]]:
     """The arguments after `swipl PROGRAM.pl` that run as `retalisc run` does with these
     options (prolog_runtime/retalis.pl, rtl_main/0), or None when the runtime's command line
     cannot say them: an events file name the runtime would read as an option, or not UTF-8,
@@ -44,6 +45,10 @@ def swipl_arguments(events: str, rules: List[str], echo_input: bool = False, max
     if retraction_horizon is not None:
         arguments.append(f"--retraction-horizon={retraction_horizon!r}")
     arguments += [f"--max-steps={max_steps}", f"--max-timers={max_timers}"]
+    if max_event_types != "inf":
+        arguments.append(f"--max-event-types={max_event_types}")
+    for flag, value in (limits or {}).items():      # the input limits given (max_line_bytes: --max-line-bytes)
+        arguments.append(f"--{flag.replace('_', '-')}={value}")
     if drop_pending:
         arguments.append("--drop-pending")
     if flush_timers:
@@ -67,13 +72,19 @@ def swipl_command(program_file: str, arguments: List[str]) -> Optional[List[str]
 
 def hand_over(command: List[str]) -> None:
     """Replace this process by `command` (what is written so far leaves first). Returns
-    only when it cannot be started."""
+    only when it cannot be started. A rule added while the events stream (a control line,
+    ins_event_rule/1) is compiled by `retalisc compile-rules` run with `$RETALISC_PYTHON`:
+    unless it is set, this Python, the one that runs `retalisc` (not one the runtime would
+    search for)."""
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
         except (OSError, ValueError):
             pass
+    environment = dict(os.environ)
+    if not environment.get("RETALISC_PYTHON") and sys.executable:
+        environment["RETALISC_PYTHON"] = sys.executable
     try:
-        os.execv(command[0], command)
+        os.execve(command[0], command, environment)
     except OSError:
         return

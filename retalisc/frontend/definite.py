@@ -18,14 +18,17 @@ from typing import Dict, List, Optional, Set, Tuple
 from .errors import RetalisSemanticError
 from .operators import STANDARD_OPERATORS
 from .parser import read_program
-from .terms import Atom, Compound, Number, Span, Term, Var, indicator, list_items, span_of, to_prolog, variables
+from .terms import (Atom, Compound, Number, Span, String, Term, Var, indicator, list_items, make_list, span_of,
+                    to_prolog, variables)
 
 Indicator = Tuple[str, int]
 
-#: Builtins allowed in rule bodies: evaluated in place, left to right, like Prolog does.
+#: Builtins allowed in rule bodies: evaluated where their arguments are bound (the aq_join_order
+#: pass places them), like XSB does.
 BUILTINS: Set[Indicator] = {
     ("<", 2), (">", 2), ("=<", 2), (">=", 2), ("=:=", 2), ("=\\=", 2),
-    ("is", 2), ("=", 2), ("==", 2), ("\\==", 2), ("true", 0),
+    ("is", 2), ("=", 2), ("\\=", 2), ("==", 2), ("\\==", 2), ("@<", 2), ("@>", 2), ("@=<", 2), ("@>=", 2),
+    ("true", 0),
 }
 
 #: Constructs that make a program non-definite, with the reason given to the user.
@@ -36,7 +39,6 @@ REJECTED: Dict[Indicator, str] = {
     (";", 2): "disjunction (;) is not allowed: write one rule per alternative",
     ("->", 2): "if-then-else (->) is not allowed in a definite program",
     ("*->", 2): "soft-cut (*->) is not allowed in a definite program",
-    ("\\=", 2): "\\= is negation of unification and not definite",
     ("call", 1): "meta-calls are not allowed in a definite program",
     ("findall", 3): "findall/3 is not allowed in a definite program",
     ("forall", 2): "forall/2 is not allowed in a definite program",
@@ -170,13 +172,68 @@ def _pred_spec(term: Term, span: Optional[Span]) -> List[Indicator]:
     raise program_error("expected a predicate indicator Name/Arity in the dynamic declaration", term, span)
 
 
+#: The flags of set_prolog_flag/2 that only say how the program text is read, with the values
+#: that read it as retalisc does (double_quotes: any value, applied to the clauses after it).
+READING_FLAGS = {"double_quotes": ("codes", "chars", "atom", "string"), "back_quotes": ("codes",),
+                 "character_escapes": ("true",)}
+
+
+def _reading_directive(directive: Term, span: Optional[Span], reading: Dict[str, str]) -> Optional[str]:
+    """Accept a directive that does not change what the program means (a note to show, or None),
+    or raise a located error saying why it is refused."""
+    name = directive.name if isinstance(directive, (Atom, Compound)) else None
+    args = directive.args if isinstance(directive, Compound) else ()
+    if name == "encoding" and len(args) == 1 and isinstance(args[0], Atom):
+        if args[0].name.lower().replace("-", "").replace("_", "") in ("utf8", "unicode"):
+            return None                         # the file is read as UTF-8
+        raise program_error(f"encoding({args[0].name}): an active-query program is read as UTF-8; convert "
+                            "the file to UTF-8 and write :- encoding(utf8)", directive, span)
+    if name == "set_prolog_flag" and len(args) == 2:
+        flag, value = args
+        if not isinstance(flag, Atom) or flag.name not in READING_FLAGS:
+            shown = to_prolog(flag)
+            raise program_error(f"set_prolog_flag({shown}, ...) is not a flag for reading the program text "
+                                f"(those are {', '.join(sorted(READING_FLAGS))}): it would change how the "
+                                "program runs, which an active-query program does not set", directive, span)
+        allowed = READING_FLAGS[flag.name]
+        if not isinstance(value, Atom) or value.name not in allowed:
+            raise program_error(f"set_prolog_flag({flag.name}, {to_prolog(value)}): an active-query program is "
+                                f"read with {flag.name} {' or '.join(allowed)}", directive, span)
+        reading[flag.name] = value.name
+        return None
+    if (name, len(args)) in (("ensure_loaded", 1), ("use_module", 1), ("use_module", 2)):
+        if isinstance(args[0], Compound) and args[0].name == "library" and args[0].arity == 1:
+            return (f"{span}: note: `:- {name}({to_prolog(args[0])})` ignored: rule bodies use the definite "
+                    f"builtins only, which need no library")
+        raise program_error(f"{name}({to_prolog(args[0])}) loads a file of clauses, which an active-query "
+                            "program cannot do: put its clauses in this program", directive, span)
+    raise program_error("only declarations (`:- dynamic`, `:- table`), `:- encoding/1`, `:- set_prolog_flag/2` of "
+                        "a reading flag and `:- ensure_loaded(library(...))` are allowed in an active-query "
+                        "program: other directives run code", directive, span)
+
+
+def _with_double_quotes(term: Term, mode: str) -> Term:
+    """`term` with its double-quoted texts read as `set_prolog_flag(double_quotes, mode)` says."""
+    if mode == "string":
+        return term
+    if isinstance(term, String):
+        if mode == "atom":
+            return Atom(term.text, term.span)
+        items = [Number(ord(c)) if mode == "codes" else Atom(c) for c in term.text]
+        return make_list(items)
+    if isinstance(term, Compound):
+        return Compound(term.name, tuple(_with_double_quotes(a, mode) for a in term.args), term.span)
+    return term
+
+
 def read_definite_program(text: str, file: str) -> Program:
     """Read a definite program: its rules (bodies not yet checked, see the `aq_program` pass),
     facts and dynamic predicates. Raises RetalisSyntaxError / RetalisSemanticError."""
     program = Program(file=file)
     dynamic: Dict[Indicator, None] = {}
+    reading = {"double_quotes": "string"}     # as the reader gives "...": SWI-Prolog 7's default
     for clause in read_program(text, file, XSB_OPERATORS):
-        term, span = clause.term, clause.span
+        term, span = _with_double_quotes(clause.term, reading["double_quotes"]), clause.span
         if isinstance(term, Compound) and term.name == ":-" and term.arity == 1:
             directive = term.args[0]
             if isinstance(directive, Compound) and directive.name == "dynamic" and directive.arity == 1:
@@ -202,8 +259,10 @@ def read_definite_program(text: str, file: str) -> Program:
                     f"{span}: note: XSB `:- {directive.name}` ignored: an active-query program is one module "
                     f"and its builtins need no import")
                 continue
-            raise program_error("only `:- dynamic` declarations are allowed in an active-query program",
-                                directive, span)
+            note = _reading_directive(directive, span, reading)
+            if note:
+                program.notes.append(note)
+            continue
         if isinstance(term, Compound) and term.name == ":-" and term.arity == 2:
             head, body = term.args
             goals = _conjuncts(body)

@@ -13,6 +13,7 @@ from typing import Dict, Optional, Tuple
 INFIX_TYPES = ("xfx", "xfy", "yfx")
 PREFIX_TYPES = ("fx", "fy")
 POSTFIX_TYPES = ("xf", "yf")
+OP_TYPES = INFIX_TYPES + PREFIX_TYPES + POSTFIX_TYPES
 
 EVENT_OPERATORS = ("seq", "and", "par", "or", "equals", "meets", "during", "starts", "finishes",
                    "cnot", "fnot", "where", "check")

@@ -18,8 +18,8 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from .depth import MAX_TERM_DEPTH, deepest_tree, term_depth
 from .errors import RetalisSyntaxError
-from .operators import (ARGUMENT_PRIORITY, CLAUSE_PRIORITY, ETALIS_ALIASES, EVENT_OPERATORS, STANDARD_OPERATORS,
-                        OperatorTable)
+from .operators import (ARGUMENT_PRIORITY, CLAUSE_PRIORITY, ETALIS_ALIASES, EVENT_OPERATORS, OP_TYPES,
+                        STANDARD_OPERATORS, OperatorTable)
 from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
 
 _GRAMMAR = (Path(__file__).with_name("retalis.lark")).read_text()
@@ -461,14 +461,16 @@ def _apply_op_directive(term: Term, ops: OperatorTable) -> None:
     for g in goals:
         if isinstance(g, Compound) and g.name == "op" and g.arity == 3:
             priority, kind, names = g.args
-            if not (isinstance(priority, Number) and isinstance(kind, Atom)):
+            # one SWI-Prolog refuses changes nothing (the loadable pass reports it at its place)
+            if not (isinstance(priority, Number) and isinstance(priority.value, int)
+                    and 0 <= priority.value <= 1200 and isinstance(kind, Atom) and kind.name in OP_TYPES):
                 continue
             names_list = list_items(names)
             if names_list is None:
                 names_list = [names]
             for n in names_list:
                 if isinstance(n, Atom):
-                    ops.add(int(priority.value), kind.name, n.name)
+                    ops.add(priority.value, kind.name, n.name)
 
 
 def _lark_error(exc: UnexpectedInput, source: _Source) -> RetalisSyntaxError:

@@ -130,7 +130,7 @@ class EventRule:
     span: Span
     source: str
     label: Optional[str] = None
-    action: Optional[Term] = None   # `Head do Action <- Pattern`
+    action: Optional[Term] = None   # `Head do Action <- Pattern` or `Head <- Pattern do Action`
     properties: dict = field(default_factory=dict)
     synchronized: Optional[Compound] = None   # `synchronized(E, Q, SyncConds)` head
     subrules: List["EventRule"] = field(default_factory=list)   # ETALIS subpatterns `(H <- P)` in the pattern
@@ -185,6 +185,8 @@ class Program:
     text: str = ""
     # the files its includes read, in order, with the text read (the compile cache checks them)
     included: List[Tuple[str, str]] = field(default_factory=list)
+    # warnings about how it was read (`file:line:col: warning: ...`), shown by check and compile
+    notes: List[str] = field(default_factory=list)
 
     @property
     def event_rules(self) -> List[EventRule]:
@@ -218,6 +220,16 @@ DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
 # ---- building ---------------------------------------------------------------------------
 
 
+
+#: The longest window or absence a pattern may have, in seconds (about 31.7 million years):
+#: the runtime adds, doubles and compares them with times as floats, which stay finite.
+MAX_SECONDS = 1e15
+
+
+def _bounded_seconds(value) -> bool:
+    """A window length or absence duration: a number from 0 to MAX_SECONDS (not NaN)."""
+    return 0 <= value <= MAX_SECONDS
+
 def parse_program(text: str, file: str) -> Program:
     """Read and classify a whole program. Raises RetalisSyntaxError.
 
@@ -225,20 +237,27 @@ def parse_program(text: str, file: str) -> Program:
     per paragraph (`goalPredicates.txt`), and `compile_event_file(Path)`, which reads the
     clauses of Path (relative to the file that names it) in its place."""
     included: List[Tuple[str, str]] = []
-    program = build_program(_read_with_includes(text, file, [file], included), file, text)
+    notes: List[str] = []
+    program = build_program(_read_with_includes(text, file, [file], included, notes), file, text)
     program.included = included
+    program.notes = notes
     return program
 
 
 def _read_with_includes(text: str, file: str, loading: List[str],
-                        included: List[Tuple[str, str]]) -> List[ReadClause]:
+                        included: List[Tuple[str, str]], notes: List[str]) -> List[ReadClause]:
     clauses = []
     for clause in read_goal_lines(text, file):
         path = _included_file(clause.term)
         if path is None:
             clauses.append(clause)
             continue
-        target = _resolve_include(path, file, clause.span)
+        target = _resolve_include(path, file)
+        beside = _beside(target, file)
+        if beside is not None:
+            notes.append(f"{clause.span}: warning: {_include_name(clause.term)}: {target} does not exist; reading "
+                         f"{beside}, the file of that name beside {file}")
+            target = beside
         if str(target) in loading:
             raise RetalisSyntaxError(f"{_include_name(clause.term)}: {path} is already being read (it includes itself)",
                                      clause.span)
@@ -249,7 +268,7 @@ def _read_with_includes(text: str, file: str, loading: List[str],
             raise RetalisSyntaxError(f"{_include_name(clause.term)}: cannot read {path} ({target}): {reason}",
                                      clause.span) from None
         included.append((str(target), text_read))
-        clauses.extend(_read_with_includes(text_read, str(target), loading + [str(target)], included))
+        clauses.extend(_read_with_includes(text_read, str(target), loading + [str(target)], included, notes))
     return clauses
 
 
@@ -273,9 +292,22 @@ def _include_name(term: Term) -> str:
     return (term.args[0] if _is(term, ":-", 1) else term).name
 
 
-def _resolve_include(path: str, file: str, span: Span) -> Path:
-    base = Path(file).parent if file and not file.startswith("<") else Path.cwd()
-    return (base / path) if not Path(path).is_absolute() else Path(path)
+def _resolve_include(path: str, file: str) -> Path:
+    return (_directory_of(file) / path) if not Path(path).is_absolute() else Path(path)
+
+
+def _directory_of(file: str) -> Path:
+    return Path(file).parent if file and not file.startswith("<") else Path.cwd()
+
+
+def _beside(target: Path, file: str) -> Optional[Path]:
+    """The Retalis 2015 goal file names its rules by an absolute path on the author's machine
+    (`compile_event_file('/home/<user>/catkin_ws/.../eventRules.txt')`): when that path is
+    missing, the file of the same name beside the file that names it, if there is one."""
+    if not target.is_absolute() or target.exists():
+        return None
+    beside = _directory_of(file) / target.name
+    return beside if beside.is_file() and beside != target else None
 
 
 # A paragraph: text between blank lines.
@@ -432,6 +464,13 @@ def _event_rule(term: Compound, clause: ReadClause, label_term: Optional[Term]) 
     action = None
     if _is(head, "do", 2):
         head, action = head.args
+    if _is(body, "do", 2):
+        # ETALIS writes the action after the pattern too: `Head <- Pattern do Action` (its
+        # parser gives both forms the same meaning: the action runs when the rule fires)
+        if action is not None:
+            raise RetalisSyntaxError("a rule has one action: Head do Action <- Pattern or Head <- Pattern do "
+                                     "Action, not both", span_of(body) or clause.span)
+        body, action = body.args
     head = _strip_time(head)
     if _is(head, ":", 2):
         raise RetalisSyntaxError("the head of an event rule cannot be Module:Event; a label is written "
@@ -526,12 +565,22 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                                      where)
         if term.name == "not":
             raise RetalisSyntaxError("negation is written not(N).[P1, P2]: no N between P1 and P2", where)
+        if term.arity == 1 and term.name == "prolog":
+            raise RetalisSyntaxError("prolog(Goal) is a step of a sequence, after or before a pattern: "
+                                     "P seq prolog(Goal) (it means P where Goal)", where)
         if term.arity == 2 and term.name == "seq" and _is(term.args[1], "star_times", 1):
             repeated = to_pattern(term.args[1].args[0], span)
             return Binary("seq", to_pattern(term.args[0], span),
                           Aggregate(Atom("count"), repeated, Var(f"StarTimes_{next(_STAR_COUNTER)}"),
                                     span_of(term.args[1]) or where, True),
                           where)
+        if term.arity == 2 and term.name == "seq" and any(_is(side, "prolog", 1) for side in term.args):
+            # ETALIS: `P seq prolog(Goal)` (and `prolog(Goal) seq P`) calls Goal when P is detected
+            left, right = term.args
+            goal, pattern = (right, left) if _is(right, "prolog", 1) else (left, right)
+            if _is(pattern, "prolog", 1):
+                raise RetalisSyntaxError("prolog(Goal) needs an event pattern beside it: P seq prolog(Goal)", where)
+            return Where(to_pattern(pattern, span), goal.args[0], where)
         if term.arity == 2 and term.name in BINARY_OPERATORS:
             return Binary(term.name, to_pattern(term.args[0], span), to_pattern(term.args[1], span), where)
         if term.arity == 2 and term.name == "where":
@@ -557,15 +606,17 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                     raise RetalisSyntaxError("negation is written not(P).[P1, P2] or not(P).[P1, Seconds]", where)
                 if isinstance(items[1], Number):
                     duration = items[1].value
-                    if duration != duration or duration < 0 or duration == float("inf"):
+                    if not _bounded_seconds(duration):
                         raise RetalisSyntaxError("the duration of an absence not(P).[P1, Seconds] must be a "
-                                                 "finite number of seconds, not negative", span_of(items[1]) or where)
+                                                 f"number of seconds, not negative and at most {MAX_SECONDS:g}",
+                                                 span_of(items[1]) or where)
                     return Absence(to_pattern(left.args[0], span), to_pattern(items[0], span), duration, where)
                 return Negation(to_pattern(left.args[0], span), to_pattern(items[0], span),
                                 to_pattern(items[1], span), where)
             if isinstance(right, Number):
-                if right.value != right.value or right.value < 0:
-                    raise RetalisSyntaxError("a window length must be a number of seconds, not negative", where)
+                if not _bounded_seconds(right.value):
+                    raise RetalisSyntaxError("a window length must be a number of seconds, not negative and "
+                                             f"at most {MAX_SECONDS:g}", where)
                 return Window(to_pattern(left, span), right.value, where)
             raise RetalisSyntaxError("'(Pattern).Q' needs a number Q (the window length in seconds)", where)
         if term.arity == 3 and term.name == "aggregate":
@@ -622,7 +673,8 @@ _NOT_PATTERNS = {
     (":-", 1): "a pattern is not a directive",
     ("?-", 1): "a pattern is not a directive",
     ("-->", 2): "a pattern is not a grammar rule",
-    ("do", 2): "an action is written on the head: Head do Action <- Pattern",
+    ("do", 2): "an action is written on the head or after the whole pattern: Head do Action <- Pattern or "
+               "Head <- Pattern do Action",
     ("rule:", 2): "a rule label is written before the head: label 'rule:' Head <- Pattern",
 }
 

@@ -1,4 +1,13 @@
-"""aq_join_order: order each rule's body for the arguments its calls bind (an adorned join order).
+"""aq_join_order: place each builtin where its arguments are bound, then order each rule's body for
+the arguments its calls bind (an adorned join order).
+
+Builtins first, in every mode: XSB programs write tests where they read well (`q(X, Y) :- X < Y,
+e(X, Y).`), and XSB evaluates them once their arguments are bound.  A builtin that is not ready
+where it is written (a test or `\\+ Builtin` with a variable unbound there, `is/2` with an unbound
+variable on its right; the head's variables count as unbound: a call may leave them so) moves to
+just after the first literal from which on it is ready; the other literals keep their order.
+A builtin that no position makes ready even with the head's variables bound by the call is
+refused with a located error (it would raise an instantiation error whatever the call).
 
 The transformed program records every state that waits on stored facts (a goal record) so that
 later assertions find it; how many there are depends on the order of the body.  Program 6 of
@@ -24,14 +33,15 @@ from __future__ import annotations
 import copy
 from typing import Dict, List, Optional, Set, Tuple
 
-from ..frontend.definite import Literal, Program, Rule
+from ..frontend.definite import Literal, Program, Rule, program_error
 from ..frontend.terms import Compound, Var, variables
+from ..frontend.writer import write_term
 from .unit import AqUnit
 
 name = "aq_join_order"
 
 MAX_HEAD_VARS = 4
-_ORDER_SENSITIVE = {"==", "\\==", "\\+"}
+_ORDER_SENSITIVE = {"==", "\\==", "\\=", "\\+", "@<", "@>", "@=<", "@>="}
 
 
 def _vars(term) -> Set[str]:
@@ -39,12 +49,17 @@ def _vars(term) -> Set[str]:
 
 
 def _builtin_ready(lit: Literal, bound: Set[str]) -> bool:
+    return _needed(lit) <= bound
+
+
+def _needed(lit: Literal) -> Set[str]:
+    """The variables a builtin needs bound: none for `=`, the right side's for `is`, else all."""
     term = lit.term
     if isinstance(term, Compound) and term.name == "=" and term.arity == 2:
-        return True
+        return set()
     if isinstance(term, Compound) and term.name == "is" and term.arity == 2:
-        return _vars(term.args[1]) <= bound
-    return _vars(term) <= bound
+        return _vars(term.args[1])
+    return _vars(term)
 
 
 def _bind(lit: Literal, bound: Set[str]) -> None:
@@ -57,6 +72,51 @@ def _bind(lit: Literal, bound: Set[str]) -> None:
             bound |= left | right
     elif isinstance(term, Compound) and term.name == "is" and term.arity == 2:
         bound |= _vars(term.args[0])
+
+
+def place_builtins(rule: Rule) -> List[Literal]:
+    """`rule.body` with every builtin at the first position where it is ready (module docstring).
+    Raises a located error for a builtin that is ready nowhere."""
+    placed, waiting = _placed(rule.body, set(), set())
+    if waiting:
+        # ready only once the call binds head variables: where they first make it ready
+        placed, waiting = _placed(rule.body, {id(lit) for lit, _ in waiting}, _vars(rule.head))
+    for lit, bound in waiting:
+        unbound = sorted(_needed(lit) - bound)
+        raise program_error(
+            f"{write_term(lit.term, 999)}: no order of this body binds {', '.join(unbound)} before this goal "
+            f"(neither the head nor a literal of the body binds {'it' if len(unbound) == 1 else 'them'}): "
+            "it would raise an instantiation error", lit.term, rule.span)
+    return placed
+
+
+def _placed(body: List[Literal], late: Set[int], head: Set[str]):
+    """The body with each builtin where it is ready (the `late` ones counting the head's variables
+    as bound), and the builtins never ready with the variables bound at the end."""
+    placed: List[Literal] = []
+    waiting: List[Literal] = []
+    bound: Set[str] = set()
+
+    def ready(lit: Literal) -> bool:
+        return _builtin_ready(lit, bound | head if id(lit) in late else bound)
+
+    def place(lit: Literal) -> None:
+        placed.append(lit)
+        _bind(lit, bound)
+        while True:
+            now = [w for w in waiting if ready(w)]
+            if not now:
+                return
+            waiting.remove(now[0])
+            placed.append(now[0])
+            _bind(now[0], bound)
+
+    for lit in body:
+        if lit.kind == "builtin" and not ready(lit):
+            waiting.append(lit)
+        else:
+            place(lit)
+    return placed, [(lit, bound | head if id(lit) in late else bound) for lit in waiting]
 
 
 def _written_order_ok(body: List[Literal], bound0: Set[str]) -> bool:
@@ -140,11 +200,13 @@ def variants(rule: Rule) -> List[Tuple[List[int], List[int]]]:
 
 
 def run(unit: AqUnit) -> AqUnit:
+    program: Program = unit.program
+    for rule in program.rules:
+        rule.body = place_builtins(rule)
     if unit.mode != "tabled":
         # Optimized creates a table per call: an order that calls a recursive predicate with
         # fewer arguments bound may not terminate there; Naive's tables are per predicate
         return unit
-    program: Program = unit.program
     rules: List[Rule] = []
     for rule in program.rules:
         for masks, order in variants(rule):

@@ -33,6 +33,7 @@ from __future__ import annotations
 from typing import Iterable, Optional, Set, Tuple
 
 from ..frontend.errors import RetalisSemanticError
+from ..frontend.operators import OP_TYPES
 from ..frontend.program import (Aggregate, Check, Declaration, Directive, EventAtom, EventRule, StaticClause, Where,
                                 pattern_conditions, walk_pattern)
 from ..frontend.terms import (Atom, Compound, Number, String, Term, Var, indicator, list_items, span_of, to_prolog,
@@ -68,7 +69,6 @@ _DECLARATIONS = {"dynamic", "discontiguous", "multifile", "public", "table", "th
 _LOADERS = {"use_module", "ensure_loaded", "consult", "include", "load_files", "reexport", "autoload",
             "use_foreign_library"}
 
-OP_TYPES = ("xfx", "xfy", "yfx", "fy", "fx", "xf", "yf")
 
 
 #: SWI-Prolog's `max_procedure_arity` flag: a predicate cannot have more arguments.

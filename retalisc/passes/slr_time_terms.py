@@ -4,9 +4,10 @@ SLR writes the time of a state-based fact as `color(O, C)^T :- prev(obj(O, C)^Z,
 clause defines `color/2` at time T. Following the thesis's event terms (Def. 10: the start
 and end times are the last two arguments), the clause head and every goal `E^[T1, T2]`
 becomes `E` with `T1, T2` appended, and `E^T` becomes `E` with `T, T` appended. The rewrite
-applies to static clauses, `where` conditions and actions, through the control constructs
-(`,` `;` `->` `\\+` findall/forall/aggregate_all/once/ignore). Inside prev, next and mem the
-`^` is data for the runtime and stays.
+applies to static clauses, `where` conditions and actions, through the goal arguments of the
+control constructs and meta-predicates listed in `prolog_runtime/rtl_goal_arguments.pl`, the
+table the runtime rewrites the queries from outside with (rtl_query.pl, rtl_time_goal/2).
+Inside prev, next and mem the `^` is data for the runtime and stays.
 """
 from __future__ import annotations
 
@@ -14,18 +15,11 @@ from dataclasses import replace
 from typing import Optional
 
 from ..frontend.program import Absence, Sliding, Check, EventRule, StaticClause, Where, Binary, Negation, Window, Aggregate
+from ..frontend.goal_arguments import goal_arguments
 from ..frontend.terms import Atom, Compound, Term, list_items, span_of
 from .unit import Unit
 
 name = "slr_time_terms"
-
-# Goal arguments of control constructs and meta-predicates, by (name, arity).
-_GOAL_ARGS = {
-    (",", 2): (0, 1), (";", 2): (0, 1), ("->", 2): (0, 1), ("*->", 2): (0, 1), ("\\+", 1): (0,),
-    ("findall", 3): (1,), ("findall", 4): (1,), ("forall", 2): (0, 1), ("aggregate_all", 3): (1,),
-    ("aggregate_all", 4): (2,), ("once", 1): (0,), ("ignore", 1): (0,), ("call", 1): (0,),
-}
-
 
 def run(unit: Unit) -> Unit:
     clauses = []
@@ -73,7 +67,7 @@ def timed_goal(goal: Term) -> Term:
     if timed is not None:
         return timed
     if isinstance(goal, Compound):
-        positions = _GOAL_ARGS.get((goal.name, goal.arity))
+        positions = goal_arguments().get((goal.name, goal.arity))
         if positions:
             args = tuple(timed_goal(a) if i in positions else a for i, a in enumerate(goal.args))
             return Compound(goal.name, args, goal.span)

@@ -183,7 +183,7 @@ def step_clauses(rule: Rule) -> List[str]:
     return clauses
 
 
-_INFIX = {"<", ">", "=<", ">=", "=:=", "=\\=", "is", "=", "==", "\\=="}
+_INFIX = {"<", ">", "=<", ">=", "=:=", "=\\=", "is", "=", "\\=", "==", "\\==", "@<", "@>", "@=<", "@>="}
 
 
 def to_prolog_goal(term: Term) -> str:

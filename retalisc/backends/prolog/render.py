@@ -8,6 +8,7 @@ turns terms into text: each clause is written with operators, one body goal per 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import List, Tuple
 
 import jinja2
 
@@ -28,6 +29,9 @@ _ENV = jinja2.Environment(
     keep_trailing_newline=True,
     undefined=jinja2.StrictUndefined,
 )
+
+#: The heading of the program's own clauses in templates/program.pl.j2.
+_STATIC_HEADING = "% ---- Static rules and facts"
 
 # Directives that only configure the compiler: they are compiled, not copied.
 _COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print_trigger", 1), ("print_event", 1),
@@ -66,6 +70,25 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
         rules=[_RuleView(g) for g in unit.generated],
         runtime_overrides=[f"{quote_atom(name)}/{arity}" for name, arity in unit.runtime_overrides],
     )
+
+
+def copied_clause_lines(unit: Unit, prolog: str) -> List[Tuple[int, int, object]]:
+    """(first line, last line, clause) of each clause of the program copied into `prolog`, the
+    text `render_program(unit)` made: where SWI-Prolog's messages about the generated file
+    point back to in the source."""
+    found = []
+    at = prolog.find(_STATIC_HEADING)
+    for clause in unit.program.clauses:
+        if not _is_copied(clause) or at < 0:
+            continue
+        text = _static_text(clause)
+        start = prolog.find(text, at)
+        if start < 0:
+            continue
+        first = prolog.count("\n", 0, start) + 1
+        found.append((first, first + text.count("\n"), clause))
+        at = start + len(text)
+    return found
 
 
 def render_added_rules(unit: Unit) -> str:
