@@ -362,7 +362,7 @@ def settle_output(step, full: Optional[OSError]) -> Optional[OSError]:
 def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],
                    heartbeat: Optional[float]) -> bool:
     """Whether a run reads its input in the runtime's loop (that of `swipl PROGRAM.pl FILE`,
-    prolog_runtime/retalis.pl, rtl_run_event_file/4): standard input or a regular file, to
+    prolog_runtime/rtl_feed.pl, rtl_run_event_file/4): standard input or a regular file, to
     standard output, without --consumer-dir, --heartbeat or a progress line (forced with
     --progress, or possible on a terminal), whose work Python does per batch. Both loops
     read the same lines from any bytes (`event_lines`)."""
