@@ -396,3 +396,27 @@ def test_the_tail_keeps_only_the_last_seconds(tmp_path, monkeypatch):
     feed(node, range(len(XS)), "cdr")
     assert transport.published and not node.state.tail
     node.close()
+
+
+def test_a_state_directory_another_process_holds_is_refused(tmp_path):
+    """A node takes the lock of its state directory (recovery.StateDir.lock) before it restores:
+    while another process holds it the node does not start and the directory is unchanged; the
+    lock of a process killed with SIGKILL is gone."""
+    from retalisc.driver.recovery import RecoveryError
+
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time; from retalisc.driver.recovery import StateDir; "
+         "StateDir(sys.argv[1]).lock(); print('locked', flush=True); time.sleep(120)", str(tmp_path / "state")],
+        env=retalisc_env(), stdout=subprocess.PIPE)
+    try:
+        assert holder.stdout.readline() == b"locked\n"
+        with pytest.raises(RecoveryError, match=f"in use by another process \\(pid {holder.pid}\\)"):
+            node_for("cdr", state=LiveState(tmp_path / "state", str(tmp_path / "out.jsonl"), log=lambda text: None))
+        assert sorted(p.name for p in (tmp_path / "state").iterdir()) == ["lock"]
+    finally:
+        holder.kill()
+        holder.wait(30)
+    node, _ = node_for("cdr", state=LiveState(tmp_path / "state", str(tmp_path / "out.jsonl"), log=lambda text: None))
+    feed(node, range(3), "cdr")
+    node.close()
+    assert (tmp_path / "state" / "snapshot-00000000.json").exists()
