@@ -20,7 +20,7 @@ from typing import Optional, Union
 
 from ..runtime_location import runtime_dir
 
-STATE_FORMAT = "retalisc-state-1"
+STATE_FORMAT = "retalisc-state-1"     # of the manifest; the state file's is rtl_state.pl's state_version/1
 
 
 class StateError(Exception):
@@ -323,9 +323,10 @@ def restore_newest(directory: StateDir, engine, input_key: str, input_name: str,
     """Restore the newest complete snapshot of `directory` into `engine` (an Engine or an
     ActiveQueries: identity() and restore_state()) and return its manifest, or None for a
     directory without snapshots (a first run). Incomplete snapshots are deleted first, corrupt
-    ones reported on `log` and passed over. RecoveryError for a snapshot of another program or
-    runtime version, or of a run over another input (the manifest's `input_key` is not
-    `input_name`)."""
+    ones (not matching their checksum) reported on `log` and passed over. RecoveryError for a
+    snapshot of another program or runtime version, of a run over another input (the
+    manifest's `input_key` is not `input_name`), or that the runtime refuses (anything in it
+    that is not the declared state, prolog_runtime/rtl_state.pl): nothing is restored then."""
     directory.remove_incomplete()
     identity = engine.identity()
     found, problems = directory.snapshots()
@@ -340,12 +341,9 @@ def restore_newest(directory: StateDir, engine, input_key: str, input_name: str,
                                 f"not {input_name}")
         try:
             engine.restore_state(state_path)
-        except StateError as error:
-            print(f"retalisc: {error}; trying an older snapshot", file=log)
-            continue
+        except StateError as error:     # it matches its checksum: made so, not damaged
+            raise RecoveryError(f"refused: {error}") from None
         return manifest
-    if found:
-        raise RecoveryError(f"{directory.directory}: no snapshot could be restored")
     return None
 
 
