@@ -53,6 +53,8 @@ restoring (retalisc/driver/recovery.py).
 :- use_module(rtl_ele).
 :- use_module(rtl_rules, [rtl_rules_state/3, rtl_rules_check_state/4, rtl_rules_restore_state/3]).
 :- use_module(rtl_sandbox, [rtl_check_goal/3]).
+:- use_module(rtl_io, [rtl_too_deep_text/2]).
+:- use_module(library(readutil)).
 
 state_version(2).
 
@@ -401,17 +403,37 @@ read_snapshot(File, Terms) :-
           )).
 
 % Data only: read_term/3 runs nothing (no directives, no term expansion) and uses no
-% operator of the snapshot's; it makes neither cyclic terms nor attributed variables.
+% operator of the snapshot's; it makes neither cyclic terms nor attributed variables. A
+% term is one line (write_canonical/2 writes none inside one); a line nested deeper than
+% snapshot_max_depth/1 is refused before it is read (the reader recurses on the C stack).
 read_terms(In, Terms) :-
-    read_term(In, T, [syntax_errors(error), double_quotes(string), back_quotes(codes),
-                      module(rtl_state)]),
-    (   T == end_of_file
+    snapshot_max_depth(MaxDepth),
+    read_terms(In, MaxDepth, Terms).
+
+read_terms(In, MaxDepth, Terms) :-
+    read_line_to_string(In, Line),
+    (   Line == end_of_file
     ->  Terms = []
-    ;   acyclic_term(T), term_attvars(T, [])
-    ->  Terms = [T|Rest],
-        read_terms(In, Rest)
-    ;   state_error("the snapshot holds a cyclic term or an attributed variable", [])
+    ;   rtl_too_deep_text(Line, MaxDepth)
+    ->  state_error("the snapshot holds a term nested deeper than ~D levels", [MaxDepth])
+    ;   setup_call_cleanup(open_string(Line, LineIn),
+                           read_term(LineIn, T, [syntax_errors(error), double_quotes(string),
+                                                 back_quotes(codes), module(rtl_state)]),
+                           close(LineIn)),
+        (   T == end_of_file
+        ->  read_terms(In, MaxDepth, Terms)
+        ;   acyclic_term(T), term_attvars(T, [])
+        ->  Terms = [T|Rest],
+            read_terms(In, MaxDepth, Rest)
+        ;   state_error("the snapshot holds a cyclic term or an attributed variable", [])
+        )
     ).
+
+%   How deep a term of a snapshot may be: the input events (max_term_depth) with the
+%   runtime's own nesting around them.
+snapshot_max_depth(MaxDepth) :-
+    rtl_flag(max_term_depth, EventDepth),
+    MaxDepth is EventDepth + 1000.
 
 check_snapshot(Terms, Identity, Program, Plan) :-
     state_version(V),

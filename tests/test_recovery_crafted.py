@@ -36,6 +36,8 @@ def crafted_terms(module: str, canary: Path):
         "wrong_shape": "fact(rtl_slr, id_handle(user, v, x)).",
         "directive": f"(:- {shell}).",
         "added_rule": f"rules([rule(rx_1, [], [(ele_trigger(a(_), _, _) :- {shell})])], []).",
+        # deeper than the reader's C stack in the bridge's thread (it crashed the process)
+        "deep_term": "fact(rtl_slr, need(" + "f(" * 30_000 + "x" + ")" * 30_000 + ", 1)).",
     }
 
 
