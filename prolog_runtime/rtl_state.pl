@@ -100,13 +100,14 @@ state_predicate(rtl_trace, late_rule(data, data, data)).
 state_predicate(rtl_rules, removed_rule(program, atom)).
 state_predicate(rtl_aq, Head) :-
     member(Name/Arity, [aq_tab/5, aq_tpred/3, aq_c/3, aq_agenda/3, aq_q/4, aq_ev/3, aq_conf/2,
-                        aq_ground_facts/3, aq_negq/5, aq_buf/3, aq_rule/3, aq_warm/3, aq_dead/1,
+                        aq_ground_facts/3, aq_negq/5, aq_buf/3, aq_warm/3, aq_dead/1,
                         aq_join_step/4, aq_join_state/1, aq_join_eligible/4, aq_join_consumers/3,
                         aq_join_off/2, aq_fact_only/3]),
     length(Types, Arity),
     maplist(=(data), Types),
     Head =.. [Name|Types].
 state_predicate(rtl_aq, aq_hook(kept)).
+state_predicate(rtl_aq, aq_rule(data, data, clause_refs)).     % the clauses of a run-time rule
 
 %!  state_global(?Key, ?Type) is nondet.
 %
@@ -208,10 +209,10 @@ write_state(Out, V, Identity, Program) :-
     unblob_globals(Globals0, Globals, S1, S2),
     trie_entries(S2, TrieEntries),
     captured_flags(Flags),
-    (   Program = _-all
-    ->  Plain = PredTerms, WithRefs = []        % clause references: active queries only
-    ;   partition(plain_terms, PredTerms, Plain, WithRefs)
-    ),
+    pairs_keys_values(PIsTerms, PIs, PredTerms),
+    partition(plain_predicate, PIsTerms, Plain0, WithRefs0),
+    pairs_values(Plain0, Plain),
+    pairs_values(WithRefs0, WithRefs),
     Terms = [modules(Modules), rules(Added, Removed)|Rest],
     findall(trie(Id, Es), member(Id-Es, TrieEntries), Tries),
     findall(global(K, Val), member(K-Val, Globals), GlobalTerms),
@@ -227,8 +228,14 @@ write_term_line(Out, Term) :-
     write_canonical(Out, Term),
     write(Out, '.\n').
 
-plain_terms(Terms) :-
-    \+ ( member(T, Terms), sub_term(Sub, T), compound(Sub), Sub = '$rtl_clause'(_, _) ).
+% Clause references are in the arguments declared `clause_refs` only.
+plain_predicate(M:Name/Arity-_) :-
+    \+ refs_predicate(M, Name, Arity).
+
+refs_predicate(M, Name, Arity) :-
+    functor(Decl, Name, Arity),
+    state_predicate(M, Decl),
+    arg(_, Decl, clause_refs), !.
 
 % The declared modules loaded now: the snapshot replaces the state of these.
 saved_modules(Program-_, Modules) :-
@@ -473,10 +480,10 @@ check_snapshot(Terms, Identity, Program, Plan) :-
     Ctx = ctx(M, Which, Stores, Modules),
     empty_assoc(NoTypes),
     foldl(check_fact(Ctx, Map), FactTerms, Facts, NoTypes, _),
+    check_clause_references(Facts),
     (   Which == all
-    ->  true                % no clause references: a '$rtl_clause'/2 term stays a term
-    ;   check_clause_references(Facts),
-        catch(rtl_aq:aq_state_code(Facts), aq_rule_error(Why), state_error("~w", [Why]))
+    ->  true
+    ;   catch(rtl_aq:aq_state_code(Facts), aq_rule_error(Why), state_error("~w", [Why]))
     ),
     maplist(check_global(Map), GlobalTerms, Globals),
     maplist(check_flag, FlagTerms, Flags),
@@ -582,6 +589,9 @@ check_args([Type|Types], [Arg|Args], I, Ctx, PI, Head) :-
 %!  arg_ok(+Type, +Context, +Where, +Value) is semidet.
 
 arg_ok(data, _, _, _).
+arg_ok(clause_refs, _, _, V) :-
+    is_list(V),
+    forall(member(R, V), ( nonvar(R), R = '$rtl_clause'(_:_/_, Index), integer(Index) )).
 arg_ok(atom, _, _, V) :- atom(V).
 arg_ok(integer, _, _, V) :- integer(V).
 arg_ok(program, Ctx, _, V) :- program_module(Ctx, V).
@@ -622,16 +632,24 @@ state_goal(M, G) :-
     ;   catch(rtl_check_goal(query([]), M, G), _, fail)
     ).
 
-% A clause reference '$rtl_clause'(PI, Index) points at a clause the snapshot holds.
+% A clause reference '$rtl_clause'(PI, Index) points at a clause the snapshot holds, or
+% (a predicate of a module the snapshot does not replace) at one there is now.
 check_clause_references(Facts) :-
-    forall(( member(T, Facts), sub_term(Sub, T), compound(Sub), Sub = '$rtl_clause'(PI, Index) ),
-           (   integer(Index), Index >= 1, PI = Mod:Name/Arity,
-               functor(H, Name, Arity),
-               aggregate_all(count, ( member(F, Facts), ( F = fact(Mod, H) ; F = clause(Mod, H, _) ) ), N),
-               Index =< N
+    forall(( member(fact(Mod, H), Facts), functor(H, Name, Arity), refs_predicate(Mod, Name, Arity),
+             sub_term(Sub, H), compound(Sub), Sub = '$rtl_clause'(PI, Index) ),
+           (   clause_reference_ok(Facts, PI, Index)
            ->  true
            ;   state_error("the snapshot refers to clause ~q of ~q, which it does not hold", [Index, PI])
            )).
+
+clause_reference_ok(Facts, Mod:Name/Arity, Index) :-
+    atom(Mod), atom(Name), integer(Arity), Arity >= 0, integer(Index), Index >= 1,
+    functor(H, Name, Arity),
+    (   \+ \+ ( memberchk(fact(Mod, H), Facts) ; memberchk(clause(Mod, H, _), Facts) )
+    ->  aggregate_all(count, ( member(F, Facts), ( F = fact(Mod, H) ; F = clause(Mod, H, _) ) ), N),
+        Index =< N
+    ;   catch(nth_clause(Mod:H, Index, _), _, fail)
+    ).
 
 check_global(Map, global(K, V0), K-V) :-
     (   atom(K), declared_global(K, Type)
@@ -662,12 +680,9 @@ apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map))
     captured_predicates(M-Which, Current),
     forall(( member(CM:Name/Arity, Current), ( memberchk(CM, Modules) ; seen_module(CM) ) ),
            ( functor(H, Name, Arity), retractall(CM:H) )),
-    (   Which == all
-    ->  forall(member(T, Facts), assert_term(T))
-    ;   partition(plain_fact, Facts, Plain, WithRefs),
-        forall(member(T, Plain), assert_term(T)),
-        forall(member(T0, WithRefs), ( reblob(Map, T0, T), assert_term(T) ))
-    ),
+    partition(plain_fact, Facts, Plain, WithRefs),
+    forall(member(T, Plain), assert_term(T)),
+    forall(member(T0, WithRefs), ( reblob(Map, T0, T), assert_term(T) )),
     captured_globals(CurrentGlobals),
     forall(( member(K-_, CurrentGlobals), \+ memberchk(K-_, Globals), owned_by(K, Modules) ), nb_delete(K)),
     forall(member(K-V, Globals), nb_setval(K, V)),
@@ -675,8 +690,10 @@ apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map))
     forall(( member(K-_, CurrentFlags), \+ memberchk(K-_, Flags), owned_by(K, Modules) ), flag(K, _, 0)),
     forall(member(K-V, Flags), flag(K, _, V)).
 
-plain_fact(T) :-
-    \+ ( sub_term(Sub, T), compound(Sub), Sub = '$rtl_clause'(_, _) ).
+plain_fact(clause(_, _, _)).
+plain_fact(fact(M, H)) :-
+    functor(H, Name, Arity),
+    \+ refs_predicate(M, Name, Arity).
 
 assert_term(fact(Mod, Head)) :-
     functor(Head, Name, Arity),
