@@ -63,6 +63,8 @@ state_version(2).
 %!  state_predicate(?Module, ?Head) is nondet.
 %
 %   The facts of Module:Head are state; Head's arguments are the types of theirs (arg_ok/4).
+%   Not state (not declared): what belongs to the process rather than to the stream (output
+%   sinks, open streams, the values of one call, caches, the hooks of other code).
 %   Besides these, the partial-match stores of the program's rules (ele_partial_store/2),
 %   the events of the generations of rtl_seen.pl (`rtl_seen_<N>:seen/3`, `seen_atomic/1`),
 %   the watch predicates of rtl_slr.pl (`'$slr_watch Name/Arity'/3`) and the predicates an
@@ -132,13 +134,6 @@ state_global(Key, integer) :-
 
 global_family('rtl_detected ', data).
 global_family('$rtl_slr_bounds_', data).
-
-%   What restore leaves as it is although it is declared above: the state of the process,
-%   not of the stream (output sinks, streams, the values of one call). Multifile.
-:- multifile excluded_predicate/1, excluded_global/1.
-
-excluded_predicate(_) :- fail.
-excluded_global(_) :- fail.
 
 % The hooks the runtime registers (rtl_add_output_hook/1, rtl_add_type_output_hook/2).
 state_hook(rtl_subscriptions:deliver).
@@ -238,9 +233,9 @@ refs_predicate(M, Name, Arity) :-
     arg(_, Decl, clause_refs), !.
 
 % The declared modules loaded now: the snapshot replaces the state of these.
-saved_modules(Program-_, Modules) :-
+saved_modules(M-_, Modules) :-
     findall(Module, ( state_predicate(Module, _), current_module(Module) ), Modules0),
-    sort([Program|Modules0], Modules).
+    sort([M|Modules0], Modules).
 
 rules_state(M-all, Added, Removed) :- !,
     rtl_rules_state(M, Added, Removed).
@@ -289,8 +284,7 @@ existing_dynamic(M:Name/Arity) :-
     functor(H, Name, Arity),
     current_predicate(M:Name/Arity),
     predicate_property(M:H, dynamic),
-    \+ predicate_property(M:H, imported_from(_)),
-    \+ excluded_predicate(M:Name/Arity).
+    \+ predicate_property(M:H, imported_from(_)).
 
 current_store(M, Name, Arity) :-
     current_predicate(M:ele_partial_store/2),
@@ -304,8 +298,7 @@ declared_global(K, Type) :-
     (   state_global(K, Type0) -> Type = Type0
     ;   global_family(Prefix, Type), sub_atom(K, 0, _, _, Prefix)
     ->  true
-    ),
-    \+ excluded_global(K).
+    ).
 
 captured_flags(Pairs) :-
     findall(K-V, ( current_flag(K), atom(K), flag_key(K), flag(K, V, V), V \== 0 ), Pairs0),

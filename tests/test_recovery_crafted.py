@@ -157,3 +157,22 @@ def test_a_crafted_active_query_snapshot_is_refused_and_runs_nothing(tmp_path, n
     assert not canary.exists()
     aq.restore_state(genuine)
     assert "path(2,1)" in [answer.replace(" ", "") for answer in aq.answers("q")]
+
+
+def test_run_state_whose_snapshots_are_all_changed_does_not_start_from_the_beginning(tmp_path):
+    """Snapshots changed without their checksum made again are corrupt: one is passed over for
+    the previous, but a directory with none left is refused (exit status 2) rather than run again
+    from the first event, which would rewrite the output file."""
+    program, events, out, state = (tmp_path / "p.rtl", tmp_path / "e.jsonl", tmp_path / "out.jsonl",
+                                   tmp_path / "state")
+    program.write_text(PROGRAM, encoding="utf-8")
+    events.write_text("".join(json.dumps({"event": e, "t": t}) + "\n"
+                              for e, t in [("a(1)", 1), ("b(1)", 2), ("a(2)", 3)]), encoding="utf-8")
+    assert _run([str(program), "--events", str(events), "--out", str(out), "--state", str(state)]).returncode == 0
+    for snapshot in state.glob("snapshot-*.state"):
+        craft(snapshot, crafted_terms("m", tmp_path / "canary")["message_hook"])
+    again = _run([str(program), "--events", str(events), "--out", str(out), "--state", str(state)])
+    message = again.stderr.decode()
+    assert again.returncode == 2, message
+    assert "corrupt" in message and "none of its snapshots can be used" in message
+    assert "Traceback" not in message

@@ -325,8 +325,9 @@ def restore_newest(directory: StateDir, engine, input_key: str, input_name: str,
     directory without snapshots (a first run). Incomplete snapshots are deleted first, corrupt
     ones (not matching their checksum) reported on `log` and passed over. RecoveryError for a
     snapshot of another program or runtime version, of a run over another input (the
-    manifest's `input_key` is not `input_name`), or that the runtime refuses (anything in it
-    that is not the declared state, prolog_runtime/rtl_state.pl): nothing is restored then."""
+    manifest's `input_key` is not `input_name`), that the runtime refuses (anything in it that
+    is not the declared state, prolog_runtime/rtl_state.pl), or when every snapshot is corrupt:
+    nothing is restored then, and the run does not start from the beginning."""
     directory.remove_incomplete()
     identity = engine.identity()
     found, problems = directory.snapshots()
@@ -344,6 +345,9 @@ def restore_newest(directory: StateDir, engine, input_key: str, input_name: str,
         except StateError as error:     # it matches its checksum: made so, not damaged
             raise RecoveryError(f"refused: {error}") from None
         return manifest
+    if problems:                        # snapshots there, none usable: not a first run
+        raise RecoveryError(f"{directory.directory}: none of its snapshots can be used (above); move or delete "
+                            f"the directory to start again from the beginning")
     return None
 
 
