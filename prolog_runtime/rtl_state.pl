@@ -403,9 +403,10 @@ read_snapshot(File, Terms) :-
           )).
 
 % Data only: read_term/3 runs nothing (no directives, no term expansion) and uses no
-% operator of the snapshot's; it makes neither cyclic terms nor attributed variables. A
-% term is one line (write_canonical/2 writes none inside one); a line nested deeper than
-% snapshot_max_depth/1 is refused before it is read (the reader recurses on the C stack).
+% operator of the snapshot's; it makes neither cyclic terms nor attributed variables. Each
+% line is read by itself, one term (write_canonical/2 writes none over two lines), so that
+% a line nested deeper than snapshot_max_depth/1 is refused before it is read (the reader
+% recurses on the C stack).
 read_terms(In, Terms) :-
     snapshot_max_depth(MaxDepth),
     read_terms(In, MaxDepth, Terms).
@@ -416,10 +417,7 @@ read_terms(In, MaxDepth, Terms) :-
     ->  Terms = []
     ;   rtl_too_deep_text(Line, MaxDepth)
     ->  state_error("the snapshot holds a term nested deeper than ~D levels", [MaxDepth])
-    ;   setup_call_cleanup(open_string(Line, LineIn),
-                           read_term(LineIn, T, [syntax_errors(error), double_quotes(string),
-                                                 back_quotes(codes), module(rtl_state)]),
-                           close(LineIn)),
+    ;   setup_call_cleanup(open_string(Line, LineIn), line_term(LineIn, T), close(LineIn)),
         (   T == end_of_file
         ->  read_terms(In, MaxDepth, Terms)
         ;   acyclic_term(T), term_attvars(T, [])
@@ -427,6 +425,13 @@ read_terms(In, MaxDepth, Terms) :-
             read_terms(In, MaxDepth, Rest)
         ;   state_error("the snapshot holds a cyclic term or an attributed variable", [])
         )
+    ).
+
+line_term(In, T) :-
+    read_term(In, T, [syntax_errors(error), double_quotes(string), back_quotes(codes),
+                      module(rtl_state)]),
+    (   at_end_of_stream(In) -> true
+    ;   state_error("the snapshot has a line with more than one term", [])
     ).
 
 %   How deep a term of a snapshot may be: the input events (max_term_depth) with the

@@ -38,6 +38,8 @@ def crafted_terms(module: str, canary: Path):
         "added_rule": f"rules([rule(rx_1, [], [(ele_trigger(a(_), _, _) :- {shell})])], []).",
         # deeper than the reader's C stack in the bridge's thread (it crashed the process)
         "deep_term": "fact(rtl_slr, need(" + "f(" * 30_000 + "x" + ")" * 30_000 + ", 1)).",
+        "deep_over_lines": "fact(rtl_slr, need(" + "f(\n" * 30_000 + "x" + ")" * 30_000 + ", 1)).",
+        "two_terms_on_a_line": f"global(events, 1). clause(user, message_hook(_, _, _), {shell}).",
     }
 
 
