@@ -67,7 +67,9 @@
             aq_wait_neg/4,          % +Kind, +Literal, +State, +Stratum (called by generated code)
             aq_answer/3,            % +Table, +Answer, +Rank   (called by generated code)
             aq_fact_arrived/2,      % +State, +Fact            (called by generated code)
-            aq_adornment/2          % +Vars, -Mask             (called by generated code)
+            aq_adornment/2,         % +Vars, -Mask             (called by generated code)
+            aq_state_code/1,        % +Terms                   (rtl_state.pl: restore)
+            aq_code_head/1          % ?Head                    (rtl_state.pl)
           ]).
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- use_module(library(lists)).
@@ -75,6 +77,7 @@
 :- use_module(library(readutil)).
 :- use_module(library(pairs)).
 :- use_module(library(assoc)).
+:- use_module(library(ordsets)).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_aq_rules).
 
@@ -1850,6 +1853,59 @@ mixed_goal(_, G, G).
 of_predicate(L, P) :-
     nonvar(L),
     \+ L \= P.
+
+%!  aq_state_code(+Terms) is det.
+%
+%   The check of a snapshot's rule code (rtl_state.pl, which reads it as data): every clause
+%   of the generated predicates `'$aq_act'/2`, `'$aq_go'/3` and `'$aq_final'/6` among Terms
+%   (rtl_state's `clause(user, Head, Body)` terms) is one the loaded program has now, or one
+%   that a rule record `aq_rule(N, Rule, _)` of the snapshot compiles to after passing
+%   aq_rule_check/2, as a rule added by a script line does. Throws aq_rule_error(Message)
+%   otherwise. The predicate kinds of the snapshot's rules are there while they are compiled
+%   (and only then: nothing else changes).
+aq_state_code(Terms) :-
+    findall(N-Rule, member(fact(rtl_aq, aq_rule(N, Rule, _)), Terms), Rules),
+    findall(P-K, ( member(clause(user, '$aq_kind'(P, K), true), Terms), \+ user:'$aq_kind'(P, _) ), Kinds),
+    setup_call_cleanup(
+        foldl(assert_kind, Kinds, [], Refs),
+        findall(Hash, ( current_code(Hash) ; rules_code(Rules, Hash) ), Hashes0),
+        forall(member(Ref, Refs), erase(Ref))),
+    sort(Hashes0, Hashes),
+    forall(( member(clause(user, H, B), Terms), aq_code_head(H) ),
+           (   variant_sha1(H-B, Hash), ord_memberchk(Hash, Hashes)
+           ->  true
+           ;   functor(H, Name, Arity),
+               format(atom(M), 'a clause of ~q is not the code of a rule of the program or of the snapshot', [Name/Arity]),
+               throw(aq_rule_error(M))
+           )).
+
+assert_kind(P-K, Refs, [Ref|Refs]) :-
+    assertz(user:'$aq_kind'(P, K), Ref).
+
+aq_code_head('$aq_act'(_, _)).
+aq_code_head('$aq_go'(_, _, _)).
+aq_code_head('$aq_final'(_, _, _, _, _, _)).
+
+current_code(Hash) :-
+    aq_code_head(H),
+    catch(clause(user:H, B), _, fail),
+    variant_sha1(H-B, Hash).
+
+rules_code(Rules, Hash) :-
+    member(N-Rule0, Rules),
+    (   integer(N), copy_term(Rule0, Rule), catch(aq_rule_check(Rule, Lits0), aq_rule_error(M), true)
+    ->  (   nonvar(M)
+        ->  format(atom(Message), 'its rule ~q is refused: ~w', [N, M]),
+            throw(aq_rule_error(Message))
+        ;   true
+        )
+    ;   throw(aq_rule_error('a rule record of the snapshot is not a rule'))
+    ),
+    (   aq_conf(mode, naive) -> maplist(as_call, Lits0, Lits) ; Lits = Lits0 ),
+    aq_rule_clauses(Rule, Lits, N, Clauses),
+    member(C, Clauses),
+    (   C = (H :- B) -> true ; H = C, B = true ),
+    variant_sha1(H-B, Hash).
 
 %   The steps of the join states (join_step/4) as the clauses are now.
 join_steps_changed :-

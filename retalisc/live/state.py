@@ -104,6 +104,7 @@ class LiveState:
     def recover(self, node) -> None:
         from ..driver.recovery import RecoveryError
 
+        self.directory.lock()                   # until close (or the end of the process)
         restored = restore_newest(self.directory, node.engine, "live", node.transport.name, _LogStream(self.log))
         if self.out_path is not None:
             self.raw = open_output(self.out_path, restored)
@@ -282,6 +283,7 @@ class LiveState:
         self.journal.close()
         if self.raw is not None:
             self.raw.close()
+        self.directory.unlock()
 
 
 def _subscribers(node) -> dict:
