@@ -101,7 +101,8 @@
     aq_ground_facts/3,  % aq_ground_facts(Name, Arity, Bool)  every stored fact is ground
     aq_negq/5,         % aq_negq(Stratum, Kind, Goal, State, T)  a negation still to be checked
     aq_buf/3,          % aq_buf(Id, Op, Answer)        notifications of an update, held back
-    aq_rule/3.         % aq_rule(N, Rule, ClauseRefs)  rules added at run time
+    aq_rule/3,         % aq_rule(N, Rule, ClauseRefs)  rules added at run time
+    aq_mixed/2.        % aq_mixed(P, N)  P became a mixed predicate, its facts read by rule N
 
 aq_conf(mode, tabled).
 aq_conf(subsumption, false).
@@ -132,6 +133,7 @@ init_globals :-
 aq_configure(Options) :-
     retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
     retractall(aq_fact_only(_, _, _)),
+    retractall(aq_mixed(_, _)),
     nb_setval(aq_ground, unknown),
     nb_setval(aq_joins, unknown),
     retractall(aq_join_step(_, _, _, _)),
@@ -1809,6 +1811,7 @@ mixed_predicate(H) :-
         K is K0 + 1,
         aq_rule_clauses((P :- P), [fact(P)], K, Clauses),
         maplist(assert_clause, Clauses, _),
+        assertz(aq_mixed(P, K)),
         retractall(aq_fact_only(_, _, _)),
         register_again(Olds)
     ;   true
@@ -1866,9 +1869,11 @@ of_predicate(L, P) :-
 aq_state_code(Terms) :-
     findall(N-Rule, member(fact(rtl_aq, aq_rule(N, Rule, _)), Terms), Rules),
     findall(P-K, ( member(clause(user, '$aq_kind'(P, K), true), Terms), \+ user:'$aq_kind'(P, _) ), Kinds),
+    findall(P-K, ( member(fact(rtl_aq, aq_mixed(P, K)), Terms), integer(K) ), Mixed),
     setup_call_cleanup(
         foldl(assert_kind, Kinds, [], Refs),
-        findall(Hash, ( current_code(Hash) ; rules_code(Rules, Hash) ), Hashes0),
+        findall(Hash, ( ( current_code(H, B) ; rules_code(Rules, H, B) ; mixed_code(Mixed, H, B) ),
+                        mixed_versions(Mixed, H-B, Hash) ), Hashes0),
         forall(member(Ref, Refs), erase(Ref))),
     sort(Hashes0, Hashes),
     forall(( member(clause(user, H, B), Terms), aq_code_head(H) ),
@@ -1886,12 +1891,29 @@ aq_code_head('$aq_act'(_, _)).
 aq_code_head('$aq_go'(_, _, _)).
 aq_code_head('$aq_final'(_, _, _, _, _, _)).
 
-current_code(Hash) :-
+current_code(H, B) :-
     aq_code_head(H),
-    catch(clause(user:H, B), _, fail),
-    variant_sha1(H-B, Hash).
+    catch(clause(user:H, B), _, fail).
 
-rules_code(Rules, Hash) :-
+% The clauses that read the stored facts of the predicates a snapshot made mixed
+% (mixed_predicate/1), and the hash of each clause as it stands and as each conversion of the
+% snapshot rewrote it (the conversions are in the order they happened).
+mixed_code(Mixed, H, B) :-
+    member(P-K, Mixed),
+    aq_rule_clauses((P :- P), [fact(P)], K, Clauses),
+    member(C, Clauses),
+    (   C = (H :- B) -> true ; H = C, B = true ).
+
+mixed_versions(Mixed, H-B, Hash) :-
+    (   variant_sha1(H-B, Hash)
+    ;   append(_, [P-_|Later], Mixed),
+        mixed_head(P, H, H1),
+        mixed_goal(P, B, B1),
+        H1-B1 \== H-B,
+        mixed_versions(Later, H1-B1, Hash)
+    ).
+
+rules_code(Rules, H, B) :-
     member(N-Rule0, Rules),
     (   integer(N), copy_term(Rule0, Rule), catch(aq_rule_check(Rule, Lits0), aq_rule_error(M), true)
     ->  (   nonvar(M)
@@ -1904,8 +1926,7 @@ rules_code(Rules, Hash) :-
     (   aq_conf(mode, naive) -> maplist(as_call, Lits0, Lits) ; Lits = Lits0 ),
     aq_rule_clauses(Rule, Lits, N, Clauses),
     member(C, Clauses),
-    (   C = (H :- B) -> true ; H = C, B = true ),
-    variant_sha1(H-B, Hash).
+    (   C = (H :- B) -> true ; H = C, B = true ).
 
 %   The steps of the join states (join_step/4) as the clauses are now.
 join_steps_changed :-

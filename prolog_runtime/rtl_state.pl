@@ -73,6 +73,7 @@ state_version(2).
 state_predicate(rtl_ele, flag_value(atom, data)).
 state_predicate(rtl_ele, output_hook(output_hook)).
 state_predicate(rtl_ele, type_output_hook(data, type_output_hook)).
+state_predicate(rtl_event_types, known_type(atom, integer)).
 state_predicate(rtl_seen, generation(seen_module, data)).
 state_predicate(rtl_seen, free_generation(seen_module)).
 state_predicate(rtl_slr, instance(integer, program, atom, data, conditions, data, data, data, data)).
@@ -81,11 +82,12 @@ state_predicate(rtl_slr, watch_predicate(atom, integer, watch_predicate)).
 state_predicate(rtl_slr, record(integer, data, data, data)).
 state_predicate(rtl_slr, stream_memory(data, data, data, data)).
 state_predicate(rtl_slr, need(data, data)).
+state_predicate(rtl_slr, expiry(integer, program, data)).
 state_predicate(rtl_slr, bounds_name(integer, bounds_global)).
 state_predicate(rtl_subscriptions, subscription(program, data, atom, data, conditions, data, data, data)).
 state_predicate(rtl_subscriptions, by_functor(program, atom, integer, data, atom)).
 state_predicate(rtl_sync, pending(integer, data, goal, data, data, data)).
-state_predicate(rtl_sync, condition(integer, data, data)).
+state_predicate(rtl_sync, condition(integer, data, data, data)).
 state_predicate(rtl_sync, call_monitor(data, integer)).
 state_predicate(rtl_sync, declared_delay(program, atom, integer, data)).
 state_predicate(rtl_sync, learned_delay(program, atom, integer, data)).
@@ -104,7 +106,7 @@ state_predicate(rtl_aq, Head) :-
     member(Name/Arity, [aq_tab/5, aq_tpred/3, aq_c/3, aq_agenda/3, aq_q/4, aq_ev/3, aq_conf/2,
                         aq_ground_facts/3, aq_negq/5, aq_buf/3, aq_warm/3, aq_dead/1,
                         aq_join_step/4, aq_join_state/1, aq_join_eligible/4, aq_join_consumers/3,
-                        aq_join_off/2, aq_fact_only/3]),
+                        aq_join_off/2, aq_fact_only/3, aq_mixed/2]),
     length(Types, Arity),
     maplist(=(data), Types),
     Head =.. [Name|Types].
@@ -121,10 +123,10 @@ state_global(Key, data) :-
     member(Key, [rtl_blockers_swept_by_type, rtl_clock, rtl_complete_since, rtl_detection_labels,
                  rtl_dry_run, rtl_echo_input, rtl_horizon, rtl_kept_generation, rtl_kept_generations,
                  rtl_kept_rotated, rtl_largest_window, rtl_late_before, rtl_late_delay,
-                 rtl_latest_start, rtl_longest_by_type, rtl_made_mode, rtl_max_steps, rtl_next_sweep,
+                 rtl_late_sweep, rtl_latest_start, rtl_longest_by_type, rtl_made_mode, rtl_max_steps, rtl_next_sweep,
                  rtl_next_timer, rtl_output_hooks, rtl_paced_rest, rtl_raised, rtl_replay_position,
                  rtl_retract_position, rtl_rule_counter, rtl_seen_size, rtl_subscription_counter,
-                 rtl_sweep_after, rtl_trace_line, rtl_trace_line_seen, rtl_trace_phase,
+                 rtl_slr_next_expiry, rtl_sweep_after, rtl_trace_line, rtl_trace_line_seen, rtl_trace_phase,
                  rtl_trace_seq, rtl_trace_text,
                  aq_buffer, aq_cstates, aq_dred, aq_ground, aq_joins, aq_nstates, aq_phase,
                  aq_registering, aq_subgoals]).
