@@ -69,6 +69,7 @@
             aq_fact_arrived/2,      % +State, +Fact            (called by generated code)
             aq_adornment/2          % +Vars, -Mask             (called by generated code)
           ]).
+:- use_module(rtl_error_text, [rtl_error_text/2]).
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- use_module(library(lists)).
 :- use_module(library(apply)).
@@ -1964,17 +1965,7 @@ line_error(N, E) :-
 
 %   The message of an error on one line.
 message_to_codes(E, Msg) :-
-    (   catch(message_to_chars(E, Msg0), _, fail)
-    ->  true
-    ;   term_string(E, Msg0)
-    ),
-    split_string(Msg0, "\n", " \t", Parts0),
-    exclude(==(""), Parts0, Parts),
-    atomic_list_concat(Parts, ' ', Msg).
-
-message_to_chars(E, Msg) :-
-    '$messages':translate_message(E, Lines, []),
-    with_output_to(string(Msg), print_message_lines(current_output, '', Lines)).
+    rtl_error_text(E, Msg).
 
 %   What the runtime refuses before it changes anything: the errors that
 %   aq_register/3, aq_assert/1, aq_retract/1 and aq_unregister/1 raise for

@@ -64,6 +64,8 @@ most Z. prev and next are bounded by their own time arguments instead (text unde
 Def. 18). A time argument that is not bound raises an instantiation error.
 */
 
+:- use_module(rtl_error_text, [rtl_error_text/2]).
+:- use_module(rtl_guard, [rtl_is_reserved_ball/1]).
 :- use_module(rtl_ele).
 :- use_module(rtl_time).
 :- use_module(rtl_raise).
@@ -374,9 +376,12 @@ observe_in([H|Hs], Op, Event, Start, End) :-
 conditions_hold([], _, _) :- !.
 conditions_hold(Conds, M, Id) :-
     catch(once(all_goals(Conds, M)), Error,
-          ( print_message(warning, format("condition of memory ~q raised ~q; event not recorded",
-                                          [Id, Error])),
-            fail )).
+          ( rtl_is_reserved_ball(Error)
+          ->  throw(Error)                          % a limit: it ends the event
+          ;   rtl_error_text(Error, Text),
+              print_message(warning, format("condition of memory ~q raised ~s; event not recorded",
+                                            [Id, Text])),
+              fail )).
 
 all_goals([], _).
 all_goals([G|Gs], M) :-

@@ -50,6 +50,7 @@ The caller makes the write atomic (temporary file, fsync, rename) and checks a c
 before restoring (retalisc/driver/recovery.py).
 */
 
+:- use_module(rtl_error_text, [rtl_error_text/2]).
 :- use_module(library(lists)).
 :- use_module(library(apply)).
 :- use_module(library(pairs)).
@@ -282,10 +283,8 @@ read_snapshot(File, Terms) :-
           )).
 
 message_to_codes(E, Text) :-
-    (   catch(message_to_codes_(E, Text), _, fail) -> true ; format(codes(Text), "~q", [E]) ).
-message_to_codes_(E, Text) :-
-    '$messages':translate_message(E, Lines, []),
-    with_output_to(codes(Text), print_message_lines(current_output, '', Lines)).
+    rtl_error_text(E, String),
+    string_codes(String, Text).
 
 read_terms(In, Terms) :-
     (   at_end_of_stream(In)
@@ -479,6 +478,9 @@ rtl_state_digest(Hash) :-
 rtl_state_digest(Program, Hash) :-
     rtl_state_capture(Program, State),
     variant_sha1(State, Hash).
+
+rtl_error_text:runtime_error_text(rtl_state_error(Message), Text) :-
+    text_to_string(Message, Text).
 
 :- multifile prolog:error_message//1.
 prolog:error_message(rtl_state_error(Message)) -->

@@ -42,6 +42,8 @@ every history is complete, so rtl_sync_finish(run) runs the matches still postpo
 order; rtl_sync_finish(drop) discards them.
 */
 
+:- use_module(rtl_error_text, [rtl_error_text/2, rtl_term_text/2]).
+:- use_module(rtl_guard, [rtl_is_reserved_ball/1]).
 :- use_module(rtl_ele).
 :- use_module(rtl_slr).
 :- use_module(rtl_time).
@@ -311,8 +313,12 @@ release('$call'(Action, _), _, _, _) :- !,
     call(Action, ready).
 release(Event, Query, Start, End) :-
     (   catch(once(Query), Error,
-              ( print_message(warning, format("synchronized query ~q raised ~q; no event", [Query, Error])),
-                fail ))
+              (   rtl_is_reserved_ball(Error)
+              ->  throw(Error)                      % a limit: it ends the event
+              ;   rtl_term_text(Query, Q),
+                  rtl_error_text(Error, Text),
+                  print_message(warning, format("synchronized query ~s raised ~s; no event", [Q, Text])),
+                  fail ))
     ->  rtl_derived(Event, Start, End)
     ;   true
     ).
