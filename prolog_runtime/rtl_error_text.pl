@@ -76,6 +76,12 @@ error_text(Error, _) :-
     var(Error), !,
     fail.
 error_text(time_limit_exceeded, "no answer within the time limit") :- !.
+error_text(error(resource_error(stack), Context), Text) :-
+    is_dict(Context),
+    get_dict(stack_limit, Context, KB),
+    integer(KB), !,
+    GB is KB / 1048576,
+    format(string(Text), "Stack limit (~1fGb) exceeded", [GB]).
 error_text(error(Formal, Context), Text) :- !,
     nonvar(Formal),
     (   runtime_error_text(Formal, Text0)
@@ -117,6 +123,7 @@ iso_text(representation_error(What), Text) :-
     format_parts("Cannot represent due to `~s'", [What], Text).
 iso_text(evaluation_error(What), Text) :-
     format_parts("Arithmetic: evaluation error: ~s", [What], Text).
+iso_text(resource_error(stack), "Stack limit exceeded") :- !.
 iso_text(resource_error(What), Text) :-
     format_parts("Not enough resources: ~s", [What], Text).
 iso_text(syntax_error(What), Text) :-

@@ -154,10 +154,11 @@ rtl_memory_request(Text, Error) :-
     ->  true
     ;   memory_request_conditions(Request, Conds)
     ->  (   is_list(Conds) -> CondList = Conds ; CondList = [Conds] ),
-        catch(( maplist(safe_condition(M), CondList), Result = ok ), Unsafe,
+        catch(( maplist(safe_condition(M), CondList, Guarded), Result = ok ), Unsafe,
               ( rtl_error_text(Unsafe, Message), Result = unsafe(Message) )),
         (   Result == ok
-        ->  catch(M:Request, Raised,
+        ->  foldl(rtl_sandbox:substitute_goal, CondList, Guarded, Request, Checked),
+            catch(M:Checked, Raised,
                   ( rtl_error_text(Raised, Message), Error = failed(Message) ))
         ;   Error = Result
         )
@@ -197,7 +198,7 @@ rtl_sync_query(Text, At, Timeout, QueryId, Error) :-
     ->  Error = syntax("a synchronized query needs a time (at)")
     ;   rtl_time_goal(Goal0, Goal),
         in_temporary_module(Tmp, add_import_module(Tmp, M, start),
-                            ( catch(rtl_check_goal(query([Tmp]), Tmp, Goal, _), Unsafe, true),
+                            ( catch(rtl_sandbox:rtl_check_goal(query([Tmp]), Tmp, Goal, _), Unsafe, true),
                               ( nonvar(Unsafe) -> unsafe_message(Unsafe, Tmp, Message) ; true ) )),
         (   nonvar(Unsafe)
         ->  Error = unsafe(Message)

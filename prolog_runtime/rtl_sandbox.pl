@@ -582,11 +582,11 @@ checked_goal(catch(G, C, R), M, S, G1, catch(Checked, C, Checked), V0, V) :- !,
 checked_goal(format(F), M, S, G1, Second, V0, V) :- !,
     checked_goal(format(F, []), M, S, G2, Second, V0, V),
     ( G2 = format(F, []) -> G1 = format(F) ; G1 = rtl_guard:rtl_format(F) ).
-checked_goal(format(F, A), _, S, G1, format(F, A), V, V) :- !,
-    format_goal(F, S, format(F, A), rtl_guard:rtl_format(F, A), G1).
-checked_goal(format(Sink, F, A), _, S, G1, format(Sink, F, A), V, V) :- !,
+checked_goal(format(F, A), _, S, G1, Second, V, V) :- !,
+    format_goal(F, S, format(F, A), rtl_guard:rtl_format(F, A), G1, Second).
+checked_goal(format(Sink, F, A), _, S, G1, Second, V, V) :- !,
     checked_sink(Sink, S, format/3),
-    format_goal(F, S, format(Sink, F, A), rtl_guard:rtl_format(Sink, F, A), G1).
+    format_goal(F, S, format(Sink, F, A), rtl_guard:rtl_format(Sink, F, A), G1, Second).
 checked_goal(with_output_to(Sink, G), M, S, with_output_to(Sink, G1), Second, V0, V) :- !,
     checked_sink(Sink, S, with_output_to/2),
     stand_in(0, Checked),
@@ -638,14 +638,16 @@ guard(S, PI, What, _, _) :-
 catches_reserved(C) :-
     rtl_reserved_ball(C).
 
-format_goal(F, S, Plain, Guarded, G1) :-
-    (   var(F)
-    ->  guard(S, format/2, format, Guarded, G1)
-    ;   rtl_format_directive(F, Refused)
+%   A format string known now is judged now (and by library(sandbox)); one given by data
+%   is judged by the guard when it runs.
+format_goal(F, S, Plain, Guarded, G1, Second) :-
+    (   nonvar(F), rtl_format_directive(F, Refused)
     ->  refuse(S, format/2, format_directive(Refused))
-    ;   rtl_format_text(F)
-    ->  G1 = Plain
-    ;   guard(S, format/2, format, Guarded, G1)
+    ;   nonvar(F), rtl_format_text(F)
+    ->  G1 = Plain,
+        Second = Plain
+    ;   guard(S, format/2, format, Guarded, G1),
+        Second = true
     ).
 
 checked_sink(Sink, S, PI) :-
