@@ -450,11 +450,16 @@ replace_identical(T0, Old, New, T) :-
     (   T0 == Old
     ->  T = New
     ;   compound(T0)
-    ->  T0 =.. [F|Args0],
-        maplist([A0, A]>>replace_identical(A0, Old, New, A), Args0, Args),
-        T =.. [F|Args]
+    ->  compound_name_arguments(T0, F, Args0),
+        replace_in_args(Args0, Old, New, Args),
+        compound_name_arguments(T, F, Args)
     ;   T = T0
     ).
+
+replace_in_args([], _, _, []).
+replace_in_args([A0|As0], Old, New, [A|As]) :-
+    replace_identical(A0, Old, New, A),
+    replace_in_args(As0, Old, New, As).
 
 %   The policy runtime (rtl_policy.pl) rewinds the step it is given, retracting that step's
 %   matches: an added rule may name only its own steps.
@@ -567,9 +572,9 @@ system_module(yall).
 checked_goal(throw(Ball), _, S, G1, throw(Ball), V, V) :- !,
     (   \+ rtl_reserved_ball(Ball)
     ->  G1 = throw(Ball)
-    ;   rtl_is_reserved_ball(Ball)
+    ;   S = st(_, _, strict), rtl_is_reserved_ball(Ball)
     ->  refuse(S, throw/1, reserved_ball(Ball))
-    ;   guard(S, throw/1, ball, rtl_guard:rtl_throw(Ball), G1)
+    ;   guard(S, throw/1, ball, rtl_guard:rtl_throw(Ball), G1)    % raises a permission error
     ).
 checked_goal(catch(G, C, R), M, S, G1, catch(Checked, C, Checked), V0, V) :- !,
     stand_in(0, Checked),
