@@ -157,7 +157,7 @@ rtl_memory_request(Text, Error) :-
         catch(( maplist(safe_condition(M), CondList, Guarded), Result = ok ), Unsafe,
               ( rtl_error_text(Unsafe, Message), Result = unsafe(Message) )),
         (   Result == ok
-        ->  foldl(rtl_sandbox:substitute_goal, CondList, Guarded, Request, Checked),
+        ->  rtl_replace_goals(CondList, Guarded, Request, Checked),
             catch(M:Checked, Raised,
                   ( rtl_error_text(Raised, Message), Error = failed(Message) ))
         ;   Error = Result

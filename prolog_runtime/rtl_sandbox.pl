@@ -1,7 +1,8 @@
 :- module(rtl_sandbox,
           [ rtl_check_goal/4,           % +Policy, +Module, :Goal, -Guarded
             rtl_check_rule/5,           % +Module, +Id, +Stores, +Clauses, -Guarded
-            rtl_unsafe_message/2        % +Error, -Message
+            rtl_unsafe_message/2,       % +Error, -Message
+            rtl_replace_goals/4         % +Called, +Guarded, +Term0, -Term
           ]).
 
 /** <module> Untrusted goals: what code from outside the program file may run
@@ -384,15 +385,21 @@ local_pred(rule(_, _, Local), _, G) :-
     functor(G, N, A),
     memberchk(N/A, Local).
 
-%   The module that defines G as called from M (autoloading it if need be).
+%   The module that defines G as called from M, autoloading it if allowed/1 lists it:
+%   checking a goal loads no other library (loading one runs its directives, and even
+%   predicate_property(G, defined) autoloads, so the test of a definition is the system's
+%   own, which does not).
 defined_in(G, M, S, IM) :-
-    (   predicate_property(M:G, defined)
+    functor(G, Name, Arity),
+    (   '$get_predicate_attribute'(M:G, defined, 1)
     ->  true
-    ;   catch('$define_predicate'(M:G), _, fail),
-        predicate_property(M:G, defined)
+    ;   allowed(Name/Arity),
+        catch('$define_predicate'(M:G), _, fail),
+        '$get_predicate_attribute'(M:G, defined, 1)
     ->  true
-    ;   goal_pi(G, PI),
-        refuse(S, PI, unknown)
+    ;   '$autoload':library_index(G, _, _)
+    ->  refuse(S, Name/Arity, not_allowed)
+    ;   refuse(S, Name/Arity, unknown)
     ),
     predicate_property(M:G, implementation_module(IM)).
 
@@ -425,7 +432,7 @@ runtime_goal(IM, G, M, S, G1, V0, V) :-
         ( Where == any ; Policy = rule(_, _, _) )
     ->  own_step(IM:G, S),
         walk_called(Called, M, S, Guarded, V0, V),
-        foldl(substitute_goal, Called, Guarded, G, G1)
+        rtl_replace_goals(Called, Guarded, G, G1)
     ;   catch(sandbox:safe_primitive(IM:G), _, fail)
     ->  G1 = G,
         V = V0
@@ -438,9 +445,16 @@ walk_called([G|Gs], M, S, [G1|G1s], V0, V) :-
     walk(G, M, S, G1, V0, V1),
     walk_called(Gs, M, S, G1s, V1, V).
 
-%   substitute_goal(+Called, +Guarded, +Term0, -Term): Term0 with its subterms identical
-%   to Called replaced by Guarded (a goal argument of a builtin, or a condition in a list).
-substitute_goal(Called, Guarded, T0, T) :-
+%!  rtl_replace_goals(+Called:list, +Guarded:list, +Term0, -Term) is det.
+%
+%   Term0 with each subterm identical to an element of Called replaced by the element of
+%   Guarded at its place: the goals of a builtin's arguments, or of a memory request's
+%   conditions, replaced by their guarded forms (rtl_check_goal/4).
+
+rtl_replace_goals(Called, Guarded, T0, T) :-
+    foldl(replace_goal, Called, Guarded, T0, T).
+
+replace_goal(Called, Guarded, T0, T) :-
     (   Called == Guarded
     ->  T = T0
     ;   replace_identical(T0, Called, Guarded, T)
