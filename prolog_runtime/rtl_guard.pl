@@ -7,7 +7,9 @@
             rtl_format/1,               % +Format
             rtl_format/2,               % +Format, :Args
             rtl_format/3,               % +Sink, +Format, :Args
-            rtl_format_directive/2      % +Format, -Refused
+            rtl_format_directive/2,     % +Format, -Refused
+            rtl_output_sink/1,          % @Sink
+            rtl_condition_raised/3      % +Error, +Format, +Args
           ]).
 
 /** <module> Run-time guards of untrusted goals
@@ -25,6 +27,9 @@ into the guarded predicates here when it checks the goal:
     hooks); the sink of rtl_format/3 must be `atom(_)`, `string(_)`, `codes(_)`,
     `codes(_, _)`, `chars(_)` or `chars(_, _)`.
 */
+
+:- use_module(library(lists)).
+:- use_module(rtl_error_text, [rtl_error_text/2]).
 
 :- meta_predicate rtl_catch(0, ?, 0).
 
@@ -102,7 +107,7 @@ rtl_format(Format, Args) :-
     format(Format, Args).
 
 rtl_format(Sink, Format, Args) :-
-    (   safe_sink(Sink)
+    (   rtl_output_sink(Sink)
     ->  true
     ;   throw(error(permission_error(output, sink, Sink), context(format/3, _)))
     ),
@@ -115,13 +120,34 @@ checked_format(Format) :-
     ;   true
     ).
 
-safe_sink(S) :- var(S), !, fail.
-safe_sink(atom(_)).
-safe_sink(string(_)).
-safe_sink(codes(_)).
-safe_sink(codes(_, _)).
-safe_sink(chars(_)).
-safe_sink(chars(_, _)).
+%!  rtl_output_sink(@Sink) is semidet.
+%
+%   Sink is one untrusted code may write to with format/3 or with_output_to/2: a string, an
+%   atom, codes or chars, never a stream.
+
+rtl_output_sink(S) :- var(S), !, fail.
+rtl_output_sink(atom(_)).
+rtl_output_sink(string(_)).
+rtl_output_sink(codes(_)).
+rtl_output_sink(codes(_, _)).
+rtl_output_sink(chars(_)).
+rtl_output_sink(chars(_, _)).
+
+%!  rtl_condition_raised(+Error, +Format, +Args) is failure.
+%
+%   The runtime's handler of an error raised by the conditions of a subscription, a memory
+%   or a synchronized query: a reserved ball (a limit) is raised again, so it ends the
+%   event; any other is a warning, Format with Args and the error's text (rtl_error_text/2)
+%   after them, and the condition fails.
+
+rtl_condition_raised(Error, Format, Args) :-
+    (   rtl_is_reserved_ball(Error)
+    ->  throw(Error)
+    ;   rtl_error_text(Error, Text),
+        append(Args, [Text], All),
+        print_message(warning, format(Format, All)),
+        fail
+    ).
 
 %!  rtl_format_directive(+Format, -Refused:atom) is semidet.
 %

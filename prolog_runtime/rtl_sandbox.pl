@@ -25,10 +25,20 @@ The check walks the goal as SWI-Prolog's library(sandbox) does, with two differe
     the effects of a rule (rtl_derived/3, new_event/1-3, c_mem/4, sub/5, ...) only in an
     added rule.
 
-Every other goal (system and library predicates) must pass library(sandbox)'s safe_goal/1:
-no files, processes, streams other than the current output, halt or global flags. Module
-qualified database changes (`M:retractall(G)`), which safe_goal/1 lets through, and
-set_prolog_flag/2 are refused here.
+Every other goal is a system or library predicate, and denied by default: allowed/1 lists
+those untrusted code may call (pure predicates, all-solutions and control, output to the
+current output or a string), and each must pass library(sandbox)'s safe_goal/1 as well, a
+second check. Not listed, so refused: message printing (it interprets its term), attributed
+variables (their hooks run goals), blocking builtins (sleep, reads, waits, threads), cleanup
+handlers, files, processes, flags, global variables, the program's clauses. Module qualified
+database changes (`M:retractall(G)`), which safe_goal/1 lets through, are checked here.
+
+What can only be judged when it runs is guarded (rtl_guard.pl): the walk gives back the
+goal to run, in which throw/1 of a ball that could be reserved, catch/3 with a catcher that
+could catch a reserved ball and format/1,2,3 with a format string given by data are
+replaced by their guards. The clauses of program predicates are not rewritten: there such a
+goal is refused (unless the call at hand decides it). `format` directives that call goals or
+take write options (`~@`, `~W`, `~p`) are refused when the format string is known.
 
 A refusal throws `error(rtl_unsafe(Culprit, Reason, Path), _)`: Culprit is the predicate indicator
 of the unsafe goal, Path the program predicates through which it was reached. Its message
@@ -45,7 +55,8 @@ nearby/2)`.
 :- use_module(rtl_error_text).
 
 %   Stand-ins for the goal arguments of a library meta-predicate: the arguments are checked
-%   by the walk, the meta-predicate itself by safe_goal/1 with these in their place.
+%   by the walk, the meta-predicate itself by safe_goal/1 with these in their place (the
+%   second check).
 '$rtl_checked'.
 '$rtl_checked'(_).
 '$rtl_checked'(_, _).
@@ -670,17 +681,10 @@ format_goal(F, S, Plain, Guarded, G1, Second) :-
     ).
 
 checked_sink(Sink, S, PI) :-
-    (   nonvar(Sink), output_sink(Sink)
+    (   rtl_output_sink(Sink)
     ->  true
     ;   refuse(S, PI, sink(Sink))
     ).
-
-output_sink(atom(_)).
-output_sink(string(_)).
-output_sink(codes(_)).
-output_sink(codes(_, _)).
-output_sink(chars(_)).
-output_sink(chars(_, _)).
 
 write_option(quoted).
 write_option(ignore_ops).

@@ -36,8 +36,7 @@ and are indexed by the functor of their pattern: an event no subscription can ma
 one failed index lookup.
 */
 
-:- use_module(rtl_error_text, [rtl_error_text/2]).
-:- use_module(rtl_guard, [rtl_is_reserved_ball/1]).
+:- use_module(rtl_guard, [rtl_condition_raised/3]).
 :- use_module(rtl_ele).
 :- use_module(rtl_time).
 :- use_module(rtl_io).
@@ -202,12 +201,7 @@ expired(M, Id, Consumer) :-
 
 conditions_hold(M, Conds, Which) :-
     catch(all_goals(Conds, M), Error,
-          ( rtl_is_reserved_ball(Error)
-          ->  throw(Error)                          % a limit: it ends the event
-          ;   rtl_error_text(Error, Text),
-              print_message(warning, format("condition of ~q raised ~s; event not delivered",
-                                            [Which, Text])),
-              fail )).
+          rtl_condition_raised(Error, "condition of ~q raised ~s; event not delivered", [Which])).
 
 all_goals([], _).
 all_goals([G|Gs], M) :-

@@ -42,8 +42,8 @@ every history is complete, so rtl_sync_finish(run) runs the matches still postpo
 order; rtl_sync_finish(drop) discards them.
 */
 
-:- use_module(rtl_error_text, [rtl_error_text/2, rtl_term_text/2]).
-:- use_module(rtl_guard, [rtl_is_reserved_ball/1]).
+:- use_module(rtl_error_text, [rtl_term_text/2]).
+:- use_module(rtl_guard, [rtl_condition_raised/3]).
 :- use_module(rtl_ele).
 :- use_module(rtl_slr).
 :- use_module(rtl_time).
@@ -313,12 +313,8 @@ release('$call'(Action, _), _, _, _) :- !,
     call(Action, ready).
 release(Event, Query, Start, End) :-
     (   catch(once(Query), Error,
-              (   rtl_is_reserved_ball(Error)
-              ->  throw(Error)                      % a limit: it ends the event
-              ;   rtl_term_text(Query, Q),
-                  rtl_error_text(Error, Text),
-                  print_message(warning, format("synchronized query ~s raised ~s; no event", [Q, Text])),
-                  fail ))
+              ( rtl_term_text(Query, Q),
+                rtl_condition_raised(Error, "synchronized query ~s raised ~s; no event", [Q]) ))
     ->  rtl_derived(Event, Start, End)
     ;   true
     ).

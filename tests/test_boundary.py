@@ -288,3 +288,12 @@ def test_cli_memory_and_swipl_control_lines(tmp_path, swipl):
     assert "unsafe goal: print_message/2" in out.stderr
     assert "No permission to throw reserved_ball" in out.stderr
     assert "unsafe goal: sleep/1" in out.stderr
+
+
+def test_error_printer_and_guards_plunit(swipl):
+    """rtl_error_text.pl (the one printer: never interprets, bounded, SWI-Prolog's words for
+    the known forms) and rtl_guard.pl (catch/throw/format guards)."""
+    proc = subprocess.run([swipl, "--no-tty", "-q", "-g", "run_tests", "-t", "halt",
+                           str(ROOT / "prolog_runtime" / "tests" / "test_error_text.pl")],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+    assert proc.returncode == 0 and "ERROR" not in proc.stdout and "Warning" not in proc.stdout, proc.stdout
