@@ -351,6 +351,11 @@ cross_module_call(Q, G, S) :-
     ->  true
     ;   runtime_module(Q)
     ->  true                                    % builtin/3 decides
+    ;   \+ db_change(G),
+        \+ '$get_predicate_attribute'(Q:G, defined, 1),
+        functor(G, Name, Arity),
+        \+ allowed(Name/Arity)
+    ->  refuse(S, Name/Arity, not_allowed)     % (asking for its properties would autoload it)
     ;   (   predicate_property(Q:G, exported)
         ;   predicate_property(Q:G, public)
         ;   predicate_property(Q:G, multifile)

@@ -60,6 +60,8 @@ def goal_strategy(names):
         inner.map(lambda g: f"\\+ {g}"),
         inner.map(lambda g: f"call({g})"),
         inner.map(lambda g: f"with_output_to(string(_), {g})"),
+        st.tuples(st.sampled_from(["lists", "system", "user", "apply", "sandbox"]), inner).map(
+            lambda p: f"{p[0]}:({p[1]})"),
     ), max_leaves=3)
 
 
