@@ -1951,21 +1951,16 @@ parse_command(_, Rest, T) :-
 parse_error(N, aq_script_error(_, Msg)) :- !,
     throw(aq_script_error(N, Msg)).
 parse_error(N, E) :-
-    message_to_codes(E, Msg0),
-    split_string(Msg0, "\n", " ", Parts),
-    atomic_list_concat(Parts, ' ', Msg),
+    rtl_error_text(E, Msg),
     throw(aq_script_error(N, Msg)).
 
 %   Every error of check_command/3 is a bad script line.
 line_error(N, aq_script_error(_, Msg)) :- !,
     throw(aq_script_error(N, Msg)).
 line_error(N, E) :-
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     throw(aq_script_error(N, Msg)).
 
-%   The message of an error on one line.
-message_to_codes(E, Msg) :-
-    rtl_error_text(E, Msg).
 
 %   What the runtime refuses before it changes anything: the errors that
 %   aq_register/3, aq_assert/1, aq_retract/1 and aq_unregister/1 raise for
@@ -2033,8 +2028,8 @@ script_error(File, E, Status) :-
 script_error_text(File, aq_script_error(Line, Msg), 2, Text) :- !,
     format(string(Text), '~w:~w: error: ~w', [File, Line, Msg]).
 script_error_text(File, aq_runtime_error(Line, E), 1, Text) :- !,
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     format(string(Text), '~w:~w: runtime error: ~w', [File, Line, Msg]).
 script_error_text(_, E, 1, Text) :-
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     format(string(Text), 'error: ~w', [Msg]).

@@ -278,13 +278,10 @@ read_snapshot(File, Terms) :-
           E,
           (   E = error(rtl_state_error(_), _)
           ->  throw(E)
-          ;   message_to_codes(E, Text),
+          ;   rtl_error_text(E, Text),
               state_error("~w is not a readable snapshot: ~s", [File, Text])
           )).
 
-message_to_codes(E, Text) :-
-    rtl_error_text(E, String),
-    string_codes(String, Text).
 
 read_terms(In, Terms) :-
     (   at_end_of_stream(In)

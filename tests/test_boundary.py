@@ -169,13 +169,17 @@ def test_subscription_and_memory_conditions_cannot_run_code(engine, tmp_path):
     canary, goals = canary_goals(tmp_path)
     accepted = 0
     for i, goal in enumerate(goals):
-        for give in (lambda: engine.subscribe("ops", "smoke(X)", conditions_text=f"[{goal}]"),
-                     lambda: engine.subscribe_query("ops", f"smoke(X)-[{goal}]"),
-                     lambda: engine.memory(f"c_mem(m{i}, smoke(_)-[{goal}], 5, inf)"),
-                     lambda: engine.add_rules(f"alarm(X) <- smoke(X) where ({goal})."),
-                     lambda: engine.add_rules(f"null do ({goal}) <- smoke(_).")):
+        for give, text in ((engine.subscribe, f"[{goal}]"), (engine.subscribe_query, f"smoke(X)-[{goal}]"),
+                           (engine.memory, f"c_mem(m{i}, smoke(_)-[{goal}], 5, inf)"),
+                           (engine.add_rules, f"alarm(X) <- smoke(X) where ({goal})."),
+                           (engine.add_rules, f"null do ({goal}) <- smoke(_).")):
             try:
-                give()
+                if give == engine.subscribe:
+                    give("ops", "smoke(X)", conditions_text=text)
+                elif give == engine.subscribe_query:
+                    give("ops", text)
+                else:
+                    give(text)
                 accepted += 1
             except (PrologError, QueryError) as refused:
                 assert "unsafe goal" in str(refused), refused

@@ -138,7 +138,7 @@ def test_every_goal_the_boundary_accepts_is_side_effect_free(world, data):
 def test_accepted_conditions_are_side_effect_free_on_the_event_road(world, data):
     """A few goals through the other roads: a subscription condition and an added rule's
     condition, run by an event under the step limit."""
-    engine, directory, everything, allowed = world
+    engine, directory, _, allowed = world
     goal = data.draw(goal_strategy(st.sampled_from(allowed))).replace("{d}", str(directory))
     present = files(directory)
     installed = []
