@@ -11,9 +11,9 @@
 A query arrives as text (from Python, the command line or a service). It is read as a
 term with rtl_read_text/4 (its variable names kept, trailing text refused), its time terms
 `E^T` / `E^[T1, T2]` are rewritten as the compiler rewrites them in the program (the
-time becomes the last two arguments), and it must pass rtl_check_goal/4 (rtl_sandbox.pl) before it runs, in the guarded form
-that check gives: no file, shell or database side
-effects, no halt. The program's own predicates are checked like any code; the SLR query
+time becomes the last two arguments), and it must pass rtl_check_goal/4 (rtl_sandbox.pl):
+what runs is the guarded goal that check gives. No file, shell or database side effects,
+no halt, and no catch/3 of the time limit. The program's own predicates are checked like any code; the SLR query
 predicates (prev, next, mem, ...) are declared safe there.
 
 An answer is the list of `Name=Value` pairs of the goal's variables (those whose name does
