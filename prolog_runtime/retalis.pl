@@ -21,6 +21,8 @@
 :- reexport(rtl_io).
 :- use_module(rtl_lines, [rtl_read_line/3, rtl_split_lines/2, rtl_utf8_line/2, rtl_long_line/4]).
 :- use_module(rtl_horizon, [rtl_warnings_pending/0]).
+:- use_module(rtl_error_text, [rtl_error_text/2, rtl_term_text/2]).
+:- use_module(rtl_guard, [rtl_is_reserved_ball/1]).
 :- reexport(rtl_time).
 :- reexport(rtl_raise).
 :- reexport(rtl_subscriptions).
@@ -727,18 +729,9 @@ change_rules(Change, Text, Reason) :-
           Error,
           error_text(Error, Reason)).
 
-% One line of text for an error term, as print_message/2 would say it.
-error_text(error(rtl_step_limit(Max), _), Text) :- !,
-    format(string(Text), "more than ~D steps (--max-steps)", [Max]).
+% One line of text for an error term (rtl_error_text.pl: never interpreted).
 error_text(Error, Text) :-
-    (   catch('$messages':translate_message(Error, Lines, []), _, fail)
-    ->  with_output_to(string(S), print_message_lines(current_output, '', Lines)),
-        split_string(S, "\n", " ", Parts0),
-        exclude(==(""), Parts0, Parts),
-        atomic_list_concat(Parts, " ", Text0),
-        atom_string(Text0, Text)
-    ;   format(string(Text), "~q", [Error])
-    ).
+    rtl_error_text(Error, Text).
 
 process_event(Op, Event, Start, End) :-
     (   Op == add
@@ -862,15 +855,16 @@ rtl_action(Goal) :-
     (   rtl_action_context(Goal, catch(Goal, Error, action_error(Error)))
     ->  true
     ;   rtl_halt_check,                         % a halt in the action made it fail
-        print_message(warning, format("action failed: ~q", [Goal]))
+        rtl_term_text(Goal, Text),
+        print_message(warning, format("action failed: ~s", [Text]))
     ).
 
 % The step limit and halts are not the action's own errors: they end the event.
 action_error(Error) :-
-    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_)
-        ; Error = rtl_signal(_) )
+    (   rtl_is_reserved_ball(Error)
     ->  throw(Error)
-    ;   print_message(warning, Error),
+    ;   rtl_error_text(Error, Text),
+        print_message(warning, format("~s", [Text])),
         fail
     ).
 

@@ -71,6 +71,7 @@
             aq_state_code/1,        % +Terms                   (rtl_state.pl: restore)
             aq_code_head/1          % ?Head                    (rtl_state.pl)
           ]).
+:- use_module(rtl_error_text, [rtl_error_text/2]).
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- use_module(library(lists)).
 :- use_module(library(apply)).
@@ -2103,31 +2104,16 @@ parse_command(_, Rest, T) :-
 parse_error(N, aq_script_error(_, Msg)) :- !,
     throw(aq_script_error(N, Msg)).
 parse_error(N, E) :-
-    message_to_codes(E, Msg0),
-    split_string(Msg0, "\n", " ", Parts),
-    atomic_list_concat(Parts, ' ', Msg),
+    rtl_error_text(E, Msg),
     throw(aq_script_error(N, Msg)).
 
 %   Every error of check_command/3 is a bad script line.
 line_error(N, aq_script_error(_, Msg)) :- !,
     throw(aq_script_error(N, Msg)).
 line_error(N, E) :-
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     throw(aq_script_error(N, Msg)).
 
-%   The message of an error on one line.
-message_to_codes(E, Msg) :-
-    (   catch(message_to_chars(E, Msg0), _, fail)
-    ->  true
-    ;   term_string(E, Msg0)
-    ),
-    split_string(Msg0, "\n", " \t", Parts0),
-    exclude(==(""), Parts0, Parts),
-    atomic_list_concat(Parts, ' ', Msg).
-
-message_to_chars(E, Msg) :-
-    '$messages':translate_message(E, Lines, []),
-    with_output_to(string(Msg), print_message_lines(current_output, '', Lines)).
 
 %   What the runtime refuses before it changes anything: the errors that
 %   aq_register/3, aq_assert/1, aq_retract/1 and aq_unregister/1 raise for
@@ -2195,8 +2181,8 @@ script_error(File, E, Status) :-
 script_error_text(File, aq_script_error(Line, Msg), 2, Text) :- !,
     format(string(Text), '~w:~w: error: ~w', [File, Line, Msg]).
 script_error_text(File, aq_runtime_error(Line, E), 1, Text) :- !,
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     format(string(Text), '~w:~w: runtime error: ~w', [File, Line, Msg]).
 script_error_text(_, E, 1, Text) :-
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     format(string(Text), 'error: ~w', [Msg]).

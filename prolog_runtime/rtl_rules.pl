@@ -31,7 +31,8 @@ program file too, so del_event_rule/1 removes those as well.
 :- use_module(library(readutil)).
 :- use_module(rtl_ele).
 :- use_module(rtl_library, [rtl_target_program/2]).
-:- use_module(rtl_sandbox, [rtl_check_rule/4]).
+:- use_module(rtl_sandbox, [rtl_check_rule/5]).
+:- use_module(rtl_error_text).
 :- use_module(rtl_timers, [rtl_timers_drop/2]).
 
 :- meta_predicate ins_event_rule(:), del_event_rule(:).
@@ -94,7 +95,7 @@ rule_label(Rule, Label) :-
 %
 %   Add the rules in Text, the output of `retalisc compile-rules`, to Module. Nothing is
 %   added when one of their ids is in use, or when one of them is refused by
-%   rtl_check_rule/4 (rtl_sandbox.pl): a rule added at run time comes from outside the
+%   rtl_check_rule/5 (rtl_sandbox.pl): a rule added at run time comes from outside the
 %   program file, so every goal it could run must be safe.
 
 rtl_install_rules(M, Text, Ids) :-
@@ -106,11 +107,14 @@ rtl_install_rules(M, Text, Ids) :-
                            context(ins_event_rule/1, 'a rule with this id exists; delete it first')))
            ;   true
            )),
-    forall(member(rule(Id, Stores, Clauses), Rules),
-           rtl_check_rule(M, Id, Stores, Clauses)),
-    forall(member(rule(Id, Stores, Clauses), Rules),
+    maplist(checked_rule(M), Rules, Checked),
+    forall(member(rule(Id, Stores, Clauses), Checked),
            install_rule(M, Id, Stores, Clauses)),
     reschedule_sweep.
+
+% The clauses of a rule as rtl_check_rule/5 guards them.
+checked_rule(M, rule(Id, Stores, Clauses), rule(Id, Stores, Guarded)) :-
+    rtl_check_rule(M, Id, Stores, Clauses, Guarded).
 
 install_rule(M, Id, Stores, Clauses) :-
     forall(member(store(Name, Arity, Window), Stores),
@@ -234,8 +238,12 @@ rtl_rules_check_state(M, Added, Removed, Stores) :-
            )),
     forall(member(Rule, Added),
            (   Rule = rule(Id, RuleStores, Clauses), atom(Id), is_list(RuleStores), is_list(Clauses)
-           ->  catch(rtl_check_rule(M, Id, RuleStores, Clauses), error(Unsafe, _),
-                     throw(rtl_rules_state("its rule ~q added at run time is refused: ~q", [Id, Unsafe])))
+           ->  catch(rtl_check_rule(M, Id, RuleStores, Clauses, Guarded), error(Unsafe, _),
+                     throw(rtl_rules_state("its rule ~q added at run time is refused: ~q", [Id, Unsafe]))),
+               (   Guarded =@= Clauses              % installed in their guarded form
+               ->  true
+               ;   throw(rtl_rules_state("its rule ~q added at run time is not as the rule check leaves it", [Id]))
+               )
            ;   throw(rtl_rules_state("~q is not a compiled rule", [Rule]))
            )),
     findall(Name/Arity,
@@ -385,6 +393,10 @@ compile_in_subprocess(M, Prefix, Text, Clauses) :-
     ;   split_string(Messages, "", "\n", [Message]),
         throw(error(retalis_compile_error(Message), context(ins_event_rule/1, Text)))
     ).
+
+rtl_error_text:runtime_error_text(retalis_compile_error(Message), Text) :-
+    string(Message),
+    format(string(Text), "the event rule does not compile: ~s", [Message]).
 
 :- multifile prolog:error_message//1.
 prolog:error_message(retalis_compile_error(Message)) -->

@@ -47,12 +47,13 @@ makes the write atomic (temporary file, fsync, rename) and checks a checksum bef
 restoring (retalisc/driver/recovery.py).
 */
 
+:- use_module(rtl_error_text, [rtl_error_text/2]).
 :- use_module(library(lists)).
 :- use_module(library(apply)).
 :- use_module(library(pairs)).
 :- use_module(rtl_ele).
 :- use_module(rtl_rules, [rtl_rules_state/3, rtl_rules_check_state/4, rtl_rules_restore_state/3]).
-:- use_module(rtl_sandbox, [rtl_check_goal/3]).
+:- use_module(rtl_sandbox, [rtl_check_goal/4]).
 :- use_module(rtl_io, [rtl_too_deep_text/2]).
 :- use_module(library(readutil)).
 
@@ -401,7 +402,8 @@ read_snapshot(File, Terms) :-
           E,
           (   E = error(rtl_state_error(_), _)
           ->  throw(E)
-          ;   state_error("not a readable snapshot: ~W", [E, [quoted(true), max_depth(8)]])
+          ;   rtl_error_text(E, Text),
+              state_error("not a readable snapshot: ~s", [Text])
           )).
 
 % Data only: read_term/3 runs nothing (no directives, no term expansion) and uses no
@@ -622,14 +624,16 @@ program_module(ctx(M, _, _, _), V) :-
 
 %   A goal kept in the state (a condition, a timer, a postponed query): a call of one of the
 %   program's own predicates (its code, trusted like the program file), or a goal that
-%   passes the check of untrusted goals (a condition that came from outside passed it then).
+%   passes the check of untrusted goals unchanged (a condition that came from outside passed
+%   it then, and was kept in its guarded form: rtl_check_goal/4).
 state_goal(M, G) :-
     callable(G),
     (   G \= _:_,
         predicate_property(M:G, implementation_module(M)),
         \+ predicate_property(M:G, built_in)
     ->  true
-    ;   catch(rtl_check_goal(query([]), M, G), _, fail)
+    ;   catch(rtl_check_goal(query([]), M, G, Guarded), _, fail),
+        Guarded =@= G                       % kept as it was guarded when it came in
     ).
 
 % A clause reference '$rtl_clause'(PI, Index) points at a clause the snapshot holds, or
@@ -822,6 +826,9 @@ rtl_state_digest(Hash) :-
 rtl_state_digest(Program, Hash) :-
     rtl_state_capture(Program, State),
     variant_sha1(State, Hash).
+
+rtl_error_text:runtime_error_text(rtl_state_error(Message), Text) :-
+    text_to_string(Message, Text).
 
 :- multifile prolog:error_message//1.
 prolog:error_message(rtl_state_error(Message)) -->
