@@ -77,8 +77,8 @@ state_predicate(rtl_ele, type_output_hook(data, type_output_hook)).
 state_predicate(rtl_event_types, known_type(atom, integer)).
 state_predicate(rtl_seen, generation(seen_module, data)).
 state_predicate(rtl_seen, free_generation(seen_module)).
-state_predicate(rtl_slr, instance(integer, program, atom, data, conditions, data, data, data, data)).
-state_predicate(rtl_slr, id_handle(program, atom, integer)).
+state_predicate(rtl_slr, instance(integer, program, data, data, conditions, data, data, data, data)).
+state_predicate(rtl_slr, id_handle(program, data, integer)).
 state_predicate(rtl_slr, watch_predicate(atom, integer, watch_predicate)).
 state_predicate(rtl_slr, record(integer, data, data, data)).
 state_predicate(rtl_slr, stream_memory(data, data, data, data)).

@@ -178,3 +178,33 @@ def test_run_state_whose_snapshots_are_all_changed_does_not_start_from_the_begin
     assert again.returncode == 2, message
     assert "corrupt" in message and "none of its snapshots can be used" in message
     assert "Traceback" not in message
+
+
+def test_guarded_goals_restore_and_a_crafted_unguarded_one_is_refused(tmp_path):
+    """Conditions and rules from outside are kept in the form the untrusted-goal check leaves
+    them (a catch-all catcher guarded by rtl_guard): a genuine snapshot of them restores into a
+    new load and gives the same deliveries; the same snapshot with the guard taken off (a
+    catch/3 that would catch the runtime's limits) is refused."""
+    program = "c(X) <- a(X) seq b(X).\n"
+    first = Engine.from_source(program, "guarded.rtl")
+    first.subscribe("me", "a(X)", conditions_text="[catch(X > 0, _, fail)]")
+    first.add_rules("g : d(X) <- a(X) where catch(X > 1, _, fail).")
+    first.feed_batch([("a(1)", 1)])
+    genuine = tmp_path / "guarded.state"
+    first.save_state(genuine)
+    guard = ":(rtl_guard,rtl_catch("
+    assert genuine.read_text(encoding="utf-8").count(guard) >= 2   # the condition and the rule
+    expected = [str(e) for e in first.feed_batch([("a(2)", 2), ("b(2)", 3)])]
+
+    second = Engine.from_source(program, "guarded.rtl")
+    second.restore_state(genuine)
+    assert [str(e) for e in second.feed_batch([("a(2)", 2), ("b(2)", 3)])] == expected
+
+    for kept in ("fact(rtl_subscriptions", "rules("):      # the condition; the rule's clauses
+        unguarded = tmp_path / "unguarded.state"
+        unguarded.write_text("".join(line.replace(guard, ":(system,catch(") if line.startswith(kept) else line
+                                     for line in genuine.read_text(encoding="utf-8").splitlines(True)),
+                             encoding="utf-8")
+        third = Engine.from_source(program, "guarded.rtl")
+        with pytest.raises(StateError):
+            third.restore_state(unguarded)
