@@ -36,3 +36,26 @@ def test_same_answers_as_tf2(swipl, seed):
     ops = scenario(seed)
     ours, theirs = run_both(ops, swipl)
     assert differences(ours, theirs, ops) == []
+
+
+BAGS = Path("/work/shared/data/bags")
+
+
+@pytest.mark.skipif(not (BAGS / "evo_tf_example.bag").exists(), reason="the shared test bags are not here")
+@pytest.mark.parametrize("name", ["evo_tf_example.bag", "evo_tf_example_ros2"])
+def test_a_recording_teaches_the_tree_static_links_from_tf_static(name):
+    """/tf_static's message comes in as tf_static(Msg) (ROS 1 bytes road and ROS 2 text road):
+    its link answers at any time; /tf's links only within their data."""
+    from retalisc.driver.engine import Engine
+    from retalisc.robot_io.replay import replay_bag
+
+    engine = Engine.from_source("x(A) <- y(A).\n")
+    replay_bag(engine, str(BAGS / name), out=None)
+    assert engine.query("tf_links(L), tf_records(R)") == {"L": "2", "R": "102"}
+    static = engine.query("""tf_lookup('"base_footprint"', '"base_link"', 1.0, _, S, R)""")
+    assert static["R"] == "ok" and static["S"] == "[1,0]"
+    dynamic = engine.query("""tf_lookup('"odom"', '"base_link"', 1.0, _, _, R)""")
+    assert dynamic["R"].startswith("extrapolation(past,1000000000,")
+    latest = engine.query("""tf_lookup('"odom"', '"/base_link"', latest, P, S, R)""")
+    assert latest["R"] == "ok"
+    engine.close()
