@@ -276,6 +276,10 @@ forget(H, First, Last, Latest, Buffer) :-
     ;   assertz(range(H, First, Last))
     ).
 
+nonneg_seconds(S) :-
+    must_be(number, S),
+    (   S >= 0, S =:= S -> true ; domain_error(nonneg_seconds, S) ).
+
 buffer(M, Buffer) :-
     (   buffer_ns(M, B) -> Buffer = B ; default_buffer_ns(Buffer) ).
 
@@ -286,7 +290,7 @@ buffer(M, Buffer) :-
 %   duration applies from the next transform of each frame on.
 
 tf_set_buffer(Seconds) :-
-    must_be(nonneg, Seconds),
+    nonneg_seconds(Seconds),
     current_program(M),
     Ns is round(Seconds * 1_000_000_000),
     retractall(buffer_ns(M, _)),
@@ -676,7 +680,7 @@ time_ns(T, _) :-
 tf_wait(Target, Source, Time0, Timeout, Goal) :-
     time_ns(Time0, Time),
     (   Time =:= 0 -> domain_error(tf_stamp, Time0) ; true ),
-    must_be(nonneg, Timeout),
+    nonneg_seconds(Timeout),
     (   tf_can_transform(Target, Source, ns(Time))
     ->  once(Goal)
     ;   current_program(M),

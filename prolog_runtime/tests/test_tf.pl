@@ -64,7 +64,7 @@ test(static_is_never_interpolated_nor_forgotten) :-
 
 test(buffer_forgets_old_records) :-
     tf_clear,
-    tf_set_buffer(2),
+    tf_set_buffer(2.0),
     forall(between(1, 5, T), tf_add(a, b, T, [T, 0, 0], [0, 0, 0, 1], dynamic)),
     tf_records(3),
     tf_lookup(a, b, 2, _, _, extrapolation(past, 2000000000, 3000000000, 5000000000)),
@@ -124,7 +124,7 @@ test(bad_transforms_are_ignored) :-
 test(runs_when_the_chain_has_data_past_the_time) :-
     tf_clear, retractall(seen(_)),
     tf_add(a, b, 1, [1, 0, 0], [0, 0, 0, 1], dynamic),
-    tf_wait(a, b, 2, 5, assertz(seen(2))),
+    tf_wait(a, b, 2, 5.0, assertz(seen(2))),
     tf_waiting(1),
     \+ seen(_),
     tf_add(a, b, 3, [3, 0, 0], [0, 0, 0, 1], dynamic),
