@@ -227,27 +227,20 @@ insert(dynamic, M, H, Stamp, PH, V, Q) :-
 key(H, Number, Key) :- Key is H << 32 + Number.
 
 % place(+H, +First, +Last, +Stamp, -Number): the first record with a stamp >= Stamp
+% (Last + 1 when there is none), by binary search
 place(H, First, Last, Stamp, Number) :-
-    (   First > Last
-    ->  Number = First
-    ;   Mid is (First + Last) >> 1,
-        key(H, Mid, Key),
-        record(Key, S, _, _, _),
-        (   S < Stamp
-        ->  Mid1 is Mid + 1, place(H, Mid1, Last, Stamp, Number)
-        ;   Mid0 is Mid - 1, place_le(H, First, Mid0, Stamp, Mid, Number)
-        )
-    ).
+    After is Last + 1,
+    place(H, First, Last, Stamp, After, Number).
 
-place_le(H, First, Last, Stamp, Best, Number) :-
+place(H, First, Last, Stamp, Best, Number) :-
     (   First > Last
     ->  Number = Best
     ;   Mid is (First + Last) >> 1,
         key(H, Mid, Key),
         record(Key, S, _, _, _),
         (   S < Stamp
-        ->  Mid1 is Mid + 1, place_le(H, Mid1, Last, Stamp, Best, Number)
-        ;   Mid0 is Mid - 1, place_le(H, First, Mid0, Stamp, Mid, Number)
+        ->  Mid1 is Mid + 1, place(H, Mid1, Last, Stamp, Best, Number)
+        ;   Mid0 is Mid - 1, place(H, First, Mid0, Stamp, Mid, Number)
         )
     ).
 

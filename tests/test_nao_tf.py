@@ -30,13 +30,18 @@ def poses(program, bag):
     return {key: pose for key, _, pose in derived}
 
 
-def test_same_world_poses_as_the_original(bag4):
-    mine = poses("examples/nao/nao_tf.rtl", bag4)
-    original = poses("examples/nao/nao.rtl", bag4)
+def assert_same_poses(mine, original):
+    """The same detections, at 1e-6 m and 1e-5 degree (see the module docstring)."""
     assert len(mine) >= 20 and set(mine) == set(original)
     worst_m = max(math.dist(mine[k][0], original[k][0]) for k in mine)
     worst_degree = max(math.degrees(angle_between(mine[k][1], original[k][1])) for k in mine)
     assert worst_m < 1e-6 and worst_degree < 1e-5, (worst_m, worst_degree)
+
+
+def test_same_world_poses_as_the_original(bag4):
+    mine = poses("examples/nao/nao_tf.rtl", bag4)
+    original = poses("examples/nao/nao.rtl", bag4)
+    assert_same_poses(mine, original)
 
 
 MARKER_POSE = re.compile(r"geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\[(\d+),(\d+)\],'\"([^\"]+)\"'\),"
@@ -60,7 +65,4 @@ def marker_poses(program, bag):
 def test_nao_markers_same_world_poses_as_the_original(bag4):
     mine = marker_poses("examples/nao_markers/nao_markers_tf.rtl", bag4)
     original = marker_poses("examples/nao_markers/nao_markers.rtl", bag4)
-    assert len(mine) >= 20 and set(mine) == set(original)
-    worst_m = max(math.dist(mine[k][0], original[k][0]) for k in mine)
-    worst_degree = max(math.degrees(angle_between(mine[k][1], original[k][1])) for k in mine)
-    assert worst_m < 1e-6 and worst_degree < 1e-5, (worst_m, worst_degree)
+    assert_same_poses(mine, original)

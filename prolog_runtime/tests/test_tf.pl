@@ -25,6 +25,10 @@ ros2(Parent, Child, Stamp, V, Q,
 
 feed(Event, T) :- rtl_input(add, Event, T, T).
 
+% along_x(+Parent, +Child, +Time, +X): a dynamic link, Child X metres along Parent's x axis
+along_x(Parent, Child, Time, X) :-
+    tf_add(Parent, Child, Time, [X, 0, 0], [0, 0, 0, 1], dynamic).
+
 :- begin_tests(tf_events, [setup(tf_clear), cleanup(tf_clear)]).
 
 test(ros1_and_ros2_messages_and_static_topic) :-
@@ -65,32 +69,32 @@ test(static_is_never_interpolated_nor_forgotten) :-
 test(buffer_forgets_old_records) :-
     tf_clear,
     tf_set_buffer(2.0),
-    forall(between(1, 5, T), tf_add(a, b, T, [T, 0, 0], [0, 0, 0, 1], dynamic)),
+    forall(between(1, 5, T), along_x(a, b, T, T)),
     tf_records(3),
     tf_lookup(a, b, 2, _, _, extrapolation(past, 2000000000, 3000000000, 5000000000)),
-    tf_add(a, b, 1, [9, 0, 0], [0, 0, 0, 1], dynamic),          % older than the buffer: ignored
+    along_x(a, b, 1, 9),          % older than the buffer: ignored
     tf_records(3),
     tf_set_buffer(10).
 
 test(repeated_stamp_keeps_the_first) :-
     tf_clear,
-    tf_add(a, b, 1, [1, 0, 0], [0, 0, 0, 1], dynamic),
-    tf_add(a, b, 1, [2, 0, 0], [0, 0, 0, 1], dynamic),
+    along_x(a, b, 1, 1),
+    along_x(a, b, 1, 2),
     tf_lookup(a, b, 1, [[X, _, _], _]),
     X =:= 1.
 
 test(late_record_is_placed_by_stamp) :-
     tf_clear,
-    tf_add(a, b, 1, [1, 0, 0], [0, 0, 0, 1], dynamic),
-    tf_add(a, b, 3, [3, 0, 0], [0, 0, 0, 1], dynamic),
-    tf_add(a, b, 2, [0, 0, 0], [0, 0, 0, 1], dynamic),
+    along_x(a, b, 1, 1),
+    along_x(a, b, 3, 3),
+    along_x(a, b, 2, 0),
     tf_lookup(a, b, 1.5, [[X, _, _], _]),
     approx(X, 0.5).
 
 test(parent_change_uses_the_older_record) :-
     tf_clear,
-    tf_add(a, c, 1, [1, 0, 0], [0, 0, 0, 1], dynamic),
-    tf_add(b, c, 2, [5, 0, 0], [0, 0, 0, 1], dynamic),
+    along_x(a, c, 1, 1),
+    along_x(b, c, 2, 5),
     tf_add(a, b, 0, [0, 0, 0], [0, 0, 0, 1], static),
     tf_parent(c, 1.5, P1), P1 == a,
     tf_parent(c, 2, P2), P2 == b,
@@ -99,8 +103,8 @@ test(parent_change_uses_the_older_record) :-
 
 test(reasons) :-
     tf_clear,
-    tf_add(a, b, 1, [1, 0, 0], [0, 0, 0, 1], dynamic),
-    tf_add(c, d, 1, [1, 0, 0], [0, 0, 0, 1], dynamic),
+    along_x(a, b, 1, 1),
+    along_x(c, d, 1, 1),
     tf_lookup(a, nowhere, 1, _, _, R1), R1 == unknown_frame(nowhere),
     tf_lookup(a, d, 1, _, _, R2), R2 == not_connected(a, d),
     tf_lookup(a, b, 2, _, _, R3), R3 == extrapolation(future, 2000000000, 1000000000, 1000000000),
@@ -110,9 +114,9 @@ test(reasons) :-
 
 test(bad_transforms_are_ignored) :-
     tf_clear,
-    tf_add(a, a, 1, [1, 0, 0], [0, 0, 0, 1], dynamic),
+    along_x(a, a, 1, 1),
     tf_add(a, b, 1, [1, 0, 0], [0, 0, 0, 2], dynamic),
-    tf_add(a, b, 1, [nan, 0, 0], [0, 0, 0, 1], dynamic),
+    along_x(a, b, 1, nan),
     tf_records(0).
 
 :- end_tests(tf_semantics).
@@ -123,11 +127,11 @@ test(bad_transforms_are_ignored) :-
 
 test(runs_when_the_chain_has_data_past_the_time) :-
     tf_clear, retractall(seen(_)),
-    tf_add(a, b, 1, [1, 0, 0], [0, 0, 0, 1], dynamic),
+    along_x(a, b, 1, 1),
     tf_wait(a, b, 2, 5.0, assertz(seen(2))),
     tf_waiting(1),
     \+ seen(_),
-    tf_add(a, b, 3, [3, 0, 0], [0, 0, 0, 1], dynamic),
+    along_x(a, b, 3, 3),
     seen(2),
     tf_waiting(0),
     tf_wait(a, b, 1.5, 5, assertz(seen(1.5))),
