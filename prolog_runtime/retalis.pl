@@ -39,6 +39,7 @@
 :- reexport(rtl_policy).
 :- reexport(rtl_timers).
 :- reexport(rtl_sliding).
+:- reexport(rtl_tf).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 

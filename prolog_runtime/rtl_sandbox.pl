@@ -135,6 +135,16 @@ builtin(any,  rtl_sync:rtl_history_complete(_, _), []).
 builtin(any,  rtl_sync:rtl_up_to_date(_), []).
 builtin(any,  rtl_sync:rtl_input_ended, []).
 builtin(any,  rtl_sync:rtl_goal_set(_, _, _), []).
+builtin(any,  rtl_tf:tf_lookup(_, _, _, _), []).                 % the tf library: read-only
+builtin(any,  rtl_tf:tf_lookup(_, _, _, _, _, _), []).
+builtin(any,  rtl_tf:tf_can_transform(_, _, _), []).
+builtin(any,  rtl_tf:tf_buffer(_), []).
+builtin(any,  rtl_tf:tf_frames(_), []).
+builtin(any,  rtl_tf:tf_parent(_, _, _), []).
+builtin(any,  rtl_tf:tf_links(_), []).
+builtin(any,  rtl_tf:tf_records(_), []).
+builtin(any,  rtl_tf:tf_waiting(_), []).
+builtin(rule, rtl_tf:tf_wait(_, _, _, _, Goal), [Goal]).
 builtin(any,  rtl_math:G, []) :-
     (   var(G) -> true ; predicate_property(rtl_math:G, exported) ).
 builtin(rule, rtl_ele:rtl_derived(_, _, _), []).
