@@ -23,6 +23,8 @@
                          rtl_drop_output/0, rtl_stop_signal/2, error_text/2]).
 :- reexport(rtl_ele).
 :- reexport(rtl_io).
+:- use_module(rtl_error_text, [rtl_error_text/2, rtl_term_text/2]).
+:- use_module(rtl_guard, [rtl_is_reserved_ball/1]).
 :- reexport(rtl_time).
 :- reexport(rtl_raise).
 :- reexport(rtl_subscriptions).
@@ -39,6 +41,7 @@
 :- reexport(rtl_policy).
 :- reexport(rtl_timers).
 :- reexport(rtl_sliding).
+:- reexport(rtl_tf).
 
 /** <module> Retalis runtime: the entry points of a compiled program
 
@@ -315,14 +318,15 @@ rtl_action(Goal) :-
     (   rtl_action_context(Goal, catch(Goal, Error, action_error(Error)))
     ->  true
     ;   rtl_halt_check,                         % a halt in the action made it fail
-        print_message(warning, format("action failed: ~q", [Goal]))
+        rtl_term_text(Goal, Text),
+        print_message(warning, format("action failed: ~s", [Text]))
     ).
 
 % The step limit and halts are not the action's own errors: they end the event.
 action_error(Error) :-
-    (   ( Error == inference_limit_exceeded ; Error = error(rtl_step_limit(_), _) ; Error = rtl_halted(_)
-        ; Error = rtl_signal(_) )
+    (   rtl_is_reserved_ball(Error)
     ->  throw(Error)
-    ;   print_message(warning, Error),
+    ;   rtl_error_text(Error, Text),
+        print_message(warning, format("~s", [Text])),
         fail
     ).

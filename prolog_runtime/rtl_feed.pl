@@ -19,6 +19,7 @@
 :- use_module(library(lists)).
 :- use_module(rtl_ele).
 :- use_module(rtl_io).
+:- use_module(rtl_error_text, [rtl_error_text/2]).
 :- use_module(rtl_lines, [rtl_read_line/3, rtl_split_lines/2, rtl_utf8_line/2, rtl_long_line/4]).
 :- use_module(rtl_horizon).
 :- use_module(rtl_time).
@@ -481,18 +482,9 @@ change_rules(Change, Text, Reason) :-
           Error,
           error_text(Error, Reason)).
 
-% One line of text for an error term, as print_message/2 would say it.
-error_text(error(rtl_step_limit(Max), _), Text) :- !,
-    format(string(Text), "more than ~D steps (--max-steps)", [Max]).
+% One line of text for an error term (rtl_error_text.pl: never interpreted).
 error_text(Error, Text) :-
-    (   catch('$messages':translate_message(Error, Lines, []), _, fail)
-    ->  with_output_to(string(S), print_message_lines(current_output, '', Lines)),
-        split_string(S, "\n", " ", Parts0),
-        exclude(==(""), Parts0, Parts),
-        atomic_list_concat(Parts, " ", Text0),
-        atom_string(Text0, Text)
-    ;   format(string(Text), "~q", [Error])
-    ).
+    rtl_error_text(Error, Text).
 
 % The end of the input: run or drop the postponed synchronized matches. Errors are
 % reported through Report (called as call(Report, 0, Outcome)).

@@ -7,7 +7,8 @@
             rtl_write_event_line/4,      % +Stream, +Event, +Start, +End
             rtl_json_string_escape/2,    % +Text, -Escaped
             rtl_use_fast_reader/1,       % +Bool
-            rtl_fast_reader_used/0
+            rtl_fast_reader_used/0,
+            rtl_too_deep_text/2          % +Text, +MaxDepth
           ]).
 
 /** <module> Event JSON Lines in and out (docs/runtime.md, "Event input" and "Output")
@@ -510,11 +511,14 @@ syntax_reason(E, E).
 depth_reason(MaxDepth, Reason) :-
     format(string(Reason), "term nested deeper than ~D levels", [MaxDepth]).
 
-%   too_deep_text(+Text, +MaxDepth) is semidet.
+%!  rtl_too_deep_text(+Text, +MaxDepth) is semidet.
 %
 %   Text opens more than MaxDepth brackets without closing them (quotes are not skipped,
 %   so brackets in quoted text count too). Checked before reading: the reader recurses on
 %   the C stack. A text no longer than MaxDepth cannot be that deep.
+
+rtl_too_deep_text(Text, MaxDepth) :-
+    too_deep_text(Text, MaxDepth).
 
 too_deep_text(Text, MaxDepth) :-
     string_length(Text, Length),

@@ -4,11 +4,14 @@ replacement) is `snapshot.py`, below the Engine.
 """
 from __future__ import annotations
 
+import fcntl
 import hashlib
+import inspect
 import json
 import os
 import sys
 import time
+from functools import wraps
 from pathlib import Path
 from typing import Optional, Union
 
@@ -38,6 +41,12 @@ def file_sha256(path: Union[str, Path]) -> str:
 DEFAULT_SNAPSHOT_EVENTS = 200_000   # input lines between two snapshots
 DEFAULT_SNAPSHOT_SECONDS = 60.0     # or seconds of processing, whichever comes first
 KEEP_SNAPSHOTS = 2                  # the newest complete ones; older ones are deleted
+LOCK_FILE = "lock"                  # in DIR: held (fcntl) by the process that uses DIR
+
+# lock file (real path) -> its open file, for the state directories this process holds. A
+# POSIX record lock belongs to the process and goes when any descriptor of the file is closed,
+# so each lock file is opened once per process.
+_HELD_LOCKS: dict = {}
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
@@ -55,13 +64,40 @@ class StateDir:
     - `journal.jsonl`: one line per batch consumed since the newest snapshot (input and output
       positions reached), emptied at each snapshot. For a file the journal of what was consumed
       is this position: a restart replays the input file from the snapshot's position, so the
-      journal is for inspection (how far the run got), and a line cut by a crash is harmless.
+      journal is for inspection (how far the run got), and a line cut by a crash is harmless;
+    - `lock`: locked (`lock`) by the process that runs with DIR, so that a second one is refused.
     """
 
     def __init__(self, directory: Union[str, Path]):
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self.journal_path = self.directory / "journal.jsonl"
+        self.lock_path = self.directory / LOCK_FILE
+
+    def lock(self) -> None:
+        """Take the directory for this process until `unlock` (or its end: the operating system
+        drops the lock of a killed process, so a stale lock never blocks a restart); the file
+        holds the process id, for the message. RecoveryError when another process holds it."""
+        key = os.path.realpath(self.lock_path)
+        if key in _HELD_LOCKS:
+            return
+        fd = os.open(key, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.read(fd, 32).decode("ascii", "replace").strip()
+            os.close(fd)
+            raise RecoveryError(f"{self.directory} is in use by another process"
+                                f"{f' (pid {holder})' if holder.isdigit() else ''}: one process per "
+                                f"state directory") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode("ascii"))
+        _HELD_LOCKS[key] = fd
+
+    def unlock(self) -> None:
+        fd = _HELD_LOCKS.pop(os.path.realpath(self.lock_path), None)
+        if fd is not None:
+            os.close(fd)
 
     def _manifests(self):
         return sorted(self.directory.glob("snapshot-*.json"), reverse=True)
@@ -230,9 +266,11 @@ def restore_newest(directory: StateDir, engine, input_key: str, input_name: str,
     """Restore the newest complete snapshot of `directory` into `engine` (an Engine or an
     ActiveQueries: identity() and restore_state()) and return its manifest, or None for a
     directory without snapshots (a first run). Incomplete snapshots are deleted first, corrupt
-    ones reported on `log` and passed over. RecoveryError for a snapshot of another program or
-    runtime version, or of a run over another input (the manifest's `input_key` is not
-    `input_name`)."""
+    ones (not matching their checksum) reported on `log` and passed over. RecoveryError for a
+    snapshot of another program or runtime version, of a run over another input (the
+    manifest's `input_key` is not `input_name`), that the runtime refuses (anything in it that
+    is not the declared state, prolog_runtime/rtl_state.pl), or when every snapshot is corrupt:
+    nothing is restored then, and the run does not start from the beginning."""
     directory.remove_incomplete()
     identity = engine.identity()
     found, problems = directory.snapshots()
@@ -247,12 +285,12 @@ def restore_newest(directory: StateDir, engine, input_key: str, input_name: str,
                                 f"not {input_name}")
         try:
             engine.restore_state(state_path)
-        except StateError as error:
-            print(f"retalisc: {error}; trying an older snapshot", file=log)
-            continue
+        except StateError as error:     # it matches its checksum: made so, not damaged
+            raise RecoveryError(f"refused: {error}") from None
         return manifest
-    if found:
-        raise RecoveryError(f"{directory.directory}: no snapshot could be restored")
+    if problems:                        # snapshots there, none usable: not a first run
+        raise RecoveryError(f"{directory.directory}: none of its snapshots can be used (above); move or delete "
+                            f"the directory to start again from the beginning")
     return None
 
 
@@ -286,6 +324,20 @@ def take_snapshot(directory: StateDir, engine, sink, manifest: dict, log):
         return None
 
 
+def _holding_the_state_directory(run):
+    """`run` (its argument `state` a state directory) holds the directory's lock while it runs."""
+    @wraps(run)
+    def held(*args, **kwargs):
+        directory = StateDir(inspect.signature(run).bind(*args, **kwargs).arguments["state"])
+        directory.lock()
+        try:
+            return run(*args, **kwargs)
+        finally:
+            directory.unlock()
+    return held
+
+
+@_holding_the_state_directory
 def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batch_size: int = 2000,
                     snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
                     snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,
@@ -439,6 +491,7 @@ DEFAULT_AQ_SNAPSHOT_COMMANDS = 10_000   # script commands between two snapshots 
 DEFAULT_AQ_BATCH = 100                  # commands run per call into the runtime
 
 
+@_holding_the_state_directory
 def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], display_name: Optional[str] = None,
                        batch_size: int = DEFAULT_AQ_BATCH, snapshot_commands: int = DEFAULT_AQ_SNAPSHOT_COMMANDS,
                        snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, log=None) -> int:
@@ -492,6 +545,7 @@ def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], displ
     return status
 
 
+@_holding_the_state_directory
 def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path], options=None,
                         batch_size: int = 2000, snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
                         snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,

@@ -17,7 +17,7 @@ from typing import Union
 
 from ..runtime_location import runtime_dir
 
-STATE_FORMAT = "retalisc-state-1"
+STATE_FORMAT = "retalisc-state-1"     # of the manifest; the state file's is rtl_state.pl's state_version/1
 
 
 class StateError(Exception):

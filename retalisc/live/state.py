@@ -105,6 +105,7 @@ class LiveState:
     # ---- start: restore and replay (called by LiveNode.start before live input is taken) -------
 
     def recover(self, node) -> None:
+        self.directory.lock()                   # until close (or the end of the process)
         restored = restore_newest(self.directory, node.engine, "live", node.transport.name, _LogStream(self.log))
         if self.out_path is not None:
             self.raw = open_output(self.out_path, restored)
@@ -281,6 +282,7 @@ class LiveState:
         self.journal.close()
         if self.raw is not None:
             self.raw.close()
+        self.directory.unlock()
 
 
 def _subscribers(node) -> dict:

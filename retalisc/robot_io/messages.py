@@ -16,7 +16,9 @@ The convention is the one of the 2015 Retalis release, which its programs expect
 
 With `wrap_topic`, the term is wrapped in the topic name (the thesis's `topic(Msg)`): `/tf`
 gives `tf(tf2_msgs__0__TFMessage(...))`, `/arm/status` gives `arm__0__status(...)` (leading
-slash dropped, the others spelled `__0__`).
+slash dropped, the others spelled `__0__`). Without it, a tf message on `/tf_static` is still
+wrapped, as `tf_static(tf2_msgs__0__TFMessage(...))`: the topic is what tells static
+transforms from dynamic ones (tf2's rule), and the runtime's tf library reads it from there.
 
 An event is stamped with the message's `header.stamp`; a message without a header, or whose
 stamp is zero (not set), is stamped with the time of the bag record.
@@ -78,6 +80,18 @@ def type_functor(msgtype: str) -> str:
 def topic_functor(topic: str) -> str:
     """The functor of `--wrap-topic`: `/tf` -> `tf`, `/arm/status` -> `arm__0__status`."""
     return "__0__".join(part for part in topic.split("/") if part) or "topic"
+
+
+TF_MESSAGE_TYPES = ("tf2_msgs__0__TFMessage", "tf__0__tfMessage")
+
+
+def static_tf_wrapper(topic: str, msgtype: str, convention: Convention) -> Optional[str]:
+    """`tf_static` for a tf message on a static tf topic (`/tf_static`, `/ns/tf_static`) when
+    the convention does not wrap topics anyway: the event is then `tf_static(Msg)`, which the
+    runtime's tf library (prolog_runtime/rtl_tf.pl) takes as static links; None otherwise."""
+    if convention.wrap_topic or topic.rstrip("/").rsplit("/", 1)[-1] != "tf_static":
+        return None
+    return "tf_static" if type_functor(msgtype) in TF_MESSAGE_TYPES else None
 
 
 def _fields(typestore, msgtype: str) -> List[Tuple[str, tuple]]:
@@ -155,6 +169,8 @@ class MessageConverter:
         text = self.term(msg, msgtype)
         if self.convention.wrap_topic:
             text = f"{atom_text(topic_functor(topic))}({text})"
+        elif static_tf_wrapper(topic, msgtype, self.convention):
+            text = f"tf_static({text})"
         stamp = self.stamp_ns(msg, msgtype)
         return text, (stamp or record_ns) / 1_000_000_000     # int / int: correctly rounded
 

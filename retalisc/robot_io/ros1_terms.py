@@ -23,7 +23,7 @@ from typing import Callable, Dict, List, Optional, Tuple
 
 from .data_terms import atom_text
 from .messages import (ARRAY, BASE, HEADER_TYPE, NAME, SEQUENCE, TIME_TYPES, Convention, _fields,
-                       topic_functor, type_functor)
+                       static_tf_wrapper, topic_functor, type_functor)
 from ..driver.engine import Ros1Bytes
 
 _BASES = {"float32": ("f32", 4), "float64": ("f64", 8), "int8": ("i8", 1), "byte": ("i8", 1),
@@ -53,7 +53,7 @@ class Ros1Terms:
         """(Ros1Bytes, time in seconds) of the message `raw` (its ROS 1 bytes) recorded on
         `topic` at `record_ns`; None when the type takes the text road. The time is the
         header stamp unless `record_stamp` (or there is none, or it is zero)."""
-        key = (msgtype, topic if self.convention.wrap_topic else "")
+        key = (msgtype, topic if self.convention.wrap_topic or static_tf_wrapper(topic, msgtype, self.convention) else "")
         entry = self._types.get(key, False)
         if entry is False:
             entry = self._types[key] = self._register(msgtype, topic)
@@ -83,6 +83,8 @@ class Ros1Terms:
         text = self._message(msgtype)
         if self.convention.wrap_topic:
             text = f"w({atom_text(topic_functor(topic))},{text})"
+        elif static_tf_wrapper(topic, msgtype, self.convention):
+            text = f"w({static_tf_wrapper(topic, msgtype, self.convention)},{text})"
         return text
 
     def _register(self, msgtype: str, topic: str):
