@@ -31,7 +31,7 @@ program file too, so del_event_rule/1 removes those as well.
 :- use_module(library(readutil)).
 :- use_module(rtl_ele).
 :- use_module(rtl_library, [rtl_target_program/2]).
-:- use_module(rtl_sandbox, [rtl_check_rule/5, rtl_rule_pred_name/2]).
+:- use_module(rtl_sandbox, [rtl_check_rule/5, rtl_rule_pred_name/2, rtl_store_pred/2]).
 :- use_module(rtl_error_text).
 :- use_module(rtl_timers, [rtl_timers_drop/2]).
 
@@ -253,7 +253,7 @@ rtl_rules_check_state(M, Added, Removed, Stores) :-
                 \+ ( member(Id, Removed), rtl_rule_pred_name(Id, Name) )
             ;   member(rule(_, RuleStores, _), Added),
                 member(Store, RuleStores),
-                rtl_sandbox:store_pred(Store, Name/Arity)
+                rtl_store_pred(Store, Name/Arity)
             ),
             Stores0),
     sort(Stores0, Stores).

@@ -3,7 +3,8 @@
             rtl_check_rule/5,           % +Module, +Id, +Stores, +Clauses, -Guarded
             rtl_unsafe_message/2,       % +Error, -Message
             rtl_replace_goals/4,        % +Called, +Guarded, +Term0, -Term
-            rtl_rule_pred_name/2        % +Id, +Name
+            rtl_rule_pred_name/2,       % +Id, +Name
+            rtl_store_pred/2            % +Store, -Name/Arity
           ]).
 
 /** <module> Untrusted goals: what code from outside the program file may run
@@ -275,6 +276,13 @@ own_store(Id, kept(Live, A, KA, KB, Order)) :-
 own_names(Id, Names, Arity) :-
     integer(Arity),
     forall(member(N, Names), ( atom(N), rtl_rule_pred_name(Id, N) )).
+
+%!  rtl_store_pred(+Store, -PI) is nondet.
+%
+%   The predicates of a rule's store declaration (rtl_rules.pl).
+
+rtl_store_pred(Store, PI) :-
+    store_pred(Store, PI).
 
 store_pred(store(N, A, _), N/A).
 store_pred(record(N, A, _, _), N/A).

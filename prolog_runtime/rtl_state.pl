@@ -94,6 +94,13 @@ state_predicate(rtl_sync, declared_delay(program, atom, integer, data)).
 state_predicate(rtl_sync, learned_delay(program, atom, integer, data)).
 state_predicate(rtl_sync, updated_until(program, atom, integer, data)).
 state_predicate(rtl_sync, goal_set_of(program, atom, integer, data, data)).
+state_predicate(rtl_tf, frame(program, data, integer, atom)).          % the tf library's tree
+state_predicate(rtl_tf, handle_frame(integer, data, atom)).
+state_predicate(rtl_tf, static_record(integer, data, data, data, data)).
+state_predicate(rtl_tf, range(integer, integer, integer)).
+state_predicate(rtl_tf, record(integer, data, data, data, data)).
+state_predicate(rtl_tf, buffer_ns(program, integer)).
+state_predicate(rtl_tf, waiting(program, data, data, data, data, data, goal)).
 state_predicate(rtl_time_index, entry(data, data, data, data, data)).
 state_predicate(rtl_time_index, low_bucket(data, data, data, data)).
 state_predicate(rtl_timers, timer(data, data, data, goal)).
@@ -141,6 +148,7 @@ global_family('$rtl_slr_bounds_', data).
 % The hooks the runtime registers (rtl_add_output_hook/1, rtl_add_type_output_hook/2).
 state_hook(rtl_subscriptions:deliver).
 state_hook(rtl_sync:clock_moved).
+state_hook(rtl_tf:observe).
 state_hook(rtl_sync:availability).
 state_hook(rtl_trace:log_event).
 state_hook(rtl_trace:trace_phase).
@@ -602,7 +610,7 @@ arg_ok(watch_predicate, _, _, V) :- watch_name(V).
 arg_ok(bounds_global, _, _, V) :- atom(V), sub_atom(V, 0, _, _, '$rtl_slr_bounds_').
 arg_ok(output_hook, _, _, V) :- ground(V), state_hook(V).
 arg_ok(type_output_hook, _, _, V) :-
-    (   V = rtl_slr:observe(W) -> watch_name(W) ; ground(V), state_hook(V) ).
+    (   V = Q:observe(W), Q == rtl_slr -> watch_name(W) ; ground(V), state_hook(V) ).   % data: a hook term
 arg_ok(goal, Ctx, _, V) :-
     nonvar(V), V = Q:G, program_module(Ctx, Q), state_goal(Q, G).
 arg_ok(conditions, Ctx, _-_-Head, V) :-    % run in the program module the fact names

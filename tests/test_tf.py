@@ -59,3 +59,26 @@ def test_a_recording_teaches_the_tree_static_links_from_tf_static(name):
     latest = engine.query("""tf_lookup('"odom"', '"/base_link"', latest, P, S, R)""")
     assert latest["R"] == "ok"
     engine.close()
+
+
+def test_the_tree_is_kept_in_a_snapshot(tmp_path):
+    """The tf store is state (prolog_runtime/rtl_state.pl declares it): a snapshot restored into
+    a new load answers every lookup as the engine that wrote it."""
+    from retalisc.driver.engine import Engine
+
+    program = "x(A) <- y(A).\n"
+    first = Engine.from_source(program, "tf_state.rtl")
+    for goal in ("tf_add(map, odom, 1.0, [0, 0, 0], [0, 0, 0, 1], static)",
+                 "tf_add(odom, base, 1.0, [1, 0, 0], [0, 0, 0, 1], dynamic)",
+                 "tf_add(odom, base, 2.0, [3, 0, 0], [0, 0, 0.7071067811865476, 0.7071067811865476], dynamic)"):
+        first.bridge.call_text(f"rtl_tf:{goal}, R = \"\"", "R")
+    first.feed_batch([("y(1)", 2.0)])
+    lookups = ["tf_lookup(map, base, 1.5, P, _, R)", "tf_lookup(map, base, latest, P, _, R)",
+               "tf_lookup(map, base, 0.5, _, _, R)", "tf_records(R), tf_links(P)"]
+    expected = [first.query(q) for q in lookups]
+    assert expected[0]["R"] == "ok" and expected[2]["R"].startswith("extrapolation(past")
+    path = tmp_path / "tf.state"
+    first.save_state(path)
+    second = Engine.from_source(program, "tf_state.rtl")
+    second.restore_state(path)
+    assert [second.query(q) for q in lookups] == expected

@@ -98,7 +98,9 @@ qualified_reference(Predicates, Modules, Module, Other, Name/Arity) :-
     sub_term(Other:Goal, Body),
     atom(Other), Other \== Module,
     memberchk(_-Other, Modules),
-    (   Goal = Name/Arity, atom(Name), integer(Arity)
+    (   Goal = PName/PArity, ( var(PName) ; var(PArity) )
+    ->  fail                                    % a pattern (current_predicate(M:N/3)), no name
+    ;   Goal = Name/Arity, atom(Name), integer(Arity)
     ->  true
     ;   callable(Goal), functor(Goal, Name, Arity)
     ).
