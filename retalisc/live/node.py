@@ -152,7 +152,7 @@ _BATCH_INDEX = re.compile(r"^event (\d+) of the batch")
 
 class LiveNode:
     def __init__(self, engine, transport: Transport, config: Optional[PubSubConfig] = None,
-                 convention: Convention = Convention(), out: Optional[IO[str]] = None,
+                 convention: Optional[Convention] = None, out: Optional[IO[str]] = None,
                  log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True),
                  linger: float = 0.0, state=None):
         from ..robot_io.bags import typestore
@@ -161,6 +161,7 @@ class LiveNode:
         self.transport = transport
         self.config = config or PubSubConfig()
         self.store = typestore("ros1_noetic" if transport.wire == "ros1" else "ros2_humble")
+        convention = convention or Convention.of_program(engine)     # the program's strings
         self.converter = MessageConverter(self.store, convention)
         # ROS 1 messages go to the runtime as bytes, which it reads in C (ros1_terms.py)
         self.ros1_terms = Ros1Terms(engine, self.store, convention) if transport.wire == "ros1" else None

@@ -1,6 +1,7 @@
 """ROS messages as Retalis events and back (thesis 2.2, Listing 2.3; docs/robot_io.md).
 
-The convention is the one of the 2015 Retalis release, which its programs expect:
+The convention is the one of the 2015 Retalis release, which its programs expect, except
+for strings:
 
 - a message is a compound term whose functor is its type with `/` spelled `__0__`
   (`geometry_msgs/PoseStamped` -> `geometry_msgs__0__PoseStamped`; ROS 2's
@@ -10,9 +11,10 @@ The convention is the one of the 2015 Retalis release, which its programs expect
   builtin_interfaces Time and Duration) are `[Sec, NSec]`;
 - integers and floats are numbers (non-finite floats are 1.0Inf, -1.0Inf, 1.5NaN), bools are
   the atoms `true` and `false`;
-- a string is an atom holding the text between double quotes, as the release wrote it:
-  frame id `/odom` is `'"/odom"'`. With `plain_strings`, the atom holds the text alone
-  (`'/odom'`).
+- a string is an atom holding its text: frame id `odom` is the atom `odom`, `/odom` is
+  `'/odom'`. Without `plain_strings` (a program that says `:- ros_strings(quoted).`, or
+  reads its rules with `compile_event_file`), the atom holds the text between double
+  quotes, as the release wrote it: `'"odom"'`.
 
 With `wrap_topic`, the term is wrapped in the topic name (the thesis's `topic(Msg)`): `/tf`
 gives `tf(tf2_msgs__0__TFMessage(...))`, `/arm/status` gives `arm__0__status(...)` (leading
@@ -62,8 +64,15 @@ class ConversionError(ValueError):
 class Convention:
     """How messages are written as terms (see the module docstring)."""
 
-    plain_strings: bool = False
+    plain_strings: bool = True
     wrap_topic: bool = False
+
+    @classmethod
+    def of_program(cls, engine, plain_strings: bool = False, wrap_topic: bool = False) -> "Convention":
+        """The convention for `engine`'s program: its strings as it says (Engine.ros_strings),
+        plain whatever it says with `plain_strings` (the --plain-strings flag)."""
+        ros_strings = getattr(engine, "ros_strings", "plain")
+        return cls(plain_strings=plain_strings or ros_strings == "plain", wrap_topic=wrap_topic)
 
 
 def type_functor(msgtype: str) -> str:

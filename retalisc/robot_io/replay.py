@@ -41,12 +41,13 @@ class BagOptions:
     typestore: str = DEFAULT_ROS2_STORE   # for ROS 2 bags without definitions
 
     @classmethod
-    def from_cli(cls, values: dict) -> "BagOptions":
+    def from_cli(cls, values: dict, engine=None) -> "BagOptions":
+        """The options of the command line, for `engine`'s program (its string convention)."""
         return cls(topics=topic_list(values.get("topics")), rate=values.get("rate"),
                    tick=values.get("bag_tick") or RATE_TICK,
                    start=values.get("bag_start") or 0.0, duration=values.get("bag_duration"),
-                   convention=Convention(plain_strings=bool(values.get("plain_strings")),
-                                         wrap_topic=bool(values.get("wrap_topic"))),
+                   convention=Convention.of_program(engine, bool(values.get("plain_strings")),
+                                                    bool(values.get("wrap_topic"))),
                    stamp=values.get("stamp") or "header",
                    typestore=values.get("bag_typestore") or DEFAULT_ROS2_STORE)
 
@@ -413,7 +414,7 @@ def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
     from . import MissingDependency
 
     try:
-        return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values), out_bag=values.get("out_bag"),
+        return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values, engine), out_bag=values.get("out_bag"),
                           foxglove=values.get("foxglove"), **run_options)
     except MissingDependency as error:
         click.echo(f"error: {error}", err=True)
