@@ -106,9 +106,8 @@ def release_string(text: str) -> str:
 
 
 def plain_string(text: str) -> str:
-    if text.isprintable() and "'" not in text and "\\" not in text:
-        return "'" + text + "'"
-    return quote_atom(text)
+    """A string field as the atom of its text, written as writeq writes it (`odom`, `'/odom'`)."""
+    return atom_text(text)
 
 
 def _float_list(values) -> str:
