@@ -14,7 +14,7 @@ pytest.importorskip("rosbags")
 from retalisc.driver.engine import Engine  # noqa: E402
 from retalisc.robot_io.bags import Recording  # noqa: E402
 from retalisc.robot_io.messages import Convention, MessageConverter  # noqa: E402
-from retalisc.robot_io.replay import BagOptions, replay_bag  # noqa: E402
+from retalisc.robot_io.replay import replay_bag  # noqa: E402
 from retalisc.robot_io.ros1_terms import Ros1Terms  # noqa: E402
 
 # One link/2 event per transform, kept in memory `links` (a ROS 1 header has a seq first).
@@ -29,12 +29,10 @@ memorize(link(F, C), [], link(F, C), links, 1000).
 BAGS = ["evo_tf_example.bag", "evo_tf_example_ros2"]
 
 
-def replayed(program: str, name: str, tmp_path, **options) -> Engine:
+def replayed(program: str, name: str, tmp_path) -> Engine:
+    """The whole bag replayed into the program; without options, strings are as it says."""
     engine = Engine.from_source(program, "strings.rtl")
-    out = tmp_path / "out.jsonl"
-    convention = Convention.of_program(engine)
-    assert replay_bag(engine, str(shared_bag(name)), str(out), BagOptions(topics=["/tf"], convention=convention),
-                      progress=False) == 0
+    assert replay_bag(engine, str(shared_bag(name)), str(tmp_path / "out.jsonl"), progress=False) == 0
     return engine
 
 

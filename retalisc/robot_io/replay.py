@@ -253,11 +253,12 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     read. A message whose processing raises an error is reported with its topic and number,
     counted as failed, and the replay goes on. `clock` paces a replay with a rate (default:
     the wall clock). `trace_report()`, if given, returns text printed on standard error before
-    the detections per rule and the summary (the counts of `--trace`)."""
+    the detections per rule and the summary (the counts of `--trace`). Without `options`,
+    strings are as the program says (Engine.ros_strings)."""
     from ..driver.bridge import PrologError
     from ..driver.run import ConsumerFiles, detections_line
 
-    options = options or BagOptions()
+    options = options or BagOptions(convention=Convention.of_program(engine))    # the program's strings
     name = str(path)
     bag = open_recording(path, options)
     if bag is None:
