@@ -150,7 +150,7 @@ def test_the_release_convention_on_the_nao_types(engine):
     assert bytes_road == text_road
     assert bytes_road["event"].startswith("tf2_msgs__0__TFMessage([geometry_msgs__0__TransformStamped("
                                           "std_msgs__0__Header(3,[1413748205,5],'\"/odom\"'),'\"/base_link\"',")
-    assert bytes_road["end"] == 1500.000000123           # no header: the record time
+    assert bytes_road["end"] == 1413748205_000000005 / 1e9    # no header: its first transform's stamp
     empty_text, empty_bytes = both_roads(engine, T["std_msgs/msg/Empty"](), "std_msgs/msg/Empty")
     assert empty_bytes == empty_text and empty_bytes["event"] == "std_msgs__0__Empty"
 
