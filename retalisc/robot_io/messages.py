@@ -436,6 +436,8 @@ def _no_stamp(msg) -> int:
     return 0
 
 
+CLOCK_TOPIC = "/clock"          # rosgraph_msgs/Clock: a simulation's time
+
 CLOCK_JUMP = 3600.0
 """A step of the event clock larger than this many seconds (an hour, either way) between two
 messages is warned about, once a run: two clocks are mixed (sim time and wall time)."""

@@ -23,7 +23,7 @@ from typing import IO, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 import click
 
 from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
-from .messages import ConversionError, Convention, EventClock, MessageConverter
+from .messages import CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from .ros1_terms import Ros1Terms
 
 
@@ -150,9 +150,6 @@ def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
             report(record.topic, number, str(rejected))
             continue
         yield text, clock.time(carried, record.time_ns, record.topic, where), record
-
-
-CLOCK_TOPIC = "/clock"          # rosgraph_msgs/Clock: the simulation's time
 
 
 def _clock_seconds(bag: Recording, record: Record) -> float:
