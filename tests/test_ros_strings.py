@@ -91,3 +91,18 @@ def test_a_program_in_the_two_file_form_is_quoted_unless_it_says_otherwise(tmp_p
     modes = {name: compile_file(str(tmp_path / name)).unit.settings.ros_strings
              for name in ("goals.txt", "plain.txt", "one.rtl")}
     assert modes == {"goals.txt": "quoted", "plain.txt": "plain", "one.rtl": "plain"}
+
+
+def test_the_cli_answers_a_query_with_odom_with_plain_atoms(tmp_path):
+    from click.testing import CliRunner
+
+    from retalisc.cli import main
+
+    program = tmp_path / "links.rtl"
+    program.write_text(LINKS)
+    result = CliRunner().invoke(main, ["run", str(program), "--bag", str(shared_bag("evo_tf_example.bag")),
+                                       "--query", "1715000000", "mem(links, link(odom, C))"])
+    assert result.exit_code == 0, result.output
+    (line,) = [json.loads(line) for line in result.stdout.splitlines() if line.startswith('{"query"')]
+    assert line["status"] == "answered" and line["answers"]
+    assert {answer["C"] for answer in line["answers"]} == {"base_footprint"}
