@@ -113,3 +113,31 @@ def test_stamp_record_puts_everything_on_the_record_clock():
     c.clock(12.0)
     assert c.time(0.0, 6_000_000_000, "/a", "b:/a#2") == 6.0
     assert warnings == []
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "mcap"])
+def test_a_recording_with_a_clock_stamps_the_messages_without_a_time_by_it(tmp_path, fmt, capsys):
+    """/clock (sim time, 100-102 s) recorded on the wall clock with std_msgs/String status
+    messages: each status is at the latest /clock, on both roads (ROS 1 bytes, ROS 2 text),
+    and also when --topics leaves /clock out; nothing warns."""
+    from retalisc.robot_io.bags import typestore, write_bag
+
+    store = typestore("ros1_noetic" if fmt == "ros1" else "ros2_humble")
+    T = store.types
+    wall = 1_778_234_353_000_000_000
+    records = []
+    for k in range(3):
+        records.append(("/clock", "rosgraph_msgs/msg/Clock", wall + k * 10**9,
+                        T["rosgraph_msgs/msg/Clock"](clock=T["builtin_interfaces/msg/Time"](sec=100 + k, nanosec=0))))
+        records.append(("/status", "std_msgs/msg/String", wall + k * 10**9 + 500_000_000,
+                        T["std_msgs/msg/String"](data=f"s{k}")))
+    bag = write_bag(tmp_path / ("c.bag" if fmt == "ros1" else "c_mcap"), fmt, store, records)
+    for topics in (None, ["/status"]):
+        engine = Engine.from_source("", "clock.rtl")
+        engine.set_flag("echo_input", "true")
+        out = tmp_path / "out.jsonl"
+        assert replay_bag(engine, str(bag), str(out), BagOptions(topics=topics), progress=False) == 0
+        status = [json.loads(line) for line in out.read_text().splitlines() if "String" in line]
+        assert [(line["event"], line["start"]) for line in status] == [
+            ("std_msgs__0__String(s0)", 100.0), ("std_msgs__0__String(s1)", 101.0), ("std_msgs__0__String(s2)", 102.0)]
+    assert "jumps" not in capsys.readouterr().err
