@@ -184,3 +184,31 @@ def test_variable_met_first_inside_a_negation_in_a_condition():
     [warning] = lint(":- dynamic f/1, g/1.\nalarm(X) <- smoke(X) where (\\+ f(Z), g(Z)).\n")
     assert warning.code == "variable-bound-after-negation"
     assert warning.span.line == 2
+
+
+# ---- string-mode -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("text, found", [
+    ("b(X) <- a('\"odom\"', X).", ["string-mode"]),                      # the release's atom, plain program
+    ("memorize(tf('\"/odom\"', C, V, Q), [], tf(V, Q), m, 10).", ["string-mode"]),
+    ("b(X) <- a(odom, X).", []),
+    (":- ros_strings(quoted).\nb(X) <- a('\"odom\"', X).", []),
+    (":- ros_strings(quoted).\nb(X) <- p(std_msgs__0__Header(_, _, odom), X).", ["string-mode"]),
+    (":- ros_strings(quoted).\nb(X) <- p(std_msgs__0__Header(_, '\"odom\"'), X).", []),
+    (":- ros_strings(quoted).\nb(X) <- t(geometry_msgs__0__TransformStamped(_, base, X)).", ["string-mode"]),
+    (":- ros_strings(quoted).\nb(X) <- a(odom, X).", []),       # not a frame id: cannot tell
+])
+def test_a_string_of_the_other_mode_is_reported(text, found):
+    assert [c for c in codes(text) if c == "string-mode"] == found
+
+
+def test_the_string_mode_warning_says_what_to_write():
+    (warning,) = lint("b(X) <- a('\"odom\"', X).")
+    assert "is ever" in warning.message and "write odom" in warning.hint and "ros_strings(quoted)" in warning.hint
+    assert (warning.span.line, warning.span.column) == (1, 11)
+
+
+def test_ros_strings_takes_plain_or_quoted():
+    from retalisc.frontend.errors import RetalisSemanticError
+    with pytest.raises(RetalisSemanticError, match="ros_strings takes one of plain, quoted"):
+        compile_source(":- ros_strings(yes).\nb <- a.\n", "p.rtl")

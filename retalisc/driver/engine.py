@@ -693,6 +693,17 @@ class Engine:
             counts[rule] = int(count)
         return counts
 
+    @cached_property
+    def ros_strings(self) -> str:
+        """How the program reads a ROS message's string field (collect_settings): `plain`
+        (frame id `odom` is the atom `odom`) or `quoted`, the 2015 release's `'"odom"'`."""
+        from .bridge import GoalFailed
+
+        try:
+            return self.bridge.apply(self.module, "ele_ros_strings") if self.module else "plain"
+        except (GoalFailed, PrologError):       # not a quoted program: the fact is not there
+            return "plain"
+
     def summary(self) -> str:
         with self._lock:
             return self._call("rtl_api_summary")

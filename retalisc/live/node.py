@@ -30,8 +30,11 @@ types without a header) it is published on the companion topic `<topic>/seq` as 
 std_msgs/UInt64, right before the message (unless the middleware says that topic has no
 subscriber: an extra message costs, over rospy, about as much as the message itself).
 
-Time: an event is stamped with its message's `header.stamp`, or with the wall-clock time of
-its arrival when it has no header (or a zero stamp). A subscription or unsubscription at
+Time: one clock rule (robot_io/messages.py EventClock): an event is stamped with the time its
+message carries (its `header.stamp`, a TFMessage's first transform's), else with the latest
+`/clock` when the node subscribes to it, else with the wall-clock time of its arrival (shifted
+onto the messages' clock when they carry another one, sim time); a jump of more than an hour
+is a warning on the log, once. A subscription or unsubscription at
 `now` (or with no time) means the wall clock's now. Events later than the delay bound void
 the promise of arrival-order independence (a synchronized rule no longer waits for them), so
 the node says so when it happens, not only in its summary: after a batch, at most once every
@@ -53,7 +56,7 @@ from dataclasses import dataclass, field
 from typing import IO, Any, Callable, Dict, List, Optional, Tuple
 
 from ..robot_io.data_terms import read_data_term, write_data_term
-from ..robot_io.messages import ConversionError, Convention, MessageConverter
+from ..robot_io.messages import CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from ..robot_io.ros1_terms import Ros1Terms
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 from .state import STATEFUL_CALLS
@@ -154,16 +157,18 @@ _BATCH_INDEX = re.compile(r"^event (\d+) of the batch")
 
 class LiveNode:
     def __init__(self, engine, transport: Transport, config: Optional[PubSubConfig] = None,
-                 convention: Convention = Convention(), out: Optional[IO[str]] = None,
+                 convention: Optional[Convention] = None, out: Optional[IO[str]] = None,
                  log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True),
                  linger: float = 0.0, state=None):
         self.engine = engine
         self.transport = transport
         self.config = config or PubSubConfig()
         self.store = typestore("ros1_noetic" if transport.wire == "ros1" else "ros2_humble")
+        convention = convention or Convention.of_program(engine)     # the program's strings
         self.converter = MessageConverter(self.store, convention)
         # ROS 1 messages go to the runtime as bytes, which it reads in C (ros1_terms.py)
         self.ros1_terms = Ros1Terms(engine, self.store, convention) if transport.wire == "ros1" else None
+        self.clock = EventClock(log)             # the one clock rule (consumer thread only)
         self.out = out
         self.log = log
         self.stats = NodeStats()
@@ -328,20 +333,27 @@ class LiveNode:
             name = store_type(subscribed)
             if name not in self.store.fielddefs:
                 self._learn_type(name, definition)
-            if self.ros1_terms is not None:
-                fast = self.ros1_terms.event(data, name, topic, arrival_ns)
+            where = f"{topic}#{number}"
+            if self.ros1_terms is not None and topic != CLOCK_TOPIC:
+                fast = self.ros1_terms.event(data, name, topic, 0)
                 if fast is not None:
-                    return fast[0], fast[1], (topic, number, data, name, arrival_ns)
-            return self._text_event(topic, data, name, arrival_ns) + ((topic, number, data, name, arrival_ns),)
+                    return (fast[0], self.clock.time(fast[1], arrival_ns, topic, where),
+                            (topic, number, data, name, arrival_ns))
+            text, carried = self._text_event(topic, data, name, 0)
+            return text, self.clock.time(carried, arrival_ns, topic, where), (topic, number, data, name, arrival_ns)
         except Exception as error:       # bytes from the network are data: report, skip
             self._reject(topic, number, error)
             return None
 
     def _text_event(self, topic: str, data: bytes, name: str, arrival_ns: int) -> Tuple[str, float]:
+        """(text, the time the message carries, else `arrival_ns`); a /clock message sets the
+        run's clock (EventClock)."""
         if self.transport.wire == "ros1":
             msg = self.store.deserialize_ros1(data, name)
         else:
             msg = self.store.deserialize_cdr(data, name)
+        if topic == CLOCK_TOPIC and hasattr(getattr(msg, "clock", None), "nanosec"):
+            self.clock.clock((msg.clock.sec * 1_000_000_000 + msg.clock.nanosec) / 1_000_000_000)
         return self.converter.event(msg, name, topic, arrival_ns)
 
     def _replay_call(self, name: str, args, now: Optional[float]) -> Reply:
@@ -392,8 +404,9 @@ class LiveNode:
                 if getattr(error, "undecodable", False):     # the runtime refused the bytes: the text road
                     self.fed += index
                     topic, number, data, name, arrival_ns = events[index][2]
+                    seconds = events[index][1]          # the time the run's clock gave it
                     try:
-                        text, seconds = self._text_event(topic, data, name, arrival_ns)
+                        text, _ = self._text_event(topic, data, name, arrival_ns)
                     except Exception as reason:
                         self._reject(topic, number, reason)
                         events = events[index + 1:]

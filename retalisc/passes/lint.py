@@ -24,7 +24,12 @@ errors. The pass changes nothing in the unit but `unit.lint` and `unit.warnings`
 - `variable-bound-after-negation`: a variable met first inside `\\+ G` of a clause body or a
   condition and used by a later goal: `\\+` binds nothing, so the negation asks whether G holds
   for any value, not for the one the later goal finds (and SWI-Prolog 9.0.4 may compile such a
-  clause wrongly: `p(0) :- \\+ f(Y), e(Y, Y).` with only `e(0, 1)` stored succeeds).
+  clause wrongly: `p(0) :- \\+ f(Y), e(Y, Y).` with only `e(0, 1)` stored succeeds);
+- `string-mode`: a pattern (of an event rule, a memory or a subscription) holds a string in
+  the form the program's ROS strings are not in (collect_settings `ros_strings`): the 2015
+  release's quoted atom `'"odom"'` in a plain program, or, in a quoted program, a plain atom
+  as the frame id of a header or the child frame id of a transform. No message's string
+  field is ever that atom, so the pattern never matches one.
 
 Runs last in the event pipeline, after the checks that make a program an error.
 """
@@ -89,6 +94,7 @@ def lint_unit(unit: Unit) -> List[LintWarning]:
     found += _event_operators_in_clauses(program)
     found += _variables_bound_after_negation(program)
     found += _undefined_predicates(unit)
+    found += _string_mode(unit)
     found.sort(key=lambda w: (w.span.line, w.span.column) if w.span else (0, 0))
     return found
 
@@ -372,4 +378,57 @@ def _undefined_predicates(unit: Unit) -> List[LintWarning]:
                     "that gets here",
                     f"define {key[0]}/{key[1]} in the program (or declare it ':- dynamic {key[0]}/{key[1]}.' if "
                     "it is added while the program runs), or correct the name"))
+    return found
+
+
+# ---- strings in the other mode ---------------------------------------------------------------
+
+#: Declarations whose first argument is a pattern matched against events.
+_PATTERN_DECLARATIONS = {("memorize", 5), ("c_mem", 4), ("c_mem", 5), ("subscribe", 5), ("sub", 5),
+                         ("subscribe_between", 5)}
+
+
+def _string_mode(unit: Unit) -> List[LintWarning]:
+    patterns = [(p.term, p.span) for rule in unit.program.event_rules for p in walk_pattern(rule.pattern)
+                if isinstance(p, EventAtom)]
+    patterns += [(d.goal.args[0], d.span) for d in unit.program.declarations + unit.program.directives
+                 if isinstance(d.goal, Compound) and (d.goal.name, d.goal.arity) in _PATTERN_DECLARATIONS]
+    quoted = unit.settings.ros_strings == "quoted"
+    found = []
+    for term, fallback in patterns:
+        for atom in (_plain_frame_atoms(term) if quoted else _quoted_atoms(term)):
+            text = write_term(atom)
+            if quoted:
+                message = (f"{text} is a plain string, but this program reads ROS strings in the 2015 release's "
+                           f"quoted form ({write_term(Atom(chr(34) + atom.name + chr(34)))}): no frame id is "
+                           f"ever {text}")
+                hint = f"write {write_term(Atom(chr(34) + atom.name + chr(34)))}, or drop ros_strings(quoted)"
+            else:
+                plain = write_term(Atom(atom.name[1:-1]))
+                message = (f"{text} is a string in the 2015 release's quoted form, but this program reads ROS "
+                           f"strings as plain atoms ({plain}): no string field of a message is ever {text}")
+                hint = f"write {plain}, or add `:- ros_strings(quoted).` for a program written for the release"
+            found.append(LintWarning("string-mode", span_of(atom) or fallback, message, hint))
+    return found
+
+
+def _quoted_atoms(term) -> List[Atom]:
+    return [t for t in walk(term) if isinstance(t, Atom) and len(t.name) >= 2 and t.name[0] == t.name[-1] == '"']
+
+
+# Where a message term holds a frame id: the last argument of a header (ROS 1 has a seq
+# first), the second of a TransformStamped (its child frame id).
+_FRAME_POSITIONS = {("std_msgs__0__Header", 2): 1, ("std_msgs__0__Header", 3): 2,
+                    ("geometry_msgs__0__TransformStamped", 3): 1}
+
+
+def _plain_frame_atoms(term) -> List[Atom]:
+    found = []
+    for t in walk(term):
+        position = _FRAME_POSITIONS.get((t.name, t.arity)) if isinstance(t, Compound) else None
+        if position is not None:
+            frame = t.args[position]
+            if isinstance(frame, Atom) and frame.name != "[]" and not (
+                    len(frame.name) >= 2 and frame.name[0] == frame.name[-1] == '"'):
+                found.append(frame)
     return found

@@ -26,8 +26,9 @@ _OPTIONS = [
     click.option("--wrap-topic", is_flag=True,
                  help="With --bag: wrap each message in its topic name, topic(Msg) (/tf -> tf(...))."),
     click.option("--plain-strings", is_flag=True,
-                 help="With --bag: strings are atoms holding the text ('/odom') instead of the "
-                      "release's quoted form ('\"/odom\"')."),
+                 help="With --bag: strings are atoms holding the text ('/odom', the default) even for a "
+                      "program that asks for the release's quoted form '\"/odom\"' (ros_strings(quoted), "
+                      "compile_event_file)."),
     click.option("--stamp", type=click.Choice(STAMPS), default="header", show_default=True,
                  help="With --bag: the time of an event: its message's header.stamp (the record time "
                       "when it has none), or always the record time."),
