@@ -4,7 +4,8 @@ about or why a pattern was not detected.
 
 The rules go to the runtime as one term, `[rule(Label, Place, Head, Pattern), ...]`, with the
 pattern in the plain form rtl_trace.pl evaluates (`ev/3`, `seq/2`, ..., `where/2`, `win/2`,
-`neg/3`, `fnot/2`, `agg/3`), written by `retalisc.frontend.terms.to_prolog` and read back as
+`neg/3`, `absent/3`, `fnot/2`, `agg/3`, `sliding/5`, and `timer/2` around the pattern of a
+timer rule, whose head is then the raised event), written by `retalisc.frontend.terms.to_prolog` and read back as
 data; the event file is fed line by line so that every event is logged with its line.
 """
 from __future__ import annotations
@@ -13,9 +14,10 @@ from pathlib import Path
 from typing import Iterable, List
 
 from ..compiler import CompileResult
-from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where,
-                                Window)
+from ..frontend.program import (Absence, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
+                                Sliding, Where, Window)
 from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
+from ..passes.edbc import alarm_head
 from .engine import Engine, OutputEvent, Rejection
 from .event_lines import batch_payload, max_line_bytes, read_lines
 
@@ -43,9 +45,15 @@ def pattern_term(pattern: Pattern, counter: List[int]) -> Term:
     if isinstance(pattern, Negation):
         return Compound("neg", (pattern_term(pattern.negated, counter), pattern_term(pattern.first, counter),
                                 pattern_term(pattern.second, counter)))
+    if isinstance(pattern, Absence):
+        return Compound("absent", (pattern_term(pattern.negated, counter), pattern_term(pattern.first, counter),
+                                   Number(pattern.duration)))
     if isinstance(pattern, Aggregate):
         return Compound("agg", (pattern.function, pattern_term(pattern.pattern, counter), pattern.value))
-    raise TypeError(pattern)
+    if isinstance(pattern, Sliding):
+        return Compound("sliding", (pattern.function, pattern_term(pattern.pattern, counter), pattern.group,
+                                    Number(pattern.duration), pattern.value))
+    raise TypeError(f"rtl_trace has no form for the pattern {type(pattern).__name__}")
 
 
 def rules_text(rules: Iterable[EventRule]) -> str:
@@ -57,8 +65,11 @@ def rules_text(rules: Iterable[EventRule]) -> str:
             continue
         label = rule.label or f"r{number}"
         place = f"{Path(rule.span.file).name}:{rule.span.line}"
-        items.append("rule(" + ", ".join([to_prolog(Atom(label)), to_prolog(Atom(place)), to_prolog(rule.head),
-                                          to_prolog(pattern_term(rule.pattern, counter))]) + ")")
+        head, pattern = rule.head, pattern_term(rule.pattern, counter)
+        if alarm_head(head):                    # a timer: the raised event, D seconds after the match
+            head, pattern = head.args[0], Compound("timer", (pattern, head.args[1]))
+        items.append("rule(" + ", ".join([to_prolog(Atom(label)), to_prolog(Atom(place)), to_prolog(head),
+                                          to_prolog(pattern)]) + ")")
     return "[" + ",\n".join(items) + "]"
 
 
