@@ -73,13 +73,26 @@ rtl_trace_start("") :-
 rtl_trace_stop("") :-
     rtl_remove_output_hook(rtl_trace:log_event).
 
-%!  rtl_trace_feed_line(+Text, +LineNo, -Output) is det.
+%!  rtl_trace_feed_line(+Text, +Where, -Output) is det.
 %
-%   rtl_feed_lines/3 for one input line, its events logged under LineNo.
+%   rtl_feed_lines/3 for one input line, its events logged under Where: the line number in
+%   the event file, or a string naming a recording's message (`/tf#12`, fed as line 0).
 
 rtl_trace_feed_line(Text, Line, Output) :-
     expect_input(Text, Line),
-    rtl_feed_lines(Text, Line, Output).
+    line_number(Line, Number),
+    rtl_feed_lines(Text, Number, Output).
+
+line_number(Line, Number) :-
+    (   integer(Line) -> Number = Line ; Number = 0 ).
+
+%   where_text(+Where, -Text): "input line N" or "input message TOPIC#N".
+
+where_text(Line, Text) :-
+    (   integer(Line)
+    ->  format(string(Text), "input line ~w", [Line])
+    ;   format(string(Text), "input message ~w", [Line])
+    ).
 
 %!  rtl_trace_feed_byte_line(+Bytes, +LineNo, -Output) is det.
 %
@@ -91,7 +104,8 @@ rtl_trace_feed_byte_line(Bytes, Line, Output) :-
     ->  expect_input(Text, Line)
     ;   expect_input("", Line)
     ),
-    rtl_feed_lines(Bytes, Line, [bytes(true)], Output).
+    line_number(Line, Number),
+    rtl_feed_lines(Bytes, Number, [bytes(true)], Output).
 
 %   expect_input(+Text, +LineNo): the event the line holds is the one logged as its input.
 %   Events logged before it (timers and absences the line's time makes due) and after it
@@ -153,7 +167,8 @@ explain_entry(Rules, Seq, Depth, Seen) :-
     ;   format("~q over [~w, ~w]", [Event, Start, End])
     ),
     (   Kind == input
-    ->  format("  input line ~w~n", [Line])
+    ->  where_text(Line, Where),
+        format("  ~s~n", [Where])
     ;   memberchk(Seq, Seen)
     ->  format("  (see above)~n")
     ;   derivation(Rules, Event, Start, End, Seq, Rule, Items)
@@ -161,7 +176,8 @@ explain_entry(Rules, Seq, Depth, Seen) :-
         format("  derived by rule ~w (~w)~n", [Label, Place]),
         Depth1 is Depth + 1,
         forall(member(Item, Items), explain_item(Rules, Item, Depth1, [Seq|Seen]))
-    ;   format("  raised while processing input line ~w~n", [Line])
+    ;   where_text(Line, Where),
+        format("  raised while processing ~s~n", [Where])
     ).
 
 explain_item(Rules, Seq, Depth, Seen) :-

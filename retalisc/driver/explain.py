@@ -11,7 +11,7 @@ data; the event file is fed line by line so that every event is logged with its 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterable, List
+from typing import Iterable, List, Tuple
 
 from ..compiler import CompileResult
 from ..frontend.program import (Absence, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
@@ -81,27 +81,34 @@ class Explainer:
         self.engine = Engine.from_compiled(result)
         self.engine.bridge.once("use_module(retalis_runtime(rtl_trace))")      # constant text
         self.rules = rules_text(result.unit.program.event_rules)
-        self.rejections: List[Rejection] = []
+        self.rejections: List[Tuple[object, Rejection]] = []   # (where: line number or TOPIC#N, rejection)
         self.outputs: List[OutputEvent] = []
 
     def feed_file(self, events: str) -> None:
         """Feed the event file line by line, each event logged with its line number."""
+        with open(events, "rb") as source:             # lines read as `retalisc run` reads them
+            lines = read_lines(source, max_line_bytes(self.engine))
+            self._feed((batch_payload([raw]), number) for number, (raw, _) in enumerate(lines, start=1))
+
+    def feed_lines(self, lines: Iterable[Tuple[str, str]]) -> None:
+        """Feed event lines, each `(line, where)`, its events logged as coming from `where`
+        (a recording's messages: `TOPIC#N`)."""
+        self._feed(lines)
+
+    def _feed(self, lines) -> None:
         bridge = self.engine.bridge
         bridge.apply("rtl_trace", "rtl_trace_start")
         try:
-            with open(events, "rb") as source:         # lines read as `retalisc run` reads them
-                lines = read_lines(source, max_line_bytes(self.engine))
-                for number, (raw, _) in enumerate(lines, start=1):
-                    line = batch_payload([raw])
-                    feed = "rtl_trace_feed_byte_line" if isinstance(line, bytes) else "rtl_trace_feed_line"
-                    output = bridge.apply("rtl_trace", feed, line, number)
-                    for text in output.splitlines():
-                        if text.startswith("!"):
-                            line_no, _, rest = text[1:].partition("\t")
-                            kind, _, reason = rest.partition("\t")
-                            self.rejections.append(Rejection(int(line_no), reason, kind))
-                        elif text and not text.startswith("?"):
-                            self.outputs.append(OutputEvent.from_line(text))
+            for line, where in lines:
+                feed = "rtl_trace_feed_byte_line" if isinstance(line, bytes) else "rtl_trace_feed_line"
+                output = bridge.apply("rtl_trace", feed, line, where)
+                for text in output.splitlines():
+                    if text.startswith("!"):
+                        line_no, _, rest = text[1:].partition("\t")
+                        kind, _, reason = rest.partition("\t")
+                        self.rejections.append((where, Rejection(int(line_no), reason, kind)))
+                    elif text and not text.startswith("?"):
+                        self.outputs.append(OutputEvent.from_line(text))
         finally:
             bridge.apply("rtl_trace", "rtl_trace_stop")
 
