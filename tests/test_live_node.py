@@ -168,6 +168,8 @@ def test_services_and_refusals():
     node.arrived("/v", vector(4.0))
     assert [a["X"] for a in node.query("mem(m2, geometry_msgs__0__Vector3(X, _, _))", "", True).value] == ["4.0"]
     assert node.delete_memory("m2").ok and not node.delete_memory("m2), halt, (x").ok
+    gone = node.query("mem(m2, geometry_msgs__0__Vector3(X, _, _))", "", True)      # deleted: an error naming it
+    assert not gone.ok and "no memory instance m2" in gone.error
     assert node.delete_output_subscription(reply.value).ok
     assert not node.add_input_subscription("/v", "geometry_msgs/Point").ok      # already, as another type
     assert node.delete_input_subscription("/v").ok and not node.delete_input_subscription("/v").ok
