@@ -188,6 +188,22 @@ def test_services_and_refusals():
     assert node.stats.errors == 0
 
 
+def test_the_summary_counts_the_service_calls_clients_made():
+    """The node's own set-up (subscribing to the configured topics, advertising the outputs)
+    is not a service call; a transport without services (ROS 2 over DDS, Zenoh) shows none."""
+    node, _ = make_node(config="<publish_subscribe><subscribe_to name='/v' msg_type='geometry_msgs/Vector3'/>"
+                               "<publish_to name='out' msg_type='geometry_msgs/Point'/></publish_subscribe>")
+    try:
+        assert node.stats.calls == 0
+        node.query("true", "")
+        assert not node.delete_input_subscription("/nothing").ok          # a refused request is a call too
+        assert node.stats.calls == 2
+        assert node.stats.summary("ros").endswith("; 2 service calls")
+        assert "service" not in node.stats.summary("ros2", services=False)
+    finally:
+        node.close()
+
+
 def test_an_event_that_raises_does_not_stop_the_batch():
     program = "bad(X) <- geometry_msgs__0__Vector3(X, _, _) where X > 1, atom_length(f(X), _).\n" \
               "pos(X) <- geometry_msgs__0__Vector3(X, _, _).\n"
