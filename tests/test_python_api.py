@@ -200,3 +200,12 @@ def test_context_manager_on_an_exception_drops_pending_work():
             raise KeyError("boom")
     assert engine.closed
     assert future.exception().kind == "dropped"
+
+
+def test_the_echo_of_an_input_is_marked_and_told_from_a_derived_event():
+    with Engine.from_source("b(X) <- a(X).\na(X) <- c(X).\n", "echo_mark.rtl") as engine:
+        engine.set_flag("echo_input", "true")
+        out = engine.feed("c(1)", 1) + engine.feed("a(2)", 2)
+    assert [(o.event, o.input) for o in out] == [("c(1)", True), ("a(1)", False), ("b(1)", False),
+                                                 ("a(2)", True), ("b(2)", False)]
+    assert all(('"input": true' in o.line) == o.input for o in out)

@@ -54,7 +54,8 @@ _unique_module = unique_module_name
 @dataclass(frozen=True)
 class OutputEvent:
     """One output line: `event` is the term text (writeq), `consumer` is set for subscription
-    deliveries, `op` is "add" or "retract"; or, with `op` "answer", the result of a synchronized
+    deliveries, `input` is True for the echo of an input event (`echo_input`), `op` is "add"
+    or "retract"; or, with `op` "answer", the result of a synchronized
     query: `answer` is then a `QueryAnswer` (query id, at, status, answers, message; `query`
     holds the same as its JSON object) and `event` is empty.
 
@@ -70,6 +71,7 @@ class OutputEvent:
     op: str = "add"
     line: str = ""
     query: Optional[dict] = None     # op "answer": the result line of a synchronized query
+    input: bool = False              # the echo of an input event (`echo_input`, `--echo-input`)
 
     @cached_property
     def answer(self) -> Optional[QueryAnswer]:
@@ -113,7 +115,8 @@ class OutputEvent:
         data = json.loads(line)
         if "query" in data:
             return cls("", data["at"], data["at"], None, "answer", line, data)
-        return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line)
+        return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line,
+                   input=data.get("input") is True)
 
 
 # An output line as the runtime writes it for an event with integer times, no consumer and no
