@@ -41,8 +41,9 @@ language (docs/language.md, "Patterns"): rules come from the compiler as terms
 `rule(Label, Place, Head, Pattern)`, Pattern built from `ev(Event, Start, End)`,
 `seq(P, Q)` (and the other binary operators), `where(P, Goal)`, `check(P, Goal)`,
 `win(P, Seconds)`, `neg(N, P1, P2)`, `absent(N, P, Seconds)`, `fnot(P, N)`,
-`agg(Function, P, Value)`, `sliding(Function, P, Group, Seconds, Value)`, and `timer(P, Delay)`
-for the pattern of a timer rule (`alarm(E, Delay) <- P`, whose head is then E).
+`agg(Function, P, Value)`, `sliding(Function, P, Group, Seconds, Value)`, `timer(P, Delay)`
+for the pattern of a timer rule (`alarm(E, Delay) <- P`, whose head is then E) and
+`sync(P, Query)` for that of a synchronized rule (its head the synchronized event).
 Conditions run in the program module.
 */
 
@@ -260,6 +261,8 @@ match(M, B, timer(P, Delay), S, E, [I, note(Note)]) :-
     catch(D is Delay, _, fail),
     E is E1 + D,
     format(string(Note), "(raised ~w s after the match ended)", [D]).
+match(M, B, sync(P, _Query), S, E, [I, note("(a synchronized rule: derived once its query could be answered)")]) :-
+    match(M, B, P, S, E, I).
 match(M, B, sliding(F, P, G, D, V), T, T, [Items, note(Note)]) :-
     copy_term(G-P, G1-P1),
     distinct(G1-T, ( match(M, B, P1, _, E0, _), ( T = E0 ; T is E0 + D ) )),
@@ -389,6 +392,11 @@ part(M, Names, timer(P, Delay), node(_, Text, Count, [NP])) :- !,
     node_count(NP, Count),
     named(Names, Delay, DelayText),
     text(Text, "timer of ~s s: one per match, raised when the clock reaches it", [DelayText]).
+part(M, Names, sync(P, Query), node(_, Text, Count, [NP])) :- !,
+    part(M, Names, P, NP),
+    node_count(NP, Count),
+    named(Names, Query, QueryText),
+    text(Text, "synchronized: the query ~s once the memories it reads are complete", [QueryText]).
 part(M, Names, sliding(F, P, G, D, V), node(_, Text, Count, [NP])) :- !,
     part(M, Names, P, NP),
     count_matches(M, sliding(F, P, G, D, V), Count),

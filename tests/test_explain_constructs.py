@@ -1,5 +1,6 @@
 """`retalisc explain` on one small program per construct of docs/language.md ("Patterns",
-"Absence and timers", "Sliding aggregates by group", "Actions and raising events"): each
+"Absence and timers", "Sliding aggregates by group", "Actions and raising events", and the
+synchronized rules of slr.md): each
 derived `h` is explained by its rule, and `--why-not` walks every part, so a construct the
 explainer has no form for fails here rather than with a traceback for a user."""
 from __future__ import annotations
@@ -52,6 +53,8 @@ CONSTRUCTS = {
     "action": ("h(X) do true <- a(X).", "h(_)"),
     "action after": ("h(X) <- a(X) do true.", "h(_)"),
     "prolog seq": ("h(X) <- a(X) seq prolog(X > 0).", "h(_)"),
+    "synchronized rule": ("c_mem(m, a(_)-[], 10, inf).\nsyncronized(h(X), prev(m, a(X)^_, T), [[m, T]]) <- b(_)^T.",
+                          "h(_)"),
     "raised event": ("null do new_event(r(X)) <- a(X).\nh(X) <- r(X).", "h(_)"),
 }
 

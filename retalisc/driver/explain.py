@@ -4,8 +4,8 @@ about or why a pattern was not detected.
 
 The rules go to the runtime as one term, `[rule(Label, Place, Head, Pattern), ...]`, with the
 pattern in the plain form rtl_trace.pl evaluates (`ev/3`, `seq/2`, ..., `where/2`, `win/2`,
-`neg/3`, `absent/3`, `fnot/2`, `agg/3`, `sliding/5`, and `timer/2` around the pattern of a
-timer rule, whose head is then the raised event), written by `retalisc.frontend.terms.to_prolog` and read back as
+`neg/3`, `absent/3`, `fnot/2`, `agg/3`, `sliding/5`, and `timer/2` or `sync/2` around the
+pattern of a timer or synchronized rule, whose head is then the raised event), written by `retalisc.frontend.terms.to_prolog` and read back as
 data; the event file is fed line by line so that every event is logged with its line.
 """
 from __future__ import annotations
@@ -61,12 +61,14 @@ def rules_text(rules: Iterable[EventRule]) -> str:
     items = []
     counter = [0]
     for number, rule in enumerate(rules, start=1):
-        if rule.synchronized is not None or rule.head == Atom("null"):
+        if rule.head == Atom("null") and rule.synchronized is None:
             continue
         label = rule.label or f"r{number}"
         place = f"{Path(rule.span.file).name}:{rule.span.line}"
         head, pattern = rule.head, pattern_term(rule.pattern, counter)
-        if alarm_head(head):                    # a timer: the raised event, D seconds after the match
+        if rule.synchronized is not None:       # synchronized(E, Query, SyncConds): E once Query can run
+            head, pattern = rule.synchronized.args[0], Compound("sync", (pattern, rule.synchronized.args[1]))
+        elif alarm_head(head):                  # a timer: the raised event, D seconds after the match
             head, pattern = head.args[0], Compound("timer", (pattern, head.args[1]))
         items.append("rule(" + ", ".join([to_prolog(Atom(label)), to_prolog(Atom(place)), to_prolog(head),
                                           to_prolog(pattern)]) + ")")
