@@ -116,7 +116,7 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
             signal.signal(sig, handler)
         if sink is not None and sink is not sys.stdout:
             sink.close()
-    click.echo(node.stats.summary(transport.name), err=True)
+    click.echo(node.stats.summary(transport.name, transport.offers_services), err=True)
     click.echo(engine.summary(), err=True)
     return status
 

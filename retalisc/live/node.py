@@ -91,15 +91,17 @@ class NodeStats:
     errors: int = 0
     calls: int = 0
 
-    def summary(self, transport: str) -> str:
+    def summary(self, transport: str, services: bool = True) -> str:
+        """The node's summary line; the count of service calls (requests a client made, not the
+        node's own set-up) only for a transport that offers services."""
         topics = ", ".join(f"{t} {n:,}" for t, n in sorted(self.received.items()))
         out = ", ".join(f"{t} {n:,}" for t, n in sorted(self.published.items()))
         rejected = sum(self.rejected.values())
         return (f"{transport}: {sum(self.received.values()):,} messages in"
                 f"{': ' + topics if topics else ''}; {rejected:,} rejected, {self.errors:,} errors; "
                 f"{sum(self.published.values()):,} published{': ' + out if out else ''}"
-                f"{f', {self.unpublished:,} not publishable' if self.unpublished else ''}; "
-                f"{self.calls:,} service calls")
+                f"{f', {self.unpublished:,} not publishable' if self.unpublished else ''}"
+                f"{f'; {self.calls:,} service calls' if services else ''}")
 
 
 class Transport:
@@ -108,6 +110,7 @@ class Transport:
 
     wire = "cdr"
     name = "transport"
+    offers_services = False  # the node's services are reachable over this middleware (ROS 1)
     attaches_seq = False     # publish(..., seq=N) carries the output number with the message itself
     # `flush` makes sure what was published is not lost with the process; when it cannot
     # (Zenoh), a node with --state keeps the outputs of the last moments in its snapshots and
@@ -199,12 +202,12 @@ class LiveNode:
         if self.state is not None:     # restore and replay before the live input queued meanwhile
             self.state.recover(self)
         self._thread.start()
-        for spec in self.config.subscribe:
-            reply = self.call(self._add_input, spec.name, spec.msgtype)
+        for spec in self.config.subscribe:          # the node's own set-up: not service calls
+            reply = self.call(self._add_input, spec.name, spec.msgtype, request=False)
             if not reply.ok:
                 raise ValueError(reply.error)
         for spec in self.config.publish:
-            self.call(self._advertise, spec.name, spec.msgtype)
+            self.call(self._advertise, spec.name, spec.msgtype, request=False)
 
     def _advertise(self, topic: str, msgtype: str) -> Reply:
         if store_type(msgtype) not in self.store.fielddefs:
@@ -251,13 +254,15 @@ class LiveNode:
         (ROS 1), for types the node does not know."""
         self._queue.put((topic, data, msgtype, definition, time.time_ns()))
 
-    def call(self, function: Callable[..., Reply], *args, timeout: float = CALL_TIMEOUT) -> Reply:
+    def call(self, function: Callable[..., Reply], *args, timeout: float = CALL_TIMEOUT,
+             request: bool = True) -> Reply:
         """Run `function(*args)` in the consumer thread, after what arrived before; its Reply.
-        Called from the consumer thread itself, it runs at once."""
+        Called from the consumer thread itself, it runs at once. `request`: a service request
+        (counted in `stats.calls`), not the node's own set-up."""
         if threading.current_thread() is self._thread:
-            return self._run_call(function, args)
+            return self._run_call(function, args, request)
         future: Future = Future()
-        self._queue.put((function, args, future))
+        self._queue.put((function, args, future, request))
         try:
             return future.result(timeout)
         except Exception as error:          # a timeout: the node is overloaded or stopped
@@ -279,11 +284,11 @@ class LiveNode:
             while True:
                 if item is _STOP:
                     stop = True
-                elif len(item) == 3:
+                elif len(item) == 4:
                     self._feed(pending)
                     pending = []
-                    function, args, future = item
-                    future.set_result(self._run_call(function, args))
+                    function, args, future, request = item
+                    future.set_result(self._run_call(function, args, request))
                 else:
                     event = self._event(*item)
                     if event is not None:
@@ -303,8 +308,9 @@ class LiveNode:
             if stop:
                 return
 
-    def _run_call(self, function, args) -> Reply:
-        self.stats.calls += 1
+    def _run_call(self, function, args, request: bool = True) -> Reply:
+        if request:
+            self.stats.calls += 1
         name = getattr(function, "__name__", "")
         if self.state is not None and name in STATEFUL_CALLS:
             now = time.time()

@@ -21,6 +21,14 @@ errors. The pass changes nothing in the unit but `unit.lint` and `unit.warnings`
   earlier event of the other, and a rule without window keeps its partial matches forever,
   so each event costs more than the one before (not reported under the `recent` and
   `chronological` policies, which consume partners);
+- `new-event-at-the-clock`: an action of an event rule calls `new_event/1` (directly or
+  through the program's predicates): the raised event is stamped with the clock (the latest
+  event time processed), not with the time of the match that raised it, which differs as soon
+  as the triggering event comes late (language.md, "Actions and raising events");
+- `one-event-per-solution`: a `where` (or `check`, `event_multiply`) condition holds a
+  disjunction, or a goal with several solutions (member/2, between/3, a predicate of several
+  clauses, ...), that binds no variable of the head: one event is derived per solution, so the
+  same event comes several times;
 - `variable-bound-after-negation`: a variable met first inside `\\+ G` of a clause body or a
   condition and used by a later goal: `\\+` binds nothing, so the negation asks whether G holds
   for any value, not for the one the later goal finds (and SWI-Prolog 9.0.4 may compile such a
@@ -41,7 +49,7 @@ from typing import Iterable, List, Optional, Set
 from ..frontend.errors import render_at
 from ..frontend.program import (Absence, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Sliding,
                                 StaticClause, Where, Window, pattern_conditions, pattern_text, walk_pattern)
-from ..frontend.terms import Atom, Compound, Span, indicator, span_of, variables, walk
+from ..frontend.terms import Atom, Compound, Span, Term, Var, indicator, span_of, variables, walk
 from ..frontend.writer import write_term
 from .loadable import _goals, _loads_code, _program_predicates
 from .unit import Unit
@@ -92,6 +100,8 @@ def lint_unit(unit: Unit) -> List[LintWarning]:
         if unit.settings.consumption_policy == "unrestricted":
             found += _keyless_joins(rule)
     found += _event_operators_in_clauses(program)
+    found += _new_events_at_the_clock(program)
+    found += _solutions_with_the_same_head(program)
     found += _variables_bound_after_negation(program)
     found += _undefined_predicates(unit)
     found += _string_mode(unit)
@@ -289,6 +299,133 @@ def _keyless_joins(rule: EventRule) -> Iterable[LintWarning]:
             "kept forever, so each event costs more than the one before",
             "use the same variable on both sides for the thing they are about (a(X) seq b(X)), relate them "
             "with a where condition, or bound the pattern with a window: (P).Seconds")
+
+
+# ---- new_event/1 in an action -------------------------------------------------------------
+
+
+def _predicate_bodies(program) -> dict:
+    """Per predicate of the program, the bodies of its clauses."""
+    bodies: dict = {}
+    for clause in program.clauses:
+        if isinstance(clause, StaticClause):
+            key = indicator(clause.head)
+            if key is not None:
+                bodies.setdefault(key, []).append(clause.body)
+    return bodies
+
+
+def _calls_new_event_1(goal, bodies: dict, seen: Set) -> Optional[Term]:
+    """The `new_event/1` call that `goal` makes, itself or through the program's predicates."""
+    for g in _goals(goal):
+        key = indicator(g)
+        if key == ("new_event", 1):
+            return g
+        if key in bodies and key not in seen:
+            seen.add(key)
+            for body in bodies[key]:
+                if body is not None:
+                    found = _calls_new_event_1(body, bodies, seen)
+                    if found is not None:
+                        return found
+    return None
+
+
+def _new_events_at_the_clock(program) -> Iterable[LintWarning]:
+    bodies = _predicate_bodies(program)
+    for rule in program.event_rules:
+        if rule.action is None:
+            continue
+        call = _calls_new_event_1(rule.action, bodies, set())
+        if call is None:
+            continue
+        yield LintWarning(
+            "new-event-at-the-clock", span_of(call) or span_of(rule.action) or rule.span,
+            f"new_event/1 in this action stamps {write_term(call.args[0], 999)} with the clock (the latest event "
+            "time processed), not with the time of the match that raised it: a late triggering event gives "
+            "its raised event a later time",
+            "stamp it with the match's time: bind it with E^T in the pattern and call new_event(Event, T), or "
+            "new_event(Event, Sec, NSec) with a ROS stamp")
+
+
+# ---- a condition whose solutions give the same event ------------------------------------------
+
+#: Builtins that commonly have several solutions (member(X, L) with X unbound, ...).
+MULTI_SOLUTION = {("member", 2), ("between", 3), ("select", 3), ("nth0", 3), ("nth1", 3), ("append", 3),
+                  ("append", 2), ("sub_atom", 5), ("permutation", 2), ("subtract", 3), ("last", 2),
+                  ("clause", 2), ("current_op", 3), ("repeat", 0)}
+
+
+def _condition_goals(goal):
+    """The goals of a condition in order, conjunctions opened; a disjunction stays whole (an
+    if-then-else is one goal)."""
+    stack = [goal]
+    while stack:
+        g = stack.pop()
+        if isinstance(g, Compound) and g.name == "," and g.arity == 2:
+            stack.extend(reversed(g.args))
+        else:
+            yield g
+
+
+def _several_solutions(goal, clause_heads: dict) -> Optional[str]:
+    if isinstance(goal, Compound) and goal.name in (";", "|") and goal.arity == 2:
+        left = goal.args[0]
+        if isinstance(left, Compound) and left.name in ("->", "*->") and left.arity == 2:
+            return None                             # if-then-else: one branch runs
+        return "this disjunction"
+    key = indicator(goal)
+    if key in MULTI_SOLUTION:
+        return f"{key[0]}/{key[1]}"
+    heads = [h for h in clause_heads.get(key, []) if _may_match(h, goal)]
+    if len(heads) > 1:
+        return f"{key[0]}/{key[1]} ({len(heads)} clauses for this call)"
+    return None
+
+
+def _may_match(head, goal) -> bool:
+    """False when an argument of the call and of the clause head are different constants
+    (first-argument style selection: the clause cannot run for this call)."""
+    if not (isinstance(head, Compound) and isinstance(goal, Compound)):
+        return True
+    for a, b in zip(head.args, goal.args):
+        if isinstance(a, Compound) and a.name == "^" and isinstance(b, Compound) and b.name == "^":
+            a, b = a.args[0], b.args[0]
+        if isinstance(a, Compound) and isinstance(b, Compound):
+            if (a.name, a.arity) != (b.name, b.arity) or not _may_match(a, b):
+                return False
+        elif not isinstance(a, Var) and not isinstance(b, Var) and not isinstance(a, Compound) \
+                and not isinstance(b, Compound) and a != b:
+            return False
+    return True
+
+
+def _solutions_with_the_same_head(program) -> Iterable[LintWarning]:
+    clause_heads: dict = {}
+    for clause in program.clauses:
+        if isinstance(clause, StaticClause) and indicator(clause.head) is not None:
+            clause_heads.setdefault(indicator(clause.head), []).append(clause.head)
+    for rule in program.event_rules:
+        if rule.synchronized is not None:
+            continue
+        head = {v.name for v in variables(rule.head)}
+        for p in walk_pattern(rule.pattern):
+            if not isinstance(p, (Where, Check)):
+                continue
+            known = _mentioned(p.pattern)
+            for goal in _condition_goals(p.condition):
+                names = {v.name for v in variables(goal)}
+                what = _several_solutions(goal, clause_heads)
+                new = {n for n in names - known if not n.startswith("_") or n == "_"}
+                if what is not None and not (new & head) and (new or what == "this disjunction"):
+                    yield LintWarning(
+                        "one-event-per-solution", span_of(goal) or p.span,
+                        f"{what} in the condition can hold more than once for one match and binds no variable "
+                        f"of the head {write_term(rule.head, 999)}: the rule derives one event per solution, "
+                        "so the same event several times",
+                        "make the condition hold at most once (once(G), or an if-then-else (C -> true ; D) "
+                        "for 'either'), or put the variable it binds into the head")
+                known |= names
 
 
 # ---- a variable met first inside a negation -------------------------------------------------
