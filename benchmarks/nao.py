@@ -165,7 +165,7 @@ def measure(spec: dict) -> dict:
             "derived": stats.get("derived", 0), "series": series, "steady": steady, "latency": latency}
 
 
-POSE = re.compile(r"geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\d+,\[(\d+),(\d+)\],'\"([^\"]+)\"'\)")
+POSE = re.compile(r"geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\d+,\[(\d+),(\d+)\],'?\"?([^,\"')]+)\"?'?\)")
 
 
 def output_latency(bag_path: str, dues: List[float], outputs: List[tuple]) -> dict:
@@ -249,7 +249,7 @@ def run_all(bag: Path, seconds: float, quick: bool, only: Optional[set]) -> dict
         res["all_tf"] = [dict(n=n, **case(with_memories(n, "tf(_, _, V, Q)", 2500, "all"), label=f"{n} x tf(_,_,V,Q)"))
                          for n in ([5, 10] if quick else [5, 10, 20])]
         res["all_tf_big"] = case(with_memories(5, "tf(_, _, V, Q)", 150000, "big"), label="5 x tf(_,_,V,Q) size 150,000")
-        res["headcam"] = [dict(n=n, **case(with_memories(n, "tf('\"Head\"', '\"CameraTop_frame\"', V, Q)", 2500, "hc"),
+        res["headcam"] = [dict(n=n, **case(with_memories(n, "tf('Head', 'CameraTop_frame', V, Q)", 2500, "hc"),
                                            label=f"{n} x head_cam"))
                           for n in ([5, 40] if quick else [5, 40, 160])]
     if want("5.9"):

@@ -80,11 +80,11 @@ split_tf([geometry_msgs__0__TransformStamped(H, Child, geometry_msgs__0__Transfo
     header(H, [S, NS], Parent),
     new_event(tf(Parent, Child, [X, Y, Z], [QX, QY, QZ, QW]), S, NS),
     split_tf(Ts).
-memorize(tf('"odom"', '"base_link"', V, Q), [], tf(V, Q), odom_base, 2500).
-memorize(tf('"base_link"', '"torso"', V, Q), [], tf(V, Q), base_torso, 2500).
-memorize(tf('"torso"', '"Neck"', V, Q), [], tf(V, Q), torso_neck, 2500).
-memorize(tf('"Neck"', '"Head"', V, Q), [], tf(V, Q), neck_head, 2500).
-memorize(tf('"Head"', '"CameraTop_frame"', V, Q), [], tf(V, Q), head_cam, 2500).
+memorize(tf(odom, base_link, V, Q), [], tf(V, Q), odom_base, 2500).
+memorize(tf(base_link, torso, V, Q), [], tf(V, Q), base_torso, 2500).
+memorize(tf(torso, 'Neck', V, Q), [], tf(V, Q), torso_neck, 2500).
+memorize(tf('Neck', 'Head', V, Q), [], tf(V, Q), neck_head, 2500).
+memorize(tf('Head', 'CameraTop_frame', V, Q), [], tf(V, Q), head_cam, 2500).
 """
 FRAMES = [("odom", "base_link"), ("base_link", "torso"), ("torso", "Neck"), ("Neck", "Head"),
           ("Head", "CameraTop_frame")]
@@ -243,7 +243,7 @@ def replay_throughput(bag: Path, program: str, repeat: int) -> dict:
 # ---- (d) live ---------------------------------------------------------------------------------------
 
 LIVE_PROGRAM = TF_PROGRAM + """
-subscribe(tf('"odom"', '"base_link"', [X, Y, Z], _), [], geometry_msgs__0__Vector3(X, Y, Z), out, s1).
+subscribe(tf(odom, base_link, [X, Y, Z], _), [], geometry_msgs__0__Vector3(X, Y, Z), out, s1).
 """
 LIVE_CONFIG = """<publish_subscribe>
   <subscribe_to name="/tf" msg_type="tf2_msgs/TFMessage"/>

@@ -60,7 +60,7 @@ def services(node: str, forbidden: str) -> dict:
     tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=None)
     tf2_pub = rospy.Publisher("/tf_other", TFMessage, queue_size=None)
     positions = rospy.Subscriber("/robot_pos", Vector3, lambda m: got.append(m.x))
-    reply = add_out(topic="robot_pos", msg_type="", event="tf(P, C, V)", conditions="[P == '\"odom\"']",
+    reply = add_out(topic="robot_pos", msg_type="", event="tf(P, C, V)", conditions="[P == odom]",
                     template="V", start="", end="")
     result["subscribe"] = [reply.ok, reply.error, reply.id]
     result["bad_subscribe"] = _pair(add_out(topic="robot_pos", msg_type="", event="tf(P, C, V)",

@@ -78,7 +78,7 @@ def test_ros1_node_topics_services_and_load(ros, tmp_path):
     # queries: all answers, one answer at a time, none; refusals are error replies
     ok, answers = r["query_all"]
     assert ok and [a["V"] for a in answers] == [f"geometry_msgs__0__Vector3({i}.0,0.0,0.0)" for i in range(5)]
-    assert answers[0]["P"] == "'\"odom\"'" and answers[0]["C"] == "'\"base\"'"
+    assert answers[0]["P"] == "odom" and answers[0]["C"] == "base"        # plain strings (docs/robot_io.md)
     assert r["query_one"][:2] == [True, True] and r["query_one"][2]["T"] == "100"
     assert r["query_none"] == [True, False]
     assert r["unsafe"][0] is False and r["unsafe"][1].startswith("unsafe:") and "shell/1" in r["unsafe"][1]
