@@ -73,7 +73,9 @@
             aq_state_kinds/2,       % +Terms, -Kinds           (rtl_state.pl: restore)
             aq_state_literal/3,     % +Kinds, +Literal, -Kind  (rtl_state.pl)
             aq_state_negations/2,   % +Kinds, +NStatesTrie     (rtl_state.pl)
-            aq_state_negated/3      % +Kinds, +How, +Literal   (rtl_state.pl)
+            aq_state_negated/3,     % +Kinds, +How, +Literal   (rtl_state.pl)
+            aq_state_conf/2,        % +Key, +Value             (rtl_state.pl)
+            aq_event_op/1           % ?Op                      (rtl_state.pl)
           ]).
 :- use_module(rtl_error_text, [rtl_error_text/2]).
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
@@ -148,20 +150,30 @@ aq_configure(Options) :-
     retractall(aq_join_off(_, _)),
     forall(member(Opt, Options), configure(Opt)).
 
-configure(mode(M)) :- !,
-    must_be(oneof([tabled, optimized, naive]), M),
-    retractall(aq_conf(mode, _)), assertz(aq_conf(mode, M)).
-configure(subsumption(B)) :- !,
-    must_be(boolean, B),
-    retractall(aq_conf(subsumption, _)), assertz(aq_conf(subsumption, B)).
-configure(dred(D)) :- !,
-    must_be(oneof([primary, basic]), D),
-    retractall(aq_conf(dred, _)), assertz(aq_conf(dred, D)).
-configure(negation(B)) :- !,
-    must_be(boolean, B),
-    retractall(aq_conf(negation, _)), assertz(aq_conf(negation, B)).
 configure(Opt) :-
-    domain_error(aq_option, Opt).
+    (   compound(Opt), Opt =.. [Key, Value], option_domain(Key, Domain)
+    ->  must_be(Domain, Value),
+        retractall(aq_conf(Key, _)), assertz(aq_conf(Key, Value))
+    ;   domain_error(aq_option, Opt)
+    ).
+
+option_domain(mode, oneof([tabled, optimized, naive])).
+option_domain(subsumption, boolean).
+option_domain(dred, oneof([primary, basic])).
+option_domain(negation, boolean).
+
+%!  aq_state_conf(+Key, +Value) is semidet.
+%
+%   Key is an option of aq_configure/1 (`aq_conf(Key, Value)`) and Value one of its values.
+aq_state_conf(Key, Value) :-
+    atom(Key), option_domain(Key, Domain), is_of_type(Domain, Value).
+
+%!  aq_event_op(?Op) is nondet.
+%
+%   The operations of a notification (emit/3): Event is Op(Answer).
+aq_event_op(answer).
+aq_event_op(add).
+aq_event_op(delete).
 
 %!  aq_set_notify(:Hook) is det.
 %
@@ -1894,10 +1906,10 @@ aq_state_code(Terms) :-
 %   The predicate kinds of a snapshot (its `clause(user, '$aq_kind'(P, K), true)` terms), as
 %   pairs P-K, each checked: a stored predicate of the program (`'$aq_fact_pred'/1`, as it
 %   was compiled) has kind `fact`, or `call` once the snapshot made it mixed (an `aq_mixed`
-%   record); any other predicate has kind `call` and is one the program has now or the head
-%   of a rule record of the snapshot (aq_state_code/1 checks the rule).  Only a `fact`
-%   literal is ever called (against the stored facts); a `call` literal is answered through
-%   a table, by the generated code.  Throws aq_rule_error(Message) otherwise.
+%   record); any other predicate has kind `call` and is one a rule may define (a rule added
+%   at run time gives its head that kind, which stays when the rule is removed).  Only a
+%   `fact` literal is ever called (against the stored facts); a `call` literal is answered
+%   through a table, by the generated code.  Throws aq_rule_error(Message) otherwise.
 aq_state_kinds(Terms, Kinds) :-
     findall(P-K, member(clause(user, '$aq_kind'(P, K), true), Terms), Kinds),
     forall(member(P-K, Kinds),
@@ -1916,9 +1928,7 @@ state_kind_ok(Terms, P, K) :-
     ;   K == call,
         (   user:'$aq_kind'(P0, _)
         ->  true
-        ;   member(fact(rtl_aq, aq_rule(_, Rule, _)), Terms),
-            nonvar(Rule), Rule = (H :- _), callable(H), functor(H, N, A)
-        ->  true
+        ;   catch(aq_rule_check((P0 :- true), _), aq_rule_error(_), fail)
         )
     ).
 

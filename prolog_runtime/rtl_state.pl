@@ -26,8 +26,10 @@ else in it, is refused with `error(rtl_state_error(Message), _)` and nothing cha
 
 The program is the event program of rtl_program/1, whose state is the facts of the
 partial-match stores of its rules (ele_partial_store/2), or one given as `Module-PIs` to the
-/3 forms: an active-query program (rtl_aq_api.pl) keeps its facts, goal records and rules
-in `user` and names those predicates (their clauses are kept as they are, bodies included).
+/3 forms: an active-query program (rtl_aq_api.pl) keeps its facts, goal records, predicate
+kinds and generated rule code in `user` and names those predicates; a snapshot's kinds
+(rtl_aq:aq_state_kinds/2) and code (rtl_aq:aq_state_code/1) are checked against the program
+and the snapshot's rule records, and the literals of the rtl_aq records against those kinds.
 The program's module name may differ (an Engine loaded second in a process): its occurrences
 are renamed.
 
@@ -122,8 +124,11 @@ state_predicate(rtl_aq, aq_negq(integer, atom, aq_negated, data, data)).
 state_predicate(rtl_aq, aq_join_step(aq_literal, data, aq_literal, data)).
 state_predicate(rtl_aq, aq_join_eligible(aq_literal, data, aq_literal, data)).
 state_predicate(rtl_aq, aq_mixed(aq_stored_predicate, integer)).
+state_predicate(rtl_aq, aq_conf(atom, aq_option_value)).
+state_predicate(rtl_aq, aq_ev(data, aq_event_op, data)).      % notified: Op(Answer)
+state_predicate(rtl_aq, aq_buf(data, aq_event_op, data)).
 state_predicate(rtl_aq, Head) :-
-    member(Name/Arity, [aq_ev/3, aq_conf/2, aq_ground_facts/3, aq_buf/3, aq_warm/3, aq_dead/1,
+    member(Name/Arity, [aq_ground_facts/3, aq_warm/3, aq_dead/1,
                         aq_join_state/1, aq_join_consumers/3, aq_join_off/2, aq_fact_only/3]),
     length(Types, Arity),
     maplist(=(data), Types),
@@ -603,7 +608,7 @@ declared_types(Ctx, Mod, Name, Arity, Types) :-
 
 check_args([], [], _, _, _, _).
 check_args([Type|Types], [Arg|Args], I, Ctx, PI, Head) :-
-    (   arg_ok(Type, Ctx, PI-I-Head, Arg)
+    (   catch(arg_ok(Type, Ctx, PI-I-Head, Arg), _, fail)    % rtl_aq may not be loaded
     ->  true
     ;   state_error("a fact of ~q does not have the declared shape (argument ~w is not ~w): ~W",
                     [PI, I, Type, Head, [quoted(true), max_depth(6)]])
@@ -643,6 +648,8 @@ arg_ok(aq_negated, ctx(_, _, _, _, Kinds), _-_-aq_negq(_, How, _, _, _), V) :-  
 arg_ok(aq_stored_predicate, _, _, V) :-        % made mixed: its code is made from it
     callable(V), functor(V, N, A), functor(P, N, A), V =@= P,
     user:'$aq_fact_pred'(P).
+arg_ok(aq_option_value, _, _-_-aq_conf(Key, _), V) :- rtl_aq:aq_state_conf(Key, V).
+arg_ok(aq_event_op, _, _, V) :- atom(V), rtl_aq:aq_event_op(V).
 arg_ok(aq_nstates, ctx(_, _, _, _, Kinds), _, V) :-
     blob(V, trie), rtl_aq:aq_state_negations(Kinds, V).
 arg_ok(kept, _, Mod:Name/Arity-I-_, V) :-     % as the process has it now (a hook of the caller)

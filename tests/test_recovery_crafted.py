@@ -149,6 +149,9 @@ def aq_crafted_terms(canary: Path):
         "module_kind": "clause(user, '$aq_kind'(system:shell(_), fact), true).",
         # the code of a mixed predicate is made from its record (aq_state_code/1 accepts it)
         "mixed_predicate": "fact(rtl_aq, aq_mixed(shell(_), 7)).",
+        # an option the engine dispatches on, a notification a hook receives as Op(Answer)
+        "option_value": "fact(rtl_aq, aq_conf(mode, shell)).",
+        "notification_op": f"fact(rtl_aq, aq_ev(q, shell, \"touch {canary}\")).",
     }
 
 
@@ -176,6 +179,27 @@ def test_a_crafted_active_query_snapshot_is_refused_and_runs_nothing(tmp_path, n
     assert not canary.exists()
     aq.restore_state(genuine)
     assert "path(2,1)" in [answer.replace(" ", "") for answer in aq.answers("q")]
+
+
+def test_an_active_query_snapshot_with_a_removed_rule_restores_into_a_new_load(tmp_path):
+    """A rule added at run time gives its head predicate a kind, which stays after the rule is
+    removed: the snapshot holds that kind without a rule record, and restores."""
+    from retalisc.driver.active_queries import ActiveQueries
+
+    first = ActiveQueries.from_source(AQ_PROGRAM)
+    first.register("q", "path(1, Y)")
+    first.add_rule("near(X) :- edge(X, 2)")
+    first.register("near", "near(X)")
+    first.remove_rule("near(X) :- edge(X, 2)")
+    genuine = tmp_path / "genuine.state"
+    first.save_state(genuine)
+    assert "'$aq_kind'(near(_),call)" in genuine.read_text(encoding="utf-8")
+    second = ActiveQueries.from_source(AQ_PROGRAM)
+    second.restore_state(genuine)
+    assert second.state_digest() == first.state_digest()
+    first.assert_fact("edge(3, 4)")
+    second.assert_fact("edge(3, 4)")
+    assert second.answers("q") == first.answers("q") and second.answers("near") == first.answers("near") == []
 
 
 def test_a_crafted_negation_in_an_active_query_snapshot_is_refused(tmp_path):
