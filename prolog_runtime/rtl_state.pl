@@ -580,6 +580,8 @@ check_fact(Ctx, Map, Term0, Term, Cache0, Cache) :-
         ->  Term = clause(Mod, Head, Body), Cache = Cache0
         ;   state_error("the snapshot holds a clause of ~q with a body: a snapshot holds facts only", [PI])
         )
+    ;   Which \== all, Mod == M, memberchk(Name/Arity, Which)     % saved as clause/3, checked so
+    ->  state_error("the snapshot holds a fact term of ~q, which an active-query snapshot writes as a clause", [PI])
     ;   (   get_assoc(PI, Cache0, Types)
         ->  Cache = Cache0
         ;   declared_types(Ctx, Mod, Name, Arity, Types)
@@ -595,15 +597,13 @@ check_fact(Ctx, Map, Term0, Term, Cache0, Cache) :-
     ).
 
 declared_types(Ctx, Mod, Name, Arity, Types) :-
-    Ctx = ctx(M, Which, _, Modules, _),
+    Ctx = ctx(M, _, _, Modules, _),
     functor(Decl, Name, Arity),
     (   memberchk(Mod, Modules), state_predicate(Mod, Decl)
     ->  Decl =.. [_|Types]
     ;   ( memberchk(Mod, Modules) ; Mod == M ; seen_module(Mod) ),
         family_predicate(Ctx, Mod, Name, Arity)
     ->  family_types(Ctx, Mod, Name, Types)
-    ;   Which \== all, Mod == M, memberchk(Name/Arity, Which)
-    ->  Types = any
     ).
 
 check_args([], [], _, _, _, _).

@@ -149,6 +149,9 @@ def aq_crafted_terms(canary: Path):
         "module_kind": "clause(user, '$aq_kind'(system:shell(_), fact), true).",
         # the code of a mixed predicate is made from its record (aq_state_code/1 accepts it)
         "mixed_predicate": "fact(rtl_aq, aq_mixed(shell(_), 7)).",
+        # the same clauses written as fact terms (a genuine snapshot writes them as clause/3)
+        "kind_as_fact_term": "fact(user, '$aq_kind'(shell(_), fact)).",
+        "rule_code_as_fact_term": f"fact(user, '$aq_final'(path(A, B), C, s9(C, A, B), fact, edge(A, B), {shell})).",
         # an option the engine dispatches on, a notification a hook receives as Op(Answer)
         "option_value": "fact(rtl_aq, aq_conf(mode, shell)).",
         "notification_op": f"fact(rtl_aq, aq_ev(q, shell, \"touch {canary}\")).",
