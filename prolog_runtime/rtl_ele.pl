@@ -303,7 +303,7 @@ rtl_event(Event, Start, End) :-
     nb_getval(events, N0),
     N is N0 + 1,
     nb_linkval(events, N),
-    (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
+    (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, echo(input), add) ; true ),
     (   type_output_hook(Event, Hook), call(Hook, Event, Start, End, add), fail ; true ),
     (   nb_current(rtl_output_hooks, true) -> run_hooks_of_every_type(Event, Start, End, add) ; true ),
     nb_getval(rtl_program, M),
@@ -458,7 +458,7 @@ rtl_retract_event(Event, Start, End) :-
         rtl_too_late_text(End, Retracted, Derived, Text),
         rtl_warning(Text)
     ;   rtl_count(retracted),
-        (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
+        (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, echo(input), retract) ; true ),
         run_output_hooks(Event, Start, End, retract),
         (   M:ele_untrigger(Event, Start, End), fail ; true )
     ).

@@ -569,8 +569,8 @@ list_tail_within(T, Left) :-
 
 %!  rtl_event_json(+Event, +Start, +End, +Consumer, +Op, -Json:string) is det.
 %
-%   One output line (without the newline). Consumer is `-` for none; Op is `add` or
-%   `retract`.
+%   One output line (without the newline). Consumer is `-` for none, `echo(input)` for the
+%   echo of an input event (the line then carries `"input": true`); Op is `add` or `retract`.
 
 rtl_event_json(Event, Start, End, Consumer, Op, Json) :-
     Consumer == (-), Op \== retract,
@@ -586,6 +586,8 @@ rtl_event_json(Event, Start, End, Consumer, Op, Json) :-
     ->  format(string(Json), "{\"event\": \"~s\", \"start\": ~w, \"end\": ~w}", [Escaped, S, E])
     ;   (   Consumer == (-)
         ->  ConsumerPart = ""
+        ;   Consumer == echo(input)                  % the echo of an input event (echo_input)
+        ->  ConsumerPart = ", \"input\": true"
         ;   format(string(ConsumerText), "~w", [Consumer]),
             rtl_json_string_escape(ConsumerText, C),
             format(string(ConsumerPart), ", \"consumer\": \"~s\"", [C])

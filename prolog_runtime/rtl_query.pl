@@ -53,12 +53,29 @@ rtl_query(Text, At, Limit, Answers, Error) :-
 % sandbox allows it to assert goes there, and is gone with it.
 checked_run(Limit, Tmp, Goal, At, Bindings, Answers, Error) :-
     catch(rtl_check_goal(query([Tmp]), Tmp, Goal, Guarded), Unsafe, true),
-    (   var(Unsafe)
-    ->  run(Limit, Tmp, Guarded, At, Bindings, Answers, Error)
-    ;   unsafe_message(Unsafe, Tmp, Message),
+    (   nonvar(Unsafe)
+    ->  unsafe_message(Unsafe, Tmp, Message),
         Error = unsafe(Message),
         Answers = []
+    ;   unknown_memory(Goal, Message)
+    ->  Error = failed(Message),
+        Answers = []
+    ;   run(Limit, Tmp, Guarded, At, Bindings, Answers, Error)
     ).
+
+%   unknown_memory(+Goal, -Message): Goal calls a memory query (mem, prev, next, ...) on a
+%   memory id that names no memory instance (never created, or deleted): an error naming
+%   it, not a query with no answer.
+
+unknown_memory(Goal, Message) :-
+    sub_term(T, Goal), compound(T),
+    compound_name_arity(T, Name, Arity),
+    memory_query(Name, Arity),
+    arg(1, T, Id),
+    ground(Id),
+    \+ exist_mem(Id),
+    !,
+    format(string(Message), "no memory instance ~q (never created, or deleted): ~q", [Id, Name/Arity]).
 
 % The sandbox's refusal, without the name of the temporary module.
 unsafe_message(Unsafe, Tmp, Message) :-
@@ -206,6 +223,8 @@ rtl_sync_query(Text, At, Timeout, QueryId, Error) :-
                               ( nonvar(Unsafe) -> unsafe_message(Unsafe, Tmp, Message) ; true ) )),
         (   nonvar(Unsafe)
         ->  Error = unsafe(Message)
+        ;   unknown_memory(Goal, Message)
+        ->  Error = failed(Message)
         ;   (   var(QueryId) -> flag(rtl_sync_query, Q0, Q0 + 1), QueryId is Q0 + 1 ; true ),
             (   Timeout == inf -> Until = inf ; Until is At + Timeout ),
             (   goal_reads_memory(Goal)

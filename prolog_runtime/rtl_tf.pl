@@ -452,16 +452,20 @@ stamp(Ns, [S, NS]) :-
 
 %!  tf_can_transform(+Target, +Source, +Time) is semidet.
 %
-%   True when tf_lookup/6 would give `ok` (tf2's canTransform, false for unknown frames).
+%   True when tf_lookup/6 would give `ok` (tf2's canTransform: false for unknown frames, but
+%   true for a frame and itself, known or not, as tf2 short-circuits it).
 
 tf_can_transform(Target0, Source0, Time0) :-
     frame_id(Target0, Target),
     frame_id(Source0, Source),
     time_ns(Time0, Time),
-    current_program(M),
-    frame(M, Target, _, _),
-    frame(M, Source, _, _),
-    lookup(M, Target, Source, Time, _, _, ok).
+    (   Target == Source                    % tf2 answers so before it looks at the frames
+    ->  true
+    ;   current_program(M),
+        frame(M, Target, _, _),
+        frame(M, Source, _, _),
+        lookup(M, Target, Source, Time, _, _, ok)
+    ).
 
 lookup(M, Target, Source, Time0, Acc, Time, ok) :-
     Target == Source,

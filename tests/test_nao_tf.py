@@ -44,7 +44,7 @@ def test_same_world_poses_as_the_original(bag4):
     assert_same_poses(mine, original)
 
 
-MARKER_POSE = re.compile(r"geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\[(\d+),(\d+)\],'\"([^\"]+)\"'\),"
+MARKER_POSE = re.compile(r"geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\[(\d+),(\d+)\],'?\"?([^,\"')]+)\"?'?\),"
                          r"geometry_msgs__0__Pose\(geometry_msgs__0__Point\(([^,]+),([^,]+),([^)]+)\),"
                          r"geometry_msgs__0__Quaternion\(([^,]+),([^,]+),([^,]+),([^)]+)\)\)\)")
 

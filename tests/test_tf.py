@@ -52,11 +52,11 @@ def test_a_recording_teaches_the_tree_static_links_from_tf_static(name):
     engine = Engine.from_source("x(A) <- y(A).\n")
     replay_bag(engine, str(BAGS / name), out=None)
     assert engine.query("tf_links(L), tf_records(R)") == {"L": "2", "R": "102"}
-    static = engine.query("""tf_lookup('"base_footprint"', '"base_link"', 1.0, _, S, R)""")
+    static = engine.query("""tf_lookup(base_footprint, base_link, 1.0, _, S, R)""")
     assert static["R"] == "ok" and static["S"] == "[1,0]"
-    dynamic = engine.query("""tf_lookup('"odom"', '"base_link"', 1.0, _, _, R)""")
+    dynamic = engine.query("""tf_lookup(odom, base_link, 1.0, _, _, R)""")
     assert dynamic["R"].startswith("extrapolation(past,1000000000,")
-    latest = engine.query("""tf_lookup('"odom"', '"/base_link"', latest, P, S, R)""")
+    latest = engine.query("""tf_lookup(odom, '/base_link', latest, P, S, R)""")
     assert latest["R"] == "ok"
     engine.close()
 

@@ -320,7 +320,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         from ..robot_io.replay import BagOptions
         try:
             status = recovery.run_bag_recoverable(
-                engine, bag["bag"], out, state, BagOptions.from_cli(bag), batch_size=batch_size,
+                engine, bag["bag"], out, state, BagOptions.from_cli(bag, engine), batch_size=batch_size,
                 snapshot_events=snapshot_every or recovery.DEFAULT_SNAPSHOT_EVENTS,
                 snapshot_seconds=recovery.DEFAULT_SNAPSHOT_SECONDS if snapshot_seconds is None else snapshot_seconds,
                 drop_pending=drop_pending, first_output=posted)

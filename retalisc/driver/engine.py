@@ -36,10 +36,10 @@ from ..compiler import CompileResult, compile_file, compile_source, unique_modul
 from ..runtime_rules import RulesRefused, compile_rules, compile_rules_for_the_runtime
 from . import snapshot
 from .bridge import Bridge, PrologError, ServedCallError
-from .values import Term, Time, Value, Variable, parse_term, time_value
+from .values import QueryAnswer, Term, Time, Value, Variable, parse_term, time_value
 
 __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", "PrologError", "Term",
-           "Variable", "Value", "Time"]
+           "Variable", "Value", "QueryAnswer", "Time"]
 
 Number = Union[int, float]
 
@@ -51,12 +51,15 @@ _API = "rtl_api"        # prolog_runtime/rtl_api.pl: the predicates an Engine ca
 @dataclass(frozen=True)
 class OutputEvent:
     """One output line: `event` is the term text (writeq), `consumer` is set for subscription
-    deliveries, `op` is "add" or "retract"; or, with `op` "answer", the result of a synchronized
-    query (`query` holds its JSON object: query, at, status, answers, message).
+    deliveries, `input` is True for the echo of an input event (`echo_input`), `op` is "add"
+    or "retract"; or, with `op` "answer", the result of a synchronized
+    query: `answer` is then a `QueryAnswer` (query id, at, status, answers, message; `query`
+    holds the same as its JSON object) and `event` is empty.
 
     The term is also there as data: `term` is its Python value (`Term(name, args)`, or a `str`
     for an atom), `name` and `args` its name and arguments (atoms as `str`, numbers, lists,
-    nested `Term`s), read from `event` the first time one of them is asked for."""
+    nested `Term`s), read from `event` the first time one of them is asked for. For an answer,
+    `term` and `answer` are the QueryAnswer, `name` is "answer" and `args` is `()`."""
 
     event: str
     start: Number
@@ -65,23 +68,33 @@ class OutputEvent:
     op: str = "add"
     line: str = ""
     query: Optional[dict] = None     # op "answer": the result line of a synchronized query
+    input: bool = False              # the echo of an input event (`echo_input`, `--echo-input`)
 
     @cached_property
-    def term(self) -> Value:
-        """The event term as a Python value (see `retalisc.driver.values`)."""
+    def answer(self) -> Optional[QueryAnswer]:
+        """The result of a synchronized query (op "answer"); None for an event."""
+        return QueryAnswer.from_json(self.query) if self.op == "answer" and self.query is not None else None
+
+    @cached_property
+    def term(self) -> Union[Value, QueryAnswer]:
+        """The event term as a Python value (see `retalisc.driver.values`); the QueryAnswer
+        for an answer."""
         if self.op == "answer":
-            raise AttributeError("a query answer has no event term; see `query`")
+            return self.answer
         return parse_term(self.event)
 
     @property
     def name(self) -> str:
-        """The event's name: `fire_alarm` for `fire_alarm(smoke_1, temp_1)`."""
+        """The event's name: `fire_alarm` for `fire_alarm(smoke_1, temp_1)`; "answer" for the
+        result of a synchronized query."""
+        if self.op == "answer":
+            return "answer"
         term = self.term
         return term.name if isinstance(term, Term) else str(term)
 
     @property
     def args(self) -> Tuple[Value, ...]:
-        """The event's arguments as Python values; `()` for an atom."""
+        """The event's arguments as Python values; `()` for an atom and for an answer."""
         term = self.term
         return term.args if isinstance(term, Term) else ()
 
@@ -99,7 +112,8 @@ class OutputEvent:
         data = json.loads(line)
         if "query" in data:
             return cls("", data["at"], data["at"], None, "answer", line, data)
-        return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line)
+        return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line,
+                   input=data.get("input") is True)
 
 
 # An output line as the runtime writes it for an event with integer times, no consumer and no
@@ -343,7 +357,10 @@ class Engine:
             self._call("rtl_api_set_flag", _text(name, "a flag name"), _text(value_text, "a flag value"))
 
     def on_output(self, callback: Callable[[OutputEvent], None]) -> None:
-        """Call `callback(output_event)` for every output line, in processing order."""
+        """Call `callback(output_event)` for every output line, in processing order: derived
+        events, subscription deliveries (`consumer` set), deletions (`op` "retract"), the echo
+        of inputs, and the results of synchronized queries (`op` "answer", `answer` a
+        QueryAnswer)."""
         with self._lock:
             self._callbacks.append(callback)
 
@@ -692,6 +709,17 @@ class Engine:
             rule, _, count = line.partition("\t")
             counts[rule] = int(count)
         return counts
+
+    @cached_property
+    def ros_strings(self) -> str:
+        """How the program reads a ROS message's string field (collect_settings): `plain`
+        (frame id `odom` is the atom `odom`) or `quoted`, the 2015 release's `'"odom"'`."""
+        from .bridge import GoalFailed
+
+        try:
+            return self.bridge.apply(self.module, "ele_ros_strings") if self.module else "plain"
+        except (GoalFailed, PrologError):       # not a quoted program: the fact is not there
+            return "plain"
 
     def summary(self) -> str:
         with self._lock:

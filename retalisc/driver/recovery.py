@@ -17,7 +17,7 @@ from typing import Optional, Union
 
 import click
 
-from ..robot_io.messages import MessageConverter
+from ..robot_io.messages import Convention, MessageConverter
 from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages, open_recording
 from ..robot_io.ros1_terms import Ros1Terms
 from .bridge import PrologError
@@ -560,7 +560,7 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
 
 
     log = log or sys.stderr
-    options = options or BagOptions()
+    options = options or BagOptions(convention=Convention.of_program(engine))
     directory = StateDir(state)
     selection = json.dumps({"bag": os.path.abspath(bag_path), "topics": options.topics, "start": options.start,
                             "duration": options.duration, "stamp": options.stamp,

@@ -21,6 +21,7 @@ from .ros1_services import SERVICES, service_class, substitution_class
 class Ros1Transport(Transport):
     wire = "ros1"
     name = "ros"
+    offers_services = True
 
     def __init__(self, node_name: str = "retalis", queue_size: int = 100000):
         import rospy    # optional: Debian's ROS 1, in .venv-ros
