@@ -69,7 +69,13 @@
             aq_fact_arrived/2,      % +State, +Fact            (called by generated code)
             aq_adornment/2,         % +Vars, -Mask             (called by generated code)
             aq_state_code/1,        % +Terms                   (rtl_state.pl: restore)
-            aq_code_head/1          % ?Head                    (rtl_state.pl)
+            aq_code_head/1,         % ?Head                    (rtl_state.pl)
+            aq_state_kinds/2,       % +Terms, -Kinds           (rtl_state.pl: restore)
+            aq_state_literal/3,     % +Kinds, +Literal, -Kind  (rtl_state.pl)
+            aq_state_negations/2,   % +Kinds, +NStatesTrie     (rtl_state.pl)
+            aq_state_negated/3,     % +Kinds, +How, +Literal   (rtl_state.pl)
+            aq_state_conf/2,        % +Key, +Value             (rtl_state.pl)
+            aq_event_op/1           % ?Op                      (rtl_state.pl)
           ]).
 :- use_module(rtl_error_text, [rtl_error_text/2]).
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
@@ -144,20 +150,30 @@ aq_configure(Options) :-
     retractall(aq_join_off(_, _)),
     forall(member(Opt, Options), configure(Opt)).
 
-configure(mode(M)) :- !,
-    must_be(oneof([tabled, optimized, naive]), M),
-    retractall(aq_conf(mode, _)), assertz(aq_conf(mode, M)).
-configure(subsumption(B)) :- !,
-    must_be(boolean, B),
-    retractall(aq_conf(subsumption, _)), assertz(aq_conf(subsumption, B)).
-configure(dred(D)) :- !,
-    must_be(oneof([primary, basic]), D),
-    retractall(aq_conf(dred, _)), assertz(aq_conf(dred, D)).
-configure(negation(B)) :- !,
-    must_be(boolean, B),
-    retractall(aq_conf(negation, _)), assertz(aq_conf(negation, B)).
 configure(Opt) :-
-    domain_error(aq_option, Opt).
+    (   compound(Opt), Opt =.. [Key, Value], option_domain(Key, Domain)
+    ->  must_be(Domain, Value),
+        retractall(aq_conf(Key, _)), assertz(aq_conf(Key, Value))
+    ;   domain_error(aq_option, Opt)
+    ).
+
+option_domain(mode, oneof([tabled, optimized, naive])).
+option_domain(subsumption, boolean).
+option_domain(dred, oneof([primary, basic])).
+option_domain(negation, boolean).
+
+%!  aq_state_conf(+Key, +Value) is semidet.
+%
+%   Key is an option of aq_configure/1 (`aq_conf(Key, Value)`) and Value one of its values.
+aq_state_conf(Key, Value) :-
+    atom(Key), option_domain(Key, Domain), is_of_type(Domain, Value).
+
+%!  aq_event_op(?Op) is nondet.
+%
+%   The operations of a notification (emit/3): Event is Op(Answer).
+aq_event_op(answer).
+aq_event_op(add).
+aq_event_op(delete).
 
 %!  aq_set_notify(:Hook) is det.
 %
@@ -1884,6 +1900,69 @@ aq_state_code(Terms) :-
                format(atom(M), 'a clause of ~q is not the code of a rule of the program or of the snapshot', [Name/Arity]),
                throw(aq_rule_error(M))
            )).
+
+%!  aq_state_kinds(+Terms, -Kinds:list) is det.
+%
+%   The predicate kinds of a snapshot (its `clause(user, '$aq_kind'(P, K), true)` terms), as
+%   pairs P-K, each checked: a stored predicate of the program (`'$aq_fact_pred'/1`, as it
+%   was compiled) has kind `fact`, or `call` once the snapshot made it mixed (an `aq_mixed`
+%   record); any other predicate has kind `call` and is one a rule may define (a rule added
+%   at run time gives its head that kind, which stays when the rule is removed).  Only a
+%   `fact` literal is ever called (against the stored facts); a `call` literal is answered
+%   through a table, by the generated code.  Throws aq_rule_error(Message) otherwise.
+aq_state_kinds(Terms, Kinds) :-
+    findall(P-K, member(clause(user, '$aq_kind'(P, K), true), Terms), Kinds),
+    forall(member(P-K, Kinds),
+           (   state_kind_ok(Terms, P, K)
+           ->  true
+           ;   format(atom(M), 'the snapshot gives ~W the kind ~q, which is not its kind in the program or the snapshot''s rules',
+                      [P, [quoted(true), max_depth(4)], K]),
+               throw(aq_rule_error(M))
+           )).
+
+state_kind_ok(Terms, P, K) :-
+    callable(P), P \= _:_,
+    functor(P, N, A), functor(P0, N, A), P =@= P0,
+    (   user:'$aq_fact_pred'(P0)
+    ->  (   K == fact -> true ; K == call, memberchk(fact(rtl_aq, aq_mixed(P1, _)), Terms), P1 =@= P0 )
+    ;   K == call,
+        (   user:'$aq_kind'(P0, _)
+        ->  true
+        ;   catch(aq_rule_check((P0 :- true), _), aq_rule_error(_), fail)
+        )
+    ).
+
+%!  aq_state_literal(+Kinds, +Literal, -Kind) is semidet.
+%
+%   Literal (a goal of a table, a consumer's or a query's literal, an answer) is an atom of
+%   a predicate that has Kind in Kinds (aq_state_kinds/2), or `'$aq_not'(L)` of one (Kind
+%   `neg`).  Not a module-qualified goal, not anything else.
+aq_state_literal(Kinds, Lit, Kind) :-
+    nonvar(Lit),
+    (   Lit = '$aq_not'(L)
+    ->  aq_state_literal(Kinds, L, _), Kind = neg
+    ;   callable(Lit), Lit \= _:_,
+        functor(Lit, N, A), functor(P, N, A),
+        memberchk(P-Kind, Kinds)
+    ).
+
+%!  aq_state_negations(+Kinds, +NStates) is semidet.
+%
+%   Every entry of the nstates trie of a snapshot (aq_wait_neg/4), `ns(State, Literal)` to
+%   `n(Kind, Table, Status, Derivations)`, has a Literal of its Kind (`fact`: a stored
+%   predicate, checked against the stored facts; `call`: through Table).
+aq_state_negations(Kinds, NS) :-
+    forall(trie_gen(NS, K, V),
+           (   nonvar(K), K = ns(_, Lit), nonvar(V), V = n(Kind, _, Status, D),
+               aq_state_negated(Kinds, Kind, Lit),
+               memberchk(Status, [passed, blocked]), integer(D)
+           )).
+
+%   A negated literal and how it is checked (neg_holds/3): `fact` only for a stored predicate.
+aq_state_negated(Kinds, How, Lit) :-
+    atom(How), memberchk(How, [fact, call]),
+    aq_state_literal(Kinds, Lit, Kind), Kind \== neg,
+    ( How == fact -> Kind == fact ; true ).
 
 assert_kind(P-K, Refs, [Ref|Refs]) :-
     assertz(user:'$aq_kind'(P, K), Ref).

@@ -26,8 +26,10 @@ else in it, is refused with `error(rtl_state_error(Message), _)` and nothing cha
 
 The program is the event program of rtl_program/1, whose state is the facts of the
 partial-match stores of its rules (ele_partial_store/2), or one given as `Module-PIs` to the
-/3 forms: an active-query program (rtl_aq_api.pl) keeps its facts, goal records and rules
-in `user` and names those predicates (their clauses are kept as they are, bodies included).
+/3 forms: an active-query program (rtl_aq_api.pl) keeps its facts, goal records, predicate
+kinds and generated rule code in `user` and names those predicates; a snapshot's kinds
+(rtl_aq:aq_state_kinds/2) and code (rtl_aq:aq_state_code/1) are checked against the program
+and the snapshot's rule records, and the literals of the rtl_aq records against those kinds.
 The program's module name may differ (an Engine loaded second in a process): its occurrences
 are renamed.
 
@@ -110,11 +112,24 @@ state_predicate(rtl_trace, traced_head(data, data)).
 state_predicate(rtl_trace, trace_count(data, data, data)).
 state_predicate(rtl_trace, late_rule(data, data, data)).
 state_predicate(rtl_rules, removed_rule(program, atom)).
+%   The records of active queries (rtl_aq.pl): a literal (aq_literal) is an atom of a
+%   predicate of the program or of the snapshot's rules (rtl_aq:aq_state_literal/3); what is
+%   called against the stored facts (a query or negation of kind `fact`) is of a stored one.
+state_predicate(rtl_aq, aq_tab(data, aq_literal, data, data, data)).
+state_predicate(rtl_aq, aq_tpred(data, aq_literal, data)).
+state_predicate(rtl_aq, aq_c(data, aq_literal, data)).
+state_predicate(rtl_aq, aq_agenda(data, aq_literal, data)).
+state_predicate(rtl_aq, aq_q(data, aq_query_goal, atom, data)).
+state_predicate(rtl_aq, aq_negq(integer, atom, aq_negated, data, data)).
+state_predicate(rtl_aq, aq_join_step(aq_literal, data, aq_literal, data)).
+state_predicate(rtl_aq, aq_join_eligible(aq_literal, data, aq_literal, data)).
+state_predicate(rtl_aq, aq_mixed(aq_stored_predicate, integer)).
+state_predicate(rtl_aq, aq_conf(atom, aq_option_value)).
+state_predicate(rtl_aq, aq_ev(data, aq_event_op, data)).      % notified: Op(Answer)
+state_predicate(rtl_aq, aq_buf(data, aq_event_op, data)).
 state_predicate(rtl_aq, Head) :-
-    member(Name/Arity, [aq_tab/5, aq_tpred/3, aq_c/3, aq_agenda/3, aq_q/4, aq_ev/3, aq_conf/2,
-                        aq_ground_facts/3, aq_negq/5, aq_buf/3, aq_warm/3, aq_dead/1,
-                        aq_join_step/4, aq_join_state/1, aq_join_eligible/4, aq_join_consumers/3,
-                        aq_join_off/2, aq_fact_only/3, aq_mixed/2]),
+    member(Name/Arity, [aq_ground_facts/3, aq_warm/3, aq_dead/1,
+                        aq_join_state/1, aq_join_consumers/3, aq_join_off/2, aq_fact_only/3]),
     length(Types, Arity),
     maplist(=(data), Types),
     Head =.. [Name|Types].
@@ -136,8 +151,9 @@ state_global(Key, data) :-
                  rtl_retract_position, rtl_rule_counter, rtl_seen_size, rtl_subscription_counter,
                  rtl_slr_next_expiry, rtl_sweep_after, rtl_trace_line, rtl_trace_line_seen, rtl_trace_phase,
                  rtl_trace_seq, rtl_trace_text,
-                 aq_buffer, aq_cstates, aq_dred, aq_ground, aq_joins, aq_nstates, aq_phase,
+                 aq_buffer, aq_cstates, aq_dred, aq_ground, aq_joins, aq_phase,
                  aq_registering, aq_subgoals]).
+state_global(aq_nstates, aq_nstates).     % its entries' negated literals are called
 state_global(rtl_seen_generation, seen_module).
 state_global(Key, integer) :-
     rtl_stat(Key, _).
@@ -155,7 +171,7 @@ state_hook(rtl_trace:trace_phase).
 state_hook(rtl_trace:late_event).
 
 % family_predicate(+Context, ?Module, ?Name, ?Arity): state predicates named by other state.
-family_predicate(ctx(M, _, Stores, _), M, Name, Arity) :-
+family_predicate(ctx(M, _, Stores, _, _), M, Name, Arity) :-
     member(Name/Arity, Stores).
 family_predicate(_, Module, seen, 3) :- seen_module(Module).
 family_predicate(_, Module, seen_atomic, 1) :- seen_module(Module).
@@ -487,7 +503,11 @@ check_snapshot(Terms, Identity, Program, Plan) :-
     ),
     partition_terms(Rest, TrieTerms, FactTerms, GlobalTerms, FlagTerms),
     new_tries(TrieTerms, OldM, M, Map),
-    Ctx = ctx(M, Which, Stores, Modules),
+    (   Which == all                    % active queries of this process keep their code
+    ->  findall(P-K, ( current_predicate(user:'$aq_kind'/2), user:'$aq_kind'(P, K) ), Kinds)
+    ;   catch(rtl_aq:aq_state_kinds(FactTerms, Kinds), aq_rule_error(Why0), state_error("~w", [Why0]))
+    ),
+    Ctx = ctx(M, Which, Stores, Modules, Kinds),
     empty_assoc(NoTypes),
     foldl(check_fact(Ctx, Map), FactTerms, Facts, NoTypes, _),
     check_clause_references(Facts),
@@ -495,7 +515,7 @@ check_snapshot(Terms, Identity, Program, Plan) :-
     ->  true
     ;   catch(rtl_aq:aq_state_code(Facts), aq_rule_error(Why), state_error("~w", [Why]))
     ),
-    maplist(check_global(Map), GlobalTerms, Globals),
+    maplist(check_global(Ctx, Map), GlobalTerms, Globals),
     maplist(check_flag, FlagTerms, Flags),
     Plan = plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map).
 
@@ -540,7 +560,7 @@ reblob_data(_, T, _) :-
 % state predicate (or a clause of a predicate an active-query program names) with arguments
 % of its declared types; Types caches the declared types of each predicate met.
 check_fact(Ctx, Map, Term0, Term, Cache0, Cache) :-
-    Ctx = ctx(M, Which, _, _),
+    Ctx = ctx(M, Which, _, _, _),
     Map = map(OldM, _, ById),
     (   Term0 = fact(Mod0, Head0) -> Body0 = true ; Term0 = clause(Mod0, Head0, Body0) ),
     (   atom(Mod0), callable(Head0)
@@ -560,6 +580,8 @@ check_fact(Ctx, Map, Term0, Term, Cache0, Cache) :-
         ->  Term = clause(Mod, Head, Body), Cache = Cache0
         ;   state_error("the snapshot holds a clause of ~q with a body: a snapshot holds facts only", [PI])
         )
+    ;   Which \== all, Mod == M, memberchk(Name/Arity, Which)     % saved as clause/3, checked so
+    ->  state_error("the snapshot holds a fact term of ~q, which an active-query snapshot writes as a clause", [PI])
     ;   (   get_assoc(PI, Cache0, Types)
         ->  Cache = Cache0
         ;   declared_types(Ctx, Mod, Name, Arity, Types)
@@ -575,20 +597,18 @@ check_fact(Ctx, Map, Term0, Term, Cache0, Cache) :-
     ).
 
 declared_types(Ctx, Mod, Name, Arity, Types) :-
-    Ctx = ctx(M, Which, _, Modules),
+    Ctx = ctx(M, _, _, Modules, _),
     functor(Decl, Name, Arity),
     (   memberchk(Mod, Modules), state_predicate(Mod, Decl)
     ->  Decl =.. [_|Types]
     ;   ( memberchk(Mod, Modules) ; Mod == M ; seen_module(Mod) ),
         family_predicate(Ctx, Mod, Name, Arity)
     ->  family_types(Ctx, Mod, Name, Types)
-    ;   Which \== all, Mod == M, memberchk(Name/Arity, Which)
-    ->  Types = any
     ).
 
 check_args([], [], _, _, _, _).
 check_args([Type|Types], [Arg|Args], I, Ctx, PI, Head) :-
-    (   arg_ok(Type, Ctx, PI-I-Head, Arg)
+    (   catch(arg_ok(Type, Ctx, PI-I-Head, Arg), _, fail)    % rtl_aq may not be loaded
     ->  true
     ;   state_error("a fact of ~q does not have the declared shape (argument ~w is not ~w): ~W",
                     [PI, I, Type, Head, [quoted(true), max_depth(6)]])
@@ -618,6 +638,20 @@ arg_ok(conditions, Ctx, _-_-Head, V) :-    % run in the program module the fact 
     Head =.. [_|Args],
     once(( member(M, Args), program_module(Ctx, M) )),
     maplist(state_goal(M), V).
+arg_ok(aq_literal, ctx(_, _, _, _, Kinds), _, V) :-
+    rtl_aq:aq_state_literal(Kinds, V, _).
+arg_ok(aq_query_goal, ctx(_, _, _, _, Kinds), _-_-aq_q(_, _, How, _), V) :-   % query_answers/2
+    rtl_aq:aq_state_literal(Kinds, V, Kind), Kind \== neg,
+    ( How == fact -> Kind == fact ; How == call ).
+arg_ok(aq_negated, ctx(_, _, _, _, Kinds), _-_-aq_negq(_, How, _, _, _), V) :-  % neg_holds/3
+    rtl_aq:aq_state_negated(Kinds, How, V).
+arg_ok(aq_stored_predicate, _, _, V) :-        % made mixed: its code is made from it
+    callable(V), functor(V, N, A), functor(P, N, A), V =@= P,
+    user:'$aq_fact_pred'(P).
+arg_ok(aq_option_value, _, _-_-aq_conf(Key, _), V) :- rtl_aq:aq_state_conf(Key, V).
+arg_ok(aq_event_op, _, _, V) :- atom(V), rtl_aq:aq_event_op(V).
+arg_ok(aq_nstates, ctx(_, _, _, _, Kinds), _, V) :-
+    blob(V, trie), rtl_aq:aq_state_negations(Kinds, V).
 arg_ok(kept, _, Mod:Name/Arity-I-_, V) :-     % as the process has it now (a hook of the caller)
     functor(H, Name, Arity),
     catch(clause(Mod:H, true), _, fail),
@@ -626,7 +660,7 @@ arg_ok(kept, _, Mod:Name/Arity-I-_, V) :-     % as the process has it now (a hoo
 
 %   The program, or another program loaded in this process (the runtime keeps one state per
 %   process: docs/recovery.md).
-program_module(ctx(M, _, _, _), V) :-
+program_module(ctx(M, _, _, _, _), V) :-
     atom(V),
     (   V == M -> true ; current_predicate(V:ele_trigger/3) ).
 
@@ -663,14 +697,13 @@ clause_reference_ok(Facts, Mod:Name/Arity, Index) :-
     ;   catch(nth_clause(Mod:H, Index, _), _, fail)
     ).
 
-check_global(Map, global(K, V0), K-V) :-
+check_global(Ctx, Map, global(K, V0), K-V) :-
     (   atom(K), declared_global(K, Type)
     ->  true
     ;   state_error("the snapshot sets the global variable ~q, which is not declared state", [K])
     ),
     reblob_data(Map, V0, V),
-    Map = map(_, M, _),
-    (   catch(arg_ok(Type, ctx(M, all, [], []), global-1-global(K, V), V), _, fail)
+    (   catch(arg_ok(Type, Ctx, global-1-global(K, V), V), _, fail)
     ->  true
     ;   state_error("the global variable ~q of the snapshot is not ~w", [K, Type])
     ).

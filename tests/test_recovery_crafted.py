@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from retalisc.driver.bridge import PrologError
 from retalisc.driver.engine import Engine
 from retalisc.driver.recovery import StateError
 
@@ -135,6 +136,25 @@ def aq_crafted_terms(canary: Path):
         "fact_with_body": f"clause(user, edge(7, 8), {shell}).",
         "rule_record": f"fact(rtl_aq, aq_rule(99, (path(_, _) :- {shell}), [])).",
         "other_module": f"clause(lists, append(_, _, _), {shell}).",
+        # records of rtl_aq whose literal the runtime calls or answers through generated code
+        "query_goal": f"fact(rtl_aq, aq_q(x, {shell}, fact, none)).",                 # query_answers/2
+        "negated_literal": f"fact(rtl_aq, aq_negq(1, fact, {shell}, s1_1(a, b, c), none)).",   # neg_holds/3
+        "consumer_literal": f"fact(rtl_aq, aq_c('$rtl_trie'(1), {shell}, q(q))).",
+        "table_goal": f"fact(rtl_aq, aq_tab('$rtl_trie'(1), {shell}, '$rtl_trie'(1), shared, {shell})).",
+        "join_step": f"fact(rtl_aq, aq_join_step({shell}, s3_1(C, A, D), {shell}, s3_2(C, A, D, B))).",
+        "agenda_answer": f"fact(rtl_aq, aq_agenda('$rtl_trie'(1), {shell}, 1)).",
+        "tabled_subgoal": f"fact(rtl_aq, aq_tpred(shell/1, {shell}, '$rtl_trie'(1))).",
+        # a stored predicate's kind makes its literals calls against the facts (register, rules)
+        "predicate_kind": "clause(user, '$aq_kind'(shell(_), fact), true).",
+        "module_kind": "clause(user, '$aq_kind'(system:shell(_), fact), true).",
+        # the code of a mixed predicate is made from its record (aq_state_code/1 accepts it)
+        "mixed_predicate": "fact(rtl_aq, aq_mixed(shell(_), 7)).",
+        # the same clauses written as fact terms (a genuine snapshot writes them as clause/3)
+        "kind_as_fact_term": "fact(user, '$aq_kind'(shell(_), fact)).",
+        "rule_code_as_fact_term": f"fact(user, '$aq_final'(path(A, B), C, s9(C, A, B), fact, edge(A, B), {shell})).",
+        # an option the engine dispatches on, a notification a hook receives as Op(Answer)
+        "option_value": "fact(rtl_aq, aq_conf(mode, shell)).",
+        "notification_op": f"fact(rtl_aq, aq_ev(q, shell, \"touch {canary}\")).",
     }
 
 
@@ -151,14 +171,66 @@ def test_a_crafted_active_query_snapshot_is_refused_and_runs_nothing(tmp_path, n
     craft(path, aq_crafted_terms(canary)[name])
     aq.assert_fact("edge(3, 4)")
     digest = aq.state_digest()
-    with pytest.raises(StateError):
+    with pytest.raises(StateError) as refused:
         aq.restore_state(path)
+    assert "\n" not in str(refused.value) and str(path) in str(refused.value)
     assert aq.state_digest() == digest
     aq.assert_fact("edge(4, 5)")
     aq.register("q2", "path(1, Y)")
+    with pytest.raises(PrologError):
+        aq.register("q3", f'shell("touch {canary}")')
     assert not canary.exists()
     aq.restore_state(genuine)
     assert "path(2,1)" in [answer.replace(" ", "") for answer in aq.answers("q")]
+
+
+def test_an_active_query_snapshot_with_a_removed_rule_restores_into_a_new_load(tmp_path):
+    """A rule added at run time gives its head predicate a kind, which stays after the rule is
+    removed: the snapshot holds that kind without a rule record, and restores."""
+    from retalisc.driver.active_queries import ActiveQueries
+
+    first = ActiveQueries.from_source(AQ_PROGRAM)
+    first.register("q", "path(1, Y)")
+    first.add_rule("near(X) :- edge(X, 2)")
+    first.register("near", "near(X)")
+    first.remove_rule("near(X) :- edge(X, 2)")
+    genuine = tmp_path / "genuine.state"
+    first.save_state(genuine)
+    assert "'$aq_kind'(near(_),call)" in genuine.read_text(encoding="utf-8")
+    second = ActiveQueries.from_source(AQ_PROGRAM)
+    second.restore_state(genuine)
+    assert second.state_digest() == first.state_digest()
+    first.assert_fact("edge(3, 4)")
+    second.assert_fact("edge(3, 4)")
+    assert second.answers("q") == first.answers("q") and second.answers("near") == first.answers("near") == []
+
+
+def test_a_crafted_negation_in_an_active_query_snapshot_is_refused(tmp_path):
+    """The states waiting at a negated literal are a trie (the global aq_nstates) whose literals
+    are checked again after every update (`\\+ Literal` against the stored facts for a stored
+    predicate): an entry whose literal is not one of the program's is refused."""
+    from retalisc.driver.active_queries import ActiveQueries
+
+    aq = ActiveQueries.from_source(AQ_PROGRAM + "far(X) :- edge(X, _), \\+ path(X, 1).\n")
+    expected = sorted(aq.register("far", "far(X)"))
+    genuine, path, canary = tmp_path / "genuine.state", tmp_path / "crafted.state", tmp_path / "canary"
+    aq.save_state(genuine)
+    lines = genuine.read_text(encoding="utf-8").splitlines()
+    nstates = next(line for line in lines if line.startswith("global(aq_nstates,"))
+    trie = "trie(" + nstates[len("global(aq_nstates,'$rtl_trie'("):].split(")", 1)[0] + ",["
+    entry = f'-(ns(q(far), shell("touch {canary}")), n(fact, none, passed, 1))'
+    crafted = [line.replace(trie, trie + entry + ("" if line.endswith(",[]).") else ","), 1)
+               if line.startswith(trie) else line for line in lines]
+    assert crafted != lines
+    path.write_text("\n".join(crafted) + "\n", encoding="utf-8")
+    digest = aq.state_digest()
+    with pytest.raises(StateError, match="aq_nstates"):
+        aq.restore_state(path)
+    assert aq.state_digest() == digest
+    aq.assert_fact("edge(3, 4)")                   # checks every negation again
+    assert not canary.exists()
+    aq.restore_state(genuine)
+    assert sorted(aq.answers("far")) == expected
 
 
 def test_run_state_whose_snapshots_are_all_changed_does_not_start_from_the_beginning(tmp_path):

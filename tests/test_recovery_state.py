@@ -192,10 +192,11 @@ def test_save_is_atomic_and_leaves_no_temporary_file(tmp_path):
 def test_tries_are_rebuilt_with_their_entries_and_stay_shared(tmp_path):
     engine = Engine.from_source(SEQ)
     bridge = engine.bridge
-    # an answer table as rtl_aq.pl keeps it: a trie held by a clause and by a global (of a family
-    # the runtime declares as state: rtl_state.pl's global_family/2)
+    # a table as rtl_aq.pl keeps it (aq_dead/1, an argument declared data): a trie held by a
+    # clause and by a global (of a family the runtime declares as state: rtl_state.pl's
+    # global_family/2)
     assert bridge.once("trie_new(T), trie_insert(T, ans(1, X), r1), trie_insert(T, ans(2, b), r2), "
-                       "assertz(rtl_aq:aq_tab(t1, g(_), T, root, k)), nb_setval('rtl_detected test_table', T)")
+                       "assertz(rtl_aq:aq_dead(T)), nb_setval('rtl_detected test_table', T)")
     try:
         digest = engine.state_digest()
         engine.save_state(tmp_path / "s.state")
@@ -203,12 +204,12 @@ def test_tries_are_rebuilt_with_their_entries_and_stay_shared(tmp_path):
         assert engine.state_digest() != digest
         engine.restore_state(tmp_path / "s.state")
         assert engine.state_digest() == digest
-        entries = bridge.call_text("rtl_aq:aq_tab(t1, _, T, _, _), nb_getval('rtl_detected test_table', T2), T == T2, "
+        entries = bridge.call_text("rtl_aq:aq_dead(T), nb_getval('rtl_detected test_table', T2), T == T2, "
                                    "blob(T, trie), findall(K-V, trie_gen(T, K, V), L0), msort(L0, L), "
                                    "format(string(Out), '~q', [L])")
         assert re.sub(r"_[0-9]+", "_", entries) == "[ans(1,_)-r1,ans(2,b)-r2]"
     finally:
-        bridge.once("retractall(rtl_aq:aq_tab(t1, _, _, _, _)), nb_delete('rtl_detected test_table')")
+        bridge.once("retractall(rtl_aq:aq_dead(_)), nb_delete('rtl_detected test_table')")
 
 
 def test_a_clause_holding_a_stream_makes_the_save_fail_cleanly(tmp_path):
