@@ -92,3 +92,31 @@ def retalisc_argv(python: str, *args: str) -> List[str]:
 
 
 this_python = sys.executable
+
+
+class RosDomain:
+    """A ROS 2 domain id no other test uses meanwhile: ids from `first` to `last` are taken by
+    an exclusive lock on a file named after them (released by `release`, or when the process
+    ends), so concurrent test runs on one machine never share a domain."""
+
+    def __init__(self, first: int = 120, last: int = 229):
+        import fcntl
+        import random
+
+        folder = Path(os.environ.get("TMPDIR", "/tmp")) / "retalisc-ros2-domains"
+        folder.mkdir(exist_ok=True)
+        ids = list(range(first, last + 1))
+        random.shuffle(ids)
+        for domain in ids:
+            handle = open(folder / f"{domain}.lock", "w")
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                handle.close()
+                continue
+            self.id, self._handle = domain, handle
+            return
+        raise RuntimeError(f"every ROS 2 domain from {first} to {last} is in use")
+
+    def release(self) -> None:
+        self._handle.close()
