@@ -105,14 +105,16 @@ def session(tmp_path_factory):
     processes = Processes(folder)
     forbidden = folder / "must_not_exist"
     out = folder / "out.jsonl"
+    parameters = folder / "params.yaml"      # as a launch file passes them (launch_ros writes such a file)
+    parameters.write_text("/**:\n  ros__parameters:\n    use_sim_time: true\n")
     try:
         client = processes.start("client", [str(ROS2_PYTHON), str(ROOT / "tests" / "ros2_client.py"), "iec1",
                                             str(forbidden)], env)
         processes.wait_for_line(client, "static published", 30)
         # started from this Python (no rclpy): `retalisc ros2` hands over to .venv-ros2's
         node = processes.start("node", retalisc_argv(this_python, "ros2", str(LIVE / "ros2_node.rtl"), "--config",
-                                                     str(LIVE / "ros2_node.xml"), "--name", "iec1", "--out", str(out),
-                                                     "--ros-args", "-p", "use_sim_time:=true"), env)
+                                                     str(LIVE / "ros2_node.xml"), "--out", str(out), "--ros-args", "-r",
+                                                     "__node:=iec1", "--params-file", str(parameters)), env)
         try:
             client.wait(90)
         except subprocess.TimeoutExpired:

@@ -137,6 +137,7 @@ class Ros2Transport(Transport):
         self.rclpy.init(args=["retalisc"] + self.ros_args, context=self.context, domain_id=self.domain)
         self.ros = self.rclpy.create_node(self.node_name, namespace=self.namespace or None, context=self.context,
                                           start_parameter_services=True)
+        self.parameters["name"] = self.ros.get_name()       # as remapped by --ros-args -r __node:=
         for key in PARAMETERS:
             self.ros.declare_parameter(key, self.parameters.get(key, ""),
                                        ParameterDescriptor(read_only=True, description=f"retalisc ros2: {key}"))
