@@ -84,7 +84,10 @@ class Channel:
 
             rclpy.init()
             self.node = rclpy.create_node("retalisc_bench_driver")
-            self.pub = self.node.create_publisher(TFMessage, "/tf", 1000)
+            from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+            self.pub = self.node.create_publisher(TFMessage, "/tf", QoSProfile(
+                history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE))
             self.sub = self.node.create_subscription(
                 Vector3, "/out", lambda data: on_x(struct.unpack_from("<d", data, 4)[0], time.perf_counter()), 1000,
                 raw=True)

@@ -246,8 +246,10 @@ def replay_throughput(bag: Path, program: str, repeat: int) -> dict:
 LIVE_PROGRAM = TF_PROGRAM + """
 subscribe(tf('"odom"', '"base_link"', [X, Y, Z], _), [], geometry_msgs__0__Vector3(X, Y, Z), out, s1).
 """
+# /tf reliable with a keep-all history on ROS 2 (the other middlewares ignore the QoS): the
+# default best-effort input loses most of a 5,000-message burst (docs/ros.md, QoS)
 LIVE_CONFIG = """<publish_subscribe>
-  <subscribe_to name="/tf" msg_type="tf2_msgs/TFMessage"/>
+  <subscribe_to name="/tf" msg_type="tf2_msgs/TFMessage" reliability="reliable" history="keep_all"/>
   <publish_to name="out" msg_type="geometry_msgs/Vector3"/>
 </publish_subscribe>
 """

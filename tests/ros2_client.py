@@ -27,6 +27,7 @@ from std_msgs.msg import UInt64
 from tf2_msgs.msg import TFMessage
 
 import retalis_interfaces.srv as srv
+from service_calls import pair as _pair, queries_and_memories
 
 
 def wait_for(condition, timeout: float = 10.0) -> bool:
@@ -48,10 +49,6 @@ def tf_message(stamp: float, x: float, child: str = "base") -> TFMessage:
     return TFMessage(transforms=[t])
 
 
-def _pair(reply) -> list:
-    return [reply.ok, reply.error]
-
-
 def main() -> None:
     name, forbidden = sys.argv[1], sys.argv[2]
     rclpy.init()
@@ -69,11 +66,13 @@ def main() -> None:
     # the graph: the node, its services, its publishers and subscriptions
     found = wait_for(lambda: (name, "/") in client.get_node_names_and_namespaces(), 30)
     result["node_found"] = found
-    wait_for(lambda: len(client.get_service_names_and_types_by_node(name, "/")) >= 8, 10)
-    result["services"] = sorted(client.get_service_names_and_types_by_node(name, "/"))
-    wait_for(lambda: client.get_publisher_names_and_types_by_node(name, "/"), 10)
-    result["publishers"] = sorted(topic for topic, _ in client.get_publisher_names_and_types_by_node(name, "/"))
-    result["subscriptions"] = sorted(topic for topic, _ in client.get_subscriber_names_and_types_by_node(name, "/"))
+    def graph():     # what discovery has told us of the node so far
+        return (sorted(client.get_service_names_and_types_by_node(name, "/")),
+                sorted(topic for topic, _ in client.get_publisher_names_and_types_by_node(name, "/")),
+                sorted(topic for topic, _ in client.get_subscriber_names_and_types_by_node(name, "/")))
+
+    wait_for(lambda: len(graph()[0]) >= 15 and "/pos/seq" in graph()[1] and len(graph()[2]) >= 5, 10)
+    result["services"], result["publishers"], result["subscriptions"] = graph()
 
     def proxy(service, cls):
         cli = client.create_client(cls, f"/{name}/{service}")
@@ -133,26 +132,13 @@ def main() -> None:
     wait_for(lambda: len(robot) >= 5 and len(pos) >= stamp - 60 + 5, 10)
     result["pos"], result["pos_seq"], result["robot_pos"] = list(pos), list(numbers), list(robot)
 
-    answers = query_all(query="mem(tfs, tf(P, C, V))", at="")
-    result["query_all"] = [answers.ok, [dict(zip(a.variables, a.values)) for a in answers.answers]]
-    one = query_one(query="mem(tfs, tf(P, C, V)^T)", at="102")
-    result["query_one"] = [one.ok, one.found, dict(zip(one.answer.variables, one.answer.values))]
-    none = query_one(query="mem(tfs, tf(nobody, C, V))", at="")
-    result["query_none"] = [none.ok, none.found]
-    result["unsafe"] = _pair(query_all(query=f"shell('touch {forbidden}')", at=""))
-    result["unsafe_one"] = _pair(query_one(query=f"open('{forbidden}', write, S)", at=""))
-    result["syntax"] = _pair(query_all(query="mem(tfs, ", at=""))
-    result["add_memory"] = _pair(add_mem(memory="c_mem(last2, tf(P, C, V)-[], 2, inf)"))
-    result["add_memory_unsafe"] = _pair(add_mem(memory="c_mem(bad, tf(P, C, V)-[shell(ls)], 2, inf)"))
-    result["add_memory_not_create"] = _pair(add_mem(memory="d_mem(tfs)"))
-    for i in range(6, 9):
-        tf.publish(tf_message(100 + i, float(i)))
-    wait_for(lambda: len(robot) >= 8, 10)
-    last2 = query_all(query="mem(last2, tf(_, _, geometry_msgs__0__Vector3(X, _, _)))", at="")
-    result["last2"] = sorted(float(a.values[0]) for a in last2.answers)
-    result["delete_memory"] = _pair(del_mem(id="last2"))
-    result["delete_memory_bad"] = _pair(del_mem(id="f(X"))
-    result["after_delete_memory"] = count("last2")
+
+    def three_more():
+        for i in range(6, 9):
+            tf.publish(tf_message(100 + i, float(i)))
+        wait_for(lambda: len(robot) >= 8, 10)
+
+    queries_and_memories(result, query_one, query_all, add_mem, del_mem, forbidden, three_more)
     result["unsubscribe"] = _pair(del_out(id=reply.id, end="200"))
     tf.publish(tf_message(300, 99.0))           # after the subscription's end: not delivered
     wait_for(lambda: any(a.values[0].startswith("geometry_msgs__0__Vector3(99.0")

@@ -54,9 +54,12 @@ def test_pub_sub_qos_attributes():
     assert config.qos("/odom", True) == QosSpec(None, "reliable", "transient_local", 5)
     assert config.qos("/tf", True) is None and config.qos("/out", True) is None
     assert config.qos("/out", False) == QosSpec("default", depth=20)
-    for bad in ('qos="fast"', 'reliability="sometimes"', 'durability="forever"', 'depth="0"', 'depth="-3"',
+    keep_all = parse_config('<publish_subscribe><subscribe_to name="/a" msg_type="std_msgs/String" '
+                            'reliability="reliable" history="keep_all"/></publish_subscribe>')
+    assert keep_all.qos("/a", True) == QosSpec(None, "reliable", history="keep_all")
+    for bad in ('qos="fast"', 'history="all"', 'history="keep_all" depth="3"', 'reliability="sometimes"', 'durability="forever"', 'depth="0"', 'depth="-3"',
                 'depth="1e3"'):
-        with pytest.raises(ConfigError, match="is not"):
+        with pytest.raises(ConfigError, match="is not|not with"):
             parse_config(f'<publish_subscribe><subscribe_to name="/a" msg_type="std_msgs/String" {bad}/>'
                          f'</publish_subscribe>')
 
@@ -76,7 +79,8 @@ print(json.dumps({
   "sensor_reliable": show(qos_profile(QosSpec("sensor_data", "reliable", depth=3), "/scan", True)),
   "parameters": show(qos_profile(QosSpec("parameters"), "/p", False)),
   "services": show(qos_profile(QosSpec("services_default"), "/p", False)),
-  "durable": show(qos_profile(QosSpec(None, None, "transient_local"), "/map", False))}))
+  "durable": show(qos_profile(QosSpec(None, None, "transient_local"), "/map", False)),
+  "keep_all": show(qos_profile(QosSpec(None, "reliable", history="keep_all"), "/tf", True))}))
 """
     shown = json.loads(subprocess.run([str(ROS2_PYTHON), "-c", script], env=retalisc_env(), capture_output=True,
                                       text=True, check=True, timeout=60).stdout)
@@ -88,6 +92,7 @@ print(json.dumps({
     assert shown["parameters"] == ["RELIABLE", "VOLATILE", "KEEP_LAST", 1000]
     assert shown["services"] == ["RELIABLE", "VOLATILE", "KEEP_LAST", 10]
     assert shown["durable"] == ["RELIABLE", "TRANSIENT_LOCAL", "KEEP_LAST", 1000]
+    assert shown["keep_all"][:3] == ["RELIABLE", "VOLATILE", "KEEP_ALL"]
 
 
 @pytest.fixture(scope="module")

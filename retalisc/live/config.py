@@ -12,7 +12,7 @@ deliveries on (consumer `robot_marker_pos` of a subscription -> topic `/robot_ma
 On ROS 2 (`retalisc ros2`) either element may also give the topic's quality of service: a
 named profile `qos="sensor_data"` (or default, services_default, parameters) and/or the
 policies `reliability="reliable|best_effort"`, `durability="volatile|transient_local"`,
-`depth="N"` (keep the last N), which override the profile's (QosSpec; ros2.py has the
+`history="keep_last|keep_all"`, `depth="N"` (keep the last N), which override the profile's (QosSpec; ros2.py has the
 defaults).
 The file of Listing 2.2 is accepted as printed: its declaration `<?XML version="1.0"?>`
 (upper case, which XML parsers refuse) is read as the ordinary one, and spaces around the
@@ -35,6 +35,7 @@ class ConfigError(Exception):
 QOS_PROFILES = ("sensor_data", "default", "services_default", "parameters")
 RELIABILITY = ("reliable", "best_effort")
 DURABILITY = ("volatile", "transient_local")
+HISTORY = ("keep_last", "keep_all")
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,7 @@ class QosSpec:
     reliability: Optional[str] = None
     durability: Optional[str] = None
     depth: Optional[int] = None
+    history: Optional[str] = None
 
 
 @dataclass(frozen=True)
@@ -129,10 +131,11 @@ def parse_config(text: str, name: str = "pub_sub.xml") -> PubSubConfig:
 
 def _qos(element) -> Optional[QosSpec]:
     """The QoS attributes of a <subscribe_to>/<publish_to>; ValueError for a bad value."""
-    values = {key: element.get(key) for key in ("qos", "reliability", "durability", "depth")}
+    values = {key: element.get(key) for key in ("qos", "reliability", "durability", "depth", "history")}
     if all(value is None for value in values.values()):
         return None
-    for key, allowed in (("qos", QOS_PROFILES), ("reliability", RELIABILITY), ("durability", DURABILITY)):
+    for key, allowed in (("qos", QOS_PROFILES), ("reliability", RELIABILITY), ("durability", DURABILITY),
+                         ("history", HISTORY)):
         if values[key] is not None and values[key] not in allowed:
             raise ValueError(f"{key}={values[key]!r} is not one of {', '.join(allowed)}")
     depth = values["depth"]
@@ -140,7 +143,9 @@ def _qos(element) -> Optional[QosSpec]:
         if not re.fullmatch(r"[0-9]{1,9}", depth) or int(depth) < 1:
             raise ValueError(f"depth={depth!r} is not a whole number of messages from 1 to 999999999")
         depth = int(depth)
-    return QosSpec(values["qos"], values["reliability"], values["durability"], depth)
+    if depth is not None and values["history"] == "keep_all":
+        raise ValueError("depth is the number of messages a keep_last history keeps: not with history=\"keep_all\"")
+    return QosSpec(values["qos"], values["reliability"], values["durability"], depth, values["history"])
 
 
 def load_config(path) -> PubSubConfig:

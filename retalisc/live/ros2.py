@@ -100,9 +100,11 @@ def qos_profile(spec: Optional[QosSpec], topic: str, subscriber: bool):
         if spec.durability is not None:
             profile.durability = (qos.DurabilityPolicy.TRANSIENT_LOCAL if spec.durability == "transient_local"
                                   else qos.DurabilityPolicy.VOLATILE)
-        if spec.depth is not None:
+        if spec.history == "keep_all":
+            profile.history = qos.HistoryPolicy.KEEP_ALL
+        elif spec.depth is not None or spec.history == "keep_last":
             profile.history = qos.HistoryPolicy.KEEP_LAST
-            profile.depth = spec.depth
+            profile.depth = spec.depth or profile.depth
     return profile
 
 
