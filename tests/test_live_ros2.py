@@ -208,3 +208,17 @@ def test_ros2_qos_and_clock(session):
     assert r["xs"] == [{"X": "1.5", "T": "5000.0"}, {"X": "2.5", "T": "5000.0"}]
     # a reliable reader (pub_sub.xml reliability="reliable") does not match a best-effort publisher
     assert r["refused_pub_matched"] == 0
+
+
+def test_ros2_without_rclpy_is_a_clear_error(tmp_path):
+    """Where neither this Python nor the hand-over Python has rclpy: one line, exit 2."""
+    pytest.importorskip("rosbags")
+    try:
+        import rclpy  # noqa: F401
+        pytest.skip("this Python has rclpy")
+    except ImportError:
+        pass
+    done = subprocess.run(retalisc_argv(this_python, "ros2", str(LIVE / "ros2_node.rtl"), "--duration", "1"),
+                          env=retalisc_env({"RETALISC_ROS2_PYTHON": str(tmp_path / "no-python")}),
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "needs ROS 2's rclpy" in done.stderr and "Traceback" not in done.stderr
