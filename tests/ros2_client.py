@@ -21,13 +21,16 @@ from geometry_msgs.msg import TransformStamped, Vector3
 from rcl_interfaces.msg import Parameter, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters
 from rclpy.executors import MultiThreadedExecutor
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import UInt64
 from tf2_msgs.msg import TFMessage
 
 import retalis_interfaces.srv as srv
 from service_calls import pair as _pair, queries_and_memories
+
+
+BURST = 5000
 
 
 def wait_for(condition, timeout: float = 10.0) -> bool:
@@ -180,6 +183,25 @@ def main() -> None:
     xs = query_all(query="mem(xs, x(X)^T)", at="").answers
     result["xs"] = sorted([dict(zip(a.variables, a.values)) for a in xs], key=lambda a: a["X"])
     result["refused_pub_matched"] = refused_pub.get_subscription_count()
+
+    # a burst of 5,000 tf messages, as fast as we can publish, on an input that pub_sub.xml makes
+    # reliable with a keep-all history: every delivery comes back, in order
+    keep_all = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+    burst = []
+    client.create_subscription(Vector3, "/burst_out", lambda m: burst.append(m.x), keep_all)
+    result["burst_subscribe"] = _pair(add_out(topic="burst_out", msg_type="", event="tf(P, C, V)",
+                                              conditions="[C == '\"burst\"']", event_template="V", start="",
+                                              end=""))
+    burst_pub = client.create_publisher(TFMessage, "/tf_burst", keep_all)
+    wait_for(lambda: burst_pub.get_subscription_count() > 0 and client.count_publishers("/burst_out") > 0, 10)
+    time.sleep(0.5)
+    began = time.monotonic()
+    for k in range(BURST):
+        burst_pub.publish(tf_message(6000 + k / 1000, float(k), "burst"))
+    wait_for(lambda: len(burst) >= BURST, 60)
+    result["burst_seconds"] = time.monotonic() - began
+    result["burst_received"] = len(burst)
+    result["burst_in_order"] = burst == [float(k) for k in range(BURST)]
     result["static_pub_matched"] = static.get_subscription_count()
     print(json.dumps(result))
     executor.shutdown()

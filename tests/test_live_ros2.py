@@ -2,8 +2,8 @@
 (tests/ros2_client.py, run with .venv-ros2's Python): the node and its services in the graph
 API, its parameters, topics both ways with their output numbers, a transient-local
 /tf_static published before the node started, reliable and best-effort inputs, /clock under
-use_sim_time, and every Retalis service with its ok and error replies (an unsafe query
-refused). One node and one client serve all the tests of the module; stock discovery
+use_sim_time, every Retalis service with its ok and error replies (an unsafe query
+refused), and a burst of 5,000 messages on a reliable keep-all input. One node and one client serve all the tests of the module; stock discovery
 settings, a domain of its own (RosDomain); each process stopped by its pid."""
 from __future__ import annotations
 
@@ -208,6 +208,15 @@ def test_ros2_qos_and_clock(session):
     assert r["xs"] == [{"X": "1.5", "T": "5000.0"}, {"X": "2.5", "T": "5000.0"}]
     # a reliable reader (pub_sub.xml reliability="reliable") does not match a best-effort publisher
     assert r["refused_pub_matched"] == 0
+
+
+def test_ros2_burst_of_5000_nothing_lost(session):
+    """5,000 tf messages published at once on a reliable keep-all input come back, in order."""
+    r, err = session[0], session[1]
+    assert r["burst_subscribe"][0] is True
+    assert r["burst_received"] == 5000, (r["burst_seconds"], err[-2000:])
+    assert r["burst_in_order"]
+    assert "/tf_burst 5,000" in err
 
 
 def test_ros2_without_rclpy_is_a_clear_error(tmp_path):
