@@ -4,6 +4,7 @@ then finds the node in the graph, reads its parameters, publishes reliable and b
 topics and /clock, calls every Retalis service and prints what it saw as one JSON object.
 
     python ros2_client.py NODE_NAME FILE_THAT_MUST_NOT_APPEAR
+    python ros2_client.py --tf FIRST LAST     (publish tf x = FIRST..LAST-1 reliably, then exit)
 
 It prints `static published` on standard error once /tf_static is out (the test then starts
 the node: a late joiner of a transient-local topic).
@@ -20,6 +21,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import TransformStamped, Vector3
 from rcl_interfaces.msg import Parameter, ParameterValue
 from rcl_interfaces.srv import GetParameters, SetParameters
+from rclpy.duration import Duration
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rosgraph_msgs.msg import Clock
@@ -52,7 +54,25 @@ def tf_message(stamp: float, x: float, child: str = "base") -> TFMessage:
     return TFMessage(transforms=[t])
 
 
+def publish_tf(first: int, last: int) -> None:
+    """Publish tf messages x = first..last-1 (stamps 1000 + x) to a node that subscribes to /tf,
+    reliably: each is kept until the node's reader acknowledged it."""
+    rclpy.init()
+    client = rclpy.create_node("retalis_test_tf")
+    tf = client.create_publisher(TFMessage, "/tf", QoSProfile(history=HistoryPolicy.KEEP_ALL,
+                                                              reliability=ReliabilityPolicy.RELIABLE))
+    if not wait_for(lambda: tf.get_subscription_count() > 0, 30):
+        sys.exit("no subscriber of /tf")
+    for x in range(first, last):
+        tf.publish(tf_message(1000 + x, float(x)))
+    tf.wait_for_all_acked(Duration(seconds=10))
+    client.destroy_node()
+    rclpy.try_shutdown()
+
+
 def main() -> None:
+    if sys.argv[1] == "--tf":
+        return publish_tf(int(sys.argv[2]), int(sys.argv[3]))
     name, forbidden = sys.argv[1], sys.argv[2]
     rclpy.init()
     client = rclpy.create_node("retalis_test_client")

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
-import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -231,3 +232,48 @@ def test_ros2_without_rclpy_is_a_clear_error(tmp_path):
                           env=retalisc_env({"RETALISC_ROS2_PYTHON": str(tmp_path / "no-python")}),
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 2 and "needs ROS 2's rclpy" in done.stderr and "Traceback" not in done.stderr
+
+
+@needs_ros2
+def test_ros2_node_killed_and_restarted_with_state(tmp_path):
+    """--state over ROS 2: a node killed (SIGKILL) after five messages and started again with
+    the same state directory replays them from its journal and ends with the output file of a
+    node that never stopped."""
+    domain = RosDomain()
+    env = retalisc_env({"ROS_DOMAIN_ID": str(domain.id)})
+    processes = Processes(tmp_path)
+    out, state = tmp_path / "out.jsonl", tmp_path / "state"
+    argv = retalisc_argv(str(ROS2_PYTHON), "ros2", str(LIVE / "ros2_node.rtl"), "--config", str(LIVE / "ros2_node.xml"),
+                         "--out", str(out), "--state", str(state), "--snapshot-every", "1000")
+
+    def outputs():
+        return [json.loads(line)["event"] for line in out.read_text().splitlines()] if out.exists() else []
+
+    def publish(first, last):
+        done = subprocess.run([str(ROS2_PYTHON), str(ROOT / "tests" / "ros2_client.py"), "--tf", str(first), str(last)],
+                              env=env, capture_output=True, text=True, timeout=60)
+        assert done.returncode == 0, done.stderr
+
+    try:
+        node = processes.start("first", argv, env)
+        processes.wait_for_line(node, "ros2: node /retalis")
+        publish(0, 5)
+        deadline = time.monotonic() + 20
+        while len(outputs()) < 5 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        os.kill(node.pid, signal.SIGKILL)
+        node.wait(10)
+        again = processes.start("again", argv, env)
+        processes.wait_for_line(again, "ros2: node /retalis")
+        publish(5, 10)
+        deadline = time.monotonic() + 20
+        while len(outputs()) < 10 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        status = processes.stop(again)
+    finally:
+        processes.stop_all()
+        domain.release()
+    assert status == 0, processes.err("again")
+    assert outputs() == [f"geometry_msgs__0__Vector3({x}.0,0.0,0.0)" for x in range(10)], processes.err("again")
+    # no snapshot since the start: the restart replayed the five messages from the journal
+    assert "replayed 5 journaled events" in processes.err("again")
