@@ -21,16 +21,7 @@ from tf2_msgs.msg import TFMessage
 from retalisc.live.ros1 import raw_message_class
 from retalisc.live.ros1_services import service_class
 from retalisc.robot_io.messages import MessageConverter
-from service_calls import pair as _pair, queries_and_memories
-
-
-def wait_for(condition, timeout: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.02)
-    return condition()
+from service_calls import pair as _pair, queries_and_memories, wait_for
 
 
 def tf_message(stamp: float, x: float, count: int = 1) -> TFMessage:

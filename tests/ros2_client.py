@@ -29,19 +29,10 @@ from std_msgs.msg import UInt64
 from tf2_msgs.msg import TFMessage
 
 import retalis_interfaces.srv as srv
-from service_calls import pair as _pair, queries_and_memories
+from service_calls import pair as _pair, queries_and_memories, wait_for
 
 
 BURST = 5000
-
-
-def wait_for(condition, timeout: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.02)
-    return condition()
 
 
 def tf_message(stamp: float, x: float, child: str = "base") -> TFMessage:

@@ -1,9 +1,19 @@
 """The part of the live services tests that is the same on ROS 1 and ROS 2 (tests/ros1_client.py,
-tests/ros2_client.py): queries and memories through the node's services, called with the
-clients of either ROS (`query_one(query=..., at=...)` and so on)."""
+tests/ros2_client.py): waiting for a condition, and queries and memories through the node's
+services, called with the clients of either ROS (`query_one(query=..., at=...)` and so on)."""
 from __future__ import annotations
 
+import time
 from typing import Callable
+
+
+def wait_for(condition, timeout: float = 10.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.02)
+    return condition()
 
 
 def pair(reply) -> list:

@@ -249,27 +249,23 @@ def test_ros2_node_killed_and_restarted_with_state(tmp_path):
     def outputs():
         return [json.loads(line)["event"] for line in out.read_text().splitlines()] if out.exists() else []
 
-    def publish(first, last):
+    def start_and_publish(name, first, last):
+        """Start a node, publish tf x = first..last-1 to it, wait for its outputs."""
+        node = processes.start(name, argv, env)
+        processes.wait_for_line(node, "ros2: node /retalis")
         done = subprocess.run([str(ROS2_PYTHON), str(ROOT / "tests" / "ros2_client.py"), "--tf", str(first), str(last)],
                               env=env, capture_output=True, text=True, timeout=60)
         assert done.returncode == 0, done.stderr
+        deadline = time.monotonic() + 20
+        while len(outputs()) < last and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return node
 
     try:
-        node = processes.start("first", argv, env)
-        processes.wait_for_line(node, "ros2: node /retalis")
-        publish(0, 5)
-        deadline = time.monotonic() + 20
-        while len(outputs()) < 5 and time.monotonic() < deadline:
-            time.sleep(0.05)
+        node = start_and_publish("first", 0, 5)
         os.kill(node.pid, signal.SIGKILL)
         node.wait(10)
-        again = processes.start("again", argv, env)
-        processes.wait_for_line(again, "ros2: node /retalis")
-        publish(5, 10)
-        deadline = time.monotonic() + 20
-        while len(outputs()) < 10 and time.monotonic() < deadline:
-            time.sleep(0.05)
-        status = processes.stop(again)
+        status = processes.stop(start_and_publish("again", 5, 10))
     finally:
         processes.stop_all()
         domain.release()
