@@ -146,7 +146,6 @@ def main() -> None:
     wait_for(lambda: len(robot) >= 5 and len(pos) >= stamp - 60 + 5, 10)
     result["pos"], result["pos_seq"], result["robot_pos"] = list(pos), list(numbers), list(robot)
 
-
     def three_more():
         for i in range(6, 9):
             tf.publish(tf_message(100 + i, float(i)))

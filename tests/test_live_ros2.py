@@ -3,8 +3,9 @@
 API, its parameters, topics both ways with their output numbers, a transient-local
 /tf_static published before the node started, reliable and best-effort inputs, /clock under
 use_sim_time, every Retalis service with its ok and error replies (an unsafe query
-refused), and a burst of 5,000 messages on a reliable keep-all input. One node and one client serve all the tests of the module; stock discovery
-settings, a domain of its own (RosDomain); each process stopped by its pid."""
+refused), and a burst of 5,000 messages on a reliable keep-all input; then a node killed and
+restarted with --state. One node and one client serve the tests of the session fixture; stock
+discovery settings, a domain of its own (RosDomain); each process stopped by its pid."""
 from __future__ import annotations
 
 import json
@@ -58,8 +59,8 @@ def test_pub_sub_qos_attributes():
     keep_all = parse_config('<publish_subscribe><subscribe_to name="/a" msg_type="std_msgs/String" '
                             'reliability="reliable" history="keep_all"/></publish_subscribe>')
     assert keep_all.qos("/a", True) == QosSpec(None, "reliable", history="keep_all")
-    for bad in ('qos="fast"', 'history="all"', 'history="keep_all" depth="3"', 'reliability="sometimes"', 'durability="forever"', 'depth="0"', 'depth="-3"',
-                'depth="1e3"'):
+    for bad in ('qos="fast"', 'history="all"', 'history="keep_all" depth="3"', 'reliability="sometimes"',
+                'durability="forever"', 'depth="0"', 'depth="-3"', 'depth="1e3"'):
         with pytest.raises(ConfigError, match="is not|not with"):
             parse_config(f'<publish_subscribe><subscribe_to name="/a" msg_type="std_msgs/String" {bad}/>'
                          f'</publish_subscribe>')

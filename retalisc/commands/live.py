@@ -213,7 +213,8 @@ def _hand_over_to_ros2_venv() -> None:
     import os
     from pathlib import Path
 
-    python = os.environ.get("RETALISC_ROS2_PYTHON") or str(Path(__file__).resolve().parents[2] / ".venv-ros2/bin/python")
+    python = (os.environ.get("RETALISC_ROS2_PYTHON")
+              or str(Path(__file__).resolve().parents[2] / ".venv-ros2" / "bin" / "python"))
     command_line = os.path.basename(sys.argv[0]) in ("retalisc", "__main__.py")
     if not command_line or os.environ.get("_RETALISC_ROS2_HANDED_OVER") or not os.access(python, os.X_OK):
         return
