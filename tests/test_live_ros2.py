@@ -200,7 +200,10 @@ def test_ros2_services(session):
     assert after == before and r["count_after_add_input"] == before + 1
     assert r["add_input"] == [True, ""] and r["add_input_bad_type"][0] is False
     # a type whose generated code is absent: an error naming the package, the node stays up
-    assert r["add_input_missing_package"][0] is False and "ar_pose" in r["add_input_missing_package"][1]
+    assert r["add_input_missing_package"][0] is False and "no_such_pkg" in r["add_input_missing_package"][1]
+    # a type rosbags does not ship, read with the definition of its installed .msg file
+    assert r["add_input_ar_pose"] == [True, ""] and r["markers"]
+    assert all(marker == {"Id": "7", "X": "0.25"} for marker in r["markers"])
 
 
 def test_ros2_qos_and_clock(session):

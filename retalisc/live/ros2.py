@@ -7,7 +7,8 @@ the bytes, `Publisher.publish(bytes)` sends them); the messages are read and wri
 rosbags, as in bag replay. rclpy 7 (Jazzy) has no dynamic types: the Python package of every
 type the node subscribes or publishes must be importable (its generated code supplies the
 type support), else the request is refused with an error naming the package and the node
-goes on.
+goes on. A type that rosbags does not ship (ar_pose/ARMarkers, a user's own) is read with the
+definition of its installed `.msg` file (message_definition).
 
 The Retalis services (ros1_services.SERVICES) are served under the node's private names
 (`/retalis/query_all`) with the types of the interface package `retalis_interfaces`
@@ -28,10 +29,11 @@ the node runs; they are read-only.
 from __future__ import annotations
 
 import importlib
+import re
 import threading
 from typing import Dict, List, Optional
 
-from .config import QosSpec, ros1_type
+from .config import QosSpec, ros1_type, store_type
 from .node import LiveNode, Transport
 from .ros1_services import SERVICES
 from .services import ROS2_FIELDS, answer
@@ -62,6 +64,45 @@ def message_class(msgtype: str) -> type:
     if cls is None:
         raise MissingType(f"the ROS 2 package {package} has no message {name}")
     return cls
+
+
+_BUILTIN = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
+            "uint32", "int64", "uint64", "string", "wstring"}
+_SEPARATOR = "\n" + "=" * 80 + "\n"
+
+
+def message_definition(msgtype: str, known) -> str:
+    """The definition of `pkg/Type` from its installed `.msg` file (`share/pkg/msg/Type.msg`,
+    found through the ament index, as `ros2 interface show` finds it), followed, in the format
+    of ROS 1 bags, by those of the types it uses that `known` (a rosbags store's fielddefs)
+    lacks: what a LiveNode needs to read a type rosbags does not ship. MissingType when a
+    `.msg` file is not installed."""
+    from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
+
+    texts: Dict[str, str] = {}
+    pending = [ros1_type(msgtype)]
+    while pending:
+        name = pending.pop()
+        package, type_name = name.split("/")
+        try:
+            path = f"{get_package_share_directory(package)}/msg/{type_name}.msg"
+            text = open(path, encoding="utf-8").read()
+        except (PackageNotFoundError, OSError):
+            raise MissingType(f"no definition of {package}/msg/{type_name} installed (share/{package}/msg/"
+                              f"{type_name}.msg): install or build the package and source it") from None
+        texts[name] = text
+        for line in text.splitlines():
+            words = line.split("#")[0].split()
+            if len(words) < 2 or "=" in words[1]:
+                continue
+            field = re.sub(r"\[.*\]$", "", words[0]).split("<=")[0]
+            if field in _BUILTIN:
+                continue
+            used = field if "/" in field else f"{package}/{field}"
+            if used not in texts and used not in pending and f"{used.split('/')[0]}/msg/{used.split('/')[1]}" not in known:
+                pending.append(used)
+    first = ros1_type(msgtype)
+    return texts[first] + "".join(f"{_SEPARATOR}MSG: {name}\n{text}" for name, text in texts.items() if name != first)
 
 
 def service_classes() -> Dict[str, type]:
@@ -174,10 +215,13 @@ class Ros2Transport(Transport):
 
     def subscribe(self, topic: str, msgtype: str) -> None:
         cls = message_class(msgtype)
+        # a type rosbags does not know: its definition from the installed package, with each message
+        definition = (None if store_type(msgtype) in self.node.store.fielddefs
+                      else message_definition(msgtype, self.node.store.fielddefs))
         profile = qos_profile(self.node.config.qos(topic, True), topic, True)
         arrived = self.node.arrived
         self._subscriptions[topic] = self.ros.create_subscription(
-            cls, topic, lambda data: arrived(topic, data), profile, raw=True)
+            cls, topic, lambda data: arrived(topic, data, None, definition), profile, raw=True)
 
     def unsubscribe(self, topic: str) -> bool:
         subscription = self._subscriptions.pop(topic, None)
