@@ -46,6 +46,12 @@ if [ "${RETALISC_ROS:-1}" != "0" ]; then
         # shellcheck disable=SC2086
         apt_install $ROS_PACKAGES || echo "setup: warning: ROS 1 is not installable here; retalisc ros and its tests are skipped" >&2
     fi
+    # tf2's BufferCore (Python binding and C++ library): the oracle of the tf library's tests
+    # and the peer of benchmarks/tf_lookup.py
+    if ! /usr/bin/python3 -c "import tf2_py" >/dev/null 2>&1 || [ ! -f /usr/include/tf2/buffer_core.h ]; then
+        echo "setup: installing tf2 from Debian (apt-get install python3-tf2 libtf2-dev)" >&2
+        apt_install python3-tf2 libtf2-dev || echo "setup: warning: tf2 is not installable here; the tf oracle tests are skipped" >&2
+    fi
     if /usr/bin/python3 -c "import rospy" >/dev/null 2>&1; then
         if [ ! -x .venv-ros/bin/python ]; then
             echo "setup: creating .venv-ros (the system Python with ROS 1, for retalisc ros)" >&2

@@ -344,7 +344,6 @@ def plot(rows, png):
         import matplotlib.pyplot as plt
     except ImportError:
         return
-    scen = sorted({r[0] for r in rows})
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     for ax, key in zip(axes, ("initial", "add", "delete")):
         labels, values = [], []

@@ -322,7 +322,7 @@ def report(res: dict, rate: float) -> None:
         lo, hi = rows[0], rows[-1]
         queries = (hi["k"] - lo["k"]) * 10 * rate
         per_query = (hi["cpu"] - lo["cpu"]) / (queries * res["seconds"]) if queries else 0.0
-        print(f"target figure  Fig 5.9-5.11 " + ", ".join(f"{r['k'] * 10 * rate:.0f} queries/s: {r['share'] * 100:.2f} %"
+        print("target figure  Fig 5.9-5.11 " + ", ".join(f"{r['k'] * 10 * rate:.0f} queries/s: {r['share'] * 100:.2f} %"
                                                           for r in rows)
               + f"; {per_query * 1e6:.1f} us CPU per prev/next query")
     if "sync" in res:

@@ -46,7 +46,6 @@ import json
 import math
 import os
 import random
-import statistics
 import sys
 import tempfile
 import time
@@ -399,7 +398,7 @@ def run(quick: bool, out_dir: Path, with_live: bool = True) -> int:
 
 def report(res: dict) -> List[tuple]:
     targets = []
-    print(f"\n(a) conversion of decoded ROS 2 messages to event text, CPU per message (best of 7, interleaved)\n")
+    print("\n(a) conversion of decoded ROS 2 messages to event text, CPU per message (best of 7, interleaved)\n")
     print(f"{'message':28} {'chars':>6} {'generated':>12} {'generic':>12} {'speedup':>8} {'msgs/s gen.':>12} "
           f"{'decode (rosbags)':>17}")
     for label, row in res["conversion"].items():
@@ -479,7 +478,7 @@ def report(res: dict) -> List[tuple]:
                             f"{thr['transforms_per_s']:,.0f} transforms/s ({thr['messages_per_s']:,.0f} msgs/s), "
                             f"{thr['lost']} lost", thr["transforms_per_s"] >= THESIS_RATE and thr["lost"] == 0))
     if res["shared"]:
-        print(f"\n    shared sample bags, empty program:")
+        print("\n    shared sample bags, empty program:")
         for name, r in res["shared"].items():
             print(f"    {name:32} {r['messages']:>6,} msgs {r['cpu']:6.2f}s CPU {r['messages_per_cpu_s']:>9,.0f} msgs "
                   f"per CPU s (bag opening included)")

@@ -613,7 +613,6 @@ def plot(res: dict, cfg: Config, out_dir: Path, prefix: str) -> List[Path]:
     m = res["match_only"]
     ax.plot([(end - m.chunk / 2) / RATE for end, _ in m.series], [s / m.chunk * 1e6 for _, s in m.series],
             label="20 x tf(_,_,_,none): matching only")
-    b = res["baseline"]
     ax.axhline(base, color="grey", linestyle=":", label="no instances")
     ax.axvline(cfg.big / RATE, color="black", linestyle="--", linewidth=0.8, label=f"{cfg.big:,} events")
     ax.set_xlabel(f"event time (s, {RATE} tf events/s)")

@@ -42,7 +42,7 @@ always a string (`""` for predicates that only act). Text that
 stands for a term (an event, a goal, a pattern, a label, a flag value) is read here with
 rtl_read_text/4 (rtl_text.pl): one term, trailing text refused, variables by name. Events
 must be ground; times finite numbers. Goals from outside (subscription conditions) pass
-rtl_check_goal/3 (rtl_sandbox.pl); rules pass it in rtl_install_rules/3 and queries in
+rtl_check_goal/4 (rtl_sandbox.pl); rules pass it in rtl_install_rules/3 and queries in
 rtl_query.pl.
 
 Output is a string of lines. Feeding stops at the first event whose processing raises an
@@ -58,16 +58,17 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_query).
 :- use_module(rtl_subscriptions).
 :- use_module(rtl_sandbox).
+:- use_module(rtl_error_text).
 :- use_module(rtl_text).
 :- use_module(rtl_seen).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_time, [rtl_input_interval/6]).
 :- use_module(rtl_lines, [rtl_digits_problem/3]).
-:- use_module(rtl_horizon, [rtl_take_warnings/1]).
+:- use_module(rtl_horizon, [rtl_take_warnings/1, rtl_warnings_pending/0]).
 :- use_module(rtl_state).
 :- use_module(rtl_ros1).
 
-:- use_module(retalis, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
+:- use_module(rtl_feed, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
 
 %!  rtl_api_default_flags(-Out) is det.
 %
@@ -218,7 +219,7 @@ paced(Events, [Due|Dues], Tick, I, Stop) :-
     ->  Stop = Failure
     ;   Rest == []
     ->  Stop = done
-    ;   ( rtl_ele:rtl_output_line(_) ; rtl_horizon:warning_text(_) )
+    ;   ( rtl_output_pending ; rtl_warnings_pending )
     ->  Stop = paced(I1, Rest, RestDues)
     ;   paced(Rest, RestDues, Tick, I1, Stop)
     ).
@@ -301,7 +302,7 @@ process_events([event(Op, Event, Start, End)|Events], I, Failure) :-
     (   var(Error)
     ->  I1 is I + 1,
         process_events(Events, I1, Failure)
-    ;   message_line(Error, Message),
+    ;   rtl_error_text(Error, Message),
         format(string(Failure), "!error\t~w\t~w", [I, Message])
     ).
 
@@ -419,10 +420,10 @@ subscribe(M, Consumer, Pattern, Conds, Template, Ts0, Te0, IdText) :-
     bound(Ts0, Ts),
     bound(Te0, Te),
     (   is_list(Conds), maplist(callable, Conds)
-    ->  maplist(rtl_check_goal(query([]), M), Conds)
-    ;   true                                    % rtl_subscribe/7 says what is wrong
+    ->  maplist(rtl_check_goal(query([]), M), Conds, Guarded)
+    ;   Guarded = Conds                         % rtl_subscribe/7 says what is wrong
     ),
-    rtl_subscribe(Id, Consumer, Pattern, Conds, Template, Ts, Te),
+    rtl_subscribe(Id, Consumer, Pattern, Guarded, Template, Ts, Te),
     term_string(Id, IdText).
 
 %   Read Text; variables of the same name as in Bindings0 are the same variable.
@@ -583,16 +584,6 @@ rtl_api_state_digest(Hash) :-
     rtl_state_digest(H),
     atom_string(H, Hash).
 
-% One line of text for an error, as print_message/2 would say it.
-message_line(Error, Text) :-
-    (   catch('$messages':translate_message(Error, Lines, []), _, fail)
-    ->  with_output_to(string(S), print_message_lines(current_output, '', Lines)),
-        split_string(S, "\n", " \t", Parts0),
-        exclude(==(""), Parts0, Parts),
-        atomic_list_concat(Parts, " ", Text)
-    ;   format(string(Text), "~q", [Error])
-    ).
-
 %!  rtl_api_term_data(+Text:string, -Json:string) is det.
 %
 %   The term written in Text (an output event, as writeq/1 wrote it) as JSON data, read by
@@ -642,10 +633,19 @@ json_text(Text) :-
     rtl_json_string_escape(S, Escaped),
     format("\"~s\"", [Escaped]).
 
+rtl_error_text:runtime_error_text(invalid_time(Reason), Text) :-
+    string(Reason),
+    Text = Reason.
+rtl_error_text:runtime_error_text(bad_item(I, Error), Text) :-
+    integer(I),
+    rtl_error_text(Error, Inner),
+    format(string(Text), "event ~w of the batch: ~s", [I, Inner]).
+
 :- multifile prolog:error_message//1.
 
 prolog:error_message(invalid_time(Reason)) -->
-    [ '~s'-[Reason] ].
+    { rtl_error_text(error(invalid_time(Reason), _), Text) },
+    [ '~s'-[Text] ].
 prolog:error_message(bad_item(I, Error)) -->
-    { message_line(Error, Text) },
-    [ 'event ~w of the batch: ~w'-[I, Text] ].
+    { rtl_error_text(error(bad_item(I, Error), _), Text) },
+    [ '~s'-[Text] ].

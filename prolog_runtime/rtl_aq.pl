@@ -67,14 +67,18 @@
             aq_wait_neg/4,          % +Kind, +Literal, +State, +Stratum (called by generated code)
             aq_answer/3,            % +Table, +Answer, +Rank   (called by generated code)
             aq_fact_arrived/2,      % +State, +Fact            (called by generated code)
-            aq_adornment/2          % +Vars, -Mask             (called by generated code)
+            aq_adornment/2,         % +Vars, -Mask             (called by generated code)
+            aq_state_code/1,        % +Terms                   (rtl_state.pl: restore)
+            aq_code_head/1          % ?Head                    (rtl_state.pl)
           ]).
+:- use_module(rtl_error_text, [rtl_error_text/2]).
 :- use_module(rtl_load, []).              % first: out-of-date .qlf files are not used
 :- use_module(library(lists)).
 :- use_module(library(apply)).
 :- use_module(library(readutil)).
 :- use_module(library(pairs)).
 :- use_module(library(assoc)).
+:- use_module(library(ordsets)).
 :- use_module(rtl_io, [rtl_json_string_escape/2]).
 :- use_module(rtl_aq_rules).
 
@@ -98,7 +102,8 @@
     aq_ground_facts/3,  % aq_ground_facts(Name, Arity, Bool)  every stored fact is ground
     aq_negq/5,         % aq_negq(Stratum, Kind, Goal, State, T)  a negation still to be checked
     aq_buf/3,          % aq_buf(Id, Op, Answer)        notifications of an update, held back
-    aq_rule/3.         % aq_rule(N, Rule, ClauseRefs)  rules added at run time
+    aq_rule/3,         % aq_rule(N, Rule, ClauseRefs)  rules added at run time
+    aq_mixed/2.        % aq_mixed(P, N)  P became a mixed predicate, its facts read by rule N
 
 aq_conf(mode, tabled).
 aq_conf(subsumption, false).
@@ -129,6 +134,7 @@ init_globals :-
 aq_configure(Options) :-
     retractall(aq_ground_facts(_, _, _)),       % a (re)loaded program
     retractall(aq_fact_only(_, _, _)),
+    retractall(aq_mixed(_, _)),
     nb_setval(aq_ground, unknown),
     nb_setval(aq_joins, unknown),
     retractall(aq_join_step(_, _, _, _)),
@@ -1806,6 +1812,7 @@ mixed_predicate(H) :-
         K is K0 + 1,
         aq_rule_clauses((P :- P), [fact(P)], K, Clauses),
         maplist(assert_clause, Clauses, _),
+        assertz(aq_mixed(P, K)),
         retractall(aq_fact_only(_, _, _)),
         register_again(Olds)
     ;   true
@@ -1850,6 +1857,77 @@ mixed_goal(_, G, G).
 of_predicate(L, P) :-
     nonvar(L),
     \+ L \= P.
+
+%!  aq_state_code(+Terms) is det.
+%
+%   The check of a snapshot's rule code (rtl_state.pl, which reads it as data): every clause
+%   of the generated predicates `'$aq_act'/2`, `'$aq_go'/3` and `'$aq_final'/6` among Terms
+%   (rtl_state's `clause(user, Head, Body)` terms) is one the loaded program has now, or one
+%   that a rule record `aq_rule(N, Rule, _)` of the snapshot compiles to after passing
+%   aq_rule_check/2, as a rule added by a script line does. Throws aq_rule_error(Message)
+%   otherwise. The predicate kinds of the snapshot's rules are there while they are compiled
+%   (and only then: nothing else changes).
+aq_state_code(Terms) :-
+    findall(N-Rule, member(fact(rtl_aq, aq_rule(N, Rule, _)), Terms), Rules),
+    findall(P-K, ( member(clause(user, '$aq_kind'(P, K), true), Terms), \+ user:'$aq_kind'(P, _) ), Kinds),
+    findall(P-K, ( member(fact(rtl_aq, aq_mixed(P, K)), Terms), integer(K) ), Mixed),
+    setup_call_cleanup(
+        foldl(assert_kind, Kinds, [], Refs),
+        findall(Hash, ( ( current_code(H, B) ; rules_code(Rules, H, B) ; mixed_code(Mixed, H, B) ),
+                        mixed_versions(Mixed, H-B, Hash) ), Hashes0),
+        forall(member(Ref, Refs), erase(Ref))),
+    sort(Hashes0, Hashes),
+    forall(( member(clause(user, H, B), Terms), aq_code_head(H) ),
+           (   variant_sha1(H-B, Hash), ord_memberchk(Hash, Hashes)
+           ->  true
+           ;   functor(H, Name, Arity),
+               format(atom(M), 'a clause of ~q is not the code of a rule of the program or of the snapshot', [Name/Arity]),
+               throw(aq_rule_error(M))
+           )).
+
+assert_kind(P-K, Refs, [Ref|Refs]) :-
+    assertz(user:'$aq_kind'(P, K), Ref).
+
+aq_code_head('$aq_act'(_, _)).
+aq_code_head('$aq_go'(_, _, _)).
+aq_code_head('$aq_final'(_, _, _, _, _, _)).
+
+current_code(H, B) :-
+    aq_code_head(H),
+    catch(clause(user:H, B), _, fail).
+
+% The clauses that read the stored facts of the predicates a snapshot made mixed
+% (mixed_predicate/1), and the hash of each clause as it stands and as each conversion of the
+% snapshot rewrote it (the conversions are in the order they happened).
+mixed_code(Mixed, H, B) :-
+    member(P-K, Mixed),
+    aq_rule_clauses((P :- P), [fact(P)], K, Clauses),
+    member(C, Clauses),
+    (   C = (H :- B) -> true ; H = C, B = true ).
+
+mixed_versions(Mixed, H-B, Hash) :-
+    (   variant_sha1(H-B, Hash)
+    ;   append(_, [P-_|Later], Mixed),
+        mixed_head(P, H, H1),
+        mixed_goal(P, B, B1),
+        H1-B1 \== H-B,
+        mixed_versions(Later, H1-B1, Hash)
+    ).
+
+rules_code(Rules, H, B) :-
+    member(N-Rule0, Rules),
+    (   integer(N), copy_term(Rule0, Rule), catch(aq_rule_check(Rule, Lits0), aq_rule_error(M), true)
+    ->  (   nonvar(M)
+        ->  format(atom(Message), 'its rule ~q is refused: ~w', [N, M]),
+            throw(aq_rule_error(Message))
+        ;   true
+        )
+    ;   throw(aq_rule_error('a rule record of the snapshot is not a rule'))
+    ),
+    (   aq_conf(mode, naive) -> maplist(as_call, Lits0, Lits) ; Lits = Lits0 ),
+    aq_rule_clauses(Rule, Lits, N, Clauses),
+    member(C, Clauses),
+    (   C = (H :- B) -> true ; H = C, B = true ).
 
 %   The steps of the join states (join_step/4) as the clauses are now.
 join_steps_changed :-
@@ -2026,31 +2104,16 @@ parse_command(_, Rest, T) :-
 parse_error(N, aq_script_error(_, Msg)) :- !,
     throw(aq_script_error(N, Msg)).
 parse_error(N, E) :-
-    message_to_codes(E, Msg0),
-    split_string(Msg0, "\n", " ", Parts),
-    atomic_list_concat(Parts, ' ', Msg),
+    rtl_error_text(E, Msg),
     throw(aq_script_error(N, Msg)).
 
 %   Every error of check_command/3 is a bad script line.
 line_error(N, aq_script_error(_, Msg)) :- !,
     throw(aq_script_error(N, Msg)).
 line_error(N, E) :-
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     throw(aq_script_error(N, Msg)).
 
-%   The message of an error on one line.
-message_to_codes(E, Msg) :-
-    (   catch(message_to_chars(E, Msg0), _, fail)
-    ->  true
-    ;   term_string(E, Msg0)
-    ),
-    split_string(Msg0, "\n", " \t", Parts0),
-    exclude(==(""), Parts0, Parts),
-    atomic_list_concat(Parts, ' ', Msg).
-
-message_to_chars(E, Msg) :-
-    '$messages':translate_message(E, Lines, []),
-    with_output_to(string(Msg), print_message_lines(current_output, '', Lines)).
 
 %   What the runtime refuses before it changes anything: the errors that
 %   aq_register/3, aq_assert/1, aq_retract/1 and aq_unregister/1 raise for
@@ -2118,8 +2181,8 @@ script_error(File, E, Status) :-
 script_error_text(File, aq_script_error(Line, Msg), 2, Text) :- !,
     format(string(Text), '~w:~w: error: ~w', [File, Line, Msg]).
 script_error_text(File, aq_runtime_error(Line, E), 1, Text) :- !,
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     format(string(Text), '~w:~w: runtime error: ~w', [File, Line, Msg]).
 script_error_text(_, E, 1, Text) :-
-    message_to_codes(E, Msg),
+    rtl_error_text(E, Msg),
     format(string(Text), 'error: ~w', [Msg]).

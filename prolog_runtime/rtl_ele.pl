@@ -14,6 +14,7 @@
             rtl_started_after/1,        % +Time
             rtl_blockers_due/4,         % +Step, +Partner, +Clock, -Before
             rtl_set_flag/2,             % +Flag, +Value
+            rtl_valid_flag_value/2,     % +Flag, @Value
             rtl_flag/2,                 % ?Flag, ?Value
             rtl_max_steps/1,            % -Steps
             rtl_default_flags/0,
@@ -22,6 +23,7 @@
             rtl_close_action_output/0,
             rtl_output_to/1,            % +Sink
             rtl_take_output/1,          % -Lines
+            rtl_output_pending/0,
             rtl_emit/5,                 % +Event, +Start, +End, +Consumer, +Op
             rtl_emit_line/1,            % +Line
             rtl_stat/2,                 % ?Name, ?Value
@@ -30,10 +32,12 @@
             rtl_detections/1,           % -Pairs
             rtl_store_size/1,           % -Clauses
             rtl_collect_garbage/0,
+            rtl_collect_garbage/1,      % +Scan
             rtl_add_output_hook/1,      % :Hook
             rtl_remove_output_hook/1,   % :Hook
             rtl_add_type_output_hook/2, % +Pattern, :Hook
-            rtl_remove_type_output_hook/2 % +Pattern, :Hook
+            rtl_remove_type_output_hook/2, % +Pattern, :Hook
+            rtl_remove_type_output_hooks/0
           ]).
 
 /** <module> ELE runtime: event ingestion, derivation, output and forgetting
@@ -166,7 +170,7 @@ rtl_set_flag(Flag, Value) :-
     ->  true
     ;   domain_error(retalis_flag, Flag)
     ),
-    (   valid_flag_value(Flag, Value)
+    (   rtl_valid_flag_value(Flag, Value)
     ->  true
     ;   var(Value)
     ->  instantiation_error(Value)
@@ -179,31 +183,31 @@ rtl_set_flag(Flag, Value) :-
     (   Flag == max_event_types -> rtl_event_types:rtl_cap_event_types(Value) ; true ),
     (   memberchk(Flag, [max_delay, retraction_horizon]) -> schedule_sweep ; true ).
 
-valid_flag_value(max_delay, V) :-
+rtl_valid_flag_value(max_delay, V) :-
     (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
-valid_flag_value(echo_input, V) :-
+rtl_valid_flag_value(echo_input, V) :-
     ( V == true ; V == false ), !.
-valid_flag_value(flush_timers, V) :-
+rtl_valid_flag_value(flush_timers, V) :-
     ( V == true ; V == false ), !.
-valid_flag_value(event_consumption_policy, V) :-
+rtl_valid_flag_value(event_consumption_policy, V) :-
     atom(V), memberchk(V, [unrestricted, recent, chronological]).
-valid_flag_value(query_time_limit, V) :-
+rtl_valid_flag_value(query_time_limit, V) :-
     number(V), V > 0, V =\= inf.
-valid_flag_value(retraction_horizon, V) :-
+rtl_valid_flag_value(retraction_horizon, V) :-
     (   V == auto -> true ; V == inf -> true ; number(V), V >= 0, V =\= inf ).
-valid_flag_value(max_steps, V) :-
+rtl_valid_flag_value(max_steps, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
-valid_flag_value(max_timers, V) :-
+rtl_valid_flag_value(max_timers, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
-valid_flag_value(max_event_types, V) :-
+rtl_valid_flag_value(max_event_types, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
-valid_flag_value(max_line_bytes, V) :-
+rtl_valid_flag_value(max_line_bytes, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
-valid_flag_value(max_future, V) :-
+rtl_valid_flag_value(max_future, V) :-
     (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
-valid_flag_value(max_digits, V) :-
+rtl_valid_flag_value(max_digits, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
-valid_flag_value(max_term_depth, V) :-
+rtl_valid_flag_value(max_term_depth, V) :-
     (   V == inf -> true ; integer(V), V > 0 ).
 
 %!  rtl_default_flags is det.
@@ -299,7 +303,7 @@ rtl_event(Event, Start, End) :-
     nb_getval(events, N0),
     N is N0 + 1,
     nb_linkval(events, N),
-    (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, add) ; true ),
+    (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, echo(input), add) ; true ),
     (   type_output_hook(Event, Hook), call(Hook, Event, Start, End, add), fail ; true ),
     (   nb_current(rtl_output_hooks, true) -> run_hooks_of_every_type(Event, Start, End, add) ; true ),
     nb_getval(rtl_program, M),
@@ -430,7 +434,7 @@ late_check(End, Clock) :-
         (   nb_current(rtl_late_sweep, Due) -> true ; Due = 64 ),
         nb_getval(late, Late),
         (   Late >= Due
-        ->  collect_garbage(whole),
+        ->  rtl_collect_garbage(whole),
             rtl_store_size(Size),
             Next is Late + max(64, Size),
             nb_setval(rtl_late_sweep, Next)
@@ -454,7 +458,7 @@ rtl_retract_event(Event, Start, End) :-
         rtl_too_late_text(End, Retracted, Derived, Text),
         rtl_warning(Text)
     ;   rtl_count(retracted),
-        (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, -, retract) ; true ),
+        (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, echo(input), retract) ; true ),
         run_output_hooks(Event, Start, End, retract),
         (   M:ele_untrigger(Event, Start, End), fail ; true )
     ).
@@ -530,6 +534,13 @@ rtl_remove_type_output_hook(Pattern, Hook) :-
     type_skeleton(Pattern, Skeleton),
     retractall(type_output_hook(Skeleton, Hook)).
 
+%!  rtl_remove_type_output_hooks is det.
+%
+%   Remove the hooks of every type (inside the snapshot of a dry run, rtl_horizon.pl).
+
+rtl_remove_type_output_hooks :-
+    retractall(type_output_hook(_, _)).
+
 type_skeleton(Pattern, Skeleton) :-
     (   compound(Pattern)
     ->  compound_name_arity(Pattern, Name, Arity),
@@ -589,6 +600,14 @@ rtl_emit_line(Line) :-
 
 rtl_take_output(Lines) :-
     findall(L, retract(rtl_output_line(L)), Lines).
+
+%!  rtl_output_pending is semidet.
+%
+%   Some buffered output line waits to be taken (rtl_take_output/1).
+
+rtl_output_pending :-
+    rtl_output_line(_),
+    !.
 
 %!  rtl_stat(?Name, ?Value) is nondet.
 %
@@ -670,6 +689,7 @@ rtl_store_size(Size) :-
                   Size).
 
 %!  rtl_collect_garbage is det.
+%!  rtl_collect_garbage(+Scan) is det.
 %
 %   Retire the partial matches of windowed steps that can no longer take part in a match
 %   with an event within the delay bound (their start lies more than Window + max_delay
@@ -677,12 +697,12 @@ rtl_store_size(Size) :-
 %   retraction horizon has passed (rtl_horizon.pl).
 
 rtl_collect_garbage :-
-    collect_garbage(stored_order).
+    rtl_collect_garbage(stored_order).
 
 % Scan `stored_order`: a store kept oldest first is scanned to its first match that stays
 % (rtl_retire_store/5); `whole`: to its end, for the sweep of late events, whose matches
 % come after those of later events.
-collect_garbage(Scan) :-
+rtl_collect_garbage(Scan) :-
     nb_getval(rtl_program, M),
     nb_getval(rtl_clock, Clock),
     rtl_flag(max_delay, Delay),

@@ -31,7 +31,7 @@ text is known, and refused, once it is read. While the cap is set, lines are rea
 rtl_cap_event_types(Max) :-
     (   Max == inf
     ->  (   retract(reader_held_back) -> rtl_io:rtl_use_fast_reader(true) ; true )
-    ;   current_predicate(rtl_io:fast_reader/0), rtl_io:fast_reader
+    ;   current_predicate(rtl_io:rtl_fast_reader_used/0), rtl_io:rtl_fast_reader_used
     ->  rtl_io:rtl_use_fast_reader(false),
         assertz(reader_held_back)
     ;   true

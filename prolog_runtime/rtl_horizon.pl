@@ -16,6 +16,8 @@
             rtl_warnings_pending/0,
             rtl_next_seq/1,             % -Seq
             rtl_take_instance/2,        % :Stored, +Own
+            rtl_aggregate/4,            % +Function, +Acc0, -Acc, -Value
+            rtl_aggregate_initial/2,    % +Function, -Value
             rtl_aggregate_values/3,     % +Items, -Acc, -Values
             rtl_aggregate_redo/5,       % +Items, +Removed, -Acc, -Retracts, -Adds
             rtl_aggregate_redo_numbered/5  % +Items, +Removed, -Acc, -Retracts, -Adds
@@ -315,7 +317,7 @@ rtl_dry_run(Goal, Retracted, Derived) :-
     setup_call_cleanup(( nb_setval(rtl_dry_run, true),
                          nb_setval(rtl_output_sink, buffer),
                          nb_setval(rtl_output_hooks, false) ),
-                       snapshot(( retractall(rtl_ele:type_output_hook(_, _)),
+                       snapshot(( rtl_ele:rtl_remove_type_output_hooks,
                                   forall(Goal, true),
                                   nb_getval(derived, Derived1),
                                   nb_getval(underived, Retracted1) )),
@@ -405,6 +407,36 @@ rtl_next_seq(Seq) :-
     Next is Seq + 1,
     nb_linkval(rtl_processing_seq, Next).        % (a number: nb_setval/2 without the copy)
 
+%!  rtl_aggregate(+Function, +Acc0, -Acc, -Value) is det.
+%
+%   One step of an ETALIS aggregate: Function is `count`, `sum(X)`, `min(X)`, `max(X)` or
+%   `avg(X)` with X bound to the new occurrence's value; Acc0 is `none` at the start.
+
+%!  rtl_aggregate_initial(+Function, -Value) is semidet.
+%
+%   The value of an ETALIS aggregate over the empty set, given when the start event opens
+%   it: 0 for `count` and `sum(X)`; `min(X)`, `max(X)` and `avg(X)` have none (ETALIS
+%   gives 100000, -100000: numbers no occurrence had), so they fail and give nothing until
+%   the first occurrence.
+
+rtl_aggregate_initial(count, 0).
+rtl_aggregate_initial(sum(_), 0).
+
+rtl_aggregate(count, Acc0, N, N) :-
+    ( Acc0 == none -> N = 1 ; N is Acc0 + 1 ).
+rtl_aggregate(sum(X), Acc0, S, S) :-
+    ( Acc0 == none -> S = X ; S is Acc0 + X ).
+rtl_aggregate(min(X), Acc0, M, M) :-
+    ( Acc0 == none -> M = X ; M is min(Acc0, X) ).
+rtl_aggregate(max(X), Acc0, M, M) :-
+    ( Acc0 == none -> M = X ; M is max(Acc0, X) ).
+rtl_aggregate(avg(X), Acc0, Sum-N, Avg) :-
+    (   Acc0 == none
+    ->  Sum = X, N = 1
+    ;   Acc0 = Sum0-N0, Sum is Sum0 + X, N is N0 + 1
+    ),
+    Avg is Sum / N.
+
 %!  rtl_aggregate_values(+Items, -Acc, -Values) is det.
 %
 %   Items are `Seq-(Function-Start-End)` for the occurrences counted by one accumulator, in
@@ -417,7 +449,7 @@ rtl_aggregate_values(Items, Acc, Values) :-
 
 fold([], Acc, Acc, []).
 fold([Seq-(F-_-End)|Items], Acc0, Acc, [Seq-(V-End)|Values]) :-
-    retalis:rtl_aggregate(F, Acc0, Acc1, V),
+    rtl_aggregate(F, Acc0, Acc1, V),
     fold(Items, Acc1, Acc, Values).
 
 %!  rtl_aggregate_redo(+Items, +Removed, -Acc, -Retracts, -Adds) is det.

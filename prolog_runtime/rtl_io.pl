@@ -6,7 +6,9 @@
             rtl_event_json/6,            % +Event, +Start, +End, +Consumer, +Op, -JsonString
             rtl_write_event_line/4,      % +Stream, +Event, +Start, +End
             rtl_json_string_escape/2,    % +Text, -Escaped
-            rtl_use_fast_reader/1        % +Bool
+            rtl_use_fast_reader/1,       % +Bool
+            rtl_fast_reader_used/0,
+            rtl_too_deep_text/2          % +Text, +MaxDepth
           ]).
 
 /** <module> Event JSON Lines in and out (docs/runtime.md, "Event input" and "Output")
@@ -30,18 +32,14 @@ also names the reason of a rejection. Without the C reader, every line takes the
 :- use_module(rtl_time).
 :- use_module(rtl_lines, [rtl_nul_problem/2, rtl_digits_problem/3, rtl_long_line/4]).
 :- use_module(rtl_event_types, [rtl_event_text_refused/2, rtl_event_type_refused/2]).
+:- use_module(rtl_foreign).
 
 :- dynamic fast_reader/0, fast_writer/0.
 
 % The C reader is optional: a runtime without it (not built, another platform) reads
 % every line in Prolog.
 load_fast_reader :-
-    source_location(File, _),                   % (loaded from a .qlf file, the load
-    file_directory_name(File, Dir),             % context is the file that loads this one)
-    atomic_list_concat([Dir, '/foreign/rtl_fastread'], Lib),
-    (   absolute_file_name(Lib, _, [file_type(executable), access(read), file_errors(fail)]),
-        catch(load_foreign_library(Lib), _, fail),     % (use_foreign_library/1 defers the load)
-        current_predicate(rtl_fast_event_line/8)
+    (   rtl_load_foreign(rtl_fastread, rtl_fast_event_line/8)
     ->  retractall(fast_reader),
         assertz(fast_reader),
         fast_writer_present
@@ -74,6 +72,13 @@ rtl_use_fast_reader(true) :-
 rtl_use_fast_reader(false) :-
     retractall(fast_reader),
     retractall(fast_writer).
+
+%!  rtl_fast_reader_used is semidet.
+%
+%   The common case of event lines is read in C now (rtl_use_fast_reader/1).
+
+rtl_fast_reader_used :-
+    fast_reader.
 
 %!  rtl_parse_event_line(+Line:string, -Parsed) is det.
 %!  rtl_parse_event_line(+Line:string, +MaxDepth:integer, -Parsed) is det.
@@ -506,11 +511,14 @@ syntax_reason(E, E).
 depth_reason(MaxDepth, Reason) :-
     format(string(Reason), "term nested deeper than ~D levels", [MaxDepth]).
 
-%   too_deep_text(+Text, +MaxDepth) is semidet.
+%!  rtl_too_deep_text(+Text, +MaxDepth) is semidet.
 %
 %   Text opens more than MaxDepth brackets without closing them (quotes are not skipped,
 %   so brackets in quoted text count too). Checked before reading: the reader recurses on
 %   the C stack. A text no longer than MaxDepth cannot be that deep.
+
+rtl_too_deep_text(Text, MaxDepth) :-
+    too_deep_text(Text, MaxDepth).
 
 too_deep_text(Text, MaxDepth) :-
     string_length(Text, Length),
@@ -561,8 +569,8 @@ list_tail_within(T, Left) :-
 
 %!  rtl_event_json(+Event, +Start, +End, +Consumer, +Op, -Json:string) is det.
 %
-%   One output line (without the newline). Consumer is `-` for none; Op is `add` or
-%   `retract`.
+%   One output line (without the newline). Consumer is `-` for none, `echo(input)` for the
+%   echo of an input event (the line then carries `"input": true`); Op is `add` or `retract`.
 
 rtl_event_json(Event, Start, End, Consumer, Op, Json) :-
     Consumer == (-), Op \== retract,
@@ -578,6 +586,8 @@ rtl_event_json(Event, Start, End, Consumer, Op, Json) :-
     ->  format(string(Json), "{\"event\": \"~s\", \"start\": ~w, \"end\": ~w}", [Escaped, S, E])
     ;   (   Consumer == (-)
         ->  ConsumerPart = ""
+        ;   Consumer == echo(input)                  % the echo of an input event (echo_input)
+        ->  ConsumerPart = ", \"input\": true"
         ;   format(string(ConsumerText), "~w", [Consumer]),
             rtl_json_string_escape(ConsumerText, C),
             format(string(ConsumerPart), ", \"consumer\": \"~s\"", [C])

@@ -28,16 +28,13 @@ The reading and decoding are done in C by `foreign/rtl_utf8.so` (`c/rtl_utf8.c`)
 set-up built it, else in Prolog, with the same results.
 */
 
+:- use_module(rtl_foreign).
+
 :- dynamic c_decoder/0.
 
 load_c_decoder :-
-    source_location(File, _),
-    file_directory_name(File, Dir),
-    atomic_list_concat([Dir, '/foreign/rtl_utf8'], Lib),
     retractall(c_decoder),
-    (   absolute_file_name(Lib, _, [file_type(executable), access(read), file_errors(fail)]),
-        catch(load_foreign_library(Lib), _, fail),
-        current_predicate(rtl_utf8_decode/2)
+    (   rtl_load_foreign(rtl_utf8, rtl_utf8_decode/2)
     ->  assertz(c_decoder)
     ;   true
     ).

@@ -241,8 +241,10 @@ exact_time(Ctx, T, X) :-
     ;   T = datime(_, _, _, _, _, _, NS)
     ->  throw(error(domain_error(datime_nanoseconds, NS), context(rtl_math:Ctx,
                     'the counter of datime/7 is the nanoseconds of the stamp, an integer in [0, 10^9)')))
+    ;   compound(T), \+ is_list(T), catch(V is T, _, fail), number(V)
+    ->  exact_time(Ctx, V, X)              % an expression such as T + 0.1, as prev and next take
     ;   throw(error(type_error(time, T), context(rtl_math:Ctx,
-                    'a time is seconds, [Secs, NSecs] or datime/7')))
+                    'a time is seconds, an arithmetic expression, [Secs, NSecs] or datime/7')))
     ).
 
 %!  pose_interpolate(+T1:number, +Pose1:list, +T2:number, +Pose2:list, +T:number,

@@ -11,9 +11,9 @@
 A query arrives as text (from Python, the command line or a service). It is read as a
 term with rtl_read_text/4 (its variable names kept, trailing text refused), its time terms
 `E^T` / `E^[T1, T2]` are rewritten as the compiler rewrites them in the program (the
-time becomes the last two arguments), and it must pass rtl_check_goal/3 (rtl_sandbox.pl,
-built on SWI-Prolog's library(sandbox)) before it runs: no file, shell or database side
-effects, no halt. The program's own predicates are checked like any code; the SLR query
+time becomes the last two arguments), and it must pass rtl_check_goal/4 (rtl_sandbox.pl):
+what runs is the guarded goal that check gives. No file, shell or database side effects,
+no halt, and no catch/3 of the time limit. The program's own predicates are checked like any code; the SLR query
 predicates (prev, next, mem, ...) are declared safe there.
 
 An answer is the list of `Name=Value` pairs of the goal's variables (those whose name does
@@ -23,6 +23,7 @@ not start with `_`), in the order they appear in the goal.
 :- use_module(library(time), [call_with_time_limit/2]).
 :- use_module(rtl_sandbox).
 :- use_module(rtl_goal_arguments).
+:- use_module(rtl_error_text).
 :- use_module(rtl_text).
 :- use_module(rtl_ele).
 :- use_module(rtl_slr).
@@ -51,17 +52,34 @@ rtl_query(Text, At, Limit, Answers, Error) :-
 % The goal runs in a temporary module that inherits the program's predicates: what the
 % sandbox allows it to assert goes there, and is gone with it.
 checked_run(Limit, Tmp, Goal, At, Bindings, Answers, Error) :-
-    catch(rtl_check_goal(query([Tmp]), Tmp, Goal), Unsafe, true),
-    (   var(Unsafe)
-    ->  run(Limit, Tmp, Goal, At, Bindings, Answers, Error)
-    ;   unsafe_message(Unsafe, Tmp, Message),
+    catch(rtl_check_goal(query([Tmp]), Tmp, Goal, Guarded), Unsafe, true),
+    (   nonvar(Unsafe)
+    ->  unsafe_message(Unsafe, Tmp, Message),
         Error = unsafe(Message),
         Answers = []
+    ;   unknown_memory(Goal, Message)
+    ->  Error = failed(Message),
+        Answers = []
+    ;   run(Limit, Tmp, Guarded, At, Bindings, Answers, Error)
     ).
+
+%   unknown_memory(+Goal, -Message): Goal calls a memory query (mem, prev, next, ...) on a
+%   memory id that names no memory instance (never created, or deleted): an error naming
+%   it, not a query with no answer.
+
+unknown_memory(Goal, Message) :-
+    sub_term(T, Goal), compound(T),
+    compound_name_arity(T, Name, Arity),
+    memory_query(Name, Arity),
+    arg(1, T, Id),
+    ground(Id),
+    \+ exist_mem(Id),
+    !,
+    format(string(Message), "no memory instance ~q (never created, or deleted): ~q", [Id, Name/Arity]).
 
 % The sandbox's refusal, without the name of the temporary module.
 unsafe_message(Unsafe, Tmp, Message) :-
-    message_text(Unsafe, Message0),
+    rtl_error_text(Unsafe, Message0),
     format(atom(Prefix), "~q:", [Tmp]),
     atomic_list_concat(Parts, Prefix, Message0),
     atomic_list_concat(Parts, Message1),
@@ -90,7 +108,7 @@ syntax_message(error(syntax_error(What), Context), Text, Message) :- !,
     ),
     format(string(Message), "1:~w: syntax error: ~w", [Column, What]).
 syntax_message(Error, _, Message) :-
-    message_text(Error, Message).
+    rtl_error_text(Error, Message).
 
 run(Limit, M, Goal, At, Bindings, Answers, Error) :-
     include(named, Bindings, Shown),
@@ -107,7 +125,7 @@ all_or_first(all, M, Goal, At, Shown, Answers) :-
 raised_message(time_limit_exceeded, Seconds, Message) :- !,
     format(string(Message), "no answer within the query time limit (~w s)", [Seconds]).
 raised_message(Error, _, Message) :-
-    message_text(Error, Message).
+    rtl_error_text(Error, Message).
 
 named(Name=_) :-
     \+ sub_atom(Name, 0, _, _, '_').
@@ -155,11 +173,12 @@ rtl_memory_request(Text, Error) :-
     ->  true
     ;   memory_request_conditions(Request, Conds)
     ->  (   is_list(Conds) -> CondList = Conds ; CondList = [Conds] ),
-        catch(( maplist(safe_condition(M), CondList), Result = ok ), Unsafe,
-              ( message_text(Unsafe, Message), Result = unsafe(Message) )),
+        catch(( maplist(safe_condition(M), CondList, Guarded), Result = ok ), Unsafe,
+              ( rtl_error_text(Unsafe, Message), Result = unsafe(Message) )),
         (   Result == ok
-        ->  catch(M:Request, Raised,
-                  ( message_text(Raised, Message), Error = failed(Message) ))
+        ->  rtl_replace_goals(CondList, Guarded, Request, Checked),
+            catch(M:Checked, Raised,
+                  ( rtl_error_text(Raised, Message), Error = failed(Message) ))
         ;   Error = Result
         )
     ;   format(string(Message), "~q is not c_mem/4, c_mem/5, memorize/5, d_mem/1 or delete_memory/1", [Request]),
@@ -174,8 +193,8 @@ memory_request_conditions(memorize(_, Conds, _, _, _), Conds).
 memory_request_conditions(d_mem(_), []).
 memory_request_conditions(delete_memory(_), []).
 
-safe_condition(M, Cond) :-
-    (   callable(Cond) -> rtl_check_goal(query([]), M, Cond) ; type_error(callable, Cond) ).
+safe_condition(M, Cond, Guarded) :-
+    (   callable(Cond) -> rtl_check_goal(query([]), M, Cond, Guarded) ; type_error(callable, Cond) ).
 
 %!  rtl_sync_query(+GoalText, +At, +Timeout, ?QueryId, -Error) is det.
 %
@@ -200,10 +219,12 @@ rtl_sync_query(Text, At, Timeout, QueryId, Error) :-
     ->  Error = syntax("a synchronized query needs a time (at)")
     ;   rtl_time_goal(Goal0, Goal),
         in_temporary_module(Tmp, add_import_module(Tmp, M, start),
-                            ( catch(rtl_sandbox:rtl_check_goal(query([Tmp]), Tmp, Goal), Unsafe, true),
+                            ( catch(rtl_sandbox:rtl_check_goal(query([Tmp]), Tmp, Goal, _), Unsafe, true),
                               ( nonvar(Unsafe) -> unsafe_message(Unsafe, Tmp, Message) ; true ) )),
         (   nonvar(Unsafe)
         ->  Error = unsafe(Message)
+        ;   unknown_memory(Goal, Message)
+        ->  Error = failed(Message)
         ;   (   var(QueryId) -> flag(rtl_sync_query, Q0, Q0 + 1), QueryId is Q0 + 1 ; true ),
             (   Timeout == inf -> Until = inf ; Until is At + Timeout ),
             (   goal_reads_memory(Goal)
@@ -322,16 +343,3 @@ timed_arguments([A0|As0], I, Positions, [A|As]) :-
     I1 is I + 1,
     timed_arguments(As0, I1, Positions, As).
 
-message_text(Error, Text) :-
-    (   catch(message_to_codes(Error, Codes), _, fail)
-    ->  string_codes(Text0, Codes)
-    ;   format(string(Text0), "~q", [Error])
-    ),
-    split_string(Text0, "\n\t", " \t", Parts0),
-    exclude(==(""), Parts0, Parts),
-    atomic_list_concat(Parts, " ", Text1),
-    atom_string(Text1, Text).
-
-message_to_codes(Error, Codes) :-
-    '$messages':translate_message(Error, Lines, []),
-    with_output_to(codes(Codes), print_message_lines(current_output, '', Lines)).

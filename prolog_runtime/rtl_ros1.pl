@@ -19,15 +19,12 @@ that are not UTF-8 and floats that are not finite; the driver then converts that
 itself, which reports what is wrong or writes the floats as text.
 */
 
+:- use_module(rtl_foreign).
+
 :- dynamic loaded/0.
 
 load_helper :-
-    source_location(File, _),                   % (loaded from a .qlf file, the load
-    file_directory_name(File, Dir),             % context is the file that loads this one)
-    atomic_list_concat([Dir, '/foreign/rtl_ros1'], Lib),
-    (   absolute_file_name(Lib, _, [file_type(executable), access(read), file_errors(fail)]),
-        catch(load_foreign_library(Lib), _, fail),
-        current_predicate(rtl_ros1_term/3)
+    (   rtl_load_foreign(rtl_ros1, rtl_ros1_term/3)
     ->  retractall(loaded),
         assertz(loaded)
     ;   true

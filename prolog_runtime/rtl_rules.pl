@@ -4,7 +4,10 @@
             rtl_install_rules/3,        % +Module, +ClausesText, -Ids
             rtl_remove_rule/2,          % +Module, +Id
             rtl_rule_exists/2,          % +Module, +Id
-            rtl_fresh_rule_prefix/2     % +Module, -Prefix
+            rtl_fresh_rule_prefix/2,    % +Module, -Prefix
+            rtl_rules_state/3,          % +Module, -Added, -Removed
+            rtl_rules_check_state/4,    % +Module, +Added, +Removed, -Stores
+            rtl_rules_restore_state/3   % +Module, +Added, +Removed
           ]).
 
 /** <module> Adding and removing event rules while events flow (ETALIS ins_event_rule)
@@ -28,12 +31,15 @@ program file too, so del_event_rule/1 removes those as well.
 :- use_module(library(readutil)).
 :- use_module(rtl_ele).
 :- use_module(rtl_library, [rtl_target_program/2]).
-:- use_module(rtl_sandbox, [rtl_check_rule/4]).
+:- use_module(rtl_sandbox, [rtl_check_rule/5, rtl_rule_pred_name/2, rtl_store_pred/2]).
+:- use_module(rtl_error_text).
 :- use_module(rtl_timers, [rtl_timers_drop/2]).
 
 :- meta_predicate ins_event_rule(:), del_event_rule(:).
 
 :- dynamic added_rule/2.        % added_rule(Module, Id)
+:- dynamic added_rule_code/4.   % added_rule_code(Module, Id, Stores, Clauses): as installed
+:- dynamic removed_rule/2.      % removed_rule(Module, Id): a rule of the program file, deleted
 
 %!  ins_event_rule(:Rule) is det.
 %
@@ -89,7 +95,7 @@ rule_label(Rule, Label) :-
 %
 %   Add the rules in Text, the output of `retalisc compile-rules`, to Module. Nothing is
 %   added when one of their ids is in use, or when one of them is refused by
-%   rtl_check_rule/4 (rtl_sandbox.pl): a rule added at run time comes from outside the
+%   rtl_check_rule/5 (rtl_sandbox.pl): a rule added at run time comes from outside the
 %   program file, so every goal it could run must be safe.
 
 rtl_install_rules(M, Text, Ids) :-
@@ -101,11 +107,14 @@ rtl_install_rules(M, Text, Ids) :-
                            context(ins_event_rule/1, 'a rule with this id exists; delete it first')))
            ;   true
            )),
-    forall(member(rule(Id, Stores, Clauses), Rules),
-           rtl_check_rule(M, Id, Stores, Clauses)),
-    forall(member(rule(Id, Stores, Clauses), Rules),
+    maplist(checked_rule(M), Rules, Checked),
+    forall(member(rule(Id, Stores, Clauses), Checked),
            install_rule(M, Id, Stores, Clauses)),
     reschedule_sweep.
+
+% The clauses of a rule as rtl_check_rule/5 guards them.
+checked_rule(M, rule(Id, Stores, Clauses), rule(Id, Stores, Guarded)) :-
+    rtl_check_rule(M, Id, Stores, Clauses, Guarded).
 
 install_rule(M, Id, Stores, Clauses) :-
     forall(member(store(Name, Arity, Window), Stores),
@@ -126,7 +135,8 @@ install_rule(M, Id, Stores, Clauses) :-
                assertz(M:ele_kept_store(Live, kept(KeptA, KeptB), Order))
            )),
     forall(member(Clause, Clauses), assertz(M:Clause)),
-    assertz(added_rule(M, Id)).
+    assertz(added_rule(M, Id)),
+    assertz(added_rule_code(M, Id, Stores, Clauses)).
 
 read_rules(M, Text, Rules) :-
     setup_call_cleanup(open_string(Text, In),
@@ -171,7 +181,7 @@ rtl_remove_rule(M, Id) :-
                     clause(M:Trigger, Body, Ref),
                     calls_rule(Body, Id) ),
                   erase(Ref))),
-    forall(( M:ele_partial_store(Name, Arity), rule_pred_name(Id, Name) ),
+    forall(( M:ele_partial_store(Name, Arity), rtl_rule_pred_name(Id, Name) ),
            ( functor(Head, Name, Arity),
              retractall(M:Head),
              retractall(M:ele_partial_store(Name, Arity)),
@@ -181,16 +191,77 @@ rtl_remove_rule(M, Id) :-
              ;   true
              ) )),
     (   current_predicate(M:ele_record_store/3)
-    ->  forall(( M:ele_record_store(Name, Arity, Kept), rule_pred_name(Id, Name) ),
+    ->  forall(( M:ele_record_store(Name, Arity, Kept), rtl_rule_pred_name(Id, Name) ),
                retractall(M:ele_record_store(Name, Arity, Kept)))
     ;   true
     ),
-    forall(( current_predicate(M:Name/Arity), rule_pred_name(Id, Name),
+    forall(( current_predicate(M:Name/Arity), rtl_rule_pred_name(Id, Name),
              functor(Head, Name, Arity),
              \+ predicate_property(M:Head, imported_from(_)) ),
            remove_predicate(M, Name, Arity)),
-    rtl_timers_drop(M, rule_pred_name(Id)),
-    retractall(added_rule(M, Id)),
+    rtl_timers_drop(M, rtl_rule_pred_name(Id)),
+    (   retract(added_rule(M, Id))
+    ->  retractall(added_rule_code(M, Id, _, _))
+    ;   assertz(removed_rule(M, Id))
+    ),
+    reschedule_sweep.
+
+%!  rtl_rules_state(+Module, -Added, -Removed) is det.
+%!  rtl_rules_check_state(+Module, +Added, +Removed, -Stores) is det.
+%!  rtl_rules_restore_state(+Module, +Added, +Removed) is det.
+%
+%   The rules of Module as a snapshot holds them (rtl_state.pl): Added the rules added at run
+%   time, `rule(Id, Stores, Clauses)` as compiled, Removed the ids of the rules of the program
+%   file deleted since it was loaded. rtl_rules_check_state/4 throws
+%   `rtl_rules_state(Message)` (and changes nothing) unless the rules can be made so: every
+%   added rule passes rtl_check_rule/4 as a rule added by a control line does, and no rule of
+%   the program file the snapshot keeps was deleted in this process (its code is gone); Stores
+%   are the Name/Arity of the partial-match stores of the rules there will be.
+%   rtl_rules_restore_state/3 makes them so: the rules added now are removed, the deleted
+%   ones deleted and the added ones installed, their stores empty.
+
+rtl_rules_state(M, Added, Removed) :-
+    findall(rule(Id, Stores, Clauses), added_rule_code(M, Id, Stores, Clauses), Added),
+    findall(Id, removed_rule(M, Id), Removed).
+
+rtl_rules_check_state(M, Added, Removed, Stores) :-
+    (   is_list(Added), is_list(Removed), maplist(atom, Removed)
+    ->  true
+    ;   throw(rtl_rules_state("its rules are not a list of compiled rules and a list of rule ids", []))
+    ),
+    forall(( removed_rule(M, Id), \+ memberchk(Id, Removed) ),
+           throw(rtl_rules_state("it has rule ~q of the program, which was deleted in this process: restore it into a new load of the program", [Id]))),
+    forall(( member(Id, Removed), \+ removed_rule(M, Id) ),
+           (   \+ added_rule(M, Id), rtl_rule_exists(M, Id)
+           ->  true
+           ;   throw(rtl_rules_state("it deletes rule ~q, which the program does not have", [Id]))
+           )),
+    forall(member(Rule, Added),
+           (   Rule = rule(Id, RuleStores, Clauses), atom(Id), is_list(RuleStores), is_list(Clauses)
+           ->  catch(rtl_check_rule(M, Id, RuleStores, Clauses, Guarded), error(Unsafe, _),
+                     throw(rtl_rules_state("its rule ~q added at run time is refused: ~q", [Id, Unsafe]))),
+               (   Guarded =@= Clauses              % installed in their guarded form
+               ->  true
+               ;   throw(rtl_rules_state("its rule ~q added at run time is not as the rule check leaves it", [Id]))
+               )
+           ;   throw(rtl_rules_state("~q is not a compiled rule", [Rule]))
+           )),
+    findall(Name/Arity,
+            (   current_predicate(M:ele_partial_store/2),
+                M:ele_partial_store(Name, Arity),
+                \+ ( added_rule(M, Id), rtl_rule_pred_name(Id, Name) ),
+                \+ ( member(Id, Removed), rtl_rule_pred_name(Id, Name) )
+            ;   member(rule(_, RuleStores, _), Added),
+                member(Store, RuleStores),
+                rtl_store_pred(Store, Name/Arity)
+            ),
+            Stores0),
+    sort(Stores0, Stores).
+
+rtl_rules_restore_state(M, Added, Removed) :-
+    forall(added_rule(M, Id), rtl_remove_rule(M, Id)),
+    forall(( member(Id, Removed), \+ removed_rule(M, Id) ), rtl_remove_rule(M, Id)),
+    forall(member(rule(Id, Stores, Clauses), Added), install_rule(M, Id, Stores, Clauses)),
     reschedule_sweep.
 
 %   The sweep of windowed stores is scheduled from the smallest window: setting the delay
@@ -209,7 +280,7 @@ calls_rule(Body, Id) :-
     sub_term(Goal, Body),
     callable(Goal),
     functor(Goal, Name, _),
-    rule_pred_name(Id, Name),
+    rtl_rule_pred_name(Id, Name),
     !.
 
 %!  rtl_rule_exists(+Module, +Id) is semidet.
@@ -220,32 +291,9 @@ rtl_rule_exists(M, Id) :-
     (   added_rule(M, Id)
     ->  true
     ;   current_predicate(M:Name/_),
-        rule_pred_name(Id, Name)
+        rtl_rule_pred_name(Id, Name)
     ->  true
     ).
-
-%   Name is `e_<Id>_<digits>` or `e_<Id>_<digits>_<suffix>`, the suffix not starting with
-%   a digit (`e_r1_2_1` belongs to rule `r1_2`, not `r1`).
-rule_pred_name(Id, Name) :-
-    atom(Name),
-    atomic_list_concat([e_, Id, '_'], Prefix),
-    atom_concat(Prefix, Tail, Name),
-    atom_codes(Tail, Codes),
-    digits(Codes, Rest),
-    (   Rest == []
-    ->  true
-    ;   Rest = [0'_, C|_],
-        \+ code_type(C, digit)
-    ).
-
-digits([C|Cs], Rest) :-
-    code_type(C, digit), !,
-    digits_(Cs, Rest).
-
-digits_([C|Cs], Rest) :-
-    code_type(C, digit), !,
-    digits_(Cs, Rest).
-digits_(Rest, Rest).
 
 %!  rtl_fresh_rule_prefix(+Module, -Prefix) is det.
 %
@@ -322,6 +370,10 @@ compile_in_subprocess(M, Prefix, Text, Clauses) :-
     ;   split_string(Messages, "", "\n", [Message]),
         throw(error(retalis_compile_error(Message), context(ins_event_rule/1, Text)))
     ).
+
+rtl_error_text:runtime_error_text(retalis_compile_error(Message), Text) :-
+    string(Message),
+    format(string(Text), "the event rule does not compile: ~s", [Message]).
 
 :- multifile prolog:error_message//1.
 prolog:error_message(retalis_compile_error(Message)) -->

@@ -73,6 +73,7 @@ most Z. prev and next are bounded by their own time arguments instead (text unde
 Def. 18). A time argument that is not bound raises an instantiation error.
 */
 
+:- use_module(rtl_guard, [rtl_condition_raised/3]).
 :- use_module(rtl_ele).
 :- use_module(rtl_time).
 :- use_module(rtl_raise).
@@ -394,9 +395,7 @@ observe_in([H|Hs], Op, Event, Start, End) :-
 conditions_hold([], _, _) :- !.
 conditions_hold(Conds, M, Id) :-
     catch(once(all_goals(Conds, M)), Error,
-          ( print_message(warning, format("condition of memory ~q raised ~q; event not recorded",
-                                          [Id, Error])),
-            fail )).
+          rtl_condition_raised(Error, "condition of memory ~q raised ~s; event not recorded", [Id])).
 
 all_goals([], _).
 all_goals([G|Gs], M) :-

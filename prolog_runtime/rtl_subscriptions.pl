@@ -36,6 +36,7 @@ and are indexed by the functor of their pattern: an event no subscription can ma
 one failed index lookup.
 */
 
+:- use_module(rtl_guard, [rtl_condition_raised/3]).
 :- use_module(rtl_ele).
 :- use_module(rtl_time).
 :- use_module(rtl_io).
@@ -200,9 +201,7 @@ expired(M, Id, Consumer) :-
 
 conditions_hold(M, Conds, Which) :-
     catch(all_goals(Conds, M), Error,
-          ( print_message(warning, format("condition of ~q raised ~q; event not delivered",
-                                          [Which, Error])),
-            fail )).
+          rtl_condition_raised(Error, "condition of ~q raised ~s; event not delivered", [Which])).
 
 all_goals([], _).
 all_goals([G|Gs], M) :-

@@ -46,6 +46,8 @@ every history is complete, so rtl_sync_finish(run) runs the matches still postpo
 order; rtl_sync_finish(drop) discards them.
 */
 
+:- use_module(rtl_error_text, [rtl_term_text/2]).
+:- use_module(rtl_guard, [rtl_condition_raised/3]).
 :- use_module(rtl_ele).
 :- use_module(rtl_slr).
 :- use_module(rtl_time).
@@ -313,8 +315,8 @@ release('$call'(Action, _), _, _, _) :- !,
     call(Action, ready).
 release(Event, Query, Start, End) :-
     (   catch(once(Query), Error,
-              ( print_message(warning, format("synchronized query ~q raised ~q; no event", [Query, Error])),
-                fail ))
+              ( rtl_term_text(Query, Q),
+                rtl_condition_raised(Error, "synchronized query ~s raised ~s; no event", [Q]) ))
     ->  rtl_derived(Event, Start, End)
     ;   true
     ).

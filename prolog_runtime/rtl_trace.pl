@@ -40,14 +40,18 @@ Both evaluations of patterns below evaluate the rules' patterns over the log wit
 language (docs/language.md, "Patterns"): rules come from the compiler as terms
 `rule(Label, Place, Head, Pattern)`, Pattern built from `ev(Event, Start, End)`,
 `seq(P, Q)` (and the other binary operators), `where(P, Goal)`, `check(P, Goal)`,
-`win(P, Seconds)`, `neg(N, P1, P2)`, `fnot(P, N)` and `agg(Function, P, Value)`.
+`win(P, Seconds)`, `neg(N, P1, P2)`, `absent(N, P, Seconds)`, `fnot(P, N)`,
+`agg(Function, P, Value)`, `sliding(Function, P, Group, Seconds, Value)`, `timer(P, Delay)`
+for the pattern of a timer rule (`alarm(E, Delay) <- P`, whose head is then E) and
+`sync(P, Query)` for that of a synchronized rule (its head the synchronized event).
 Conditions run in the program module.
 */
 
 :- use_module(library(apply)).
 :- use_module(library(lists)).
 :- use_module(rtl_ele).
-:- use_module(rtl_io, [rtl_json_string_escape/2]).
+:- use_module(rtl_io, [rtl_json_string_escape/2, rtl_parse_event_line/2]).
+:- use_module(rtl_lines, [rtl_utf8_line/2]).
 :- use_module(rtl_policy, [rtl_policy_positioned/2]).
 :- use_module(retalis, [rtl_feed_lines/3, rtl_feed_lines/4]).
 
@@ -64,18 +68,32 @@ rtl_trace_start("") :-
     nb_setval(rtl_trace_seq, 0),
     nb_setval(rtl_trace_line, 0),
     nb_setval(rtl_trace_line_seen, -1),
+    nb_setval(rtl_trace_input, first),
     rtl_add_output_hook(rtl_trace:log_event).
 
 rtl_trace_stop("") :-
     rtl_remove_output_hook(rtl_trace:log_event).
 
-%!  rtl_trace_feed_line(+Text, +LineNo, -Output) is det.
+%!  rtl_trace_feed_line(+Text, +Where, -Output) is det.
 %
-%   rtl_feed_lines/3 for one input line, its events logged under LineNo.
+%   rtl_feed_lines/3 for one input line, its events logged under Where: the line number in
+%   the event file, or a string naming a recording's message (`/tf#12`, fed as line 0).
 
 rtl_trace_feed_line(Text, Line, Output) :-
-    nb_setval(rtl_trace_line, Line),
-    rtl_feed_lines(Text, Line, Output).
+    expect_input(Text, Line),
+    line_number(Line, Number),
+    rtl_feed_lines(Text, Number, Output).
+
+line_number(Line, Number) :-
+    (   integer(Line) -> Number = Line ; Number = 0 ).
+
+%   where_text(+Where, -Text): "input line N" or "input message TOPIC#N".
+
+where_text(Line, Text) :-
+    (   integer(Line)
+    ->  format(string(Text), "input line ~w", [Line])
+    ;   format(string(Text), "input message ~w", [Line])
+    ).
 
 %!  rtl_trace_feed_byte_line(+Bytes, +LineNo, -Output) is det.
 %
@@ -83,15 +101,33 @@ rtl_trace_feed_line(Text, Line, Output) :-
 %   and rejected when it is not (rtl_feed_lines/4, `bytes(true)`).
 
 rtl_trace_feed_byte_line(Bytes, Line, Output) :-
+    (   catch(rtl_utf8_line(Bytes, Text), _, fail), string(Text)
+    ->  expect_input(Text, Line)
+    ;   expect_input("", Line)
+    ),
+    line_number(Line, Number),
+    rtl_feed_lines(Bytes, Number, [bytes(true)], Output).
+
+%   expect_input(+Text, +LineNo): the event the line holds is the one logged as its input.
+%   Events logged before it (timers and absences the line's time makes due) and after it
+%   are derived. A line whose event cannot be read here takes its first event as the input.
+
+expect_input(Text, Line) :-
     nb_setval(rtl_trace_line, Line),
-    rtl_feed_lines(Bytes, Line, [bytes(true)], Output).
+    (   catch(rtl_parse_event_line(Text, event(add, Event, Start, End)), _, fail)
+    ->  nb_setval(rtl_trace_input, event(Event, Start, End))
+    ;   nb_setval(rtl_trace_input, first)
+    ).
 
 log_event(Event, Start, End, add) :- !,
     nb_getval(rtl_trace_seq, Seq0),
     Seq is Seq0 + 1,
     nb_setval(rtl_trace_seq, Seq),
     nb_getval(rtl_trace_line, Line),
+    nb_getval(rtl_trace_input, Input),
     (   nb_getval(rtl_trace_line_seen, Line)
+    ->  Kind = derived
+    ;   Input = event(E, S, En), \+ ( E =@= Event, S =:= Start, En =:= End )
     ->  Kind = derived
     ;   nb_setval(rtl_trace_line_seen, Line),
         Kind = input
@@ -132,7 +168,8 @@ explain_entry(Rules, Seq, Depth, Seen) :-
     ;   format("~q over [~w, ~w]", [Event, Start, End])
     ),
     (   Kind == input
-    ->  format("  input line ~w~n", [Line])
+    ->  where_text(Line, Where),
+        format("  ~s~n", [Where])
     ;   memberchk(Seq, Seen)
     ->  format("  (see above)~n")
     ;   derivation(Rules, Event, Start, End, Seq, Rule, Items)
@@ -140,7 +177,8 @@ explain_entry(Rules, Seq, Depth, Seen) :-
         format("  derived by rule ~w (~w)~n", [Label, Place]),
         Depth1 is Depth + 1,
         forall(member(Item, Items), explain_item(Rules, Item, Depth1, [Seq|Seen]))
-    ;   format("  raised while processing input line ~w~n", [Line])
+    ;   where_text(Line, Where),
+        format("  raised while processing ~s~n", [Where])
     ).
 
 explain_item(Rules, Seq, Depth, Seen) :-
@@ -214,6 +252,41 @@ match(M, B, fnot(P, N), S, E, I) :-
     \+ ( match(M, B, N, _, EN, _), EN < S ).
 match(M, B, agg(_, P, _), S, E, [I, note("(the value aggregates the matches of this pattern so far)")]) :-
     match(M, B, P, S, E, I).
+match(M, B, absent(N, P, D), S, E, I) :-
+    match(M, B, P, S, E1, I),
+    \+ ( match(M, B, N, SN, EN, _), E1 < SN, EN =< E1 + D ),
+    E is E1 + D.
+match(M, B, timer(P, Delay), S, E, [I, note(Note)]) :-
+    match(M, B, P, S, E1, I),
+    catch(D is Delay, _, fail),
+    E is E1 + D,
+    format(string(Note), "(raised ~w s after the match ended)", [D]).
+match(M, B, sync(P, _Query), S, E, [I, note("(a synchronized rule: derived once its query could be answered)")]) :-
+    match(M, B, P, S, E, I).
+match(M, B, sliding(F, P, G, D, V), T, T, [Items, note(Note)]) :-
+    copy_term(G-P, G1-P1),
+    distinct(G1-T, ( match(M, B, P1, _, E0, _), ( T = E0 ; T is E0 + D ) )),
+    G = G1,
+    findall(F-I, ( match(M, B, P, _, E, I), E > T - D, E =< T ), Members),
+    pairs_keys_values(Members, Functions, Items),
+    sliding_value(F, Functions, V),
+    length(Items, Count),
+    text(Note, "(the value over the ~d match~a of group ~q in the last ~w s)", [Count, es(Count), G, D]).
+
+%   sliding_value(+Function, +Instances, ?Value): Value is Function over the matches in the
+%   window, Instances being Function with each match's bindings (equal as numbers when Value
+%   is given); fails where Function has no value.
+
+sliding_value(F, Instances, V) :-
+    findall(X, ( member(Instance, Instances), compound(Instance), arg(1, Instance, X) ), Xs),
+    function_value(F, Instances, Xs, V0),
+    (   var(V) -> V = V0 ; V =:= V0 ).
+
+function_value(count, Instances, _, V) :- length(Instances, V).
+function_value(sum(_), _, Xs, V) :- sum_list(Xs, V).
+function_value(min(_), _, Xs, V) :- Xs \== [], min_list(Xs, V).
+function_value(max(_), _, Xs, V) :- Xs \== [], max_list(Xs, V).
+function_value(avg(_), _, Xs, V) :- Xs \== [], sum_list(Xs, Sum), length(Xs, N), V is Sum / N.
 
 check_goal(Goal, S, E, Goal1) :-
     mapsubterms(check_time(S, E), Goal, Goal1).
@@ -308,6 +381,27 @@ part(M, Names, agg(F, P, V), node(_, Text, Count, [NP])) :- !,
     node_count(NP, Count),
     named(Names, F-V, FV),
     text(Text, "aggregate ~s: one value per match", [FV]).
+part(M, Names, absent(N, P, D), node(_, Text, Count, [NP])) :- !,
+    part(M, Names, P, NP),
+    node_count(NP, CP),
+    count_matches(M, absent(N, P, D), Count),
+    (   N = ev(NE, _, _) -> named(Names, NE, NText) ; NText = "the negated pattern" ),
+    text(Text, "not ~s within ~w s after: ~d of ~d have none", [NText, D, Count, CP]).
+part(M, Names, timer(P, Delay), node(_, Text, Count, [NP])) :- !,
+    part(M, Names, P, NP),
+    node_count(NP, Count),
+    named(Names, Delay, DelayText),
+    text(Text, "timer of ~s s: one per match, raised when the clock reaches it", [DelayText]).
+part(M, Names, sync(P, Query), node(_, Text, Count, [NP])) :- !,
+    part(M, Names, P, NP),
+    node_count(NP, Count),
+    named(Names, Query, QueryText),
+    text(Text, "synchronized: the query ~s once the memories it reads are complete", [QueryText]).
+part(M, Names, sliding(F, P, G, D, V), node(_, Text, Count, [NP])) :- !,
+    part(M, Names, P, NP),
+    count_matches(M, sliding(F, P, G, D, V), Count),
+    named(Names, F-G, FG),
+    text(Text, "sliding ~s over ~w s: ~d value~a", [FG, D, Count, s(Count)]).
 
 condition_part(M, Names, Kind, P, Goal, Text, Count, NP) :-
     part(M, Names, P, NP),
@@ -320,13 +414,14 @@ condition_part(M, Names, Kind, P, Goal, Text, Count, NP) :-
 node_count(node(_, _, Count, _), Count).
 
 %   stop_node(+Node): the first node, children before parents, with no match whose children
-%   all have matches (or a leaf with none) gets its Id bound to `stop`; fails if none.
+%   all have matches (or a leaf with none), under parts that have no match either, gets its
+%   Id bound to `stop`; fails if none.
 
 stop_node(node(Id, _, Count, Children)) :-
+    Count =:= 0,                % below a part that matches (an `or`), nothing stops it
     (   member(Child, Children), stop_node(Child)
     ->  true
-    ;   Count =:= 0,
-        forall(member(node(_, _, C, _), Children), C > 0),
+    ;   forall(member(node(_, _, C, _), Children), C > 0),
         Id = stop
     ).
 
@@ -460,7 +555,7 @@ change(erase, Kind, What) :- !,
 change(retract, Kind, What) :-
     (   in_ancestor(rtl_horizon:rtl_dry_run/3)
     ->  What = ignore
-    ;   in_ancestor(rtl_ele:collect_garbage/1)              % a sweep (clock-driven or of late events)
+    ;   in_ancestor(rtl_ele:rtl_collect_garbage/1)              % a sweep (clock-driven or of late events)
     ->  ( Kind == live -> What = expired ; What = dropped )
     ;   in_ancestor(rtl_policy:rtl_policy_drop_twins/2)
     ->  What = replaced

@@ -7,15 +7,11 @@ import sys
 
 import click
 
+from . import commands
 from .commands import commands_of, registered_commands
 
 
 _NO_ARGS_IS_HELP = getattr(click.exceptions, "NoArgsIsHelpError", ())
-
-#: True in the `retalisc` program itself (`entry`), where one thread makes every Prolog call;
-#: False when the commands run inside another program (click's test runner, an embedding).
-COMMAND_LINE_PROCESS = False
-
 
 class _Group(click.Group):
     """A click group whose usage errors (a missing file, a bad option value, an unknown option)
@@ -86,6 +82,5 @@ def main() -> None:
 
 def entry() -> None:
     """The `retalisc` program (its console script and `python -m retalisc`)."""
-    global COMMAND_LINE_PROCESS
-    COMMAND_LINE_PROCESS = True
+    commands.COMMAND_LINE_PROCESS = True
     main()

@@ -42,6 +42,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import List, Optional
 
+from . import runtime_location
+
 FORMAT = 1
 MAGIC = "retalisc-compiled"
 MAX_ENTRIES = 256
@@ -112,8 +114,6 @@ def cache_dir() -> Optional[Path]:
 @lru_cache(maxsize=1)
 def compiler_fingerprint() -> str:
     """A hash of everything but the program that decides what a compilation gives."""
-    from . import runtime_location
-
     digest = hashlib.sha256()
 
     def add(label: str, data: bytes) -> None:

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Callable, List, Optional, Union
 if TYPE_CHECKING:
     from .passes.unit import AqUnit, Unit
 
-__all__ = ["AQ_MODES", "AqOptions", "CompileResult", "compile_added_rules", "compile_file", "compile_source",
+__all__ = ["AQ_MODES", "AqOptions", "CompileResult", "compile_added_rules", "compile_file", "compile_source",  # noqa: F822 (AQ_MODES: __getattr__)
            "module_name", "pass_names"]
 
 RULE_PREFIX = re.compile(r"[a-z][A-Za-z0-9_]*")

@@ -17,8 +17,11 @@ from pathlib import Path
 from typing import List, Optional
 
 from .frontend.errors import RetalisSemanticError
+from .backends.prolog.render import copied_clause_lines
 from .frontend.program import Directive
 from .frontend.terms import Span
+from .passes.loadable import _loads_code
+from .runtime_location import runtime_dir
 
 #: Seconds a load may take (its directives run: the program is trusted, but may loop).
 LOAD_TIMEOUT = 120
@@ -26,8 +29,6 @@ LOAD_TIMEOUT = 120
 
 def needs_load(unit) -> bool:
     """Whether the program has a directive that loads files (only a load can judge it)."""
-    from .passes.loadable import _loads_code
-
     return any(isinstance(c, Directive) and _loads_code(c.goal) for c in unit.program.clauses)
 
 
@@ -40,9 +41,6 @@ def load_error(result, program: str) -> Optional[RetalisSemanticError]:
     swipl = shutil.which("swipl")
     if swipl is None or not hasattr(unit, "program") or not needs_load(unit):
         return None
-    from .backends.prolog.render import copied_clause_lines
-    from .runtime_location import runtime_dir
-
     source = Path(program).resolve()
     as_file = str(source.with_suffix(".pl"))
     with tempfile.TemporaryDirectory(prefix="retalisc-check-") as directory:
@@ -69,7 +67,5 @@ def load_error(result, program: str) -> Optional[RetalisSemanticError]:
 
 
 def _first_loader(unit) -> Span:
-    from .passes.loadable import _loads_code
-
     spans: List[Span] = [c.span for c in unit.program.clauses if isinstance(c, Directive) and _loads_code(c.goal)]
     return spans[0]

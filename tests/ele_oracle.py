@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections import Counter
 from typing import Dict, List, Optional, Tuple
 
-from retalisc.frontend.program import Absence, Binary, Check, EventAtom, Negation, Pattern, Where, Window
+from retalisc.frontend.program import Absence, Binary, EventAtom, Negation, Pattern, Where, Window
 from retalisc.frontend.terms import Atom, Compound, Number, Term, Var
 
 Match = Tuple[Dict[str, Term], float, float]

@@ -3,6 +3,7 @@ with the ROS Python (.venv-ros), which publishes messages, calls the node's serv
 prints what it saw as one JSON object.
 
     python ros1_client.py services NODE_NAME FILE_THAT_MUST_NOT_APPEAR
+    python ros1_client.py exploits NODE_NAME CANARY_FILE
     python ros1_client.py nao SECONDS
     python ros1_client.py bag BAG RATE TOPICS EXPECTED OUT_TOPICS
     python ros1_client.py numbered        (commands on standard input, one JSON reply a line)
@@ -111,6 +112,35 @@ def services(node: str, forbidden: str) -> dict:
     result["load_seconds"] = time.monotonic() - began
     result["load_in_order"] = everything == [float(k) for k in range(messages)]
     result["load_memorized"] = _count(query_all)
+    return result
+
+
+def exploits(node: str, canary: str) -> dict:
+    """The goal exploits of issue 35 through each service that takes a goal, then a query
+    that must still be answered; each reply as [ok, error] (tests/test_live_ros1_boundary.py)."""
+    def proxy(name):
+        rospy.wait_for_service(f"/{node}/{name}", timeout=10)
+        return rospy.ServiceProxy(f"/{node}/{name}", service_class(name))
+
+    add_out, add_mem = proxy("add_output_subscription"), proxy("add_memory")
+    query_one, query_all = proxy("query_one"), proxy("query_all")
+    shell = f'shell("touch {canary}")'
+    goals = {"print_message": f'print_message(error, format("~@", [{shell}]))',
+             "format_W": f'format(atom(_), "~W", ["touch {canary}", [portray_goal(shell)]])',
+             "put_attr": f"put_attr(Y, freeze, {shell}), Y = 1",
+             "thrown": f'throw(error(format("~@", [{shell}]), _))',
+             "aborted": "throw('$aborted')"}
+    result = {}
+    for name, goal in goals.items():
+        result[f"query_all_{name}"] = _pair(query_all(query=goal, at=""))
+        result[f"query_one_{name}"] = _pair(query_one(query=goal, at=""))
+        result[f"add_output_{name}"] = _pair(add_out(topic="robot_pos", msg_type="", event="tf(P, C, V)",
+                                                     conditions=f"[{goal}]", template="V", start="", end=""))
+        result[f"add_memory_{name}"] = _pair(add_mem(memory=f"c_mem(m_{name}, tf(P, C, V)-[{goal}], 2, inf)"))
+    started = time.monotonic()
+    result["caught_limit"] = _pair(query_all(query="catch((repeat, fail), _, true)", at=""))
+    result["caught_limit_seconds"] = time.monotonic() - started
+    result["after"] = _pair(query_all(query="X = 1", at=""))
     return result
 
 
@@ -365,6 +395,8 @@ def main() -> None:
     scenario = sys.argv[1]
     if scenario == "services":
         result = services(sys.argv[2], sys.argv[3])
+    elif scenario == "exploits":
+        result = exploits(sys.argv[2], sys.argv[3])
     elif scenario == "chain":
         result = chain(sys.argv[2], sys.argv[3])
     elif scenario == "nao":

@@ -168,7 +168,7 @@ def test_register_with_unsorted_answers():
     """aq_register/4 with answers(unsorted): each answer once, in the table's order; the same
     set as the sorted list of aq_register/3 (a fact listed twice is one answer)."""
     from retalisc.compiler import AqOptions, compile_source
-    from test_aq_support import _run
+    from aq_support import _run
     facts = "".join(f"edge({(7 * i) % 50}, {(7 * i + 3) % 50}).\n" for i in range(60))
     source = PROGRAM4 + facts + "edge(0, 1).\n"
     generated = compile_source(source, "unsorted.pl", active_queries=AqOptions("tabled")).prolog

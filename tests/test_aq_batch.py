@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import test_aq_kept as kept
-import test_aq_support as support
+import aq_support as support
 from retalisc.compiler import AqOptions, compile_source
 
 # e/2 gets non-ground facts; f/1 and h/1 stay ground.  t/1 waits on e (so that retracting an

@@ -17,7 +17,7 @@ import pytest
 from click.testing import CliRunner
 
 from retalisc.cli import main
-from test_aq_support import run_all
+from aq_support import run_all
 
 GOLDEN = Path(__file__).with_name("golden_aq")
 CASES = sorted(p.name for p in GOLDEN.iterdir() if p.is_dir())

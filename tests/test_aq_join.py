@@ -11,7 +11,7 @@ import os
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import test_aq_support as support
+import aq_support as support
 from test_aq_oracle import run_updates
 from retalisc.compiler import AqOptions, compile_source
 

@@ -21,7 +21,7 @@ from typing import List, Tuple
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import test_aq_support as support
+import aq_support as support
 from retalisc.compiler import AqOptions, compile_source
 
 RULES = """acc(O, S) :- seller(S, T), has(T, O), offers(S, O, P).

@@ -13,7 +13,7 @@ from typing import List, Tuple
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import test_aq_support as support
+import aq_support as support
 from retalisc.compiler import AqOptions, compile_source
 
 # An update step: ("+" | "-", [fact, ...]); one fact is aq_assert/aq_retract, more are one batch
@@ -97,7 +97,7 @@ def program(draw, recursive):
 
 def run_updates(source: str, goals: List[str], steps: List[Update], mode: str, subsumption: bool,
                 dred: str):
-    """test_aq_support.run_all with batches: the answer sets after registration (step 0) and after
+    """aq_support.run_all with batches: the answer sets after registration (step 0) and after
     every update step, incremental, SWI `:- table` oracle and scratch, and the stats at the end."""
     generated = compile_source(source, "program.pl", active_queries=AqOptions(mode, subsumption)).prolog
     generated += f":- aq_configure([dred({dred})]).\n"

@@ -19,7 +19,7 @@ import os
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import test_aq_support as support
+import aq_support as support
 from retalisc.compiler import AqOptions, compile_source
 
 RIGHT = "path(X, Y) :- edge(X, Z), path(Z, Y).\npath(X, Y) :- edge(X, Y).\n"

@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from retalisc.compiler import AqOptions, compile_source
-from test_aq_support import _PRINT, _parse, _run, oracle_goal, oracle_rules
+from aq_support import _PRINT, _parse, _run, oracle_goal, oracle_rules
 
 PROGRAMS = {
     "right": "path(X, Y) :- edge(X, Y).\npath(X, Y) :- edge(X, Z), path(Z, Y).\n",

@@ -101,7 +101,7 @@ def test_rule_for_a_new_predicate_can_be_queried(tmp_path):
 
 def normalised(source: str):
     program = normalise(read_definite_program(source, "p.pl"))
-    return [f"{to_prolog(r.head)} :- {', '.join(to_prolog(l.term) for l in r.body)}" for r in program.rules]
+    return [f"{to_prolog(r.head)} :- {', '.join(to_prolog(literal.term) for literal in r.body)}" for r in program.rules]
 
 
 def test_disjunction_and_if_then_else_become_clauses():
@@ -116,7 +116,7 @@ def test_disjunction_and_if_then_else_become_clauses():
 
 
 def test_too_many_alternatives_is_a_located_error():
-    body = ", ".join(f"(a(X) ; b(X))" for _ in range(9))
+    body = ", ".join("(a(X) ; b(X))" for _ in range(9))
     source = f"a(1). b(1).\np(X) :- {body}.\n"
     with pytest.raises(Exception) as info:
         compile_source(source, "p.pl", active_queries=AqOptions("tabled"))

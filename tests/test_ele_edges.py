@@ -148,7 +148,6 @@ def test_the_horizon_is_infinite_when_nothing_is_forgotten():
 @pytest.mark.parametrize("cli", ["swipl", "retalisc"])
 def test_the_warning_names_the_file_and_line(tmp_path, cli, swipl, retalisc_cmd):
     import subprocess
-    import sys
     from retalisc.compiler import compile_source
     program = tmp_path / "s.rtl"
     program.write_text(ISSUE_SEQ)

@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 import random
 import threading
-import time
 from typing import List
 
 import pytest

@@ -12,7 +12,6 @@ import re
 import select
 import shutil
 import subprocess
-import time
 from pathlib import Path
 
 import pytest

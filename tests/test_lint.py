@@ -125,10 +125,47 @@ def test_shipped_examples_give_no_warnings():
 GOLDEN_KEYLESS = {"aggregates": 4, "and_or_hierarchy": 2, "etalis_housekeeping": 1, "figure_3_1": 7, "listing_3_1": 1}
 
 
+# Two golden programs test ETALIS's new_event/1 in actions on purpose (stamped with the clock).
+GOLDEN_AT_THE_CLOCK = {"etalis_actions_after_pattern", "subscriptions_and_new_event"}
+
+
 def test_golden_programs_give_only_their_true_warnings():
     for program in sorted((ROOT / "tests" / "golden").glob("*/program.rtl")):
         found = compile_file(str(program)).unit.lint
-        assert [w.code for w in found] == ["keyless-join"] * GOLDEN_KEYLESS.get(program.parent.name, 0), program
+        name = program.parent.name
+        expected = ["keyless-join"] * GOLDEN_KEYLESS.get(name, 0) + \
+            (["new-event-at-the-clock"] if name in GOLDEN_AT_THE_CLOCK else [])
+        assert sorted(w.code for w in found) == sorted(expected), program
+
+
+def test_new_event_1_in_an_action_is_reported_also_through_a_predicate():
+    text = ("null do new_event(raised(R)) <- odom(R).\n"
+            "null do relay(R) <- odom2(R).\n"
+            "relay(R) :- new_event(r(R)).\n"
+            "null do new_event(ok(R), T) <- odom3(R)^T.\n"
+            "null do new_event(ok(R), S, NS) <- odom4(R, [S, NS]).\n")
+    found = lint(text)
+    assert [(w.code, w.span.line) for w in found] == [("new-event-at-the-clock", 1), ("new-event-at-the-clock", 3)]
+    assert "raised(R)" in found[0].message and "new_event(Event, T)" in found[0].hint
+
+
+@pytest.mark.parametrize("condition, warned", [
+    ("(V > 0.1 ; W > 0.1)", True),                     # both can hold: two moving(R) per message
+    ("(V > 0.1 -> true ; W > 0.1)", False),            # if-then-else: at most once
+    ("member(K, [a, b])", True),                       # K is not in the head
+    ("member(V, [1, 2])", False),                      # V is bound by the pattern: a test
+    ("once(member(K, [a, b]))", False),
+    ("speed(V, K)", True),                             # two clauses for this call
+    ("kind(fast, K)", False),                          # one clause for this call
+])
+def test_a_condition_with_several_solutions_that_give_the_same_head(condition, warned):
+    text = (f"moving(R) <- odom(R, V, W) where {condition}.\n"
+            "speed(V, fast) :- V > 1.\nspeed(V, slow) :- V =< 1.\nkind(fast, 1).\nkind(slow, 2).\n")
+    assert ("one-event-per-solution" in codes(text)) == warned
+
+
+def test_a_condition_binding_a_head_variable_is_not_reported():
+    assert codes("pair(R, K) <- odom(R, _) where member(K, [a, b]).\n") == []
 
 
 def test_check_prints_warning_with_place_line_and_hint(tmp_path):
@@ -184,3 +221,31 @@ def test_variable_met_first_inside_a_negation_in_a_condition():
     [warning] = lint(":- dynamic f/1, g/1.\nalarm(X) <- smoke(X) where (\\+ f(Z), g(Z)).\n")
     assert warning.code == "variable-bound-after-negation"
     assert warning.span.line == 2
+
+
+# ---- string-mode -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("text, found", [
+    ("b(X) <- a('\"odom\"', X).", ["string-mode"]),                      # the release's atom, plain program
+    ("memorize(tf('\"/odom\"', C, V, Q), [], tf(V, Q), m, 10).", ["string-mode"]),
+    ("b(X) <- a(odom, X).", []),
+    (":- ros_strings(quoted).\nb(X) <- a('\"odom\"', X).", []),
+    (":- ros_strings(quoted).\nb(X) <- p(std_msgs__0__Header(_, _, odom), X).", ["string-mode"]),
+    (":- ros_strings(quoted).\nb(X) <- p(std_msgs__0__Header(_, '\"odom\"'), X).", []),
+    (":- ros_strings(quoted).\nb(X) <- t(geometry_msgs__0__TransformStamped(_, base, X)).", ["string-mode"]),
+    (":- ros_strings(quoted).\nb(X) <- a(odom, X).", []),       # not a frame id: cannot tell
+])
+def test_a_string_of_the_other_mode_is_reported(text, found):
+    assert [c for c in codes(text) if c == "string-mode"] == found
+
+
+def test_the_string_mode_warning_says_what_to_write():
+    (warning,) = lint("b(X) <- a('\"odom\"', X).")
+    assert "is ever" in warning.message and "write odom" in warning.hint and "ros_strings(quoted)" in warning.hint
+    assert (warning.span.line, warning.span.column) == (1, 11)
+
+
+def test_ros_strings_takes_plain_or_quoted():
+    from retalisc.frontend.errors import RetalisSemanticError
+    with pytest.raises(RetalisSemanticError, match="ros_strings takes one of plain, quoted"):
+        compile_source(":- ros_strings(yes).\nb <- a.\n", "p.rtl")

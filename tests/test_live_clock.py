@@ -4,7 +4,6 @@ of the input (retalisc run and the standalone program)."""
 import os
 import subprocess
 import sys
-import time
 
 import pytest
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
-from retalisc import cli
+from retalisc import cli, commands
 from retalisc.driver import run
 from retalisc.driver.bridge import Bridge
 
@@ -70,7 +70,7 @@ def test_only_the_retalisc_program_runs_prolog_in_its_own_thread(tmp_path, monke
     args = ["run", str(tmp_path / "p.rtl"), "--events", str(tmp_path / "e.jsonl")]
     assert CliRunner().invoke(cli.main, args).exit_code == 0
     assert claimed == []                 # inside another program (here click's runner): other threads may call
-    monkeypatch.setattr(cli, "COMMAND_LINE_PROCESS", True)
+    monkeypatch.setattr(commands, "COMMAND_LINE_PROCESS", True)
     assert CliRunner().invoke(cli.main, args).exit_code == 0
     assert claimed == [True]
 

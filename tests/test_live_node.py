@@ -3,7 +3,6 @@ feeding from many threads in arrival order, deliveries published as messages, th
 of thesis A.1 with their refusals, and bytes that are not a message."""
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 import threading
@@ -15,7 +14,7 @@ pytest.importorskip("rosbags", reason="the live tests need rosbags")
 
 from hypothesis import given, settings, strategies as st  # noqa: E402
 
-from live_support import ROOT, retalisc_env  # noqa: E402
+from live_support import retalisc_env  # noqa: E402
 from retalisc.driver.engine import Engine  # noqa: E402
 from retalisc.live.config import ConfigError, parse_config, ros1_type  # noqa: E402
 from retalisc.live.node import LiveNode, Transport  # noqa: E402
@@ -168,6 +167,8 @@ def test_services_and_refusals():
     node.arrived("/v", vector(4.0))
     assert [a["X"] for a in node.query("mem(m2, geometry_msgs__0__Vector3(X, _, _))", "", True).value] == ["4.0"]
     assert node.delete_memory("m2").ok and not node.delete_memory("m2), halt, (x").ok
+    gone = node.query("mem(m2, geometry_msgs__0__Vector3(X, _, _))", "", True)      # deleted: an error naming it
+    assert not gone.ok and "no memory instance m2" in gone.error
     assert node.delete_output_subscription(reply.value).ok
     assert not node.add_input_subscription("/v", "geometry_msgs/Point").ok      # already, as another type
     assert node.delete_input_subscription("/v").ok and not node.delete_input_subscription("/v").ok
@@ -184,6 +185,22 @@ def test_services_and_refusals():
     assert numbers == [i + 1 for i, output in enumerate(outputs) if output.consumer == "out"] and len(outputs) > 3
     assert node.stats.rejected["/w"] == 1 and node.stats.received["/w"] == 2
     assert node.stats.errors == 0
+
+
+def test_the_summary_counts_the_service_calls_clients_made():
+    """The node's own set-up (subscribing to the configured topics, advertising the outputs)
+    is not a service call; a transport without services (ROS 2 over DDS, Zenoh) shows none."""
+    node, _ = make_node(config="<publish_subscribe><subscribe_to name='/v' msg_type='geometry_msgs/Vector3'/>"
+                               "<publish_to name='out' msg_type='geometry_msgs/Point'/></publish_subscribe>")
+    try:
+        assert node.stats.calls == 0
+        node.query("true", "")
+        assert not node.delete_input_subscription("/nothing").ok          # a refused request is a call too
+        assert node.stats.calls == 2
+        assert node.stats.summary("ros").endswith("; 2 service calls")
+        assert "service" not in node.stats.summary("ros2", services=False)
+    finally:
+        node.close()
 
 
 def test_an_event_that_raises_does_not_stop_the_batch():

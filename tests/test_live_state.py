@@ -173,8 +173,9 @@ def test_a_crashed_node_restarted_gives_the_uninterrupted_output(tmp_path, wire,
     assert "up(" in expected and len(reference_published) >= 4
 
     out = tmp_path / "out.jsonl"
-    state = lambda: LiveState(tmp_path / "state", str(out), snapshot_events=3, snapshot_seconds=float("inf"),
-                              log=lambda text: None)
+    def state():
+        return LiveState(tmp_path / "state", str(out), snapshot_events=3, snapshot_seconds=float("inf"),
+                         log=lambda text: None)
     first, first_transport = node_for(wire, state=state())
     feed(first, range(crash_after), wire)
     crash(first)
@@ -243,7 +244,8 @@ def test_an_idle_node_takes_its_time_based_snapshot(tmp_path):
     state = LiveState(tmp_path / "state", str(out), snapshot_events=1000, snapshot_seconds=1.0, log=lambda text: None)
     node, _ = node_for("cdr", state=state)
     feed(node, range(2), "cdr")
-    snapshots = lambda: sorted((tmp_path / "state").glob("snapshot-*.json"))
+    def snapshots():
+        return sorted((tmp_path / "state").glob("snapshot-*.json"))
     first = snapshots()
     deadline = time.monotonic() + 5
     # (the file is written before the consumer thread marks the journal as taken in)
@@ -355,8 +357,9 @@ def test_outputs_held_by_the_middleware_at_a_crash_are_published_again(tmp_path,
     assert [n for n, _, _ in expected] == sorted(n for n, _, _ in expected) and len(expected) >= 8
 
     out = tmp_path / "out.jsonl"
-    state = lambda: LiveState(tmp_path / "state", str(out), snapshot_events=3, snapshot_seconds=float("inf"),
-                              log=lambda text: None)
+    def state():
+        return LiveState(tmp_path / "state", str(out), snapshot_events=3, snapshot_seconds=float("inf"),
+                         log=lambda text: None)
     first, first_transport = holding_node(state=state())
     feed(first, range(crash_after), "cdr")
     crash(first)                             # what the session held is gone
@@ -396,3 +399,54 @@ def test_the_tail_keeps_only_the_last_seconds(tmp_path, monkeypatch):
     feed(node, range(len(XS)), "cdr")
     assert transport.published and not node.state.tail
     node.close()
+
+
+def test_a_state_directory_another_process_holds_is_refused(tmp_path):
+    """A node takes the lock of its state directory (recovery.StateDir.lock) before it restores:
+    while another process holds it the node does not start and the directory is unchanged; the
+    lock of a process killed with SIGKILL is gone."""
+    from retalisc.driver.recovery import RecoveryError
+
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time; from retalisc.driver.recovery import StateDir; "
+         "StateDir(sys.argv[1]).lock(); print('locked', flush=True); time.sleep(120)", str(tmp_path / "state")],
+        env=retalisc_env(), stdout=subprocess.PIPE)
+    try:
+        assert holder.stdout.readline() == b"locked\n"
+        with pytest.raises(RecoveryError, match=f"in use by another process \\(pid {holder.pid}\\)"):
+            node_for("cdr", state=LiveState(tmp_path / "state", str(tmp_path / "out.jsonl"), log=lambda text: None))
+        assert sorted(p.name for p in (tmp_path / "state").iterdir()) == ["lock"]
+    finally:
+        holder.kill()
+        holder.wait(30)
+    node, _ = node_for("cdr", state=LiveState(tmp_path / "state", str(tmp_path / "out.jsonl"), log=lambda text: None))
+    feed(node, range(3), "cdr")
+    node.close()
+    assert (tmp_path / "state" / "snapshot-00000000.json").exists()
+
+
+def test_a_crafted_snapshot_is_refused_by_a_live_node(tmp_path):
+    """A live node restores through recovery.restore_newest: a snapshot made to run the shell,
+    its checksum made again, stops the start (RecoveryError, `--state` exits with status 2),
+    restores nothing and runs nothing."""
+    import hashlib
+    import json
+
+    from retalisc.driver.recovery import RecoveryError
+    from test_recovery_crafted import craft, crafted_terms
+
+    out = tmp_path / "out.jsonl"
+    node, _ = node_for("cdr", state=LiveState(tmp_path / "state", str(out), log=lambda text: None))
+    feed(node, range(3), "cdr")
+    node.close()
+    manifest_path = sorted((tmp_path / "state").glob("snapshot-*.json"))[-1]
+    manifest = json.loads(manifest_path.read_text())
+    snapshot = manifest_path.with_suffix(".state")
+    module = snapshot.read_text(encoding="utf-8").split("\n", 1)[0].rsplit(",", 1)[1].rstrip(").")
+    canary = tmp_path / "canary"
+    craft(snapshot, crafted_terms(module, canary)["ele_trigger_clause"])
+    manifest.update(sha256=hashlib.sha256(snapshot.read_bytes()).hexdigest(), state_bytes=snapshot.stat().st_size)
+    manifest_path.write_text(json.dumps(manifest))
+    with pytest.raises(RecoveryError, match="refused: .*clause of .*ele_trigger/3 with a body"):
+        node_for("cdr", state=LiveState(tmp_path / "state", str(out), log=lambda text: None))
+    assert not canary.exists()

@@ -3,7 +3,7 @@ import pytest
 
 from retalisc.frontend.errors import RetalisSyntaxError
 from retalisc.frontend.parser import read_program, read_term
-from retalisc.frontend.terms import Atom, Compound, Number, String, Var, list_items, to_prolog
+from retalisc.frontend.terms import to_prolog
 
 
 def term(text):

@@ -6,11 +6,11 @@ from pathlib import Path
 
 from retalisc.backends.prolog.dump import dump_binary_rule
 from retalisc.compiler import AQ_MODES, AqOptions, compile_source, pass_names
-from retalisc.frontend.errors import RetalisSemanticError, RetalisSyntaxError
-from retalisc.frontend.program import Binary, EventAtom, Where, Window, parse_program, pattern_text
+from retalisc.frontend.errors import RetalisSemanticError
+from retalisc.frontend.program import Binary, Where, Window, parse_program, pattern_text
 from retalisc.frontend.writer import write_term
 from retalisc.passes import apply_rule_windows, binarize, collect_settings, edbc, push_conditions, validate
-from retalisc.passes.pipeline import (ACTIVE_QUERY_PIPELINE, EVENT_PIPELINE, PIPELINE, active_query_passes,
+from retalisc.passes.pipeline import (ACTIVE_QUERY_PIPELINE, EVENT_PIPELINE, active_query_passes,
                                       run_pipeline)
 from retalisc.passes.unit import Unit
 
@@ -21,7 +21,7 @@ def unit_of(text):
 
 def through(text, last):
     unit = unit_of(text)
-    for compiler_pass in PIPELINE:
+    for compiler_pass in EVENT_PIPELINE:
         unit = compiler_pass.run(unit)
         if compiler_pass is last:
             return unit
@@ -184,7 +184,7 @@ def test_pipeline_dump_after_every_pass():
 
 def test_run_pipeline_shows_the_unit_after_each_pass():
     seen = []
-    run_pipeline(unit_of("h(X) <- a(X)."), PIPELINE, lambda name, unit: seen.append(name))
+    run_pipeline(unit_of("h(X) <- a(X)."), EVENT_PIPELINE, lambda name, unit: seen.append(name))
     assert seen == [p.name for p in EVENT_PIPELINE] == pass_names()
 
 

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from retalisc.driver.engine import Engine, OutputEvent, Term, Variable
+from retalisc.driver.engine import Engine, OutputEvent, QueryAnswer, Term, Variable
 from retalisc.driver.values import parse_term
 
 ECHO = "out(X) <- echo(X).\nnull do true <- tick.\n"
@@ -180,7 +180,14 @@ def test_context_manager_runs_pending_queries_and_closes():
         engine.feed("seg(a)", 1)
         assert not future.done()
     assert future.result() and engine.closed
-    assert any(isinstance(o, OutputEvent) and o.op == "answer" for o in seen)
+    answers = [o for o in seen if o.op == "answer"]
+    assert len(answers) == 1 and isinstance(answers[0], OutputEvent)
+    answer = answers[0].answer
+    assert isinstance(answer, QueryAnswer) and answers[0].term == answer
+    assert (answer.status, answer.at, answer.answers, answer.message) == ("answered", 5, ({"X": "a", "T": "1"},), "")
+    assert answer.query.startswith("py")             # the id query_synchronized gave it
+    assert (answers[0].name, answers[0].args) == ("answer", ())      # every output has a name
+    assert all(o.answer is None for o in seen if o.op != "answer")
     with pytest.raises(RuntimeError, match="closed"):
         engine.feed("seg(b)", 2)
     assert engine.close() == []                     # closing twice does nothing
@@ -193,3 +200,12 @@ def test_context_manager_on_an_exception_drops_pending_work():
             raise KeyError("boom")
     assert engine.closed
     assert future.exception().kind == "dropped"
+
+
+def test_the_echo_of_an_input_is_marked_and_told_from_a_derived_event():
+    with Engine.from_source("b(X) <- a(X).\na(X) <- c(X).\n", "echo_mark.rtl") as engine:
+        engine.set_flag("echo_input", "true")
+        out = engine.feed("c(1)", 1) + engine.feed("a(2)", 2)
+    assert [(o.event, o.input) for o in out] == [("c(1)", True), ("a(1)", False), ("b(1)", False),
+                                                 ("a(2)", True), ("b(2)", False)]
+    assert all(('"input": true' in o.line) == o.input for o in out)

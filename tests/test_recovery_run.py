@@ -343,6 +343,48 @@ def test_kill_9_on_standard_input_then_restart_gives_the_uninterrupted_output(se
     assert out.read_bytes() == reference.read_bytes()
 
 
+def test_a_second_process_on_the_same_state_directory_is_refused_and_a_killed_one_does_not_block(
+        setup, tmp_path):
+    """The state directory is locked (an OS lock, recovery.StateDir.lock) while a run uses it: a
+    second run with the same DIR is refused on each road (exit status 2) and changes nothing;
+    once the first is killed with SIGKILL its lock is gone and a restart goes on."""
+    _, program, events, _ = setup
+    lines = events.read_bytes().splitlines(keepends=True)[:40]
+    out, state = tmp_path / "out.jsonl", tmp_path / "state"
+    cmd = run_cmd(program, "-", out, state, every=1000)
+    first = subprocess.Popen(cmd, env=_env(), stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE)
+    try:
+        first.stdin.write(b"".join(lines[:20]))
+        first.stdin.flush()
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:          # until the 20 lines are processed
+            journal = state / "journal.jsonl"
+            records = recovery.StateDir(state).journal_records() if journal.exists() else []
+            if records and records[-1]["input_line"] == 21:
+                break
+            time.sleep(0.01)
+        files = sorted((p.name, p.stat().st_size) for p in state.iterdir())
+        second = subprocess.run(cmd, env=_env(), input=b"".join(lines[20:]), capture_output=True, timeout=120)
+        assert second.returncode == 2, second.stderr.decode()
+        assert f"is in use by another process (pid {first.pid})" in second.stderr.decode()
+        assert "Traceback" not in second.stderr.decode()
+        aq_program, script = tmp_path / "p.pl", tmp_path / "s.txt"
+        aq_program.write_text("edge(1, 2).\n", encoding="utf-8")
+        script.write_text("?q edge(X, Y).\n", encoding="utf-8")
+        done = CliRunner().invoke(main, ["aq", str(aq_program), "--script", str(script), "--out",
+                                         str(tmp_path / "aq.jsonl"), "--state", str(state)])
+        assert done.exit_code == 2 and "in use by another process" in done.output, done.output
+        assert sorted((p.name, p.stat().st_size) for p in state.iterdir()) == files
+        assert first.poll() is None                     # the first run goes on
+    finally:
+        os.kill(first.pid, signal.SIGKILL)
+        first.communicate(timeout=60)
+    again = subprocess.run(cmd, env=_env(), input=b"".join(lines[20:]), capture_output=True, timeout=300)
+    assert again.returncode == 0, again.stderr.decode()
+    assert b"restored snapshot 0" in again.stderr
+
+
 # ---- a recording (--bag): the input position is the number of messages replayed --------------
 
 def test_kill_9_a_bag_replay_then_restart_gives_the_uninterrupted_output(tmp_path):

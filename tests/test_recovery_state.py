@@ -192,22 +192,23 @@ def test_save_is_atomic_and_leaves_no_temporary_file(tmp_path):
 def test_tries_are_rebuilt_with_their_entries_and_stay_shared(tmp_path):
     engine = Engine.from_source(SEQ)
     bridge = engine.bridge
-    # an answer table as rtl_aq.pl keeps it: a trie held by a clause and by a global
+    # an answer table as rtl_aq.pl keeps it: a trie held by a clause and by a global (of a family
+    # the runtime declares as state: rtl_state.pl's global_family/2)
     assert bridge.once("trie_new(T), trie_insert(T, ans(1, X), r1), trie_insert(T, ans(2, b), r2), "
-                       "assertz(rtl_aq:aq_tab(t1, g(_), T, root, k)), nb_setval(rtl_test_table, T)")
+                       "assertz(rtl_aq:aq_tab(t1, g(_), T, root, k)), nb_setval('rtl_detected test_table', T)")
     try:
         digest = engine.state_digest()
         engine.save_state(tmp_path / "s.state")
-        assert bridge.once("nb_getval(rtl_test_table, T), trie_insert(T, ans(3, c), r3)")
+        assert bridge.once("nb_getval('rtl_detected test_table', T), trie_insert(T, ans(3, c), r3)")
         assert engine.state_digest() != digest
         engine.restore_state(tmp_path / "s.state")
         assert engine.state_digest() == digest
-        entries = bridge.call_text("rtl_aq:aq_tab(t1, _, T, _, _), nb_getval(rtl_test_table, T2), T == T2, "
+        entries = bridge.call_text("rtl_aq:aq_tab(t1, _, T, _, _), nb_getval('rtl_detected test_table', T2), T == T2, "
                                    "blob(T, trie), findall(K-V, trie_gen(T, K, V), L0), msort(L0, L), "
                                    "format(string(Out), '~q', [L])")
         assert re.sub(r"_[0-9]+", "_", entries) == "[ans(1,_)-r1,ans(2,b)-r2]"
     finally:
-        bridge.once("retractall(rtl_aq:aq_tab(t1, _, _, _, _)), nb_delete(rtl_test_table)")
+        bridge.once("retractall(rtl_aq:aq_tab(t1, _, _, _, _)), nb_delete('rtl_detected test_table')")
 
 
 def test_a_clause_holding_a_stream_makes_the_save_fail_cleanly(tmp_path):
@@ -220,3 +221,32 @@ def test_a_clause_holding_a_stream_makes_the_save_fail_cleanly(tmp_path):
         assert list(tmp_path.iterdir()) == []           # no partial file left behind
     finally:
         engine.bridge.once("retractall(rtl_ele:type_output_hook(x, _))")
+
+
+def test_rules_added_and_deleted_at_run_time_are_restored_into_a_new_load(tmp_path):
+    """A snapshot keeps the rules added at run time as their compiled clauses (installed again,
+    after the rule check, into a new load of the program) and the rules of the program file
+    deleted since (deleted again): the restored engine goes on as the one that never stopped."""
+    program = "r1 'rule:' c(X) <- (a(X) seq b(X)).3.\nr2 'rule:' d(X) <- b(X) seq a(X).\n"
+    events = _abn_stream(120, 11)
+
+    def changed(engine):
+        engine.add_rules("r3 'rule:' g(X) <- a(X) seq n(X) where X > 1.\n")
+        engine.remove_rule("r2")
+
+    whole = Engine.from_source(program)
+    changed(whole)
+    full = _lines(whole.feed_batch(events)) + _lines(whole.end_of_input())
+    assert any(line.startswith('{"event": "g(') for line in full)
+    first = Engine.from_source(program)
+    changed(first)
+    before = _lines(first.feed_batch(events[:60]))
+    digest = first.state_digest()
+    first.save_state(tmp_path / "s.state")
+    second = Engine.from_source(program)
+    second.restore_state(tmp_path / "s.state")
+    assert second.state_digest() == digest
+    after = _lines(second.feed_batch(events[60:])) + _lines(second.end_of_input())
+    assert before + after == full
+    with pytest.raises(Exception, match="r2"):
+        second.remove_rule("r2")                    # deleted, as in the snapshot

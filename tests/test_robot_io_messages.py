@@ -63,14 +63,16 @@ def test_type_and_topic_functors():
 def test_listing_2_3_pose_stamped_ros1_and_ros2():
     expected_pose = ("geometry_msgs__0__Pose(geometry_msgs__0__Point(0.0,-0.01,0.1),"
                      "geometry_msgs__0__Quaternion(0.05,0.008,-0.02,0.9)))")
-    ros1 = MessageConverter(ROS1)
+    ros1 = MessageConverter(ROS1, Convention(plain_strings=False))      # the release's quoted strings
     text, time = ros1.event(pose_stamped(ROS1), "geometry_msgs/msg/PoseStamped", "/pose", 5_000_000_000)
     assert text == ("geometry_msgs__0__PoseStamped(std_msgs__0__Header(7,[1413748205,981209993],"
                     "'\"/odom\"')," + expected_pose)
+    plain, _ = MessageConverter(ROS1).event(pose_stamped(ROS1), "geometry_msgs/msg/PoseStamped", "/pose", 0)
+    assert plain == text.replace("'\"/odom\"'", "'/odom'")       # plain strings by default
     assert time == 1413748205.981209993          # header.stamp, not the record time
     ros2 = MessageConverter(ROS2)
     assert ros2.term(pose_stamped(ROS2), "geometry_msgs/msg/PoseStamped") == (
-        "geometry_msgs__0__PoseStamped(std_msgs__0__Header([1413748205,981209993],'\"/odom\"'),"
+        "geometry_msgs__0__PoseStamped(std_msgs__0__Header([1413748205,981209993],'/odom'),"
         + expected_pose)
 
 

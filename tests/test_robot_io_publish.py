@@ -11,7 +11,6 @@ import struct
 import threading
 import time
 from collections import Counter
-from pathlib import Path
 
 import pytest
 

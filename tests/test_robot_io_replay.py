@@ -8,7 +8,6 @@ import os
 import math
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
@@ -389,3 +388,56 @@ def test_a_reader_of_the_bag_run_that_goes_away_ends_it_quietly(nao_bags, tmp_pa
     stderr = process.stderr.read()
     assert process.wait(timeout=120) == 1
     assert stderr == b""
+
+
+# ---- a recording as the input of `retalisc query` and `retalisc explain` --------------------
+
+def _last_tf_stamp(path, frame: str) -> float:
+    """The header stamp of the last /tf transform of `frame`, read from the recording."""
+    stamps = []
+    with Recording(str(path)) as bag:
+        for record in bag.records(["/tf"]):
+            for transform in record.msg.transforms:
+                if transform.child_frame_id == frame:
+                    stamp = transform.header.stamp
+                    stamps.append(stamp.sec + stamp.nanosec / 1e9 if hasattr(stamp, "sec") else stamp.to_sec())
+    return max(stamps)
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "mcap"])
+def test_query_reads_a_recording(nao_bags, fmt, tmp_path):
+    from click.testing import CliRunner
+
+    from retalisc.commands.query import query_command
+
+    program = tmp_path / f"nao_query_{fmt}.rtl"          # in this process: a module name of its own
+    program.write_text(NAO_PROGRAM.read_text())
+    result = CliRunner().invoke(query_command, [str(program), "--bag", str(nao_bags[fmt]), "--topics", "/tf",
+                                                "--first", "prev(head_cam, tf(V, Q)^T, 1e12)"])
+    assert result.exit_code == 0, result.output
+    answer = json.loads(result.stdout)
+    assert float(answer["T"]) == pytest.approx(_last_tf_stamp(nao_bags[fmt], "CameraTop_frame"), abs=1e-6)
+    assert "bag: " in result.stderr and "/tf 150" in result.stderr
+    usage = CliRunner().invoke(query_command, [str(program), "--topics", "/tf", "true"])
+    assert usage.exit_code == 2 and "go with --bag" in usage.output
+
+
+def test_explain_reads_a_recording_and_names_each_message(nao_bags):
+    from click.testing import CliRunner
+
+    from retalisc.commands.explain import explain_command
+
+    bag = nao_bags["ros1"]
+    result = CliRunner().invoke(explain_command, [str(NAO_PROGRAM), "--bag", str(bag), "--stamp", "header",
+                                                  "--limit", "1", "seen_again(M)"])
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert "derived by rule r4" in lines[0], result.stdout
+    with Recording(str(bag)) as recording:
+        topics = [record.topic for record in recording.records()]
+    numbers = [int(line.rsplit("#", 1)[1]) for line in lines[1:3]]
+    assert all("input message /ar_pose_marker#" in line for line in lines[1:3])
+    assert all(topics[n - 1] == "/ar_pose_marker" for n in numbers) and numbers[0] < numbers[1]
+    both = CliRunner().invoke(explain_command, [str(NAO_PROGRAM), "--bag", str(bag), "--events", str(NAO_PROGRAM),
+                                                "x"])
+    assert both.exit_code == 2 and "one of them" in both.output

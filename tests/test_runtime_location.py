@@ -15,7 +15,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
 
 from retalisc import runtime_location
 from retalisc.compiler import AqOptions, compile_source

@@ -60,7 +60,7 @@ UNSAFE_RULES = [
     ("null do ins_event_rule(\"x <- y.\") <- trig.", "unsafe goal: ins_event_rule/1"),
     ("null do set_prolog_flag(double_quotes, atom) <- trig.", "unsafe goal: set_prolog_flag/2"),
     ("alarm(G) <- trig(G) where call(G).", "unsafe goal: call/1 with a goal that is only known when it runs"),
-    ("null do format('~@', [shell('touch {m}')]) <- trig.", "unsafe goal: shell/1"),
+    ("null do format('~@', [shell('touch {m}')]) <- trig.", "unsafe goal: format/2 with the directive ~@"),
     ("null do c_mem(m, trig(_)-[shell('touch {m}')], 1, inf) <- trig.", "unsafe goal: shell/1"),
     ("null do sub(1, c, trig(X)-[shell('touch {m}')], X, 0) <- trig.", "unsafe goal: shell/1"),
     ("null do sub(1, c, Q, x, 0) <- trig(Q).", "only known when it runs"),       # conditions from data
@@ -235,7 +235,7 @@ def test_memory_conditions_are_checked(engine, tmp_path):
     marker = tmp_path / "hacked"
     for request in (f"c_mem(m, smoke(_)-[shell('touch {marker}')], 5, inf)",
                     f"c_mem(m, smoke(_)-shell('touch {marker}'), 5, inf)",
-                    f"memorize(smoke(X), [cleanup(X)], X, m, 5)"):
+                    "memorize(smoke(X), [cleanup(X)], X, m, 5)"):
         with pytest.raises(QueryError) as refused:
             engine.memory(request)
         assert refused.value.kind == "unsafe"

@@ -163,6 +163,23 @@ def test_d_mem_deletes_the_instances_that_match_and_new_ones_start_empty():
     assert e.query("exist_mem(right)") is None
 
 
+@pytest.mark.parametrize("goal", ["mem(nope, E)", "prev(nope, E^T, 5)", "next(nope, E, 0, inf)",
+                                  "access_mem(nope, E, I)", "prev(nope, E, T1, T2, 5)", "next_inf(nope, E, S, T, 0)",
+                                  "X = 1, ( prev(nope, E, 5) ; true )"])
+def test_a_query_on_an_unknown_or_deleted_memory_is_an_error_naming_it(goal):
+    e = _engine(PROGRAM_INSTANCES)
+    e.feed_batch([("seen(cup, 1)", 1)])
+    for ask in (e.query, e.query_all, lambda g: e.query_synchronized(g, 5), lambda g: e.post_synchronized(g, 5)):
+        with pytest.raises(QueryError, match="no memory instance nope") as raised:
+            ask(goal)
+        assert raised.value.kind == "failed"
+    assert e.query("mem(right, E)") is not None
+    e.memory("d_mem(right)")                                      # deleted: the same error
+    with pytest.raises(QueryError, match="no memory instance right"):
+        e.query_all(goal.replace("nope", "right"))
+    assert e.query_all("mem(_, seen(box, _))") == []              # an id not given: no error
+
+
 def test_memory_events_reach_rules_and_memories_follow_do_actions():
     e = _engine("""
 null do c_mem(obj(O), seg(X, P)-[X == O], 1, inf) <- seen(O) where \\+ exist_mem(obj(O)).
@@ -279,6 +296,10 @@ def test_cli_query_errors(tmp_path):
     run = _query(tmp_path, "prev(tf, E, Z)")
     assert run.returncode == 1 and run.stdout == ""
     assert "instantiated" in run.stderr
+
+    run = _query(tmp_path, "--memory", "d_mem(tf)", "prev(tf, E, 10)")
+    assert run.returncode == 1 and run.stdout == ""
+    assert "no memory instance tf (never created, or deleted)" in run.stderr
 
 
 # ---- plunit: rtl_slr internals ------------------------------------------------------------

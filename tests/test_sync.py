@@ -183,8 +183,8 @@ def test_cli_run_prints_synchronized_answers_where_they_complete(tmp_path):
     lines = run.stdout.splitlines()
     answered = lines.index('{"query": "1", "at": 0.5, "status": "answered", "answers": [{"X": "155.0"}], '
                            '"message": ""}')
-    released_by = lines.index('{"event": "tf(base,cam,200)", "start": 1, "end": 1}')
-    next_input = lines.index('{"event": "marker(m3,3000)", "start": 1.5, "end": 1.5}')
+    released_by = lines.index('{"event": "tf(base,cam,200)", "start": 1, "end": 1, "input": true}')
+    next_input = lines.index('{"event": "marker(m3,3000)", "start": 1.5, "end": 1.5, "input": true}')
     assert released_by < answered < next_input            # written while that event is processed
     assert '{"query": "2", "at": 1.5, "status": "timeout", "answers": [], ' \
            '"message": "not achievable by the deadline"}' in lines

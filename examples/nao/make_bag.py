@@ -40,7 +40,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from retalisc.robot_io import require  # noqa: E402
-from retalisc.robot_io.bags import write_bag  # noqa: E402
+from retalisc.robot_io.bags import BagError, write_bag  # noqa: E402
 from retalisc.robot_io.samples import sample_store  # noqa: E402
 
 START_S = 1413748205                       # the stamp of the thesis's Figure A.1
@@ -214,11 +214,13 @@ def records(seconds: float, seed: int):
     return store, made, truth
 
 
-def write(out: Path, seconds: float = 60.0, seed: int = 1) -> Tuple[Path, Path]:
-    """Write OUT (a ROS 1 .bag) and OUT.truth.jsonl (OUT without .bag); returns both paths."""
+def write(out: Path, seconds: float = 60.0, seed: int = 1, overwrite: bool = False) -> Tuple[Path, Path]:
+    """Write OUT (a ROS 1 .bag) and OUT.truth.jsonl (OUT without .bag); returns both paths.
+    With `overwrite`, an OUT already there is replaced."""
     store, made, truth = records(seconds, seed)
     out = Path(out)
-    write_bag(out, "ros1", store, [(topic, msgtype, ns, msg) for ns, topic, msgtype, msg in made])
+    write_bag(out, "ros1", store, [(topic, msgtype, ns, msg) for ns, topic, msgtype, msg in made],
+              overwrite=overwrite)
     truth_path = truth_file(out)
     truth_path.write_text("".join(json.dumps(row) + "\n" for row in truth), encoding="utf-8")
     return out, truth_path
@@ -239,10 +241,13 @@ def main(argv: Sequence[str] = None) -> int:
     if not args.out.endswith(".bag"):
         parser.error("OUT must end in .bag")
     if Path(args.out).exists() and not args.force:
-        parser.error(f"{args.out} exists already")
+        parser.error(f"{args.out} exists already (--force replaces it)")
     if args.seconds <= 1:
         parser.error("--seconds must be over 1")
-    bag, truth = write(Path(args.out), args.seconds, args.seed)
+    try:
+        bag, truth = write(Path(args.out), args.seconds, args.seed, overwrite=args.force)
+    except BagError as error:
+        parser.error(str(error))
     print(f"{bag}: ROS 1, {args.seconds:g} s; ground truth in {truth}", file=sys.stderr)
     return 0
 

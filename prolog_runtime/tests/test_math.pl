@@ -174,6 +174,15 @@ test(interpolate_equal_times) :-
     pose_interpolate(5, P1, 5, P2, 5, A), assertion(A == P1),
     pose_interpolate(5, P1, 5, P2, 9, B), assertion(B == P1).
 
+test(interpolate_takes_every_time_form_of_prev_and_next) :-
+    P1 = [[0, 0, 0], [0, 0, 0, 1]], P2 = [[2, 0, 0], [0, 0, 0, 1]],
+    pose_interpolate(1, P1, 3, P2, 2, Expected),
+    forall(member(T1-T-T2, [ [1, 0]-[2, 0]-[3, 0], (0.5 + 0.5)-(1 + 1)-(9 / 3),
+                             datime(1970, 1, 1, 0, 0, 1, 0)-datime(1970, 1, 1, 0, 0, 2)-3.0 ]),
+           ( pose_interpolate(T1, P1, T2, P2, T, P), assertion(P == Expected) )),
+    catch(pose_interpolate(1, P1, 3, P2, foo + 1, _), error(type_error(time, _), _), Refused = true),
+    assertion(Refused == true).
+
 test(interpolate_midway) :-
     rot_z90(Q),
     pose_interpolate(1, [[0, 0, 0], [0, 0, 0, 1]], 3, [[2, 4, 6], Q], 2, P),

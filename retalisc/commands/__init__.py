@@ -19,6 +19,10 @@ COMMAND_MODULES = {
 }
 _COMMAND_MODULES = list(COMMAND_MODULES)
 
+#: True in the `retalisc` program itself (`cli.entry`), where one thread makes every Prolog
+#: call; False when the commands run inside another program (click's test runner, an embedding).
+COMMAND_LINE_PROCESS = False
+
 
 def _import(name: str):
     """The module `name`, or None when it is not installed (an optional part)."""

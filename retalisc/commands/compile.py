@@ -8,6 +8,7 @@ import click
 
 from .options import LazyChoice, Seconds, check_snapshot_options, output_directory, output_file, state_options
 from ..robot_io.options import BAG_DEFAULTS, bag_options
+from .. import commands
 
 
 def report_program_error(error) -> None:
@@ -319,7 +320,7 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         from ..robot_io.replay import BagOptions
         try:
             status = recovery.run_bag_recoverable(
-                engine, bag["bag"], out, state, BagOptions.from_cli(bag), batch_size=batch_size,
+                engine, bag["bag"], out, state, BagOptions.from_cli(bag, engine), batch_size=batch_size,
                 snapshot_events=snapshot_every or recovery.DEFAULT_SNAPSHOT_EVENTS,
                 snapshot_seconds=recovery.DEFAULT_SNAPSHOT_SECONDS if snapshot_seconds is None else snapshot_seconds,
                 drop_pending=drop_pending, first_output=posted)
@@ -361,10 +362,9 @@ def _runs_in_runtime_loop(events, out, consumer_dir, progress, heartbeat) -> boo
     """Whether, in the `retalisc` program itself, the events go through the runtime's own
     loop (`in_prolog_loop`), which `swipl` runs as well, writing to this process's own
     standard output and error (not to streams another program put in their place)."""
-    from .. import cli
     from ..driver.run import in_prolog_loop
 
-    return (cli.COMMAND_LINE_PROCESS and events is not None and _process_streams()
+    return (commands.COMMAND_LINE_PROCESS and events is not None and _process_streams()
             and in_prolog_loop(events, out, consumer_dir, progress, heartbeat))
 
 
@@ -391,10 +391,9 @@ def _calls_in_this_thread() -> bool:
     runs at once instead of being handed to the bridge's own thread, which takes two thread
     wake-ups per call (what spreads a live stream's latency on a busy machine). Not when the
     command runs inside another program (click's test runner), whose other threads may call."""
-    from .. import cli
     from ..driver.bridge import Bridge
 
-    return cli.COMMAND_LINE_PROCESS and Bridge().run_in_calling_thread()
+    return commands.COMMAND_LINE_PROCESS and Bridge().run_in_calling_thread()
 
 
 def _start_tracing(engine, unit, traces, late_file):

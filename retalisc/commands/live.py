@@ -4,6 +4,7 @@ program, publishes the subscription deliveries and runs until SIGINT or SIGTERM 
 --duration), then prints a summary on standard error."""
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -27,7 +28,8 @@ def _common(command):
                      help="Write every output line (derived events, deliveries) as JSON Lines here."),
         click.option("--wrap-topic", is_flag=True, help="Wrap each message in its topic name, topic(Msg)."),
         click.option("--plain-strings", is_flag=True,
-                     help="Strings are atoms holding the text ('/odom'), not the release's '\"/odom\"'."),
+                     help="Strings are atoms holding the text ('/odom', the default) even for a program "
+                          "that asks for the release's '\"/odom\"' (ros_strings(quoted), compile_event_file)."),
         click.option("--max-delay", type=Seconds(), default=None, help="As for `retalisc run`."),
         click.option("--duration", type=Seconds(allow_inf=False), default=None, metavar="SECONDS",
                      help="Stop after SECONDS (default: run until SIGINT or SIGTERM)."),
@@ -86,7 +88,7 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
         sink = None                      # the state opens the output file (cut back to its snapshot)
     else:
         sink = None if out is None else (sys.stdout if out == "-" else open(out, "w", encoding="utf-8"))
-    node = LiveNode(engine, transport, config, Convention(plain_strings=plain_strings, wrap_topic=wrap_topic),
+    node = LiveNode(engine, transport, config, Convention.of_program(engine, plain_strings, wrap_topic),
                     out=sink, linger=linger, state=state)
     stop = threading.Event()
     previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
@@ -114,7 +116,7 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
             signal.signal(sig, handler)
         if sink is not None and sink is not sys.stdout:
             sink.close()
-    click.echo(node.stats.summary(transport.name), err=True)
+    click.echo(node.stats.summary(transport.name, transport.offers_services), err=True)
     click.echo(engine.summary(), err=True)
     return status
 
@@ -145,8 +147,8 @@ def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay,
         except ModuleNotFoundError as error:
             if error.name in ("rospy", "genpy", "genmsg", "rosgraph"):
                 raise MissingDependency(
-                    f"retalisc ros needs ROS 1's rospy (Debian: python3-rospy): run `bash setup.sh`, "
-                    f"then .venv-ros/bin/retalisc ros ...") from None
+                    "retalisc ros needs ROS 1's rospy (Debian: python3-rospy): run `bash setup.sh`, "
+                    "then .venv-ros/bin/retalisc ros ...") from None
             raise
 
     def describe(node):
@@ -253,7 +255,6 @@ def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_dela
 
 
 def _master() -> str:
-    import os
     return os.environ.get("ROS_MASTER_URI", "http://localhost:11311")
 
 

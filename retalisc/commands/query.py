@@ -6,6 +6,7 @@ import sys
 
 import click
 
+from ..robot_io.options import bag_input_options, check_bag_input
 from .compile import add_cli_memory, compile_or_exit
 from .options import Seconds
 
@@ -14,7 +15,8 @@ from .options import Seconds
 Examples:
   retalisc query examples/state_knowledge/state_knowledge.rtl --events examples/state_knowledge/events.jsonl \\
       'location(box, L)^14'
-  retalisc query nao.rtl --events tf.jsonl --first 'prev(head_cam, tf(V, Q)^T, 12.5)'""")
+  retalisc query nao.rtl --events tf.jsonl --first 'prev(head_cam, tf(V, Q)^T, 12.5)'
+  retalisc query nao.rtl --bag nao.bag --topics /tf 'prev(head_cam, tf(V, Q)^T, 12.5)'""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 @click.argument("goal")
 @click.option("--events", "events", type=click.Path(exists=True, allow_dash=True, dir_okay=False),
@@ -25,8 +27,9 @@ Examples:
 @click.option("--max-delay", type=Seconds(), default=None, help="As for `retalisc run`.")
 @click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
               help="Create (or delete, d_mem(Id)) a memory instance before the events. Repeatable.")
-def query_command(program: str, goal: str, events, at, first: bool, max_delay, memories) -> None:
-    """Process EVENTS with PROGRAM, then answer GOAL: one JSON object per answer mapping each
+@bag_input_options
+def query_command(program: str, goal: str, events, at, first: bool, max_delay, memories, **bag) -> None:
+    """Process EVENTS (or the messages of a recording, --bag) with PROGRAM, then answer GOAL: one JSON object per answer mapping each
     variable of GOAL to its value (writeq text); `{}` for a goal without variables that
     succeeds; nothing when it fails (exit 0 either way). A goal that does not parse or that
     the sandbox refuses exits 2; a goal that raises an error exits 1.
@@ -36,6 +39,7 @@ def query_command(program: str, goal: str, events, at, first: bool, max_delay, m
 
     if at is not None and at != at:
         raise click.BadParameter("must be a number", param_hint="--at")
+    check_bag_input(events, bag)
     engine = Engine.from_compiled(compile_or_exit(program))
     if max_delay is not None:
         engine.set_flag("max_delay", repr(max_delay))
@@ -43,6 +47,12 @@ def query_command(program: str, goal: str, events, at, first: bool, max_delay, m
         add_cli_memory(engine, request)
     if events:
         run_event_file(engine, events, out=None)
+    elif bag["bag"] is not None:
+        from ..robot_io.replay import replay_from_cli
+
+        status = replay_from_cli(engine, None, bag, progress=False)
+        if status:
+            sys.exit(status)
     try:
         answers = [engine.query(goal, at)] if first else engine.query_all(goal, at)
     except QueryError as error:

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Callable, Dict, Iterable, List, NamedTuple, Optional, Union
 
 from ..compiler import AqOptions, compile_source
-from . import recovery
+from . import snapshot
 from .bridge import Bridge, PrologError
 
 _API = "rtl_aq_api"
@@ -104,7 +104,7 @@ class ActiveQueries:
                          "directory_file_path(D, 'rtl_aq_api.pl', P), use_module(user:P)")
         _loaded["path"] = str(out)
         self._ids.clear()
-        self._identity = recovery.program_identity(prolog, "")
+        self._identity = snapshot.program_identity(prolog, "")
 
     # -- callbacks -------------------------------------------------------------------------
     def on_add(self, callback: Callback) -> None:
@@ -197,7 +197,7 @@ class ActiveQueries:
     def save_state(self, path: Union[str, Path]) -> None:
         """Write the state (registered queries, their tables and records, stored facts, rules
         added at run time) to `path`, atomically (a temporary file, fsync, rename)."""
-        recovery.replace_atomically(
+        snapshot.replace_atomically(
             Path(path), lambda temporary: self.bridge.apply(_API, "aq_api_save_state", str(temporary),
                                                             self.identity()))
 
@@ -207,7 +207,7 @@ class ActiveQueries:
         try:
             self.bridge.apply(_API, "aq_api_restore_state", str(path), self.identity())
         except PrologError as error:
-            raise recovery.StateError(f"{path}: {error}") from None
+            raise snapshot.StateError(f"{path}: {error}") from None
 
     def state_digest(self) -> str:
         """A hash of everything a snapshot holds (equal states, equal digests)."""

@@ -278,13 +278,24 @@ caught(E, 2, Msg, Term) :-
     catch(message_text(E, Msg), _, Msg = ""),
     catch(writeq_string(E, Term), _, Term = "").
 
+%   The error's text, by the runtime's one printer (rtl_error_text.pl), which
+%   never interprets the term: an error may come from untrusted goal text.
 message_text(bridge_load_errors(Msg), Msg) :- !.
-message_text(error(Formal, Context0), Msg) :-
-    own_context(Context0, Context),
-    phrase('$messages':translate_message(error(Formal, Context)), Lines), !,
-    lines_text(Lines, Msg).
-message_text(E, Msg) :-
-    format(string(Msg), "Unhandled exception: ~q", [E]).
+message_text(E0, Msg) :-
+    (   E0 = error(Formal, Context0)
+    ->  own_context(Context0, Context),
+        E = error(Formal, Context)
+    ;   E = E0
+    ),
+    error_printer,
+    rtl_error_text:rtl_error_text(E, Msg).
+
+error_printer :-
+    (   current_predicate(rtl_error_text:rtl_error_text/2)
+    ->  true
+    ;   printer_file(File),
+        use_module(File, [])
+    ).
 
 %   An unknown procedure called directly by the goal is reported with our
 %   helper as its caller; drop that so the message reads as for the user.
@@ -340,6 +351,16 @@ flag_value(on_warning, print).
 flag_value(tty_control, false).
 flag_value(user:unknown, error).
 """
+
+def _helper_source() -> str:
+    """The helper module, with the file of the runtime's error printer (a path of this
+    installation, written as a quoted atom)."""
+    from retalisc.runtime_location import runtime_dir
+
+    printer = str(runtime_dir() / "rtl_error_text.pl")
+    quoted = printer.replace("\\", "\\\\").replace("'", "\\'")
+    return _HELPER_SRC + f"\nprinter_file('{quoted}').\n"
+
 
 _BOOT_GOAL = (
     "setup_call_cleanup(open_string(Src, S),"
@@ -562,7 +583,7 @@ class _PyswipEngine:
         try:
             boot = f"'$boot'(Src, ({_BOOT_GOAL}))".encode()
             t, src, arg = self._new_ref(), self._new_ref(), self._new_ref()
-            code = _HELPER_SRC.encode()
+            code = _helper_source().encode()
             ok = (from_chars(t, _REP_UTF8, len(boot), boot)
                   and self._put_chars(src, self._string_type | _REP_UTF8, len(code), code)
                   and get_arg(1, t, arg) and unify(arg, src)
@@ -697,11 +718,11 @@ class _JanusEngine:
     _QUERY = "retalisc_bridge:bridge(Mode, Goal, Aux, Status, Out, Err)"
 
     def __init__(self) -> None:
-        import janus_swi
+        import janus_swi    # optional: pyswip's C layer serves without it
 
         self._janus = janus_swi
         self._error: type[BaseException] = getattr(janus_swi, "PrologError", RuntimeError)
-        janus_swi.consult("retalisc_bridge", data=_HELPER_SRC)
+        janus_swi.consult("retalisc_bridge", data=_helper_source())
         janus_swi.query_once("retalisc_bridge:set_flags")
 
     def run(self, mode: int, goal: str, aux: str) -> tuple[int, Any, str]:

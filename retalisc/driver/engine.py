@@ -25,21 +25,21 @@ import re
 import shutil
 import tempfile
 import threading
+from concurrent.futures import Future
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
+from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Type, Union
 
 from ..compiler import CompileResult, compile_file, compile_source, unique_module_name
+from ..runtime_rules import RulesRefused, compile_rules, compile_rules_for_the_runtime
+from . import snapshot
 from .bridge import Bridge, PrologError, ServedCallError
-from .values import Term, Time, Value, Variable, parse_term, time_value
-
-if TYPE_CHECKING:
-    from concurrent.futures import Future
+from .values import QueryAnswer, Term, Time, Value, Variable, parse_term, time_value
 
 __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", "PrologError", "Term",
-           "Variable", "Value", "Time"]
+           "Variable", "Value", "QueryAnswer", "Time"]
 
 Number = Union[int, float]
 
@@ -48,18 +48,18 @@ _python_queries = itertools.count(1)
 _API = "rtl_api"        # prolog_runtime/rtl_api.pl: the predicates an Engine calls
 
 
-_unique_module = unique_module_name
-
-
 @dataclass(frozen=True)
 class OutputEvent:
     """One output line: `event` is the term text (writeq), `consumer` is set for subscription
-    deliveries, `op` is "add" or "retract"; or, with `op` "answer", the result of a synchronized
-    query (`query` holds its JSON object: query, at, status, answers, message).
+    deliveries, `input` is True for the echo of an input event (`echo_input`), `op` is "add"
+    or "retract"; or, with `op` "answer", the result of a synchronized
+    query: `answer` is then a `QueryAnswer` (query id, at, status, answers, message; `query`
+    holds the same as its JSON object) and `event` is empty.
 
     The term is also there as data: `term` is its Python value (`Term(name, args)`, or a `str`
     for an atom), `name` and `args` its name and arguments (atoms as `str`, numbers, lists,
-    nested `Term`s), read from `event` the first time one of them is asked for."""
+    nested `Term`s), read from `event` the first time one of them is asked for. For an answer,
+    `term` and `answer` are the QueryAnswer, `name` is "answer" and `args` is `()`."""
 
     event: str
     start: Number
@@ -68,23 +68,33 @@ class OutputEvent:
     op: str = "add"
     line: str = ""
     query: Optional[dict] = None     # op "answer": the result line of a synchronized query
+    input: bool = False              # the echo of an input event (`echo_input`, `--echo-input`)
 
     @cached_property
-    def term(self) -> Value:
-        """The event term as a Python value (see `retalisc.driver.values`)."""
+    def answer(self) -> Optional[QueryAnswer]:
+        """The result of a synchronized query (op "answer"); None for an event."""
+        return QueryAnswer.from_json(self.query) if self.op == "answer" and self.query is not None else None
+
+    @cached_property
+    def term(self) -> Union[Value, QueryAnswer]:
+        """The event term as a Python value (see `retalisc.driver.values`); the QueryAnswer
+        for an answer."""
         if self.op == "answer":
-            raise AttributeError("a query answer has no event term; see `query`")
+            return self.answer
         return parse_term(self.event)
 
     @property
     def name(self) -> str:
-        """The event's name: `fire_alarm` for `fire_alarm(smoke_1, temp_1)`."""
+        """The event's name: `fire_alarm` for `fire_alarm(smoke_1, temp_1)`; "answer" for the
+        result of a synchronized query."""
+        if self.op == "answer":
+            return "answer"
         term = self.term
         return term.name if isinstance(term, Term) else str(term)
 
     @property
     def args(self) -> Tuple[Value, ...]:
-        """The event's arguments as Python values; `()` for an atom."""
+        """The event's arguments as Python values; `()` for an atom and for an answer."""
         term = self.term
         return term.args if isinstance(term, Term) else ()
 
@@ -102,7 +112,8 @@ class OutputEvent:
         data = json.loads(line)
         if "query" in data:
             return cls("", data["at"], data["at"], None, "answer", line, data)
-        return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line)
+        return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line,
+                   input=data.get("input") is True)
 
 
 # An output line as the runtime writes it for an event with integer times, no consumer and no
@@ -205,8 +216,6 @@ def _compile_rules_for_the_runtime(module: str, prefix: str, text: str) -> str:
     """The rules the runtime adds while it runs (control lines, ins_event_rule/1 in an
     action: rtl_rules.pl, compile_in_process/4), compiled in this process, not by a
     `retalisc compile-rules` subprocess."""
-    from ..runtime_rules import RulesRefused, compile_rules_for_the_runtime
-
     try:
         return compile_rules_for_the_runtime(module, prefix, text)
     except RulesRefused as refused:
@@ -267,13 +276,13 @@ class Engine:
     def load(cls, program_path: Union[str, Path], bridge: Optional[Bridge] = None) -> "Engine":
         """Compile and load a `.rtl` program file."""
         path = str(program_path)
-        result = compile_file(path, module=_unique_module(path))
+        result = compile_file(path, module=unique_module_name(path))
         return cls.from_compiled(result, bridge)
 
     @classmethod
     def from_source(cls, text: str, name: str = "program.rtl", bridge: Optional[Bridge] = None) -> "Engine":
         """Compile and load program text."""
-        result = compile_source(text, name, module=_unique_module(name))
+        result = compile_source(text, name, module=unique_module_name(name))
         return cls.from_compiled(result, bridge)
 
     @classmethod
@@ -348,7 +357,10 @@ class Engine:
             self._call("rtl_api_set_flag", _text(name, "a flag name"), _text(value_text, "a flag value"))
 
     def on_output(self, callback: Callable[[OutputEvent], None]) -> None:
-        """Call `callback(output_event)` for every output line, in processing order."""
+        """Call `callback(output_event)` for every output line, in processing order: derived
+        events, subscription deliveries (`consumer` set), deletions (`op` "retract"), the echo
+        of inputs, and the results of synchronized queries (`op` "answer", `answer` a
+        QueryAnswer)."""
         with self._lock:
             self._callbacks.append(callback)
 
@@ -569,8 +581,6 @@ class Engine:
         is already in use or when a goal of a rule is unsafe (`unsafe goal: shell/1`): the
         rules come from outside the program file, so they must pass the sandbox
         (prolog_runtime/rtl_sandbox.pl). Nothing of `text` is added then."""
-        from ..runtime_rules import compile_rules
-
         with self._lock:
             prefix = self._call("rtl_api_fresh_rule_prefix", self.module)
             compiled = compile_rules(_text(text, "rule text"), self.module, prefix)
@@ -606,8 +616,6 @@ class Engine:
         the clock (event time) reaches `at + timeout` first, kind "dropped" when the input
         ends with `end_of_input(drop_pending=True)`. A goal that does not parse or that the
         sandbox refuses raises QueryError at once."""
-        from concurrent.futures import Future
-
         future: Future = Future()
         query_id = f"py{next(_python_queries)}"
         with self._lock:
@@ -702,6 +710,17 @@ class Engine:
             counts[rule] = int(count)
         return counts
 
+    @cached_property
+    def ros_strings(self) -> str:
+        """How the program reads a ROS message's string field (collect_settings): `plain`
+        (frame id `odom` is the atom `odom`) or `quoted`, the 2015 release's `'"odom"'`."""
+        from .bridge import GoalFailed
+
+        try:
+            return self.bridge.apply(self.module, "ele_ros_strings") if self.module else "plain"
+        except (GoalFailed, PrologError):       # not a quoted program: the fact is not there
+            return "plain"
+
     def summary(self) -> str:
         with self._lock:
             return self._call("rtl_api_summary")
@@ -728,9 +747,7 @@ class Engine:
     def identity(self) -> str:
         """The hash of the compiled program and the runtime a snapshot of this Engine carries."""
         if self._identity is None:
-            from . import recovery
-
-            self._identity = recovery.program_identity(self.prolog_file.read_text(encoding="utf-8"), self.module)
+            self._identity = snapshot.program_identity(self.prolog_file.read_text(encoding="utf-8"), self.module)
         return self._identity
 
     def save_state(self, path: Union[str, Path]) -> None:
@@ -738,24 +755,20 @@ class Engine:
         rules added, postponed queries, active queries, flags, clock, counters) to the file
         `path`, atomically: a temporary file, flushed to disk, renamed over `path`. Call it
         between calls that feed events (never from a callback)."""
-        from . import recovery
-
         path = Path(path)
         with self._lock:
-            recovery.replace_atomically(
+            snapshot.replace_atomically(
                 path, lambda temporary: self._call("rtl_api_save_state", str(temporary), self.identity()))
 
     def restore_state(self, path: Union[str, Path]) -> None:
         """Replace the state by the one `save_state` wrote to `path`. A file that is not a
         complete snapshot of this program under this runtime version raises
-        `recovery.StateError` and changes nothing."""
+        `recovery.StateError` (`snapshot.StateError`) and changes nothing."""
         with self._lock:
             try:
                 self._call("rtl_api_restore_state", str(path), self.identity())
             except PrologError as error:
-                from . import recovery
-
-                raise recovery.StateError(f"{path}: {error}") from None
+                raise snapshot.StateError(f"{path}: {error}") from None
 
     def state_digest(self) -> str:
         """A hash of everything a snapshot holds (equal states, equal digests)."""

@@ -4,20 +4,24 @@ about or why a pattern was not detected.
 
 The rules go to the runtime as one term, `[rule(Label, Place, Head, Pattern), ...]`, with the
 pattern in the plain form rtl_trace.pl evaluates (`ev/3`, `seq/2`, ..., `where/2`, `win/2`,
-`neg/3`, `fnot/2`, `agg/3`), written by `retalisc.frontend.terms.to_prolog` and read back as
+`neg/3`, `absent/3`, `fnot/2`, `agg/3`, `sliding/5`, and `timer/2` or `sync/2` around the
+pattern of a timer or synchronized rule, whose head is then the raised event), written by `retalisc.frontend.terms.to_prolog` and read back as
 data; the event file is fed line by line so that every event is logged with its line.
 """
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterable, List
+from typing import Iterable, List, Tuple
 
 from ..compiler import CompileResult
-from ..frontend.program import (Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Where,
-                                Window)
+from ..frontend.program import (Absence, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
+                                Sliding, Where, Window)
 from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
+from ..passes.edbc import alarm_head
 from .engine import Engine, OutputEvent, Rejection
 from .event_lines import batch_payload, max_line_bytes, read_lines
+from ..frontend.writer import write_term
+from ..frontend.program import walk_pattern
 
 def _fresh(counter: List[int], what: str) -> Var:
     counter[0] += 1
@@ -43,9 +47,15 @@ def pattern_term(pattern: Pattern, counter: List[int]) -> Term:
     if isinstance(pattern, Negation):
         return Compound("neg", (pattern_term(pattern.negated, counter), pattern_term(pattern.first, counter),
                                 pattern_term(pattern.second, counter)))
+    if isinstance(pattern, Absence):
+        return Compound("absent", (pattern_term(pattern.negated, counter), pattern_term(pattern.first, counter),
+                                   Number(pattern.duration)))
     if isinstance(pattern, Aggregate):
         return Compound("agg", (pattern.function, pattern_term(pattern.pattern, counter), pattern.value))
-    raise TypeError(pattern)
+    if isinstance(pattern, Sliding):
+        return Compound("sliding", (pattern.function, pattern_term(pattern.pattern, counter), pattern.group,
+                                    Number(pattern.duration), pattern.value))
+    raise TypeError(f"rtl_trace has no form for the pattern {type(pattern).__name__}")
 
 
 def rules_text(rules: Iterable[EventRule]) -> str:
@@ -53,12 +63,17 @@ def rules_text(rules: Iterable[EventRule]) -> str:
     items = []
     counter = [0]
     for number, rule in enumerate(rules, start=1):
-        if rule.synchronized is not None or rule.head == Atom("null"):
+        if rule.head == Atom("null") and rule.synchronized is None:
             continue
         label = rule.label or f"r{number}"
         place = f"{Path(rule.span.file).name}:{rule.span.line}"
-        items.append("rule(" + ", ".join([to_prolog(Atom(label)), to_prolog(Atom(place)), to_prolog(rule.head),
-                                          to_prolog(pattern_term(rule.pattern, counter))]) + ")")
+        head, pattern = rule.head, pattern_term(rule.pattern, counter)
+        if rule.synchronized is not None:       # synchronized(E, Query, SyncConds): E once Query can run
+            head, pattern = rule.synchronized.args[0], Compound("sync", (pattern, rule.synchronized.args[1]))
+        elif alarm_head(head):                  # a timer: the raised event, D seconds after the match
+            head, pattern = head.args[0], Compound("timer", (pattern, head.args[1]))
+        items.append("rule(" + ", ".join([to_prolog(Atom(label)), to_prolog(Atom(place)), to_prolog(head),
+                                          to_prolog(pattern)]) + ")")
     return "[" + ",\n".join(items) + "]"
 
 
@@ -70,27 +85,34 @@ class Explainer:
         self.engine = Engine.from_compiled(result)
         self.engine.bridge.once("use_module(retalis_runtime(rtl_trace))")      # constant text
         self.rules = rules_text(result.unit.program.event_rules)
-        self.rejections: List[Rejection] = []
+        self.rejections: List[Tuple[object, Rejection]] = []   # (where: line number or TOPIC#N, rejection)
         self.outputs: List[OutputEvent] = []
 
     def feed_file(self, events: str) -> None:
         """Feed the event file line by line, each event logged with its line number."""
+        with open(events, "rb") as source:             # lines read as `retalisc run` reads them
+            lines = read_lines(source, max_line_bytes(self.engine))
+            self._feed((batch_payload([raw]), number) for number, (raw, _) in enumerate(lines, start=1))
+
+    def feed_lines(self, lines: Iterable[Tuple[str, str]]) -> None:
+        """Feed event lines, each `(line, where)`, its events logged as coming from `where`
+        (a recording's messages: `TOPIC#N`)."""
+        self._feed(lines)
+
+    def _feed(self, lines) -> None:
         bridge = self.engine.bridge
         bridge.apply("rtl_trace", "rtl_trace_start")
         try:
-            with open(events, "rb") as source:         # lines read as `retalisc run` reads them
-                lines = read_lines(source, max_line_bytes(self.engine))
-                for number, (raw, _) in enumerate(lines, start=1):
-                    line = batch_payload([raw])
-                    feed = "rtl_trace_feed_byte_line" if isinstance(line, bytes) else "rtl_trace_feed_line"
-                    output = bridge.apply("rtl_trace", feed, line, number)
-                    for text in output.splitlines():
-                        if text.startswith("!"):
-                            line_no, _, rest = text[1:].partition("\t")
-                            kind, _, reason = rest.partition("\t")
-                            self.rejections.append(Rejection(int(line_no), reason, kind))
-                        elif text and not text.startswith("?"):
-                            self.outputs.append(OutputEvent.from_line(text))
+            for line, where in lines:
+                feed = "rtl_trace_feed_byte_line" if isinstance(line, bytes) else "rtl_trace_feed_line"
+                output = bridge.apply("rtl_trace", feed, line, where)
+                for text in output.splitlines():
+                    if text.startswith("!"):
+                        line_no, _, rest = text[1:].partition("\t")
+                        kind, _, reason = rest.partition("\t")
+                        self.rejections.append((where, Rejection(int(line_no), reason, kind)))
+                    elif text and not text.startswith("?"):
+                        self.outputs.append(OutputEvent.from_line(text))
         finally:
             bridge.apply("rtl_trace", "rtl_trace_stop")
 
@@ -105,8 +127,6 @@ class Explainer:
 
 
 def _step_description(step, side: str) -> str:
-    from ..frontend.writer import write_term
-
     mine, other = (step.left, step.right) if side == "left" else (step.right, step.left)
     text = write_term(mine.term, 999)
     if other is None:
@@ -146,8 +166,6 @@ def trace_specs(unit, labels: Iterable[str]) -> list:
 def late_rules(unit) -> list:
     """Per rule: its label, the window of its pattern (-1 for none) and its event atoms, for
     rtl_trace_late/3."""
-    from ..frontend.program import walk_pattern
-
     found = []
     for binary in unit.rules:
         windows = [p.length for p in walk_pattern(binary.rule.pattern) if isinstance(p, Window)]

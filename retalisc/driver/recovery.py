@@ -1,68 +1,31 @@
-"""Snapshots of a running program's state on disk, and the state directory of a run that
-survives a crash (docs/recovery.md).
-
-A snapshot file is written by the runtime (prolog_runtime/rtl_state.pl, fast_write terms)
-to a temporary file next to its place, flushed to disk (fsync) and renamed over it, so a
-reader sees the old file or the new one, never half of one. It is tagged with the
-*identity* of the program and runtime: a hash of the compiled program (its module name left
-out) and of every runtime source file; the runtime refuses a snapshot with another identity.
+"""The state directory of a run that survives a crash (docs/recovery.md), and the
+recoverable run loops. How one snapshot file is written and tagged (its identity, the atomic
+replacement) is `snapshot.py`, below the Engine.
 """
 from __future__ import annotations
 
+import fcntl
 import hashlib
+import inspect
 import json
 import os
-from functools import lru_cache
+import sys
+import time
+from functools import wraps
 from pathlib import Path
 from typing import Optional, Union
 
-from ..runtime_location import runtime_dir
+import click
 
-STATE_FORMAT = "retalisc-state-1"
-
-
-class StateError(Exception):
-    """A snapshot or state directory that cannot be used (corrupt, from another program or
-    version, unwritable)."""
-
-
-@lru_cache(maxsize=None)
-def runtime_version() -> str:
-    """A hash of the runtime's Prolog sources: a snapshot is only read by the runtime that wrote it."""
-    digest = hashlib.sha256(STATE_FORMAT.encode())
-    for path in sorted(Path(runtime_dir()).glob("*.pl")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
-    return digest.hexdigest()
-
-
-def program_identity(prolog_text: str, module: str) -> str:
-    """The identity of a compiled program under this runtime: the same program compiled under
-    another module name has the same identity."""
-    digest = hashlib.sha256(runtime_version().encode())
-    digest.update((prolog_text.replace(module, "\0M\0") if module else prolog_text).encode("utf-8"))
-    return digest.hexdigest()[:32]
-
-
-def fsync_directory(directory: Union[str, Path]) -> None:
-    """Make a rename in `directory` durable (where the platform allows it)."""
-    try:
-        fd = os.open(str(directory), os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def fsync_file(path: Union[str, Path]) -> None:
-    fd = os.open(str(path), os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
+from ..robot_io.messages import Convention, MessageConverter
+from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages, open_recording
+from ..robot_io.ros1_terms import Ros1Terms
+from .bridge import PrologError
+from .event_lines import batch_payload, max_line_bytes, read_lines
+from .outputs import detections_line
+from .run import Progress, RunStopped, _live_batches, end_the_input, output_full, print_summary, settle_output
+from .signals import SignalStop, SignalStops
+from .snapshot import STATE_FORMAT, StateError, fsync_directory, replace_atomically
 
 
 def file_sha256(path: Union[str, Path]) -> str:
@@ -78,25 +41,12 @@ def file_sha256(path: Union[str, Path]) -> str:
 DEFAULT_SNAPSHOT_EVENTS = 200_000   # input lines between two snapshots
 DEFAULT_SNAPSHOT_SECONDS = 60.0     # or seconds of processing, whichever comes first
 KEEP_SNAPSHOTS = 2                  # the newest complete ones; older ones are deleted
+LOCK_FILE = "lock"                  # in DIR: held (fcntl) by the process that uses DIR
 
-
-def replace_atomically(path: Union[str, Path], write) -> None:
-    """Make `path` what `write(temporary)` writes, or leave it as it was: the temporary file
-    is flushed to disk, renamed over `path`, and the rename flushed (the directory); on any
-    error the temporary file is removed."""
-    path = Path(path)
-    temporary = path.with_name(path.name + ".tmp")
-    try:
-        write(temporary)
-        fsync_file(temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        try:
-            temporary.unlink()
-        except OSError:
-            pass
-        raise
-    fsync_directory(path.parent)
+# lock file (real path) -> its open file, for the state directories this process holds. A
+# POSIX record lock belongs to the process and goes when any descriptor of the file is closed,
+# so each lock file is opened once per process.
+_HELD_LOCKS: dict = {}
 
 
 def _atomic_write_text(path: Path, text: str) -> None:
@@ -114,13 +64,40 @@ class StateDir:
     - `journal.jsonl`: one line per batch consumed since the newest snapshot (input and output
       positions reached), emptied at each snapshot. For a file the journal of what was consumed
       is this position: a restart replays the input file from the snapshot's position, so the
-      journal is for inspection (how far the run got), and a line cut by a crash is harmless.
+      journal is for inspection (how far the run got), and a line cut by a crash is harmless;
+    - `lock`: locked (`lock`) by the process that runs with DIR, so that a second one is refused.
     """
 
     def __init__(self, directory: Union[str, Path]):
         self.directory = Path(directory)
         self.directory.mkdir(parents=True, exist_ok=True)
         self.journal_path = self.directory / "journal.jsonl"
+        self.lock_path = self.directory / LOCK_FILE
+
+    def lock(self) -> None:
+        """Take the directory for this process until `unlock` (or its end: the operating system
+        drops the lock of a killed process, so a stale lock never blocks a restart); the file
+        holds the process id, for the message. RecoveryError when another process holds it."""
+        key = os.path.realpath(self.lock_path)
+        if key in _HELD_LOCKS:
+            return
+        fd = os.open(key, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.read(fd, 32).decode("ascii", "replace").strip()
+            os.close(fd)
+            raise RecoveryError(f"{self.directory} is in use by another process"
+                                f"{f' (pid {holder})' if holder.isdigit() else ''}: one process per "
+                                f"state directory") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode("ascii"))
+        _HELD_LOCKS[key] = fd
+
+    def unlock(self) -> None:
+        fd = _HELD_LOCKS.pop(os.path.realpath(self.lock_path), None)
+        if fd is not None:
+            os.close(fd)
 
     def _manifests(self):
         return sorted(self.directory.glob("snapshot-*.json"), reverse=True)
@@ -200,8 +177,6 @@ def _binary_batches(stream, offset: int, first_line: int, batch_size: int, limit
     file opened in binary; the lines as bytes without their newlines, made text as `retalisc
     run` makes them (`event_lines.batch_payload`), each at most `limit` bytes long
     (`event_lines.read_lines`)."""
-    from .event_lines import read_lines
-
     stream.seek(offset)
     position, number = offset, first_line
     batch, start, size = [], first_line, 0
@@ -291,9 +266,11 @@ def restore_newest(directory: StateDir, engine, input_key: str, input_name: str,
     """Restore the newest complete snapshot of `directory` into `engine` (an Engine or an
     ActiveQueries: identity() and restore_state()) and return its manifest, or None for a
     directory without snapshots (a first run). Incomplete snapshots are deleted first, corrupt
-    ones reported on `log` and passed over. RecoveryError for a snapshot of another program or
-    runtime version, or of a run over another input (the manifest's `input_key` is not
-    `input_name`)."""
+    ones (not matching their checksum) reported on `log` and passed over. RecoveryError for a
+    snapshot of another program or runtime version, of a run over another input (the
+    manifest's `input_key` is not `input_name`), that the runtime refuses (anything in it that
+    is not the declared state, prolog_runtime/rtl_state.pl), or when every snapshot is corrupt:
+    nothing is restored then, and the run does not start from the beginning."""
     directory.remove_incomplete()
     identity = engine.identity()
     found, problems = directory.snapshots()
@@ -308,12 +285,12 @@ def restore_newest(directory: StateDir, engine, input_key: str, input_name: str,
                                 f"not {input_name}")
         try:
             engine.restore_state(state_path)
-        except StateError as error:
-            print(f"retalisc: {error}; trying an older snapshot", file=log)
-            continue
+        except StateError as error:     # it matches its checksum: made so, not damaged
+            raise RecoveryError(f"refused: {error}") from None
         return manifest
-    if found:
-        raise RecoveryError(f"{directory.directory}: no snapshot could be restored")
+    if problems:                        # snapshots there, none usable: not a first run
+        raise RecoveryError(f"{directory.directory}: none of its snapshots can be used (above); move or delete "
+                            f"the directory to start again from the beginning")
     return None
 
 
@@ -336,7 +313,6 @@ def take_snapshot(directory: StateDir, engine, sink, manifest: dict, log):
     """Flush the output to disk, then write a snapshot of `engine` with `manifest` (the input
     position) and the output position. A snapshot that cannot be written (a full disk) is
     reported on `log` and None returned: the run goes on, the previous snapshot stays."""
-    from .bridge import PrologError
 
     sink.flush()
     os.fsync(sink.fileno())
@@ -348,6 +324,20 @@ def take_snapshot(directory: StateDir, engine, sink, manifest: dict, log):
         return None
 
 
+def _holding_the_state_directory(run):
+    """`run` (its argument `state` a state directory) holds the directory's lock while it runs."""
+    @wraps(run)
+    def held(*args, **kwargs):
+        directory = StateDir(inspect.signature(run).bind(*args, **kwargs).arguments["state"])
+        directory.lock()
+        try:
+            return run(*args, **kwargs)
+        finally:
+            directory.unlock()
+    return held
+
+
+@_holding_the_state_directory
 def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batch_size: int = 2000,
                     snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
                     snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,
@@ -364,13 +354,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     input) the lines are journaled (EventJournal) before they are processed, a restart
     replays the journal after the snapshot and then reads standard input on; the output is
     flushed after each batch. Returns the exit status."""
-    import sys
-    import time
 
-    from .bridge import PrologError
-    from .event_lines import batch_payload, max_line_bytes
-    from .run import Progress, RunStopped, end_the_input, output_full, print_summary, settle_output
-    from .signals import SignalStop, SignalStops
 
     log = log or sys.stderr
     started = time.perf_counter()
@@ -486,9 +470,7 @@ def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_s
     after the restored snapshot (replayed), then the lines of standard input as they arrive,
     each batch appended to the journal before it is processed. The journal's segment is that
     of the newest snapshot: the caller opens it when it takes the first snapshot of a new run."""
-    import sys
 
-    from .run import _live_batches
 
     line = first_line
     if restored is not None:
@@ -509,6 +491,7 @@ DEFAULT_AQ_SNAPSHOT_COMMANDS = 10_000   # script commands between two snapshots 
 DEFAULT_AQ_BATCH = 100                  # commands run per call into the runtime
 
 
+@_holding_the_state_directory
 def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], display_name: Optional[str] = None,
                        batch_size: int = DEFAULT_AQ_BATCH, snapshot_commands: int = DEFAULT_AQ_SNAPSHOT_COMMANDS,
                        snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, log=None) -> int:
@@ -520,8 +503,6 @@ def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], displ
     restores the newest complete one, cuts `out` back and goes on from its script line. A bad
     script line or a failed command ends the run as without --state (its message on `log`,
     with `display_name` for the script; exit status 2 or 1). Returns the exit status."""
-    import sys
-    import time
 
     log = log or sys.stderr
     batch_size = max(1, min(batch_size, snapshot_commands))   # snapshots fall between batches
@@ -564,6 +545,7 @@ def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], displ
     return status
 
 
+@_holding_the_state_directory
 def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path], options=None,
                         batch_size: int = 2000, snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
                         snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,
@@ -574,19 +556,11 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
     the options that select and convert its messages are part of the snapshot's input name:
     a state directory of another selection is refused); a restart passes over that many
     messages and goes on. Returns the exit status (2: the recording cannot be read)."""
-    import sys
-    import time
 
-    import click
 
-    from ..robot_io.messages import MessageConverter
-    from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages, open_recording
-    from ..robot_io.ros1_terms import Ros1Terms
-    from .bridge import PrologError
-    from .run import detections_line
 
     log = log or sys.stderr
-    options = options or BagOptions()
+    options = options or BagOptions(convention=Convention.of_program(engine))
     directory = StateDir(state)
     selection = json.dumps({"bag": os.path.abspath(bag_path), "topics": options.topics, "start": options.start,
                             "duration": options.duration, "stamp": options.stamp,

@@ -14,13 +14,12 @@ import stat
 import sys
 import threading
 import time
-from typing import IO, TYPE_CHECKING, Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import IO, Iterator, List, Optional, Sequence, Tuple
 
+from .engine import Engine
 from .event_lines import batch_payload, max_line_bytes, read_lines, split_lines, too_long_line
+from .outputs import ConsumerFiles, detections_line
 from .signals import SignalStop, SignalStops
-
-if TYPE_CHECKING:
-    from .engine import Engine
 
 PROGRESS_THRESHOLD = 5_000_000     # bytes of input before a progress display is worth it
 
@@ -363,7 +362,7 @@ def settle_output(step, full: Optional[OSError]) -> Optional[OSError]:
 def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],
                    heartbeat: Optional[float]) -> bool:
     """Whether a run reads its input in the runtime's loop (that of `swipl PROGRAM.pl FILE`,
-    prolog_runtime/retalis.pl, rtl_run_event_file/4): standard input or a regular file, to
+    prolog_runtime/rtl_feed.pl, rtl_run_event_file/4): standard input or a regular file, to
     standard output, without --consumer-dir, --heartbeat or a progress line (forced with
     --progress, or possible on a terminal), whose work Python does per batch. Both loops
     read the same lines from any bytes (`event_lines`)."""
@@ -433,14 +432,6 @@ def print_summary(engine: Engine, seconds: float, summary: Optional[str] = None)
     if line:
         print(line, file=sys.stderr)
     print(summary if summary is not None else summary_line(engine.stats(), seconds), file=sys.stderr)
-
-
-def detections_line(counts: Dict[str, int]) -> Optional[str]:
-    """`retalis: detections per rule: r1 3, fire_alarm 0` (Engine.detections, program order),
-    None for a program without event rules."""
-    if not counts:
-        return None
-    return "retalis: detections per rule: " + ", ".join(f"{rule} {count:,}" for rule, count in counts.items())
 
 
 def summary_line(stats: dict, seconds: float) -> str:
@@ -524,31 +515,3 @@ class Progress:
         if self.shown:
             self.stream.write("\n")
             self.stream.flush()
-
-
-def consumer_file_name(consumer: str) -> str:
-    """The file of a consumer's deliveries: leading slashes dropped, every character other
-    than letters, digits, `_`, `-`, `.` written `_` (the runtime's rtl_consumer_dir/1 rule)."""
-    base = "".join(c if (c.isalnum() or c in "_-.") else "_" for c in consumer.lstrip("/"))
-    return (base or "_") + ".jsonl"
-
-
-class ConsumerFiles:
-    """One JSON Lines file per consumer in a directory, opened at its first delivery."""
-
-    def __init__(self, directory: str):
-        self.directory = directory
-        os.makedirs(directory, exist_ok=True)
-        self.files: Dict[str, IO[str]] = {}
-
-    def write(self, event) -> None:
-        stream = self.files.get(event.consumer)
-        if stream is None:
-            path = os.path.join(self.directory, consumer_file_name(event.consumer))
-            stream = self.files[event.consumer] = open(path, "w", encoding="utf-8")
-        stream.write(event.line + "\n")
-
-    def close(self) -> None:
-        for stream in self.files.values():
-            stream.close()
-        self.files.clear()

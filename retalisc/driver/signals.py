@@ -6,7 +6,7 @@ run (`SignalStop`) when the batch is done, or at once while the run waits for in
 then flushes its output, prints the summary and exits with 128 + the signal's number, the
 status a shell reports for a process the signal killed, as `swipl PROGRAM.pl` does
 (prolog_runtime/retalis.pl, stop_on_signal/1). When the runtime's own loop reads the input
-(rtl_run_event_file/4) its Prolog handlers take the signals while it runs, and it reports the
+(prolog_runtime/rtl_feed.pl, rtl_run_event_file/4) its Prolog handlers take the signals while it runs, and it reports the
 signal that stopped it (`stopped_by`).
 """
 from __future__ import annotations

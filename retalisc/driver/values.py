@@ -4,7 +4,8 @@ An output event's term becomes plain Python data: an atom is a `str`, a number a
 `float`, a string a `str`, a list a `list`, and a compound term a `Term` with a `name` and
 a tuple of `args` in the same form (`fire_alarm(smoke_1, [1, 2.5])` is
 `Term("fire_alarm", ("smoke_1", [1, 2.5]))`). A variable, which a derived event can only
-carry when a rule leaves one unbound, is a `Variable`.
+carry when a rule leaves one unbound, is a `Variable`. The result of a synchronized query,
+which comes among the outputs, is a `QueryAnswer`.
 
 Times are given as event files give them: a number of seconds or a ROS stamp
 `[secs, nsecs]`; from Python also a `datetime.datetime` (read as UTC when it has no time
@@ -18,11 +19,13 @@ from __future__ import annotations
 import datetime as _dt
 import json
 from dataclasses import dataclass
-from typing import Any, List, Sequence, Tuple, Union
+from typing import Any, Dict, List, Sequence, Tuple, Union
 
 from ..frontend.depth import with_room_for_depth
+from .bridge import Bridge, PrologError
+from ..runtime_location import runtime_dir
 
-__all__ = ["Term", "Variable", "Value", "Time", "data_value", "parse_term", "time_value"]
+__all__ = ["Term", "Variable", "Value", "QueryAnswer", "Time", "data_value", "parse_term", "time_value"]
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,27 @@ class Term:
 
 Value = Union[str, int, float, list, Term, Variable]
 
+
+@dataclass(frozen=True)
+class QueryAnswer:
+    """The result of a synchronized query (`post_synchronized`, `query_synchronized`, `--query
+    Z GOAL` in `retalisc run`), as its output line `{"query": ID, "at": Z, "status": ...,
+    "answers": [...], "message": ...}` gives it: `status` is "answered", "failed" (the goal
+    raised an error), "timeout" or "dropped" (the input ended first); `answers` the answers,
+    each a dict mapping a variable's name to its value as writeq text (as `Engine.query_all`);
+    `message` says why there are none (empty when answered)."""
+
+    query: str
+    at: Union[int, float]
+    status: str
+    answers: Tuple[Dict[str, str], ...]
+    message: str = ""
+
+    @classmethod
+    def from_json(cls, data: dict) -> "QueryAnswer":
+        return cls(str(data["query"]), data["at"], data["status"], tuple(data.get("answers") or ()),
+                   data.get("message") or "")
+
 #: A time as the Engine accepts it.
 Time = Union[int, float, Sequence[int], _dt.datetime, Any]
 
@@ -59,14 +83,10 @@ _runtime_loaded = False
 def parse_term(text: str) -> Value:
     """The Python value of a term written as Prolog text (as output lines carry it). The text
     is read by SWI-Prolog (`rtl_api_term_data/2`), so whatever the runtime writes reads back."""
-    from .bridge import Bridge, PrologError
-
     global _runtime_loaded
     bridge = Bridge()
     if not _runtime_loaded:
         if not bridge.once("current_predicate(rtl_api:rtl_api_term_data/2)"):    # constant text
-            from ..runtime_location import runtime_dir
-
             bridge.consult(str(runtime_dir() / "retalis.pl"))
         _runtime_loaded = True
     try:

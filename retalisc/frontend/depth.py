@@ -46,7 +46,7 @@ def term_depth(term: Term) -> int:
 
 def deepest_tree(tree: Tree):
     """(depth, node) of the deepest node of a lark tree, computed without recursion."""
-    from lark import Tree
+    from lark import Tree   # lark only for a parse tree: the driver imports this module without it
 
     best = (0, tree)
     stack = [(tree, 1)]

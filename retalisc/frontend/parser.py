@@ -7,7 +7,7 @@ clauses after them.
 """
 from __future__ import annotations
 
-import codecs
+import bisect
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +20,7 @@ from .depth import MAX_TERM_DEPTH, deepest_tree, term_depth
 from .errors import RetalisSyntaxError
 from .operators import (ARGUMENT_PRIORITY, CLAUSE_PRIORITY, ETALIS_ALIASES, EVENT_OPERATORS, OP_TYPES,
                         STANDARD_OPERATORS, OperatorTable)
-from .terms import NIL, Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
+from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
 
 _GRAMMAR = (Path(__file__).with_name("retalis.lark")).read_text()
 # cache=True: the LALR tables are kept in the temporary directory, keyed by the grammar's hash
@@ -196,8 +196,6 @@ class _Source:
         self.line_starts = [0] + [m.end() for m in re.finditer("\n", text)]
 
     def span_at(self, offset: int) -> Span:
-        import bisect
-
         line = bisect.bisect_right(self.line_starts, offset)
         column = offset - self.line_starts[line - 1] + 1
         return Span(self.file, line, column)

@@ -18,6 +18,7 @@ from .errors import RetalisSyntaxError
 from .operators import ETALIS_ALIASES
 from .parser import ReadClause, read_program
 from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list, span_of, to_prolog
+from .writer import write_term
 
 
 # ---- patterns --------------------------------------------------------------------------
@@ -186,6 +187,8 @@ class Program:
     included: List[Tuple[str, str]] = field(default_factory=list)
     # warnings about how it was read (`file:line:col: warning: ...`), shown by check and compile
     notes: List[str] = field(default_factory=list)
+    # it reads its event rules with compile_event_file (the release's two-file form)
+    reads_event_file: bool = False
 
     @property
     def event_rules(self) -> List[EventRule]:
@@ -211,6 +214,7 @@ DECLARATIONS = {
     ("set_etalis_flag", 2), ("print_trigger", 1), ("event_rule_property", 3),
     ("set_retalis_flag", 2), ("c_mem", 5), ("stream_history", 1), ("stream_history", 3),
     ("max_delay", 2), ("goal_set", 3), ("print_event", 1), ("external_trigger", 1),
+    ("ros_strings", 1),
 }
 
 DECLARATION_NAMES = {name for name, _ in DECLARATIONS}
@@ -237,20 +241,24 @@ def parse_program(text: str, file: str) -> Program:
     clauses of Path (relative to the file that names it) in its place."""
     included: List[Tuple[str, str]] = []
     notes: List[str] = []
-    program = build_program(_read_with_includes(text, file, [file], included, notes), file, text)
+    include_names: List[str] = []
+    program = build_program(_read_with_includes(text, file, [file], included, notes, include_names), file, text)
     program.included = included
     program.notes = notes
+    program.reads_event_file = "compile_event_file" in include_names
     return program
 
 
 def _read_with_includes(text: str, file: str, loading: List[str],
-                        included: List[Tuple[str, str]], notes: List[str]) -> List[ReadClause]:
+                        included: List[Tuple[str, str]], notes: List[str],
+                        include_names: List[str]) -> List[ReadClause]:
     clauses = []
     for clause in read_goal_lines(text, file):
         path = _included_file(clause.term)
         if path is None:
             clauses.append(clause)
             continue
+        include_names.append(_include_name(clause.term))
         target = _resolve_include(path, file)
         beside = _beside(target, file)
         if beside is not None:
@@ -267,7 +275,8 @@ def _read_with_includes(text: str, file: str, loading: List[str],
             raise RetalisSyntaxError(f"{_include_name(clause.term)}: cannot read {path} ({target}): {reason}",
                                      clause.span) from None
         included.append((str(target), text_read))
-        clauses.extend(_read_with_includes(text_read, str(target), loading + [str(target)], included, notes))
+        clauses.extend(_read_with_includes(text_read, str(target), loading + [str(target)], included, notes,
+                                           include_names))
     return clauses
 
 
@@ -679,8 +688,6 @@ _NOT_PATTERNS = {
 
 
 def _function_text(function: Term) -> str:
-    from .writer import write_term
-
     return write_term(function, 999)
 
 
@@ -726,8 +733,6 @@ def pattern_conditions(pattern: Pattern):
 
 
 def pattern_text(pattern: Pattern) -> str:
-    from .writer import write_term
-
     if isinstance(pattern, EventAtom):
         text = write_term(pattern.term, 1024)
         if pattern.start is not None:

@@ -30,10 +30,13 @@ types without a header) it is published on the companion topic `<topic>/seq` as 
 std_msgs/UInt64, right before the message (unless the middleware says that topic has no
 subscriber: an extra message costs, over rospy, about as much as the message itself).
 
-Time: an event is stamped with its message's `header.stamp`, or with the node's clock at its
-arrival when it has no header (or a zero stamp). A subscription or unsubscription at `now`
-(or with no time) means the clock's now. The clock is the wall clock, or the transport's
-(`Transport.now_ns`: ROS 2's /clock under use_sim_time). Events later than the delay bound void
+Time: one clock rule (robot_io/messages.py EventClock): an event is stamped with the time its
+message carries (its `header.stamp`, a TFMessage's first transform's), else with the latest
+`/clock` when the node subscribes to it, else with the node's clock at its arrival (the wall
+clock, or the transport's, `Transport.now_ns`: ROS 2's /clock under use_sim_time; shifted onto
+the messages' clock when they carry another one, sim time); a jump of more than an hour is a
+warning on the log, once. A subscription or unsubscription at `now` (or with no time) means the
+node clock's now. Events later than the delay bound void
 the promise of arrival-order independence (a synchronized rule no longer waits for them), so
 the node says so when it happens, not only in its summary: after a batch, at most once every
 `LATE_CHECK_SECONDS`, and when it closes, a growing late count is a warning on the log (the
@@ -54,10 +57,12 @@ from dataclasses import dataclass, field
 from typing import IO, Any, Callable, Dict, List, Optional, Tuple
 
 from ..robot_io.data_terms import read_data_term, write_data_term
-from ..robot_io.messages import ConversionError, Convention, MessageConverter
+from ..robot_io.messages import CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from ..robot_io.ros1_terms import Ros1Terms
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 from .state import STATEFUL_CALLS
+from ..robot_io.bags import typestore
+from ..driver.bridge import PrologError
 
 BATCH = 2000
 REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
@@ -87,15 +92,17 @@ class NodeStats:
     errors: int = 0
     calls: int = 0
 
-    def summary(self, transport: str) -> str:
+    def summary(self, transport: str, services: bool = True) -> str:
+        """The node's summary line; the count of service calls (requests a client made, not the
+        node's own set-up) only for a transport that offers services."""
         topics = ", ".join(f"{t} {n:,}" for t, n in sorted(self.received.items()))
         out = ", ".join(f"{t} {n:,}" for t, n in sorted(self.published.items()))
         rejected = sum(self.rejected.values())
         return (f"{transport}: {sum(self.received.values()):,} messages in"
                 f"{': ' + topics if topics else ''}; {rejected:,} rejected, {self.errors:,} errors; "
                 f"{sum(self.published.values()):,} published{': ' + out if out else ''}"
-                f"{f', {self.unpublished:,} not publishable' if self.unpublished else ''}; "
-                f"{self.calls:,} service calls")
+                f"{f', {self.unpublished:,} not publishable' if self.unpublished else ''}"
+                f"{f'; {self.calls:,} service calls' if services else ''}")
 
 
 class Transport:
@@ -104,6 +111,7 @@ class Transport:
 
     wire = "cdr"
     name = "transport"
+    offers_services = False  # the node's services are reachable over this middleware (ROS 1)
     attaches_seq = False     # publish(..., seq=N) carries the output number with the message itself
     # `flush` makes sure what was published is not lost with the process; when it cannot
     # (Zenoh), a node with --state keeps the outputs of the last moments in its snapshots and
@@ -159,18 +167,18 @@ _BATCH_INDEX = re.compile(r"^event (\d+) of the batch")
 
 class LiveNode:
     def __init__(self, engine, transport: Transport, config: Optional[PubSubConfig] = None,
-                 convention: Convention = Convention(), out: Optional[IO[str]] = None,
+                 convention: Optional[Convention] = None, out: Optional[IO[str]] = None,
                  log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True),
                  linger: float = 0.0, state=None):
-        from ..robot_io.bags import typestore
-
         self.engine = engine
         self.transport = transport
         self.config = config or PubSubConfig()
         self.store = typestore("ros1_noetic" if transport.wire == "ros1" else "ros2_humble")
+        convention = convention or Convention.of_program(engine)     # the program's strings
         self.converter = MessageConverter(self.store, convention)
         # ROS 1 messages go to the runtime as bytes, which it reads in C (ros1_terms.py)
         self.ros1_terms = Ros1Terms(engine, self.store, convention) if transport.wire == "ros1" else None
+        self.clock = EventClock(log)             # the one clock rule (consumer thread only)
         self.out = out
         self.log = log
         self.stats = NodeStats()
@@ -201,12 +209,12 @@ class LiveNode:
         if self.state is not None:     # restore and replay before the live input queued meanwhile
             self.state.recover(self)
         self._thread.start()
-        for spec in self.config.subscribe:
-            reply = self.call(self._add_input, spec.name, spec.msgtype)
+        for spec in self.config.subscribe:          # the node's own set-up: not service calls
+            reply = self.call(self._add_input, spec.name, spec.msgtype, request=False)
             if not reply.ok:
                 raise ValueError(reply.error)
         for spec in self.config.publish:
-            self.call(self._advertise, spec.name, spec.msgtype)
+            self.call(self._advertise, spec.name, spec.msgtype, request=False)
 
     def _advertise(self, topic: str, msgtype: str) -> Reply:
         if store_type(msgtype) not in self.store.fielddefs:
@@ -253,13 +261,15 @@ class LiveNode:
         (ROS 1), for types the node does not know."""
         self._queue.put((topic, data, msgtype, definition, self.transport.now_ns()))
 
-    def call(self, function: Callable[..., Reply], *args, timeout: float = CALL_TIMEOUT) -> Reply:
+    def call(self, function: Callable[..., Reply], *args, timeout: float = CALL_TIMEOUT,
+             request: bool = True) -> Reply:
         """Run `function(*args)` in the consumer thread, after what arrived before; its Reply.
-        Called from the consumer thread itself, it runs at once."""
+        Called from the consumer thread itself, it runs at once. `request`: a service request
+        (counted in `stats.calls`), not the node's own set-up."""
         if threading.current_thread() is self._thread:
-            return self._run_call(function, args)
+            return self._run_call(function, args, request)
         future: Future = Future()
-        self._queue.put((function, args, future))
+        self._queue.put((function, args, future, request))
         try:
             return future.result(timeout)
         except Exception as error:          # a timeout: the node is overloaded or stopped
@@ -281,11 +291,11 @@ class LiveNode:
             while True:
                 if item is _STOP:
                     stop = True
-                elif len(item) == 3:
+                elif len(item) == 4:
                     self._feed(pending)
                     pending = []
-                    function, args, future = item
-                    future.set_result(self._run_call(function, args))
+                    function, args, future, request = item
+                    future.set_result(self._run_call(function, args, request))
                 else:
                     event = self._event(*item)
                     if event is not None:
@@ -305,8 +315,9 @@ class LiveNode:
             if stop:
                 return
 
-    def _run_call(self, function, args) -> Reply:
-        self.stats.calls += 1
+    def _run_call(self, function, args, request: bool = True) -> Reply:
+        if request:
+            self.stats.calls += 1
         name = getattr(function, "__name__", "")
         if self.state is not None and name in STATEFUL_CALLS:
             now = self._clock()
@@ -335,20 +346,27 @@ class LiveNode:
             name = store_type(subscribed)
             if name not in self.store.fielddefs:
                 self._learn_type(name, definition)
-            if self.ros1_terms is not None:
-                fast = self.ros1_terms.event(data, name, topic, arrival_ns)
+            where = f"{topic}#{number}"
+            if self.ros1_terms is not None and topic != CLOCK_TOPIC:
+                fast = self.ros1_terms.event(data, name, topic, 0)
                 if fast is not None:
-                    return fast[0], fast[1], (topic, number, data, name, arrival_ns)
-            return self._text_event(topic, data, name, arrival_ns) + ((topic, number, data, name, arrival_ns),)
+                    return (fast[0], self.clock.time(fast[1], arrival_ns, topic, where),
+                            (topic, number, data, name, arrival_ns))
+            text, carried = self._text_event(topic, data, name, 0)
+            return text, self.clock.time(carried, arrival_ns, topic, where), (topic, number, data, name, arrival_ns)
         except Exception as error:       # bytes from the network are data: report, skip
             self._reject(topic, number, error)
             return None
 
     def _text_event(self, topic: str, data: bytes, name: str, arrival_ns: int) -> Tuple[str, float]:
+        """(text, the time the message carries, else `arrival_ns`); a /clock message sets the
+        run's clock (EventClock)."""
         if self.transport.wire == "ros1":
             msg = self.store.deserialize_ros1(data, name)
         else:
             msg = self.store.deserialize_cdr(data, name)
+        if topic == CLOCK_TOPIC and hasattr(getattr(msg, "clock", None), "nanosec"):
+            self.clock.clock((msg.clock.sec * 1_000_000_000 + msg.clock.nanosec) / 1_000_000_000)
         return self.converter.event(msg, name, topic, arrival_ns)
 
     def _replay_call(self, name: str, args, now: Optional[float]) -> Reply:
@@ -378,7 +396,7 @@ class LiveNode:
     def _learn_type(self, name: str, definition: Optional[str]) -> None:
         if not definition:
             raise ConversionError(f"unknown message type {ros1_type(name)} (its definition did not come with it)")
-        from rosbags.typesys import get_types_from_msg
+        from rosbags.typesys import get_types_from_msg      # optional: the `ros` extra
 
         types = {key: value for key, value in get_types_from_msg(definition, name).items()
                  if key not in self.store.fielddefs}
@@ -386,8 +404,6 @@ class LiveNode:
         self.learned[name] = definition
 
     def _feed(self, events: List[tuple]) -> None:
-        from ..driver.bridge import PrologError
-
         if self.state is not None:
             self.state.events(events)       # journaled (flushed) before they are fed
         count = len(events)
@@ -404,8 +420,9 @@ class LiveNode:
                 if getattr(error, "undecodable", False):     # the runtime refused the bytes: the text road
                     self.fed += index
                     topic, number, data, name, arrival_ns = events[index][2]
+                    seconds = events[index][1]          # the time the run's clock gave it
                     try:
-                        text, seconds = self._text_event(topic, data, name, arrival_ns)
+                        text, _ = self._text_event(topic, data, name, arrival_ns)
                     except Exception as reason:
                         self._reject(topic, number, reason)
                         events = events[index + 1:]

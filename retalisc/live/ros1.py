@@ -22,9 +22,10 @@ from .services import answer
 class Ros1Transport(Transport):
     wire = "ros1"
     name = "ros"
+    offers_services = True
 
     def __init__(self, node_name: str = "retalis", queue_size: int = 100000):
-        import rospy
+        import rospy    # optional: Debian's ROS 1, in .venv-ros
 
         self.rospy = rospy
         self.node_name = node_name
@@ -112,7 +113,7 @@ class Ros1Transport(Transport):
 
 def raw_message_class(msgtype: str, md5: str, definition: str) -> type:
     """A rospy message class that sends bytes already serialized, announced as `msgtype`."""
-    import rospy
+    import rospy    # optional: Debian's ROS 1, in .venv-ros
 
     return type(msgtype.replace("/", "__"), (rospy.AnyMsg,),
                 {"_type": msgtype, "_md5sum": md5, "_full_text": definition, "_has_header": False,

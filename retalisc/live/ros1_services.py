@@ -64,7 +64,7 @@ def service_class(service: str) -> type:
         raise KeyError(f"no service {service!r} (known: {', '.join(SERVICES)})")
     if name in _classes:
         return _classes[name]
-    import genmsg
+    import genmsg   # optional: Debian's ROS 1 (with genpy), in .venv-ros
     import genmsg.msg_loader as loader
     from genpy.dynamic import generate_dynamic
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import sys
 
+from ..cli import main as cli_main
+
 
 def main(argv=None) -> None:
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -17,8 +19,6 @@ def main(argv=None) -> None:
             rest.append(arg)
     if name is not None and "--name" not in rest:
         rest += ["--name", name]
-    from ..cli import main as cli_main
-
     cli_main(["ros", *rest], prog_name="retalisc")
 
 

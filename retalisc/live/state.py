@@ -37,6 +37,9 @@ from typing import Callable, Optional, Union
 
 from ..driver.recovery import (DEFAULT_SNAPSHOT_EVENTS, DEFAULT_SNAPSHOT_SECONDS, EventJournal, StateDir,
                                open_output, restore_newest, take_snapshot)
+from ..driver.recovery import RecoveryError
+from ..driver.engine import Ros1Bytes
+from ..driver.bridge import PrologError
 
 RECONNECT_SECONDS = 2.0     # how long a restart waits for the subscribers of its outputs
 FLUSH_SECONDS = 1.0         # how long a snapshot waits for what was published to be handed over
@@ -102,8 +105,7 @@ class LiveState:
     # ---- start: restore and replay (called by LiveNode.start before live input is taken) -------
 
     def recover(self, node) -> None:
-        from ..driver.recovery import RecoveryError
-
+        self.directory.lock()                   # until close (or the end of the process)
         restored = restore_newest(self.directory, node.engine, "live", node.transport.name, _LogStream(self.log))
         if self.out_path is not None:
             self.raw = open_output(self.out_path, restored)
@@ -219,8 +221,6 @@ class LiveState:
         """Journal events about to be fed: (event, seconds, arrival)."""
         if self.replaying or not events:
             return
-        from ..driver.engine import Ros1Bytes
-
         lines = []
         for event, seconds, arrival in events:
             if isinstance(event, Ros1Bytes):
@@ -282,6 +282,7 @@ class LiveState:
         self.journal.close()
         if self.raw is not None:
             self.raw.close()
+        self.directory.unlock()
 
 
 def _subscribers(node) -> dict:
@@ -299,7 +300,6 @@ def _subscribers(node) -> dict:
 
 def _snapshot(directory, engine, sink, manifest, log):
     if isinstance(sink, _NoOutput):
-        from ..driver.bridge import PrologError
         try:
             return directory.save(engine, manifest)
         except (OSError, PrologError) as error:

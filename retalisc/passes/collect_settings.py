@@ -4,6 +4,11 @@
 `event_rule_property(Label, Name, Value)` may be written as directives (`:- G.`) or, in the
 style of Retalis's goalPredicates.txt, as facts. ETALIS flags with no meaning here are
 accepted with a warning.
+
+`ros_strings(Mode)` says how a ROS message's string field (a frame id, a name) is an atom:
+`plain` (the default: frame id `odom` is the atom `odom`) or `quoted`, the 2015 release's form
+(the atom `'"odom"'`). A program that reads its rules with `compile_event_file` (the release's
+two-file form) is `quoted` unless it says otherwise.
 """
 from __future__ import annotations
 
@@ -15,11 +20,14 @@ from .unit import Unit
 name = "collect_settings"
 
 CONSUMPTION_POLICIES = ("unrestricted", "recent", "chronological")
+ROS_STRINGS = ("plain", "quoted")
 
 
 def run(unit: Unit) -> Unit:
     settings = unit.settings
     everything = False
+    if unit.program.reads_event_file:
+        settings.ros_strings = "quoted"
     for item in unit.program.directives + unit.program.declarations:
         for goal in conjuncts(item.goal):
             if _is(goal, "set_etalis_flag", 2):
@@ -34,6 +42,12 @@ def run(unit: Unit) -> Unit:
                     warning = _flag_warning(flag, value)
                     if warning:
                         unit.warnings.append(f"{item.span}: warning: {warning}")
+            elif _is(goal, "ros_strings", 1):
+                mode = goal.args[0]
+                if not (isinstance(mode, Atom) and mode.name in ROS_STRINGS):
+                    raise RetalisSemanticError(f"ros_strings takes one of {', '.join(ROS_STRINGS)}",
+                                               span_of(mode) or item.span)
+                settings.ros_strings = mode.name
             elif _is(goal, "set_retalis_flag", 2):
                 unit.warnings.append(f"{item.span}: warning: set_retalis_flag/2 has no meaning in retalisc and is "
                                      "ignored")

@@ -21,10 +21,23 @@ errors. The pass changes nothing in the unit but `unit.lint` and `unit.warnings`
   earlier event of the other, and a rule without window keeps its partial matches forever,
   so each event costs more than the one before (not reported under the `recent` and
   `chronological` policies, which consume partners);
+- `new-event-at-the-clock`: an action of an event rule calls `new_event/1` (directly or
+  through the program's predicates): the raised event is stamped with the clock (the latest
+  event time processed), not with the time of the match that raised it, which differs as soon
+  as the triggering event comes late (language.md, "Actions and raising events");
+- `one-event-per-solution`: a `where` (or `check`, `event_multiply`) condition holds a
+  disjunction, or a goal with several solutions (member/2, between/3, a predicate of several
+  clauses, ...), that binds no variable of the head: one event is derived per solution, so the
+  same event comes several times;
 - `variable-bound-after-negation`: a variable met first inside `\\+ G` of a clause body or a
   condition and used by a later goal: `\\+` binds nothing, so the negation asks whether G holds
   for any value, not for the one the later goal finds (and SWI-Prolog 9.0.4 may compile such a
-  clause wrongly: `p(0) :- \\+ f(Y), e(Y, Y).` with only `e(0, 1)` stored succeeds).
+  clause wrongly: `p(0) :- \\+ f(Y), e(Y, Y).` with only `e(0, 1)` stored succeeds);
+- `string-mode`: a pattern (of an event rule, a memory or a subscription) holds a string in
+  the form the program's ROS strings are not in (collect_settings `ros_strings`): the 2015
+  release's quoted atom `'"odom"'` in a plain program, or, in a quoted program, a plain atom
+  as the frame id of a header or the child frame id of a transform. No message's string
+  field is ever that atom, so the pattern never matches one.
 
 Runs last in the event pipeline, after the checks that make a program an error.
 """
@@ -36,10 +49,11 @@ from typing import Iterable, List, Optional, Set
 from ..frontend.errors import render_at
 from ..frontend.program import (Absence, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern, Sliding,
                                 StaticClause, Where, Window, pattern_conditions, pattern_text, walk_pattern)
-from ..frontend.terms import Atom, Compound, Span, indicator, span_of, variables, walk
+from ..frontend.terms import Atom, Compound, Span, Term, Var, indicator, span_of, variables, walk
 from ..frontend.writer import write_term
 from .loadable import _goals, _loads_code, _program_predicates
 from .unit import Unit
+from ..frontend.terms import Number
 
 name = "lint"
 
@@ -86,8 +100,11 @@ def lint_unit(unit: Unit) -> List[LintWarning]:
         if unit.settings.consumption_policy == "unrestricted":
             found += _keyless_joins(rule)
     found += _event_operators_in_clauses(program)
+    found += _new_events_at_the_clock(program)
+    found += _solutions_with_the_same_head(program)
     found += _variables_bound_after_negation(program)
     found += _undefined_predicates(unit)
+    found += _string_mode(unit)
     found.sort(key=lambda w: (w.span.line, w.span.column) if w.span else (0, 0))
     return found
 
@@ -112,8 +129,6 @@ def _window_on_last_operand(rule: EventRule, text: str) -> Iterable[LintWarning]
 
 
 def _number(value):
-    from ..frontend.terms import Number
-
     return Number(int(value) if float(value).is_integer() else value)
 
 
@@ -286,6 +301,133 @@ def _keyless_joins(rule: EventRule) -> Iterable[LintWarning]:
             "with a where condition, or bound the pattern with a window: (P).Seconds")
 
 
+# ---- new_event/1 in an action -------------------------------------------------------------
+
+
+def _predicate_bodies(program) -> dict:
+    """Per predicate of the program, the bodies of its clauses."""
+    bodies: dict = {}
+    for clause in program.clauses:
+        if isinstance(clause, StaticClause):
+            key = indicator(clause.head)
+            if key is not None:
+                bodies.setdefault(key, []).append(clause.body)
+    return bodies
+
+
+def _calls_new_event_1(goal, bodies: dict, seen: Set) -> Optional[Term]:
+    """The `new_event/1` call that `goal` makes, itself or through the program's predicates."""
+    for g in _goals(goal):
+        key = indicator(g)
+        if key == ("new_event", 1):
+            return g
+        if key in bodies and key not in seen:
+            seen.add(key)
+            for body in bodies[key]:
+                if body is not None:
+                    found = _calls_new_event_1(body, bodies, seen)
+                    if found is not None:
+                        return found
+    return None
+
+
+def _new_events_at_the_clock(program) -> Iterable[LintWarning]:
+    bodies = _predicate_bodies(program)
+    for rule in program.event_rules:
+        if rule.action is None:
+            continue
+        call = _calls_new_event_1(rule.action, bodies, set())
+        if call is None:
+            continue
+        yield LintWarning(
+            "new-event-at-the-clock", span_of(call) or span_of(rule.action) or rule.span,
+            f"new_event/1 in this action stamps {write_term(call.args[0], 999)} with the clock (the latest event "
+            "time processed), not with the time of the match that raised it: a late triggering event gives "
+            "its raised event a later time",
+            "stamp it with the match's time: bind it with E^T in the pattern and call new_event(Event, T), or "
+            "new_event(Event, Sec, NSec) with a ROS stamp")
+
+
+# ---- a condition whose solutions give the same event ------------------------------------------
+
+#: Builtins that commonly have several solutions (member(X, L) with X unbound, ...).
+MULTI_SOLUTION = {("member", 2), ("between", 3), ("select", 3), ("nth0", 3), ("nth1", 3), ("append", 3),
+                  ("append", 2), ("sub_atom", 5), ("permutation", 2), ("subtract", 3), ("last", 2),
+                  ("clause", 2), ("current_op", 3), ("repeat", 0)}
+
+
+def _condition_goals(goal):
+    """The goals of a condition in order, conjunctions opened; a disjunction stays whole (an
+    if-then-else is one goal)."""
+    stack = [goal]
+    while stack:
+        g = stack.pop()
+        if isinstance(g, Compound) and g.name == "," and g.arity == 2:
+            stack.extend(reversed(g.args))
+        else:
+            yield g
+
+
+def _several_solutions(goal, clause_heads: dict) -> Optional[str]:
+    if isinstance(goal, Compound) and goal.name in (";", "|") and goal.arity == 2:
+        left = goal.args[0]
+        if isinstance(left, Compound) and left.name in ("->", "*->") and left.arity == 2:
+            return None                             # if-then-else: one branch runs
+        return "this disjunction"
+    key = indicator(goal)
+    if key in MULTI_SOLUTION:
+        return f"{key[0]}/{key[1]}"
+    heads = [h for h in clause_heads.get(key, []) if _may_match(h, goal)]
+    if len(heads) > 1:
+        return f"{key[0]}/{key[1]} ({len(heads)} clauses for this call)"
+    return None
+
+
+def _may_match(head, goal) -> bool:
+    """False when an argument of the call and of the clause head are different constants
+    (first-argument style selection: the clause cannot run for this call)."""
+    if not (isinstance(head, Compound) and isinstance(goal, Compound)):
+        return True
+    for a, b in zip(head.args, goal.args):
+        if isinstance(a, Compound) and a.name == "^" and isinstance(b, Compound) and b.name == "^":
+            a, b = a.args[0], b.args[0]
+        if isinstance(a, Compound) and isinstance(b, Compound):
+            if (a.name, a.arity) != (b.name, b.arity) or not _may_match(a, b):
+                return False
+        elif not isinstance(a, Var) and not isinstance(b, Var) and not isinstance(a, Compound) \
+                and not isinstance(b, Compound) and a != b:
+            return False
+    return True
+
+
+def _solutions_with_the_same_head(program) -> Iterable[LintWarning]:
+    clause_heads: dict = {}
+    for clause in program.clauses:
+        if isinstance(clause, StaticClause) and indicator(clause.head) is not None:
+            clause_heads.setdefault(indicator(clause.head), []).append(clause.head)
+    for rule in program.event_rules:
+        if rule.synchronized is not None:
+            continue
+        head = {v.name for v in variables(rule.head)}
+        for p in walk_pattern(rule.pattern):
+            if not isinstance(p, (Where, Check)):
+                continue
+            known = _mentioned(p.pattern)
+            for goal in _condition_goals(p.condition):
+                names = {v.name for v in variables(goal)}
+                what = _several_solutions(goal, clause_heads)
+                new = {n for n in names - known if not n.startswith("_") or n == "_"}
+                if what is not None and not (new & head) and (new or what == "this disjunction"):
+                    yield LintWarning(
+                        "one-event-per-solution", span_of(goal) or p.span,
+                        f"{what} in the condition can hold more than once for one match and binds no variable "
+                        f"of the head {write_term(rule.head, 999)}: the rule derives one event per solution, "
+                        "so the same event several times",
+                        "make the condition hold at most once (once(G), or an if-then-else (C -> true ; D) "
+                        "for 'either'), or put the variable it binds into the head")
+                known |= names
+
+
 # ---- a variable met first inside a negation -------------------------------------------------
 
 
@@ -373,4 +515,57 @@ def _undefined_predicates(unit: Unit) -> List[LintWarning]:
                     "that gets here",
                     f"define {key[0]}/{key[1]} in the program (or declare it ':- dynamic {key[0]}/{key[1]}.' if "
                     "it is added while the program runs), or correct the name"))
+    return found
+
+
+# ---- strings in the other mode ---------------------------------------------------------------
+
+#: Declarations whose first argument is a pattern matched against events.
+_PATTERN_DECLARATIONS = {("memorize", 5), ("c_mem", 4), ("c_mem", 5), ("subscribe", 5), ("sub", 5),
+                         ("subscribe_between", 5)}
+
+
+def _string_mode(unit: Unit) -> List[LintWarning]:
+    patterns = [(p.term, p.span) for rule in unit.program.event_rules for p in walk_pattern(rule.pattern)
+                if isinstance(p, EventAtom)]
+    patterns += [(d.goal.args[0], d.span) for d in unit.program.declarations + unit.program.directives
+                 if isinstance(d.goal, Compound) and (d.goal.name, d.goal.arity) in _PATTERN_DECLARATIONS]
+    quoted = unit.settings.ros_strings == "quoted"
+    found = []
+    for term, fallback in patterns:
+        for atom in (_plain_frame_atoms(term) if quoted else _quoted_atoms(term)):
+            text = write_term(atom)
+            if quoted:
+                message = (f"{text} is a plain string, but this program reads ROS strings in the 2015 release's "
+                           f"quoted form ({write_term(Atom(chr(34) + atom.name + chr(34)))}): no frame id is "
+                           f"ever {text}")
+                hint = f"write {write_term(Atom(chr(34) + atom.name + chr(34)))}, or drop ros_strings(quoted)"
+            else:
+                plain = write_term(Atom(atom.name[1:-1]))
+                message = (f"{text} is a string in the 2015 release's quoted form, but this program reads ROS "
+                           f"strings as plain atoms ({plain}): no string field of a message is ever {text}")
+                hint = f"write {plain}, or add `:- ros_strings(quoted).` for a program written for the release"
+            found.append(LintWarning("string-mode", span_of(atom) or fallback, message, hint))
+    return found
+
+
+def _quoted_atoms(term) -> List[Atom]:
+    return [t for t in walk(term) if isinstance(t, Atom) and len(t.name) >= 2 and t.name[0] == t.name[-1] == '"']
+
+
+# Where a message term holds a frame id: the last argument of a header (ROS 1 has a seq
+# first), the second of a TransformStamped (its child frame id).
+_FRAME_POSITIONS = {("std_msgs__0__Header", 2): 1, ("std_msgs__0__Header", 3): 2,
+                    ("geometry_msgs__0__TransformStamped", 3): 1}
+
+
+def _plain_frame_atoms(term) -> List[Atom]:
+    found = []
+    for t in walk(term):
+        position = _FRAME_POSITIONS.get((t.name, t.arity)) if isinstance(t, Compound) else None
+        if position is not None:
+            frame = t.args[position]
+            if isinstance(frame, Atom) and frame.name != "[]" and not (
+                    len(frame.name) >= 2 and frame.name[0] == frame.name[-1] == '"'):
+                found.append(frame)
     return found

@@ -27,8 +27,6 @@ ADDED_RULES_PIPELINE = [added_rules] + [p for p in EVENT_PIPELINE if p is not li
 #: (thesis 6.4-6.6) and runs only when that mode is asked for; see `active_query_passes`.
 ACTIVE_QUERY_PIPELINE = [aq_normalise, aq_program, aq_join_order, aq_naive, aq_optimized, aq_tabled]
 
-PIPELINE = EVENT_PIPELINE  # the name used before there were several lists
-
 #: The active-query transformations, in the order of the list.
 AQ_MODES = [p.mode for p in ACTIVE_QUERY_PIPELINE if getattr(p, "mode", None)]
 

@@ -20,7 +20,7 @@ from dataclasses import replace
 from typing import List, Optional, Set
 
 from ..frontend.program import Binary, EventAtom, Pattern, Where, Window, walk_pattern
-from ..frontend.terms import Compound, Term, conjunction, conjuncts, indicator, variables
+from ..frontend.terms import Term, conjunction, conjuncts, indicator, variables
 from .unit import Unit
 
 name = "push_conditions"

@@ -28,6 +28,7 @@ class Settings:
     consumption_policy: str = "unrestricted"
     printed: Optional[List[tuple]] = None     # print_trigger selections (collect_settings._printed); None = all
     rule_properties: Dict[str, dict] = field(default_factory=dict)  # label -> {name: value}
+    ros_strings: str = "plain"                # how a ROS string field is an atom (collect_settings.ROS_STRINGS)
 
 
 @dataclass

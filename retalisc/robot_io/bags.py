@@ -245,13 +245,18 @@ def _read_errors() -> Tuple[type, ...]:
     return (serde.SerdeError, ValueError, IndexError, KeyError, UnicodeDecodeError, struct.error)
 
 
-def write_bag(path, fmt: str, store, records: Iterable[Tuple[str, str, int, object]]) -> Path:
+def write_bag(path, fmt: str, store, records: Iterable[Tuple[str, str, int, object]],
+              overwrite: bool = False) -> Path:
     """Write `records` (topic, msgtype, time_ns, msg), in their order, to a new recording:
     `fmt` is `ros1` (a .bag file), `ros2` (a sqlite3 bag folder) or `mcap` (a ROS 2 bag
     folder with MCAP storage). `store` is the type store the messages belong to. Returns the
-    path to give to Recording (the folder for ROS 2 bags)."""
+    path to give to Recording (the folder for ROS 2 bags). With `overwrite`, a recording
+    already at `path` (a file, or a folder holding a ROS 2 bag's metadata.yaml) is removed
+    first; anything else there is a BagError, left as it is."""
     path = Path(path)
     records = list(records)
+    if overwrite:
+        remove_recording(path)
     if fmt == "ros1":
         rosbag1 = require("rosbags.rosbag1", "writing bags")
         connections: Dict[Tuple[str, str], object] = {}
@@ -274,6 +279,20 @@ def write_bag(path, fmt: str, store, records: Iterable[Tuple[str, str, int, obje
                 connections[key] = writer.add_connection(topic, msgtype, typestore=store)
             writer.write(connections[key], time_ns, store.serialize_cdr(msg, msgtype))
     return path
+
+
+def remove_recording(path: Path) -> None:
+    """Remove the recording at `path` (nothing there: nothing to do): a file, or a ROS 2 bag
+    folder (one with metadata.yaml, or empty). Raises BagError for another folder."""
+    import shutil
+
+    path = Path(path)
+    if path.is_dir() and not path.is_symlink():
+        if any(path.iterdir()) and not (path / "metadata.yaml").is_file():
+            raise BagError(f"{path} is a folder that is not a ROS 2 bag: not overwritten")
+        shutil.rmtree(path)
+    elif path.exists() or path.is_symlink():
+        path.unlink()
 
 
 def mcap_file(folder: Path) -> Path:

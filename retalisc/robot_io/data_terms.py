@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import math
 import re
-from typing import List, Union
+from typing import Union
 
 from ..frontend.parser import _number, _unescape
 from ..frontend.terms import Atom, Compound, String
+from ..driver.bridge import Bridge, PrologError
+from ..runtime_location import runtime_dir
 
 DataTerm = Union[int, float, Atom, String, Compound, list]
 
@@ -68,8 +70,6 @@ def _read_fast(text: str) -> DataTerm:
 def _canonical(text: str) -> str:
     """`text` read by SWI-Prolog (read_term from a string, never pasted into a goal) and
     written back with write_canonical/1: no operators left, which the fast reader reads."""
-    from ..driver.bridge import Bridge, PrologError
-
     bridge = Bridge()
     _load_text_reader(bridge)
     try:
@@ -88,8 +88,6 @@ def _load_text_reader(bridge) -> None:
     """Load the runtime's reader of untrusted text (rtl_text.pl) once per process."""
     global _TEXT_READER_LOADED
     if not _TEXT_READER_LOADED:
-        from ..runtime_location import runtime_dir
-
         bridge.consult(str(runtime_dir() / "rtl_text.pl"))
         _TEXT_READER_LOADED = True
 

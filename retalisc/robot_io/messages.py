@@ -1,6 +1,7 @@
 """ROS messages as Retalis events and back (thesis 2.2, Listing 2.3; docs/robot_io.md).
 
-The convention is the one of the 2015 Retalis release, which its programs expect:
+The convention is the one of the 2015 Retalis release, which its programs expect, except
+for strings:
 
 - a message is a compound term whose functor is its type with `/` spelled `__0__`
   (`geometry_msgs/PoseStamped` -> `geometry_msgs__0__PoseStamped`; ROS 2's
@@ -10,16 +11,22 @@ The convention is the one of the 2015 Retalis release, which its programs expect
   builtin_interfaces Time and Duration) are `[Sec, NSec]`;
 - integers and floats are numbers (non-finite floats are 1.0Inf, -1.0Inf, 1.5NaN), bools are
   the atoms `true` and `false`;
-- a string is an atom holding the text between double quotes, as the release wrote it:
-  frame id `/odom` is `'"/odom"'`. With `plain_strings`, the atom holds the text alone
-  (`'/odom'`).
+- a string is an atom holding its text: frame id `odom` is the atom `odom`, `/odom` is
+  `'/odom'`. Without `plain_strings` (a program that says `:- ros_strings(quoted).`, or
+  reads its rules with `compile_event_file`), the atom holds the text between double
+  quotes, as the release wrote it: `'"odom"'`.
 
 With `wrap_topic`, the term is wrapped in the topic name (the thesis's `topic(Msg)`): `/tf`
 gives `tf(tf2_msgs__0__TFMessage(...))`, `/arm/status` gives `arm__0__status(...)` (leading
-slash dropped, the others spelled `__0__`).
+slash dropped, the others spelled `__0__`). Without it, a tf message on `/tf_static` is still
+wrapped, as `tf_static(tf2_msgs__0__TFMessage(...))`: the topic is what tells static
+transforms from dynamic ones (tf2's rule), and the runtime's tf library reads it from there.
 
-An event is stamped with the message's `header.stamp`; a message without a header, or whose
-stamp is zero (not set), is stamped with the time of the bag record.
+An event is stamped by one clock rule (`EventClock`, docs/robot_io.md "Time"): the time the
+message carries (its `header.stamp`; without a header of its own, the header stamp of the
+first item of its first field when that is a list of stamped messages: a `TFMessage`'s first
+transform), else the latest `/clock` of the run, else its arrival on the run's clock; a
+stamp of zero is not set.
 
 Every message type of a rosbags type store works, custom types defined in a bag included:
 the converter of a type is generated as Python source from its definition the first time a
@@ -38,10 +45,11 @@ import keyword
 import math
 import re
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from ..frontend.terms import Atom, Compound, String
 from .data_terms import DataTerm, atom_text, float_text, quote_atom, read_data_term
+from .data_terms import write_data_term
 
 # rosbags' Nodetype values (rosbags.typesys.base.Nodetype), fixed by its message model.
 BASE, NAME, ARRAY, SEQUENCE = 1, 2, 3, 4
@@ -62,8 +70,15 @@ class ConversionError(ValueError):
 class Convention:
     """How messages are written as terms (see the module docstring)."""
 
-    plain_strings: bool = False
+    plain_strings: bool = True
     wrap_topic: bool = False
+
+    @classmethod
+    def of_program(cls, engine, plain_strings: bool = False, wrap_topic: bool = False) -> "Convention":
+        """The convention for `engine`'s program: its strings as it says (Engine.ros_strings),
+        plain whatever it says with `plain_strings` (the --plain-strings flag)."""
+        ros_strings = getattr(engine, "ros_strings", "plain")
+        return cls(plain_strings=plain_strings or ros_strings == "plain", wrap_topic=wrap_topic)
 
 
 def type_functor(msgtype: str) -> str:
@@ -77,6 +92,18 @@ def type_functor(msgtype: str) -> str:
 def topic_functor(topic: str) -> str:
     """The functor of `--wrap-topic`: `/tf` -> `tf`, `/arm/status` -> `arm__0__status`."""
     return "__0__".join(part for part in topic.split("/") if part) or "topic"
+
+
+TF_MESSAGE_TYPES = ("tf2_msgs__0__TFMessage", "tf__0__tfMessage")
+
+
+def static_tf_wrapper(topic: str, msgtype: str, convention: Convention) -> Optional[str]:
+    """`tf_static` for a tf message on a static tf topic (`/tf_static`, `/ns/tf_static`) when
+    the convention does not wrap topics anyway: the event is then `tf_static(Msg)`, which the
+    runtime's tf library (prolog_runtime/rtl_tf.pl) takes as static links; None otherwise."""
+    if convention.wrap_topic or topic.rstrip("/").rsplit("/", 1)[-1] != "tf_static":
+        return None
+    return "tf_static" if type_functor(msgtype) in TF_MESSAGE_TYPES else None
 
 
 def _fields(typestore, msgtype: str) -> List[Tuple[str, tuple]]:
@@ -97,9 +124,8 @@ def release_string(text: str) -> str:
 
 
 def plain_string(text: str) -> str:
-    if text.isprintable() and "'" not in text and "\\" not in text:
-        return "'" + text + "'"
-    return quote_atom(text)
+    """A string field as the atom of its text, written as writeq writes it (`odom`, `'/odom'`)."""
+    return atom_text(text)
 
 
 def _float_list(values) -> str:
@@ -154,16 +180,20 @@ class MessageConverter:
         text = self.term(msg, msgtype)
         if self.convention.wrap_topic:
             text = f"{atom_text(topic_functor(topic))}({text})"
+        elif static_tf_wrapper(topic, msgtype, self.convention):
+            text = f"tf_static({text})"
         stamp = self.stamp_ns(msg, msgtype)
         return text, (stamp or record_ns) / 1_000_000_000     # int / int: correctly rounded
 
     def stamp_ns(self, msg, msgtype: str) -> int:
-        """`header.stamp` of `msg` in nanoseconds, 0 when it has no header."""
+        """The time `msg` carries in nanoseconds (`stamped_list` says where), 0 when none."""
         function = self._stamp_functions.get(msgtype)
         if function is None:
-            header = any(name == "header" and desc == (NAME, HEADER_TYPE)
-                         for name, desc in _fields(self.typestore, msgtype))
-            function = _header_stamp if header else _no_stamp
+            if has_header(self.typestore, msgtype):
+                function = _header_stamp
+            else:
+                items = stamped_list(self.typestore, msgtype)
+                function = _no_stamp if items is None else _first_item_stamp(items)
             self._stamp_functions[msgtype] = function
         return function(msg)
 
@@ -319,7 +349,7 @@ class MessageConverter:
             raise ConversionError(f"{path}: expected a list of {size} elements, not {len(term)}")
         items = [self._value(item, sub, f"{path}[{i}]") for i, item in enumerate(term)]
         if sub[0] == BASE and sub[1][0] not in _STRINGS:
-            import numpy
+            import numpy    # optional: comes with rosbags, for arrays of numbers
             return numpy.array(items, dtype=_numpy_type(sub[1][0]))
         return items
 
@@ -392,8 +422,87 @@ def _header_stamp(msg) -> int:
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
+def has_header(typestore, msgtype: str) -> bool:
+    """Whether `msgtype` has a top-level `header` (std_msgs/Header)."""
+    return any(name == "header" and desc == (NAME, HEADER_TYPE) for name, desc in _fields(typestore, msgtype))
+
+
+def stamped_list(typestore, msgtype: str) -> Optional[str]:
+    """For a type without a header: the name of its first field when that is a list of
+    messages with a header (a TFMessage's `transforms`), whose first item's stamp is the time
+    the message carries; else None."""
+    fields = _fields(typestore, msgtype)
+    if not fields:
+        return None
+    name, (kind, detail) = fields[0]
+    if kind != SEQUENCE:
+        return None
+    item = detail[0]
+    return name if item[0] == NAME and has_header(typestore, item[1]) else None
+
+
+def _first_item_stamp(field_name: str) -> Callable[[Any], int]:
+    def stamp(msg) -> int:
+        items = getattr(msg, field_name)
+        return _header_stamp(items[0]) if len(items) else 0
+
+    return stamp
+
+
 def _no_stamp(msg) -> int:
     return 0
+
+
+CLOCK_TOPIC = "/clock"          # rosgraph_msgs/Clock: a simulation's time
+
+CLOCK_JUMP = 3600.0
+"""A step of the event clock larger than this many seconds (an hour, either way) between two
+messages is warned about, once a run: two clocks are mixed (sim time and wall time)."""
+
+
+class EventClock:
+    """The one clock of a run (docs/robot_io.md, "Time"). `time(carried, arrival_ns, topic,
+    where)` is the time in seconds of a message that carries the time `carried` (seconds, 0:
+    none) and arrived at `arrival_ns` (its record time): the carried time; else the latest
+    `/clock` seen (`clock`); else the arrival on the run's clock: the arrival itself, or, when
+    the messages carry another clock (the last one that carried a time was more than
+    CLOCK_JUMP away from its arrival: sim time recorded on the wall clock), the arrival
+    shifted by that difference. With `record` (`--stamp record`) every message is at its
+    arrival. A step of more than CLOCK_JUMP seconds goes to `warn(text)`, once."""
+
+    def __init__(self, warn: Callable[[str], None], record: bool = False):
+        self.warn = warn
+        self.record = record
+        self.clock_time: Optional[float] = None     # the latest /clock
+        self.offset: Optional[float] = None         # carried - arrival, of the last message carrying a time
+        self.last: Optional[float] = None
+        self.warned = False
+
+    def clock(self, seconds: float) -> None:
+        """A `/clock` message: the time of the messages that carry none, from now on."""
+        if seconds:
+            self.clock_time = seconds
+
+    def time(self, carried: float, arrival_ns: int, topic: str, where: str) -> float:
+        arrival = arrival_ns / 1_000_000_000
+        if self.record:
+            time = arrival
+        elif carried:
+            time = carried
+            self.offset = carried - arrival
+        elif self.clock_time is not None:
+            time = self.clock_time
+        elif self.offset is not None and abs(self.offset) > CLOCK_JUMP:
+            time = arrival + self.offset        # the messages carry another clock (sim time)
+        else:
+            time = arrival
+        if self.last is not None and abs(time - self.last) > CLOCK_JUMP and not self.warned:
+            self.warned = True
+            self.warn(f"{where}: warning: the event clock jumps from {self.last:.9f} s to {time:.9f} s "
+                      f"on {topic}: two clocks are mixed (header stamps and record times?); --stamp record "
+                      f"puts every message on the record clock")
+        self.last = time
+        return time
 
 
 def _functor(term: DataTerm) -> Optional[str]:
@@ -405,7 +514,6 @@ def _functor(term: DataTerm) -> Optional[str]:
 
 
 def _describe(term: DataTerm) -> str:
-    from .data_terms import write_data_term
     text = write_data_term(term)
     return text if len(text) <= 60 else text[:57] + "..."
 

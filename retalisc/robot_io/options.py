@@ -26,8 +26,9 @@ _OPTIONS = [
     click.option("--wrap-topic", is_flag=True,
                  help="With --bag: wrap each message in its topic name, topic(Msg) (/tf -> tf(...))."),
     click.option("--plain-strings", is_flag=True,
-                 help="With --bag: strings are atoms holding the text ('/odom') instead of the "
-                      "release's quoted form ('\"/odom\"')."),
+                 help="With --bag: strings are atoms holding the text ('/odom', the default) even for a "
+                      "program that asks for the release's quoted form '\"/odom\"' (ros_strings(quoted), "
+                      "compile_event_file)."),
     click.option("--stamp", type=click.Choice(STAMPS), default="header", show_default=True,
                  help="With --bag: the time of an event: its message's header.stamp (the record time "
                       "when it has none), or always the record time."),
@@ -56,3 +57,28 @@ def bag_options(command):
     for option in reversed(_OPTIONS):
         command = option(command)
     return command
+
+
+# The --bag options that say what becomes an event (for `retalisc query` and `retalisc explain`,
+# which read a recording as their input and publish nothing).
+INPUT_OPTIONS = ("bag", "topics", "bag_start", "bag_duration", "wrap_topic", "plain_strings", "stamp",
+                 "bag_typestore")
+
+
+def bag_input_options(command):
+    """Add the --bag options of INPUT_OPTIONS to a click command (as keyword arguments)."""
+    for option in reversed(_OPTIONS):
+        decorated = option(lambda: None)
+        if decorated.__click_params__[0].name in INPUT_OPTIONS:
+            command = option(command)
+    return command
+
+
+def check_bag_input(events, values: dict) -> None:
+    """Fail with a usage error unless the input is given once (--events or --bag), and the
+    --bag options come with --bag."""
+    if events is not None and values["bag"] is not None:
+        raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
+    if values["bag"] is None and any(values[name] != BAG_DEFAULTS[name] for name in INPUT_OPTIONS if name != "bag"):
+        raise click.UsageError("--topics, --start, --duration, --wrap-topic, --plain-strings, --stamp and "
+                               "--typestore go with --bag")

@@ -18,13 +18,18 @@ import sys
 import time
 from collections import Counter
 from dataclasses import dataclass, field, replace
-from typing import IO, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import IO, Callable, Iterator, List, Optional, Sequence, Tuple
 
 import click
 
 from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
-from .messages import ConversionError, Convention, MessageConverter
+from .messages import CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from .ros1_terms import Ros1Terms
+from ..driver.bridge import PrologError
+from ..driver.outputs import ConsumerFiles, detections_line
+from . import MissingDependency
+from .bags import typestore
+from .publish import EVENTS_TOPIC, FoxgloveSink, McapSink, Publisher
 
 
 @dataclass
@@ -41,12 +46,13 @@ class BagOptions:
     typestore: str = DEFAULT_ROS2_STORE   # for ROS 2 bags without definitions
 
     @classmethod
-    def from_cli(cls, values: dict) -> "BagOptions":
+    def from_cli(cls, values: dict, engine=None) -> "BagOptions":
+        """The options of the command line, for `engine`'s program (its string convention)."""
         return cls(topics=topic_list(values.get("topics")), rate=values.get("rate"),
                    tick=values.get("bag_tick") or RATE_TICK,
                    start=values.get("bag_start") or 0.0, duration=values.get("bag_duration"),
-                   convention=Convention(plain_strings=bool(values.get("plain_strings")),
-                                         wrap_topic=bool(values.get("wrap_topic"))),
+                   convention=Convention.of_program(engine, bool(values.get("plain_strings")),
+                                                    bool(values.get("wrap_topic"))),
                    stamp=values.get("stamp") or "header",
                    typestore=values.get("bag_typestore") or DEFAULT_ROS2_STORE)
 
@@ -104,37 +110,62 @@ this (an interrupt is seen when the call returns)."""
 def bag_events(bag: Recording, options: BagOptions, stats: ReplayStats,
                report: Callable[[str, int, str], None],
                converter: Optional[MessageConverter] = None,
-               ros1_terms: Optional[Ros1Terms] = None, skip: int = 0) -> Iterator[Tuple[object, float, Record]]:
+               ros1_terms: Optional[Ros1Terms] = None, skip: int = 0,
+               warn: Optional[Callable[[str], None]] = None) -> Iterator[Tuple[object, float, Record]]:
     """(event, time in seconds, record) for each message replayed, in record order: the
     event is its text, or, with `ros1_terms` on a ROS 1 recording, a `Ros1Bytes` the runtime
     reads itself (the record is then undecoded: `raw` holds its bytes; `message_event`
     converts it when the runtime refuses the bytes). Messages that cannot be decoded or
     converted go to `report(topic, number, reason)` and are counted in `stats.rejected`.
-    The first `skip` messages are counted, not converted (a replay going on from a snapshot,
-    docs/recovery.md)."""
+    The time is the run's one clock (EventClock: the time the message carries, else the
+    recording's `/clock`, read even when not selected, else its arrival); a jump of that
+    clock goes to `warn` (standard error). The first `skip` messages are counted, not
+    converted (a replay going on from a snapshot, docs/recovery.md)."""
     converter = converter or MessageConverter(bag.typestore, options.convention)
     start_ns, stop_ns = window(bag, options)
     record_stamp = options.stamp == "record"
+    clock = EventClock(warn or (lambda text: click.echo(text, err=True)), record=record_stamp)
+    clock_topic = CLOCK_TOPIC if not record_stamp and CLOCK_TOPIC in bag.topics() else None
+    selected = options.topics
+    read = selected
+    if selected is not None and clock_topic is not None and clock_topic not in selected:
+        read = list(selected) + [clock_topic]
     number = 0
     raw = ros1_terms is not None and bag.format == "ros1"
-    records = (bag.raw_records if raw else bag.records)(options.topics, start_ns, stop_ns)
+    records = (bag.raw_records if raw else bag.records)(read, start_ns, stop_ns)
     for record in records:
+        if record.topic == clock_topic:
+            clock.clock(_clock_seconds(bag, record))
+            if read is not selected:
+                continue
         number += 1
         stats.per_topic[record.topic] += 1
         if number <= skip:
             continue
+        where = f"{bag.path}:{record.topic}#{number}"
         if raw:
-            fast = ros1_terms.event(record.raw, record.msgtype, record.topic, record.time_ns, record_stamp)
+            fast = ros1_terms.event(record.raw, record.msgtype, record.topic, 0, record_stamp)
             if fast is not None:
-                yield fast[0], fast[1], record
+                yield fast[0], clock.time(fast[1], record.time_ns, record.topic, where), record
                 continue
         try:
-            text, seconds = message_event(bag, converter, record, record_stamp)
+            text, carried = message_event(bag, converter, record, record_stamp, arrival=False)
         except _Rejected as rejected:
             stats.rejected += 1
             report(record.topic, number, str(rejected))
             continue
-        yield text, seconds, record
+        yield text, clock.time(carried, record.time_ns, record.topic, where), record
+
+
+def _clock_seconds(bag: Recording, record: Record) -> float:
+    """The time of a `/clock` message (0.0 when it cannot be read: not a Clock)."""
+    if record.msg is None and record.raw is not None:
+        record = bag.decode(record)
+    stamp = getattr(record.msg, "clock", None)
+    try:
+        return (stamp.sec * 1_000_000_000 + stamp.nanosec) / 1_000_000_000
+    except (AttributeError, TypeError):
+        return 0.0
 
 
 class _Rejected(Exception):
@@ -142,15 +173,17 @@ class _Rejected(Exception):
 
 
 def message_event(bag: Recording, converter: MessageConverter, record: Record,
-                  record_stamp: bool = False) -> Tuple[str, float]:
-    """(event text, time in seconds) of a record (decoded first when it is raw); raises
+                  record_stamp: bool = False, arrival: bool = True) -> Tuple[str, float]:
+    """(event text, time in seconds) of a record (decoded first when it is raw): the time it
+    carries, else (with `arrival`) its record time; `record_stamp`: its record time. Raises
     _Rejected saying why it cannot be decoded or converted."""
     if record.msg is None and record.raw is not None and record.error is None:
         record = bag.decode(record)
     if record.msg is None:
         raise _Rejected(record.error or "cannot decode")
     try:
-        text, seconds = converter.event(record.msg, record.msgtype, record.topic, record.time_ns)
+        text, seconds = converter.event(record.msg, record.msgtype, record.topic,
+                                        record.time_ns if arrival or record_stamp else 0)
     except (ConversionError, AttributeError, TypeError, ValueError) as error:
         raise _Rejected(f"cannot convert {record.msgtype}: {error}") from None
     if record_stamp:
@@ -170,8 +203,6 @@ def feed_messages(engine, bag: Recording, converter: MessageConverter, record_st
     it; a message whose bytes the runtime refuses is converted as text instead
     (`message_event`), or goes to `report(topic, number, reason)` and `stats.rejected` when
     that fails too."""
-    from ..driver.bridge import PrologError
-
     def rejected(topic: str, number: int, reason: str) -> None:
         stats.rejected += 1
         sink.flush()
@@ -204,8 +235,9 @@ def feed_messages(engine, bag: Recording, converter: MessageConverter, record_st
             if dues is not None:
                 dues = dues[index:]             # the message's own due time, then the rest's
             if getattr(error, "undecodable", False):      # the runtime refused the bytes
+                seconds = batch[index][1]           # the time the run's clock gave it
                 try:
-                    text, seconds = message_event(bag, converter, record, record_stamp)
+                    text, _ = message_event(bag, converter, record, record_stamp)
                 except _Rejected as refusal:
                     rejected(topic, number, str(refusal))
                     batch = rest
@@ -252,11 +284,10 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     read. A message whose processing raises an error is reported with its topic and number,
     counted as failed, and the replay goes on. `clock` paces a replay with a rate (default:
     the wall clock). `trace_report()`, if given, returns text printed on standard error before
-    the detections per rule and the summary (the counts of `--trace`)."""
-    from ..driver.bridge import PrologError
-    from ..driver.run import ConsumerFiles, detections_line
+    the detections per rule and the summary (the counts of `--trace`). Without `options`,
+    strings are as the program says (Engine.ros_strings)."""
 
-    options = options or BagOptions()
+    options = options or BagOptions(convention=Convention.of_program(engine))    # the program's strings
     name = str(path)
     bag = open_recording(path, options)
     if bag is None:
@@ -326,8 +357,8 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
 
             def feed(batch, dues=None) -> None:
                 if publisher is not None:               # the input messages as they are fed
-                    for _, _, (topic, _, record) in batch:
-                        message = publisher.input(topic, record.msgtype, record.time_ns, record.msg)
+                    for _, seconds, (topic, _, record) in batch:     # on the clock of the events
+                        message = publisher.input(topic, record.msgtype, round(seconds * 1e9), record.msg)
                         for target in sinks:
                             target.write(message)
                     publisher.fed([(text, seconds) for text, seconds, _ in batch])
@@ -410,10 +441,8 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
 
 def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
     """`retalisc run PROGRAM --bag FILE ...`: `values` are the --bag options (options.py)."""
-    from . import MissingDependency
-
     try:
-        return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values), out_bag=values.get("out_bag"),
+        return replay_bag(engine, values["bag"], out, BagOptions.from_cli(values, engine), out_bag=values.get("out_bag"),
                           foxglove=values.get("foxglove"), **run_options)
     except MissingDependency as error:
         click.echo(f"error: {error}", err=True)
@@ -433,9 +462,6 @@ def _open_sinks(bag: Recording, options: BagOptions, out_bag: Optional[str], fox
     """The Publisher and the sinks of --out-bag and --foxglove (none: (None, []))."""
     if out_bag is None and foxglove is None:
         return None, []
-    from .bags import typestore
-    from .publish import EVENTS_TOPIC, FoxgloveSink, McapSink, Publisher
-
     fallback = typestore("ros1_noetic" if bag.format == "ros1" else DEFAULT_ROS2_STORE)
     publisher = Publisher(bag.typestore, fallback, options.convention)
     sinks: list = []

@@ -7,8 +7,8 @@ data this module takes a shorter road: it describes each message type once as a 
 (the wire layout and the term to build, prolog_runtime/c/rtl_ros1.c) and registers it with
 the runtime; then each message goes to the runtime as its serialized bytes
 (`engine.Ros1Bytes`) and the C helper builds the same term the text conversion gives. The
-event's time is read from the bytes too (the header stamp, when the header's position is
-fixed; else the record time), as `MessageConverter.event` gives it.
+time the message carries is read from the bytes too (the header stamp, or a TFMessage's first
+transform's, when its position is fixed), as `MessageConverter.stamp_ns` gives it.
 
 A type takes the text road when the schema cannot say it (a base type the helper does not
 read, a header that is not at a fixed place, a ROS 1 header without `seq` in the store),
@@ -22,8 +22,9 @@ import struct
 from typing import Callable, Dict, List, Optional, Tuple
 
 from .data_terms import atom_text
-from .messages import (ARRAY, BASE, HEADER_TYPE, NAME, SEQUENCE, TIME_TYPES, Convention, _fields,
-                       topic_functor, type_functor)
+from .messages import (ARRAY, BASE, HEADER_TYPE, NAME, SEQUENCE, TIME_TYPES, Convention, _fields, has_header,
+                       stamped_list, static_tf_wrapper, topic_functor, type_functor)
+from ..driver.engine import Ros1Bytes
 
 _BASES = {"float32": ("f32", 4), "float64": ("f64", 8), "int8": ("i8", 1), "byte": ("i8", 1),
           "uint8": ("u8", 1), "char": ("u8", 1), "int16": ("i16", 2), "uint16": ("u16", 2),
@@ -50,9 +51,10 @@ class Ros1Terms:
 
     def event(self, raw, msgtype: str, topic: str, record_ns: int, record_stamp: bool = False):
         """(Ros1Bytes, time in seconds) of the message `raw` (its ROS 1 bytes) recorded on
-        `topic` at `record_ns`; None when the type takes the text road. The time is the
-        header stamp unless `record_stamp` (or there is none, or it is zero)."""
-        key = (msgtype, topic if self.convention.wrap_topic else "")
+        `topic` at `record_ns`; None when the type takes the text road. The time is the one
+        the message carries (stamp_ns) unless `record_stamp` (or it carries none, or zero):
+        then `record_ns`."""
+        key = (msgtype, topic if self.convention.wrap_topic or static_tf_wrapper(topic, msgtype, self.convention) else "")
         entry = self._types.get(key, False)
         if entry is False:
             entry = self._types[key] = self._register(msgtype, topic)
@@ -82,11 +84,11 @@ class Ros1Terms:
         text = self._message(msgtype)
         if self.convention.wrap_topic:
             text = f"w({atom_text(topic_functor(topic))},{text})"
+        elif static_tf_wrapper(topic, msgtype, self.convention):
+            text = f"w({static_tf_wrapper(topic, msgtype, self.convention)},{text})"
         return text
 
     def _register(self, msgtype: str, topic: str):
-        from ..driver.engine import Ros1Bytes
-
         self._ros1_bytes = Ros1Bytes
         try:
             text = self.schema(msgtype, topic)
@@ -135,11 +137,41 @@ class Ros1Terms:
     # ---- the stamp ----------------------------------------------------------------------------
 
     def _stamp_reader(self, msgtype: str) -> Optional[Callable[[bytes], int]]:
-        """A function from the bytes to `header.stamp` in ns, as MessageConverter.stamp_ns
-        gives it; None for a type without a header. Raises _NoSchema when the stamp is not
-        at a fixed offset."""
+        """A function from the bytes to the time the message carries in ns, as
+        MessageConverter.stamp_ns gives it (`header.stamp`, or the first item's of a stamped
+        list: a TFMessage's first transform; 0 for an empty list); None for a type that
+        carries no time. Raises _NoSchema when the stamp is not at a fixed offset."""
+        offset = self._header_stamp_offset(msgtype)
+        if offset is None:
+            items = stamped_list(self.typestore, msgtype)
+            if items is None:
+                return None
+            item_offset = self._header_stamp_offset(dict(_fields(self.typestore, msgtype))[items][1][0][1])
+            first = 4 + item_offset                 # after the list's length (uint32)
+        time_fields = _fields(self.typestore, "builtin_interfaces/msg/Time")
+        layout = tuple(desc[1][0] if desc[0] == BASE else None for _, desc in time_fields)
+        if [name for name, _ in time_fields] != ["sec", "nanosec"] or layout not in _STAMP_FORMATS:
+            raise _NoSchema("the stamp")
+        unpack = struct.Struct(_STAMP_FORMATS[layout]).unpack_from
+
+        if offset is not None:
+            def stamp(data: bytes, unpack=unpack, offset=offset) -> int:
+                sec, nanosec = unpack(data, offset)
+                return sec * 1_000_000_000 + nanosec
+        else:
+            def stamp(data: bytes, unpack=unpack, first=first) -> int:
+                if not int.from_bytes(data[:4], "little"):
+                    return 0
+                sec, nanosec = unpack(data, first)
+                return sec * 1_000_000_000 + nanosec
+
+        return stamp
+
+    def _header_stamp_offset(self, msgtype: str) -> Optional[int]:
+        """The offset of `header.stamp` in the bytes of a `msgtype` message; None when it has
+        no header. Raises _NoSchema when the offset is not fixed."""
         fields = _fields(self.typestore, msgtype)
-        if not any(name == "header" and desc == (NAME, HEADER_TYPE) for name, desc in fields):
+        if not has_header(self.typestore, msgtype):
             return None
         offset = 0
         for name, desc in fields:
@@ -150,17 +182,7 @@ class Ros1Terms:
             if name == "stamp":
                 break
             offset += self._fixed_size(desc)
-        time_fields = _fields(self.typestore, "builtin_interfaces/msg/Time")
-        layout = tuple(desc[1][0] if desc[0] == BASE else None for _, desc in time_fields)
-        if [name for name, _ in time_fields] != ["sec", "nanosec"] or layout not in _STAMP_FORMATS:
-            raise _NoSchema("the stamp")
-        unpack = struct.Struct(_STAMP_FORMATS[layout]).unpack_from
-
-        def stamp(data: bytes, unpack=unpack, offset=offset) -> int:
-            sec, nanosec = unpack(data, offset)
-            return sec * 1_000_000_000 + nanosec
-
-        return stamp
+        return offset
 
     def _fixed_size(self, desc) -> int:
         kind, detail = desc

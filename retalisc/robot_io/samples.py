@@ -18,13 +18,14 @@ The same arguments give the same messages in every format (ROS 1 headers add `se
 """
 from __future__ import annotations
 
+import argparse
 import math
 import random
 from pathlib import Path
 from typing import List, Tuple
 
 from . import require
-from .bags import typestore, write_bag
+from .bags import BagError, typestore, write_bag
 
 AR_MARKERS_MSG = """Header header
 ARMarker[] markers
@@ -160,11 +161,13 @@ def _marker_fields(b: _Builder, store, ns: int, i: int, numpy) -> dict:
     return {name: values[name] for name in fields}
 
 
-def write_nao_bag(path, fmt: str, seconds: float = 4.0, tf_rate: float = 50.0, seed: int = 1) -> Path:
+def write_nao_bag(path, fmt: str, seconds: float = 4.0, tf_rate: float = 50.0, seed: int = 1,
+                  overwrite: bool = False) -> Path:
     """Write the sample recording in format `fmt` (`ros1`, `ros2`, `mcap`) at `path` (a .bag
-    file for ros1, a folder otherwise). Returns the path to open."""
+    file for ros1, a folder otherwise); with `overwrite`, a recording there is replaced.
+    Returns the path to open."""
     store = sample_store(1 if fmt == "ros1" else 2)
-    return write_bag(path, fmt, store, nao_records(store, seconds, tf_rate, seed=seed))
+    return write_bag(path, fmt, store, nao_records(store, seconds, tf_rate, seed=seed), overwrite=overwrite)
 
 
 def shared_bags_dir(root) -> "Path | None":
@@ -189,9 +192,7 @@ def shared_bags_dir(root) -> "Path | None":
 
 def main(argv=None) -> int:
     """`python -m retalisc.robot_io.samples OUT [--format ros1|ros2|mcap] [--seconds S]
-    [--tf-rate HZ]`: write the sample recording."""
-    import argparse
-
+    [--tf-rate HZ] [--force]`: write the sample recording."""
     parser = argparse.ArgumentParser(prog="python -m retalisc.robot_io.samples",
                                      description="Write the sample recording of the NAO application (thesis A.2).")
     parser.add_argument("out", help="a .bag file (ros1) or a folder to create (ros2, mcap)")
@@ -199,11 +200,15 @@ def main(argv=None) -> int:
                         help="default: ros1 for a .bag name, else ros2")
     parser.add_argument("--seconds", type=float, default=4.0)
     parser.add_argument("--tf-rate", type=float, default=50.0, help="TFMessages per second")
+    parser.add_argument("--force", action="store_true", help="replace a recording already at OUT")
     args = parser.parse_args(argv)
     fmt = args.format or ("ros1" if args.out.endswith(".bag") else "ros2")
-    if Path(args.out).exists():
-        parser.error(f"{args.out} exists already")
-    path = write_nao_bag(args.out, fmt, seconds=args.seconds, tf_rate=args.tf_rate)
+    if Path(args.out).exists() and not args.force:
+        parser.error(f"{args.out} exists already (--force replaces it)")
+    try:
+        path = write_nao_bag(args.out, fmt, seconds=args.seconds, tf_rate=args.tf_rate, overwrite=args.force)
+    except BagError as error:
+        parser.error(str(error))
     print(f"{path}: {fmt}, {args.seconds:g} s", file=__import__("sys").stderr)
     return 0
 

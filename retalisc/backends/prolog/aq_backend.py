@@ -70,7 +70,7 @@ def _indicator(term: Term):
 
 
 def _fresh_var(rule: Rule, base: str, taken=()) -> str:
-    used = set(term_vars([rule.head] + [l.term for l in rule.body])) | set(taken)
+    used = set(term_vars([rule.head] + [literal.term for literal in rule.body])) | set(taken)
     name, n = base, 0
     while name in used:
         n += 1
@@ -124,7 +124,7 @@ def _waits(rule: Rule) -> List[int]:
 
 def _state(rule: Rule, i: int) -> str:
     t = _fresh_var(rule, "T")
-    env = term_vars([rule.head] + [l.term for l in rule.body[:i]])
+    env = term_vars([rule.head] + [literal.term for literal in rule.body[:i]])
     return f"s{rule.index}_{i + 1}({', '.join([t] + env)})"
 
 

@@ -35,7 +35,7 @@ _STATIC_HEADING = "% ---- Static rules and facts"
 
 # Directives that only configure the compiler: they are compiled, not copied.
 _COMPILED_DIRECTIVES = {("set_etalis_flag", 2), ("set_retalis_flag", 2), ("print_trigger", 1), ("print_event", 1),
-                        ("external_trigger", 1),
+                        ("external_trigger", 1), ("ros_strings", 1),
                         ("event_rule_property", 3), ("op", 3)}
 
 
@@ -63,6 +63,7 @@ def render_program(unit: Unit, output_name: str = "PROGRAM.pl") -> str:
         record_stores=records,
         kept_stores=kept,
         printed=printed,
+        ros_strings=unit.settings.ros_strings,
         static_clauses=[_static_text(c) for c in unit.program.clauses if _is_copied(c)],
         declarations=[_start_up_text(c) for c in unit.program.clauses
                       if (isinstance(c, Declaration) and _declaration_key(c.goal) not in _COMPILED_DIRECTIVES)

@@ -19,6 +19,7 @@ from ...frontend.parser import read_program
 from ...frontend.terms import Atom, Compound, Number, list_items
 from ...passes.unit import TargetPredicates
 from .swi_predicates import LIBRARY_PREDICATES, SYSTEM_PREDICATES
+from ...runtime_location import runtime_dir
 
 Indicator = Tuple[str, int]
 
@@ -61,8 +62,6 @@ def _runtime_exports(directory: str) -> Dict[Indicator, str]:
 
 def runtime_predicates() -> Dict[Indicator, str]:
     """The predicates a compiled program imports from the runtime, each with its module."""
-    from .render import runtime_dir
-
     return _runtime_exports(str(runtime_dir()))
 
 

@@ -11,7 +11,7 @@ from typing import Dict, List, Tuple
 
 from retalisc.compiler import AqOptions, compile_source
 from retalisc.frontend.definite import read_definite_program as load_program
-from retalisc.frontend.terms import Atom, Compound, Term, Var, to_prolog
+from retalisc.frontend.terms import Atom, Compound, Term, to_prolog
 from retalisc.frontend.terms import variables as _variables
 
 SWIPL = shutil.which("swipl") or "swipl"
