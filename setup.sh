@@ -3,7 +3,10 @@
 # .venv, and the package with its test, benchmark and live extras (pip). Then ROS 1 for the
 # live node (`retalisc ros`, docs/ros.md): Debian's rospy and master (apt) and .venv-ros, a
 # virtualenv of the system Python that sees them (--system-site-packages) with retalisc in
-# it. RETALISC_ROS=0 skips the ROS 1 step. Safe to run again.
+# it. Then ROS 2 for `retalisc ros2`: .venv-ros2 with ROS 2 Jazzy's rclpy from PyPI wheels and
+# the interface packages with no wheel (the Retalis services, tf2_msgs) built with colcon into
+# .ros2-build (ros/setup_ros2.sh, about 2 minutes the first time). RETALISC_ROS=0 skips both ROS
+# steps. Safe to run again.
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -56,5 +59,14 @@ if [ "${RETALISC_ROS:-1}" != "0" ]; then
         fi
         .venv-ros/bin/python -m pip install -q --disable-pip-version-check -e '.[ros1]'
     fi
+    # ROS 2 Jazzy's wheels are built for Python 3.10 to 3.13
+    if /usr/bin/python3 -c "import sys, venv; sys.exit(not (3, 10) <= sys.version_info[:2] <= (3, 13))" 2>/dev/null; then
+        started=$SECONDS
+        bash ros/setup_ros2.sh .venv-ros2 .ros2-build \
+            || echo "setup: warning: the ROS 2 environment could not be made; retalisc ros2 and its tests are skipped" >&2
+        echo "setup: ROS 2 step $((SECONDS - started)) s" >&2
+    else
+        echo "setup: warning: ROS 2 Jazzy's wheels need Python 3.10-3.13 with venv; retalisc ros2 is skipped" >&2
+    fi
 fi
-echo "setup: ready ($(swipl --version), $(.venv/bin/python --version)$([ -x .venv-ros/bin/python ] && echo ", ROS 1 in .venv-ros"))" >&2
+echo "setup: ready ($(swipl --version), $(.venv/bin/python --version)$([ -x .venv-ros/bin/python ] && echo ", ROS 1 in .venv-ros")$([ -f .ros2-build/.retalisc-build-stamp ] && echo ", ROS 2 in .venv-ros2"))" >&2

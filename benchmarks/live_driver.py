@@ -1,5 +1,5 @@
 """The driver of the live part of benchmarks/robot_io.py: publishes TFMessages of 3
-transforms to a running component over ROS 1, DDS or Zenoh, receives the component's
+transforms to a running component over ROS 1, ROS 2 (rclpy) or Zenoh, receives the component's
 deliveries (one geometry_msgs/Vector3 per message, derived from its first transform, whose
 x is the message's number) and prints one JSON object:
 
@@ -10,9 +10,9 @@ x is the message's number) and prints one JSON object:
 - `throughput`: COUNT messages published as fast as the driver can, the time until the last
   delivery, messages and transforms per second, and how many were lost.
 
-    python live_driver.py ros1|dds|zenoh NODE_PID RATE SECONDS COUNT [ENDPOINT]
+    python live_driver.py ros1|ros2|zenoh NODE_PID RATE SECONDS COUNT [ENDPOINT]
 
-ROS 1 needs the Python of .venv-ros; the others run with the project's.
+ROS 1 needs the Python of .venv-ros, ROS 2 that of .venv-ros2; Zenoh runs with the project's.
 """
 from __future__ import annotations
 
@@ -77,21 +77,22 @@ class Channel:
                                         lambda m: on_x(struct.unpack_from("<d", m._buff, 0)[0], time.perf_counter()),
                                         queue_size=None, tcp_nodelay=True)
             self.ready = lambda: self.pub.get_num_connections() > 0 and self.sub.get_num_connections() > 0
-        elif kind == "dds":
-            from retalisc.live.dds import DdsTransport
+        elif kind == "ros2":          # rclpy (.venv-ros2): CDR bytes both ways
+            import rclpy
+            from geometry_msgs.msg import Vector3
+            from tf2_msgs.msg import TFMessage
 
-            class _Node:
-                store = typestore("ros2_humble")
+            rclpy.init()
+            self.node = rclpy.create_node("retalisc_bench_driver")
+            from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-                @staticmethod
-                def arrived(topic, data):
-                    on_x(struct.unpack_from("<d", data, 4)[0], time.perf_counter())
-
-            self.transport = DdsTransport()
-            self.transport.start(_Node)
-            _, self.writer, self.cls = self.transport.advertise("/tf", "tf2_msgs/TFMessage")
-            self.transport.subscribe("/out", "geometry_msgs/Vector3")
-            self.ready = lambda: bool(self.writer.get_matched_subscriptions())
+            self.pub = self.node.create_publisher(TFMessage, "/tf", QoSProfile(
+                history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE))
+            self.sub = self.node.create_subscription(
+                Vector3, "/out", lambda data: on_x(struct.unpack_from("<d", data, 4)[0], time.perf_counter()), 1000,
+                raw=True)
+            threading.Thread(target=rclpy.spin, args=(self.node,), daemon=True).start()
+            self.ready = lambda: self.pub.get_subscription_count() > 0 and self.node.count_publishers("/out") > 0
         else:
             import zenoh
 
@@ -107,8 +108,8 @@ class Channel:
             message = self.cls()
             message._buff = data
             self.pub.publish(message)
-        elif self.kind == "dds":
-            self.transport.publish("/tf", "tf2_msgs/TFMessage", data)
+        elif self.kind == "ros2":
+            self.pub.publish(data)
         else:
             self.pub.put(data)
 

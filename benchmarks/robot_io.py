@@ -32,8 +32,8 @@
     1,900 transforms/s), then sustained throughput (messages published as fast as the driver
     can; time until the last delivery). Targets: p99 below 50 ms, CPU below the thesis's 40%,
     nothing lost, and a sustained throughput of at least the thesis's load. ROS 1 runs when
-    .venv-ros and rosmaster are there (setup.sh), DDS and Zenoh when cyclonedds and
-    eclipse-zenoh are installed; otherwise the line says so.
+    .venv-ros and rosmaster are there (setup.sh), ROS 2 (the rclpy node) when .venv-ros2 is,
+    Zenoh when eclipse-zenoh is installed; otherwise the line says so.
 
 Usage: python benchmarks/robot_io.py [--quick] [--live | --no-live] [--out-dir DIR]
 Writes DIR/robot_io.json and DIR/robot_io.png (robot_io_quick.* with --quick); DIR defaults
@@ -245,8 +245,10 @@ def replay_throughput(bag: Path, program: str, repeat: int) -> dict:
 LIVE_PROGRAM = TF_PROGRAM + """
 subscribe(tf(odom, base_link, [X, Y, Z], _), [], geometry_msgs__0__Vector3(X, Y, Z), out, s1).
 """
+# /tf reliable with a keep-all history on ROS 2 (the other middlewares ignore the QoS): the
+# default best-effort input loses most of a 5,000-message burst (docs/ros.md, QoS)
 LIVE_CONFIG = """<publish_subscribe>
-  <subscribe_to name="/tf" msg_type="tf2_msgs/TFMessage"/>
+  <subscribe_to name="/tf" msg_type="tf2_msgs/TFMessage" reliability="reliable" history="keep_all"/>
   <publish_to name="out" msg_type="geometry_msgs/Vector3"/>
 </publish_subscribe>
 """
@@ -264,7 +266,7 @@ def _free_port() -> int:
 LINGERS = (0.0, 0.01)
 
 
-def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh"), lingers=LINGERS) -> Dict[str, dict]:
+def live(quick: bool, folder: Path, kinds=("ros1", "ros2", "zenoh"), lingers=LINGERS) -> Dict[str, dict]:
     """(d): each transport that is installed, in its own processes, stopped by pid."""
     import shutil
     import signal
@@ -276,6 +278,7 @@ def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh"), lingers=LING
     rate, seconds, count = THESIS_RATE / TRANSFORMS, (1.0 if quick else 10.0), (300 if quick else 5000)
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     ros_python = ROOT / ".venv-ros" / "bin" / "python"
+    ros2_python = ROOT / ".venv-ros2" / "bin" / "python"
     results: Dict[str, dict] = {}
     for kind, linger in [(kind, linger) for kind in kinds for linger in lingers]:
         label = kind if not linger else f"{kind} --linger {linger * 1e3:.0f}ms"
@@ -290,8 +293,11 @@ def live(quick: bool, folder: Path, kinds=("ros1", "dds", "zenoh"), lingers=LING
                 extra = {"ROS_MASTER_URI": f"http://127.0.0.1:{port}", "ROS_IP": "127.0.0.1",
                          "ROS_HOME": str(folder / "roshome")}
                 argv = ["ros", str(program), "--config", str(config)]
-            elif kind == "dds":
-                import cyclonedds  # noqa: F401
+            elif kind == "ros2":
+                if not ros2_python.exists():
+                    results[label] = {"skipped": "ROS 2 is not set up (bash setup.sh makes .venv-ros2)"}
+                    continue
+                python = str(ros2_python)
                 extra = {"ROS_DOMAIN_ID": str(random.randrange(100, 230))}
                 argv = ["ros2", str(program), "--config", str(config)]
             else:
@@ -367,7 +373,7 @@ def run(quick: bool, out_dir: Path, with_live: bool = True) -> int:
             finally:
                 sys.stderr = saved_err
         if with_live:
-            print("(d) live: ROS 1, DDS, Zenoh ...", file=saved_err)
+            print("(d) live: ROS 1, ROS 2, Zenoh ...", file=saved_err)
             results["live"] = live(quick, folder)
         shared = shared_bags_dir(ROOT)
         results["shared"] = {}
@@ -524,7 +530,7 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="small sizes (the smoke test)")
     parser.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
     parser.add_argument("--live", action=argparse.BooleanOptionalAction, default=True,
-                        help="(d) live over ROS 1, DDS and Zenoh (default on)")
+                        help="(d) live over ROS 1, ROS 2 and Zenoh (default on)")
     args = parser.parse_args()
     return run(args.quick, args.out_dir, args.live)
 

@@ -92,3 +92,43 @@ def retalisc_argv(python: str, *args: str) -> List[str]:
 
 
 this_python = sys.executable
+
+
+def tf_message(store, stamp: int, x: float, child: str = "base"):
+    """A tf2_msgs/TFMessage of one transform (odom -> child, translation x) of a ROS 2 rosbags store."""
+    T = store.types
+    return T["tf2_msgs/msg/TFMessage"](transforms=[T["geometry_msgs/msg/TransformStamped"](
+        header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=stamp, nanosec=0),
+                                        frame_id="odom"),
+        child_frame_id=child,
+        transform=T["geometry_msgs/msg/Transform"](
+            translation=T["geometry_msgs/msg/Vector3"](x=x, y=0.0, z=0.0),
+            rotation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)))])
+
+
+class RosDomain:
+    """A ROS 2 domain id no other test uses meanwhile: ids from `first` to `last` are taken by
+    an exclusive lock on a file named after them (released by `release`, or when the process
+    ends), so concurrent test runs on one machine never share a domain."""
+
+    def __init__(self, first: int = 120, last: int = 229):
+        import fcntl
+        import random
+
+        folder = Path(os.environ.get("TMPDIR", "/tmp")) / "retalisc-ros2-domains"
+        folder.mkdir(exist_ok=True)
+        ids = list(range(first, last + 1))
+        random.shuffle(ids)
+        for domain in ids:
+            handle = open(folder / f"{domain}.lock", "w")
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                handle.close()
+                continue
+            self.id, self._handle = domain, handle
+            return
+        raise RuntimeError(f"every ROS 2 domain from {first} to {last} is in use")
+
+    def release(self) -> None:
+        self._handle.close()

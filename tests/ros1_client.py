@@ -22,15 +22,7 @@ from tf2_msgs.msg import TFMessage
 from retalisc.live.ros1 import raw_message_class
 from retalisc.live.ros1_services import service_class
 from retalisc.robot_io.messages import MessageConverter
-
-
-def wait_for(condition, timeout: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.02)
-    return condition()
+from service_calls import pair as _pair, queries_and_memories, wait_for
 
 
 def tf_message(stamp: float, x: float, count: int = 1) -> TFMessage:
@@ -71,26 +63,13 @@ def services(node: str, forbidden: str) -> dict:
         tf_pub.publish(tf_message(100 + i, float(i)))
     wait_for(lambda: len(got) >= 5, 10)
     result["delivered"] = list(got)
-    answers = query_all(query="mem(tfs, tf(P, C, V))", at="")
-    result["query_all"] = [answers.ok, [dict(zip(a.variables, a.values)) for a in answers.answers]]
-    one = query_one(query="mem(tfs, tf(P, C, V)^T)", at="102")
-    result["query_one"] = [one.ok, one.found, dict(zip(one.answer.variables, one.answer.values))]
-    none = query_one(query="mem(tfs, tf(nobody, C, V))", at="")
-    result["query_none"] = [none.ok, none.found]
-    result["unsafe"] = _pair(query_all(query=f"shell('touch {forbidden}')", at=""))
-    result["unsafe_one"] = _pair(query_one(query=f"open('{forbidden}', write, S)", at=""))
-    result["syntax"] = _pair(query_all(query="mem(tfs, ", at=""))
-    result["add_memory"] = _pair(add_mem(memory="c_mem(last2, tf(P, C, V)-[], 2, inf)"))
-    result["add_memory_unsafe"] = _pair(add_mem(memory="c_mem(bad, tf(P, C, V)-[shell(ls)], 2, inf)"))
-    result["add_memory_not_create"] = _pair(add_mem(memory="d_mem(tfs)"))
-    for i in range(5, 8):
-        tf_pub.publish(tf_message(100 + i, float(i)))
-    wait_for(lambda: len(got) >= 8, 10)
-    last2 = query_all(query="mem(last2, tf(_, _, geometry_msgs__0__Vector3(X, _, _)))", at="")
-    result["last2"] = sorted(float(a.values[0]) for a in last2.answers)
-    result["delete_memory"] = _pair(del_mem(id="last2"))
-    result["delete_memory_bad"] = _pair(del_mem(id="f(X"))
-    result["after_delete_memory"] = len(query_all(query="mem(last2, _)", at="").answers)
+
+    def three_more():
+        for i in range(5, 8):
+            tf_pub.publish(tf_message(100 + i, float(i)))
+        wait_for(lambda: len(got) >= 8, 10)
+
+    queries_and_memories(result, query_one, query_all, add_mem, del_mem, forbidden, three_more)
     result["unsubscribe"] = _pair(del_out(id=reply.id, end=""))
     for i in range(8, 10):        # stamped now: after the unsubscription (at the wall clock's now)
         tf_pub.publish(tf_message(time.time(), float(i)))
@@ -167,10 +146,6 @@ def exploits(node: str, canary: str) -> dict:
 
 def _count(query_all) -> int:
     return len(query_all(query="mem(tfs, _)", at="").answers)
-
-
-def _pair(reply) -> list:
-    return [reply.ok, reply.error]
 
 
 def nao(seconds: float) -> dict:

@@ -13,10 +13,9 @@ import pytest
 zenoh = pytest.importorskip("zenoh", reason="the Zenoh tests need the 'live' extra (eclipse-zenoh)")
 pytest.importorskip("rosbags", reason="the Zenoh tests need rosbags")
 
-from live_support import LIVE, Processes, free_port, retalisc_argv, retalisc_env  # noqa: E402
+from live_support import LIVE, Processes, free_port, retalisc_argv, retalisc_env, tf_message  # noqa: E402
 from retalisc.live.zenoh_transport import peer_config, zenoh_key  # noqa: E402
 from retalisc.robot_io.bags import typestore  # noqa: E402
-from test_live_dds import tf_message  # noqa: E402
 
 
 def test_zenoh_keys():

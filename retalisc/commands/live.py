@@ -160,28 +160,69 @@ def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay,
                    dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds)))
 
 
-@click.command("ros2", epilog="""\b
-Example: two components on one machine, the second consuming what the first delivers:
-  retalisc ros2 first.rtl --config first.xml &
-  retalisc ros2 second.rtl --config second.xml""")
+@click.command("ros2", context_settings={"ignore_unknown_options": True}, epilog="""\b
+Example (after `bash setup.sh`): a node /retalis, its services /retalis/query_all, ...
+  retalisc ros2 examples/nao_markers/nao_markers.rtl --config examples/nao_markers/pub_sub.xml
+With sim time and a name given the ROS 2 way (as a launch file does):
+  retalisc ros2 PROGRAM.rtl --config pub_sub.xml --ros-args -r __node:=iec1 -p use_sim_time:=true""")
 @_common
+@click.option("--name", "node_name", default="retalis", show_default=True,
+              help="The node's name; its services are /NAME/add_output_subscription, ... (docs/ros.md).")
+@click.option("--namespace", default="", metavar="NS", help="The node's namespace (default: the root).")
 @click.option("--domain", type=click.IntRange(0, 232), default=None,
-              help="The DDS domain (default: $ROS_DOMAIN_ID, else 0).")
+              help="The ROS 2 domain (default: $ROS_DOMAIN_ID, else 0).")
+@click.argument("ros_args", nargs=-1, type=click.UNPROCESSED, metavar="[--ros-args ...]")
 def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, state, snapshot_every,
-                 snapshot_seconds, domain) -> None:
-    """Run PROGRAM as a live component on ROS 2 topics, over DDS (cyclonedds) without a ROS 2
-    installation: ROS 2's topic and type names, CDR and default QoS (docs/ros.md). DDS stays
-    on the loopback interface unless CYCLONEDDS_URI configures it."""
+                 snapshot_seconds, node_name, namespace, domain, ros_args) -> None:
+    """Run PROGRAM as a live ROS 2 node (rclpy): subscribe to the topics of PUB_SUB.xml (with
+    their QoS), publish subscription deliveries, offer the services of the 2015 release
+    (thesis A.1) with the types of ros/retalis_interfaces, and the parameters program, config,
+    name, max_delay, state_dir (read-only) and use_sim_time. Arguments after --ros-args are
+    ROS 2's (remappings, -p use_sim_time:=true, --params-file). Needs rclpy: run with
+    .venv-ros2/bin/retalisc, or from .venv, which hands over to .venv-ros2 (setup.sh)."""
+    if ros_args and ros_args[0] != "--ros-args":
+        raise click.UsageError(f"unexpected argument {ros_args[0]!r} (ROS 2 arguments come after --ros-args)")
 
     def make():
-        from ..live.dds import DdsTransport
-        return DdsTransport(domain)
+        from ..robot_io import MissingDependency
+        from ..live.ros2 import Ros2Transport
+
+        parameters = {"program": program, "config": config_path or "", "name": node_name,
+                      "max_delay": "" if max_delay is None else repr(max_delay), "state_dir": state or ""}
+        try:
+            return Ros2Transport(node_name, namespace, list(ros_args), parameters, domain)
+        except ModuleNotFoundError as error:
+            if error.name != "rclpy":
+                raise
+            _hand_over_to_ros2_venv()
+            raise MissingDependency(
+                "retalisc ros2 needs ROS 2's rclpy: run `bash setup.sh` (it makes .venv-ros2), or run "
+                "retalisc in the Python of your sourced ROS 2 installation (docs/ros.md)") from None
 
     def describe(node):
-        return f"ros2: DDS domain {node.transport.domain}: subscribed to {_inputs(node)}"
+        name = node.transport.fully_qualified_name
+        return (f"ros2: node {name} in domain {node.transport.domain}: subscribed to {_inputs(node)}; services "
+                f"{name}/{{add,delete}}_{{output_subscription,memory,input_subscription}}, {name}/query_one, "
+                f"{name}/query_all")
 
     sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger,
                    dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds)))
+
+
+def _hand_over_to_ros2_venv() -> None:
+    """Without rclpy here: run the same command line in .venv-ros2's Python (setup.sh), or in
+    $RETALISC_ROS2_PYTHON, when there is one and this is the `retalisc` program itself."""
+    import os
+    from pathlib import Path
+
+    python = (os.environ.get("RETALISC_ROS2_PYTHON")
+              or str(Path(__file__).resolve().parents[2] / ".venv-ros2" / "bin" / "python"))
+    command_line = os.path.basename(sys.argv[0]) in ("retalisc", "__main__.py")
+    if not command_line or os.environ.get("_RETALISC_ROS2_HANDED_OVER") or not os.access(python, os.X_OK):
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os.execve(python, [python, "-m", "retalisc", *sys.argv[1:]], dict(os.environ, _RETALISC_ROS2_HANDED_OVER="1"))
 
 
 @click.command("zenoh", epilog="""\b

@@ -32,10 +32,11 @@ subscriber: an extra message costs, over rospy, about as much as the message its
 
 Time: one clock rule (robot_io/messages.py EventClock): an event is stamped with the time its
 message carries (its `header.stamp`, a TFMessage's first transform's), else with the latest
-`/clock` when the node subscribes to it, else with the wall-clock time of its arrival (shifted
-onto the messages' clock when they carry another one, sim time); a jump of more than an hour
-is a warning on the log, once. A subscription or unsubscription at
-`now` (or with no time) means the wall clock's now. Events later than the delay bound void
+`/clock` when the node subscribes to it, else with the node's clock at its arrival (the wall
+clock, or the transport's, `Transport.now_ns`: ROS 2's /clock under use_sim_time; shifted onto
+the messages' clock when they carry another one, sim time); a jump of more than an hour is a
+warning on the log, once. A subscription or unsubscription at `now` (or with no time) means the
+node clock's now. Events later than the delay bound void
 the promise of arrival-order independence (a synchronized rule no longer waits for them), so
 the node says so when it happens, not only in its summary: after a batch, at most once every
 `LATE_CHECK_SECONDS`, and when it closes, a growing late count is a warning on the log (the
@@ -145,6 +146,12 @@ class Transport:
         system, or acknowledged by the subscribers), within `timeout` seconds; a snapshot
         then never counts an output that a crash would lose inside the process."""
 
+    def now_ns(self) -> int:
+        """The node's clock (ns since the epoch): what stamps a message with no header and what
+        `now` means in a request. The wall clock, unless the middleware has a clock of its own
+        (ROS 2's /clock with use_sim_time)."""
+        return time.time_ns()
+
     def subscriber_count(self, topic: str) -> Optional[int]:
         """How many subscribers the publisher of `topic` reaches now (0 if not advertised);
         None: the middleware does not say."""
@@ -252,7 +259,7 @@ class LiveNode:
         """A message of `topic` arrived: its serialized bytes, the type its publisher gave
         (ROS 1 connection header; None: the subscribed type) and that type's full definition
         (ROS 1), for types the node does not know."""
-        self._queue.put((topic, data, msgtype, definition, time.time_ns()))
+        self._queue.put((topic, data, msgtype, definition, self.transport.now_ns()))
 
     def call(self, function: Callable[..., Reply], *args, timeout: float = CALL_TIMEOUT,
              request: bool = True) -> Reply:
@@ -313,7 +320,7 @@ class LiveNode:
             self.stats.calls += 1
         name = getattr(function, "__name__", "")
         if self.state is not None and name in STATEFUL_CALLS:
-            now = time.time()
+            now = self._clock()
             self.state.call(name, args, now)     # journaled before it runs
             try:
                 return self._replay_call(name, args, now)
@@ -375,8 +382,11 @@ class LiveNode:
         finally:
             self._replay_now = None
 
+    def _clock(self) -> float:
+        return self.transport.now_ns() / 1e9
+
     def _now(self) -> float:
-        return time.time() if self._replay_now is None else self._replay_now
+        return self._clock() if self._replay_now is None else self._replay_now
 
     def _reject(self, topic: str, number: int, error: Exception) -> None:
         self.stats.rejected[topic] += 1
@@ -580,19 +590,19 @@ class LiveNode:
         return Reply(True)
 
     def _query(self, goal: str, at: str, all_answers: bool) -> Reply:
-        at_value = _time_value(at)
+        at_value = _time_value(at, self._now)
         if all_answers:
             return Reply(True, value=self.engine.query_all(goal, at_value))
         answer = self.engine.query(goal, at_value)
         return Reply(True, value=answer)
 
 
-def _time_value(text: str) -> Optional[float]:
+def _time_value(text: str, now: Callable[[], float] = time.time) -> Optional[float]:
     text = text.strip()
     if text in ("", "inf"):
         return None
     if text == "now":
-        return time.time()
+        return now()
     return float(text)
 
 

@@ -14,8 +14,9 @@ import threading
 import warnings
 from typing import Dict
 
-from .node import LiveNode, Reply, Transport
+from .node import LiveNode, Transport
 from .ros1_services import SERVICES, service_class, substitution_class
+from .services import answer
 
 
 class Ros1Transport(Transport):
@@ -107,46 +108,7 @@ class Ros1Transport(Transport):
     def _handler(self, name: str):
         cls = service_class(name)
         node = self.node
-
-        def handle(request):
-            response = cls._response_class()
-            reply = _dispatch(node, name, request)
-            response.ok, response.error = reply.ok, reply.error
-            if reply.ok and name == "add_output_subscription":
-                response.id = str(reply.value)
-            elif reply.ok and name == "query_one":
-                response.found = reply.value is not None
-                if reply.value is not None:
-                    response.answer = _substitution(reply.value)
-            elif reply.ok and name == "query_all":
-                response.answers = [_substitution(answer) for answer in reply.value]
-            return response
-
-        return handle
-
-
-def _dispatch(node: LiveNode, name: str, request) -> Reply:
-    if name == "add_output_subscription":
-        return node.add_output_subscription(request.topic, request.msg_type, request.event, request.conditions,
-                                            request.template, request.start, request.end)
-    if name == "delete_output_subscription":
-        return node.delete_output_subscription(request.id, request.end)
-    if name == "add_memory":
-        return node.add_memory(request.memory)
-    if name == "delete_memory":
-        return node.delete_memory(request.id)
-    if name == "add_input_subscription":
-        return node.add_input_subscription(request.topic, request.msg_type)
-    if name == "delete_input_subscription":
-        return node.delete_input_subscription(request.topic)
-    if name in ("query_one", "query_all"):
-        return node.query(request.query, request.at, name == "query_all")
-    return Reply(False, f"unknown service {name}")
-
-
-def _substitution(answer: dict):
-    cls = substitution_class()
-    return cls(variables=list(answer), values=[answer[key] for key in answer])
+        return lambda request: answer(node, name, request, cls._response_class(), substitution_class())
 
 
 def raw_message_class(msgtype: str, md5: str, definition: str) -> type:
