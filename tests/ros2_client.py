@@ -4,7 +4,7 @@ then finds the node in the graph, reads its parameters, publishes reliable and b
 topics and /clock, calls every Retalis service and prints what it saw as one JSON object.
 
     python ros2_client.py NODE_NAME FILE_THAT_MUST_NOT_APPEAR
-    python ros2_client.py --tf FIRST LAST     (publish tf x = FIRST..LAST-1 reliably, then exit)
+    python ros2_client.py --tf FIRST LAST     (publish tf x = FIRST..LAST-1 on /tf_burst reliably, then exit)
 
 It prints `static published` on standard error once /tf_static is out (the test then starts
 the node: a late joiner of a transient-local topic).
@@ -47,14 +47,16 @@ def tf_message(stamp: float, x: float, child: str = "base") -> TFMessage:
 
 
 def publish_tf(first: int, last: int) -> None:
-    """Publish tf messages x = first..last-1 (stamps 1000 + x) to a node that subscribes to /tf,
-    reliably: each is kept until the node's reader acknowledged it."""
+    """Publish tf messages x = first..last-1 (stamps 1000 + x) on /tf_burst, reliably: each is
+    kept until the node's reader acknowledged it."""
     rclpy.init()
     client = rclpy.create_node("retalis_test_tf")
-    tf = client.create_publisher(TFMessage, "/tf", QoSProfile(history=HistoryPolicy.KEEP_ALL,
-                                                              reliability=ReliabilityPolicy.RELIABLE))
+    # /tf_burst: the node reads it reliably, so no message is lost while the node's reader
+    # and this writer still discover each other (a best-effort reader drops what comes first)
+    tf = client.create_publisher(TFMessage, "/tf_burst", QoSProfile(history=HistoryPolicy.KEEP_ALL,
+                                                                    reliability=ReliabilityPolicy.RELIABLE))
     if not wait_for(lambda: tf.get_subscription_count() > 0, 30):
-        sys.exit("no subscriber of /tf")
+        sys.exit("no subscriber of /tf_burst")
     for x in range(first, last):
         tf.publish(tf_message(1000 + x, float(x)))
     tf.wait_for_all_acked(Duration(seconds=10))
@@ -134,7 +136,7 @@ def main() -> None:
         stamp += 1
         time.sleep(0.2)
     reply = add_out(topic="robot_pos", msg_type="geometry_msgs/Vector3", event="tf(P, C, V)",
-                    conditions="[P == '\"odom\"']", event_template="V", start="", end="")
+                    conditions="[P == odom]", event_template="V", start="", end="")
     result["subscribe"] = [reply.ok, reply.error, reply.id]
     result["bad_subscribe"] = _pair(add_out(topic="robot_pos", msg_type="", event="tf(P, C, V)",
                                             conditions="[shell(ls)]", event_template="", start="", end=""))
@@ -218,7 +220,7 @@ def main() -> None:
     burst = []
     client.create_subscription(Vector3, "/burst_out", lambda m: burst.append(m.x), keep_all)
     result["burst_subscribe"] = _pair(add_out(topic="burst_out", msg_type="", event="tf(P, C, V)",
-                                              conditions="[C == '\"burst\"']", event_template="V", start="",
+                                              conditions="[C == burst]", event_template="V", start="",
                                               end=""))
     burst_pub = client.create_publisher(TFMessage, "/tf_burst", keep_all)
     wait_for(lambda: burst_pub.get_subscription_count() > 0 and client.count_publishers("/burst_out") > 0, 10)
