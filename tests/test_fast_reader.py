@@ -294,7 +294,8 @@ compare_output(Line, P0-D0, P-D) :-
     delete_file(File),
     (   rtl_io:rtl_fast_plain_text(Event, PlainText)
     ->  P is P0 + 1,
-        ( PlainText == Writeq -> Same = true ; Same = false )
+        unnamed(PlainText, Plain1), unnamed(Writeq, Writeq1),
+        ( Plain1 == Writeq1 -> Same = true ; Same = false )
     ;   P = P0, Same = true
     ),
     maplist(unnamed, [Slow, Fast, Written], [Slow1, Fast1, Written1]),
