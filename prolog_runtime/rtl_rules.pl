@@ -336,12 +336,13 @@ run_compiler(M, Prefix, Text, Clauses) :-
     ).
 
 %   The Python process the runtime is embedded in serves its compiler as `compile_rules`
-%   (retalisc_bridge:python_call/4, defined by retalisc/driver/bridge.py; an Engine serves
-%   it): the rule compiles there, without starting a process. Fails when nothing serves it.
+%   (retalisc_bridge:rtl_python_call/4, prolog_runtime/rtl_bridge.pl, loaded by
+%   retalisc/driver/bridge.py; an Engine serves it): the rule compiles there, without
+%   starting a process. Fails when nothing serves it.
 compile_in_process(M, Prefix, Text, Clauses) :-
-    current_predicate(retalisc_bridge:python_call/4),
+    current_predicate(retalisc_bridge:rtl_python_call/4),
     atom_string(M, Module),
-    retalisc_bridge:python_call(compile_rules, [Module, Prefix, Text], Status, Result),
+    retalisc_bridge:rtl_python_call(compile_rules, [Module, Prefix, Text], Status, Result),
     (   Status == ok
     ->  Clauses = Result
     ;   Status == error

@@ -25,7 +25,7 @@ Backends
 
 Both backends call the same two helper predicates (``retalisc_bridge:bridge/6``
 for text, ``retalisc_bridge:bridge_apply/6`` for values; source in
-``_HELPER_SRC``), so one small interface fits both.
+prolog_runtime/rtl_bridge.pl), so one small interface fits both.
 
 Threads
 -------
@@ -36,11 +36,13 @@ thread (ROS and zenoh callbacks come from other threads), every request runs
 in one Prolog thread, the *owner*, created by the helper (``thread_create/3``)
 at the first call: the calling thread sends the request to the owner's message
 queue and waits for the answer on its own (``thread_send_message/2``,
-``thread_get_message/1``), all inside one C call, with the GIL released and no
-polling.  The handoff costs two thread switches (about 20 microseconds); the
-bridge's lock serialises callers.  (A Prolog *engine* shared by the threads
-would be cheaper, but SWI-Prolog 9.0 ties an engine to the C stack of the
-thread that created it and aborts when another thread runs it.)
+``thread_get_message/1``), all inside one C call, with the GIL released.  The
+handoff costs two thread wake-ups (20 us on an idle machine, 60-90 us on a busy
+one: benchmarks/call_cost.py); the bridge's lock serialises callers.
+(A Prolog *engine* shared by the threads would be cheaper, but SWI-Prolog 9.0
+ties an engine to the C stack of the thread that created it and aborts,
+``stack_avail: Assertion failed``, when another thread runs it.)
+``run_in_calling_thread`` makes the calling thread the owner: no handoff.
 
 Why not ``pyswip.Prolog``
 -------------------------
@@ -112,262 +114,16 @@ class GoalFailed(PrologError):
 _MODE_BOOL, _MODE_ONCE, _MODE_ALL, _MODE_TEXT, _MODE_CONSULT = range(5)
 _OK, _FAILED, _ERROR = 1, 0, 2
 
-_HELPER_SRC = r"""
-:- module(retalisc_bridge, []).
-
-:- thread_local collecting/0, collected/1.
-
-%   bridge(+Mode, +GoalText, +Aux, -Status, -Out, -ErrTerm)
-%   Never raises: errors are reported as Status 2 with the printed
-%   message in Out and the writeq text of the error term in ErrTerm.
-%   Out and ErrTerm are always bound (janus cannot return unbound vars).
-%   The request runs in the owner thread (see serve/0).
-bridge(Mode, GoalText, Aux, Status, Out, ErrTerm) :-
-    post(text(Mode, GoalText, Aux), Status, Out, ErrTerm).
-
-%   bridge_apply(+Module, +Name, +Args, -Status, -Out, -ErrTerm)
-%   Run Module:Name(Args..., Result) once: Args are values (strings,
-%   numbers, lists), never parsed; Out is the text of Result.
-bridge_apply(Module, Name, Args, Status, Out, ErrTerm) :-
-    post(apply(Module, Name, Args), Status, Out, ErrTerm).
-
-%   post(+Request, -Status, -Out, -ErrTerm)
-%   Hand the request to the owner thread and wait for its answer.
-post(Request, Status, Out, ErrTerm) :-
-    owner(Owner),
-    thread_self(Me),
-    (   Me == Owner
-    ->  handle(Request, reply(Status, Out, ErrTerm))
-    ;   caller_owned
-    ->  Status = 2,
-        Out = "this process runs Prolog in one thread only (a command-line run): call from that thread",
-        ErrTerm = ""
-    ;   flag(retalisc_bridge_request, Id, Id + 1),
-        thread_send_message(Owner, request(Me, Id, Request)),
-        thread_get_message(answer(Id, Reply)),
-        (   Reply = reply(Status, Out, ErrTerm)
-        ->  true
-        ;   Status = 2,
-            Out = "the bridge's Prolog thread ended (its state is lost); a new one runs the next calls",
-            ErrTerm = ""
-        )
-    ).
-
-%   The owner thread runs every request, whichever thread posts it, so
-%   global variables and thread_local predicates are the same for all
-%   callers. (A Prolog engine cannot serve several OS threads: SWI-Prolog
-%   9.0 checks the C stack of the thread that created it.)
-:- dynamic owner_thread/1, caller_owned/0.
-
-%   claim_caller(-Claimed)
-%   Make the calling thread the owner, so that its requests run at once,
-%   without the two thread switches of a handoff (a command-line run: one
-%   Python thread calls, and a handoff's wake-ups are what makes its
-%   latency spread on a busy machine). Only before the first request:
-%   Claimed is true when the calling thread owns the state now.
-claim_caller(Claimed) :-
-    with_mutex(retalisc_bridge, claim_caller_(Claimed)).
-
-claim_caller_(Claimed) :-
-    thread_self(Me),
-    (   owner_thread(Owner)
-    ->  ( Owner == Me -> Claimed = true ; Claimed = false )
-    ;   assertz(owner_thread(Me)),
-        assertz(caller_owned),
-        Claimed = true
-    ).
-
-owner(Owner) :-
-    (   owner_thread(Owner)
-    ->  true
-    ;   with_mutex(retalisc_bridge, start_owner(Owner))
-    ).
-
-start_owner(Owner) :-
-    (   owner_thread(Owner)
-    ->  true
-    ;   thread_create(serve, Owner, [detached(true), at_exit(owner_exit)]),
-        assertz(owner_thread(Owner))
-    ).
-
-owner_exit :-
-    retractall(owner_thread(_)),
-    (   nb_current(retalisc_bridge_pending, From-Id)
-    ->  catch(thread_send_message(From, answer(Id, ended)), _, true)
-    ;   true
-    ).
-
-serve :-
-    set_flags,
-    repeat,
-    thread_get_message(request(From, Id, Request)),
-    nb_setval(retalisc_bridge_pending, From-Id),
-    handle(Request, Reply),
-    nb_setval(retalisc_bridge_pending, none),
-    thread_send_message(From, answer(Id, Reply)),
-    fail.
-
-handle(text(Mode, GoalText, Aux), reply(Status, Out, ErrTerm)) :-
-    catch(run(Mode, GoalText, Aux, Status, Out), E,
-          caught(E, Status, Out, ErrTerm)),
-    !,
-    ( var(ErrTerm) -> ErrTerm = "" ; true ).
-handle(apply(Module, Name, Args), reply(Status, Out, ErrTerm)) :-
-    catch(apply_goal(Module, Name, Args, Status, Out), E,
-          caught(E, Status, Out, ErrTerm)),
-    !,
-    ( var(ErrTerm) -> ErrTerm = "" ; true ).
-handle(_, reply(2, "bridge helper failed", "")).
-
-apply_goal(ModuleText, NameText, Args, Status, Out) :-
-    atom_string(Module, ModuleText),
-    atom_string(Name, NameText),
-    append(Args, [Result], AllArgs),
-    Goal =.. [Name|AllArgs],
-    (   call(Module:Goal)
-    ->  Status = 1, text_of(Result, Out)
-    ;   Status = 0, Out = ""
-    ).
-
-run(0, GT, _, Status, "") :-
-    parse(GT, G, _),
-    ( user:G -> Status = 1 ; Status = 0 ).
-run(1, GT, TT, Status, Out) :-
-    parse(GT, G, VG),
-    parse(TT, T, VT),
-    share_vars(VT, VG),
-    ( user:G -> Status = 1, writeq_string(T, Out) ; Status = 0, Out = "" ).
-run(2, GT, TT, 1, Out) :-
-    parse(GT, G, VG),
-    parse(TT, T, VT),
-    share_vars(VT, VG),
-    findall(T, user:G, Ts),
-    maplist(writeq_string, Ts, Out).
-run(3, GT, VarName, Status, Out) :-
-    parse(GT, G, VG),
-    atom_string(Name, VarName),
-    (   memberchk(Name=V, VG)
-    ->  true
-    ;   throw(error(existence_error(variable, Name), context(bridge/6, GT)))
-    ),
-    ( user:G -> Status = 1, text_of(V, Out) ; Status = 0, Out = "" ).
-run(4, Path, _, 1, "") :-
-    consult_collecting(Path).
-
-parse(Text, Term, Bindings) :-
-    read_term_from_atom(Text, Term, [variable_names(Bindings)]).
-
-share_vars([], _).
-share_vars([Name=V|T], VG) :-
-    ( memberchk(Name=V0, VG) -> V = V0 ; true ),
-    share_vars(T, VG).
-
-writeq_string(T, S) :-
-    format(string(S), "~q", [T]).
-
-text_of(V, _) :-
-    var(V), !,
-    throw(error(instantiation_error, context(bridge/6, _))).
-text_of(V, S) :- string(V), !, S = V.
-text_of(V, S) :- atomic(V), !, atom_string(V, S).
-text_of(V, S) :- catch(text_to_string(V, S), _, fail), !.
-text_of(V, S) :- format(string(S), "~w", [V]).
-
-caught(bridge_load_errors(Msg), 2, Msg, "") :- !.
-caught(E, 2, Msg, Term) :-
-    catch(message_text(E, Msg), _, Msg = ""),
-    catch(writeq_string(E, Term), _, Term = "").
-
-%   The error's text, by the runtime's one printer (rtl_error_text.pl), which
-%   never interprets the term: an error may come from untrusted goal text.
-message_text(bridge_load_errors(Msg), Msg) :- !.
-message_text(E0, Msg) :-
-    (   E0 = error(Formal, Context0)
-    ->  own_context(Context0, Context),
-        E = error(Formal, Context)
-    ;   E = E0
-    ),
-    error_printer,
-    rtl_error_text:rtl_error_text(E, Msg).
-
-error_printer :-
-    (   current_predicate(rtl_error_text:rtl_error_text/2)
-    ->  true
-    ;   printer_file(File),
-        use_module(File, [])
-    ).
-
-%   An unknown procedure called directly by the goal is reported with our
-%   helper as its caller; drop that so the message reads as for the user.
-own_context(Context, _) :-
-    nonvar(Context),
-    Context = context(Caller, _),
-    nonvar(Caller),
-    Caller = retalisc_bridge:_, !.
-own_context(Context, Context).
-
-lines_text(Lines, Text) :-
-    with_output_to(string(S),
-                   print_message_lines(current_output, '', Lines)),
-    split_string(S, "", "\n", [Text]).
-
-%   Errors printed while loading do not make load_files/2 fail; collect
-%   them through message_hook/3 and raise them together afterwards.
-consult_collecting(PathText) :-
-    atom_string(Path, PathText),
-    retractall(collected(_)),
-    setup_call_cleanup(assertz(collecting),
-                       load_files(user:Path, []),
-                       retractall(collecting)),
-    findall(M, retract(collected(M)), Msgs),
-    (   Msgs == []
-    ->  true
-    ;   atomic_list_concat(Msgs, '\n', Text),
-        throw(bridge_load_errors(Text))
-    ).
-
-:- multifile user:message_hook/3.
-user:message_hook(Term, error, Lines) :-
-    collecting,
-    lines_text(Lines, Text0),
-    with_location(Term, Text0, Text),
-    assertz(collected(Text)).
-
-with_location(error(syntax_error(_), _), Text, Text) :- !.
-with_location(_, Text0, Text) :-
-    source_location(File, Line), !,
-    format(string(Text), "~w:~w: ~w", [File, Line, Text0]).
-with_location(_, Text, Text).
-
-set_flags :-
-    forall(flag_value(Flag, Value),
-           catch(set_prolog_flag(Flag, Value), _, true)).
-
-flag_value(debug_on_error, false).
-flag_value(debug_on_interrupt, false).
-flag_value(report_error, true).
-flag_value(on_error, print).
-flag_value(on_warning, print).
-flag_value(tty_control, false).
-flag_value(user:unknown, error).
-"""
-
-def _helper_source() -> str:
-    """The helper module, with the file of the runtime's error printer (a path of this
-    installation, written as a quoted atom)."""
+def _helper_file() -> str:
+    """The Prolog half of the bridge: prolog_runtime/rtl_bridge.pl (module retalisc_bridge)."""
     from retalisc.runtime_location import runtime_dir
 
-    printer = str(runtime_dir() / "rtl_error_text.pl")
-    quoted = printer.replace("\\", "\\\\").replace("'", "\\'")
-    return _HELPER_SRC + f"\nprinter_file('{quoted}').\n"
+    return str(runtime_dir() / "rtl_bridge.pl")
 
 
-_BOOT_GOAL = (
-    "setup_call_cleanup(open_string(Src, S),"
-    " load_files(retalisc_bridge, [stream(S), silent(true)]),"
-    " close(S)),"
-    " retalisc_bridge:set_flags"
-)
+def _quoted(text: str) -> str:
+    """`text` as a quoted Prolog atom (a path of this installation)."""
+    return "'" + text.replace("\\", "\\\\").replace("'", "\\'") + "'"
 
 
 # --------------------------------------------------------------------------
@@ -573,22 +329,16 @@ class _PyswipEngine:
             raise PrologError(f"PL_initialise failed with arguments {args}")
 
     def _boot(self, lib: ctypes.CDLL) -> None:
-        """Load the helper module: parse '$boot'(Src, Goal), bind Src, call Goal."""
+        """Load the helper module (prolog_runtime/rtl_bridge.pl) and set its flags."""
         from_chars = _fn(lib, "PL_put_term_from_chars", ctypes.c_int, _term_t, ctypes.c_int,
                          ctypes.c_size_t, ctypes.c_char_p)
-        get_arg = _fn(lib, "PL_get_arg", ctypes.c_int, ctypes.c_int, _term_t, _term_t)
-        unify = _fn(lib, "PL_unify", ctypes.c_int, _term_t, _term_t)
         call = _fn(lib, "PL_call", ctypes.c_int, _term_t, ctypes.c_void_p)
         fid = self._open_frame()
         try:
-            boot = f"'$boot'(Src, ({_BOOT_GOAL}))".encode()
-            t, src, arg = self._new_ref(), self._new_ref(), self._new_ref()
-            code = _helper_source().encode()
-            ok = (from_chars(t, _REP_UTF8, len(boot), boot)
-                  and self._put_chars(src, self._string_type | _REP_UTF8, len(code), code)
-                  and get_arg(1, t, arg) and unify(arg, src)
-                  and get_arg(2, t, arg) and call(arg, None))
-            if not ok:
+            goal = (f"load_files({_quoted(_helper_file())}, [silent(true), if(not_loaded)]),"
+                    " retalisc_bridge:set_flags").encode()
+            t = self._new_ref()
+            if not (from_chars(t, _REP_UTF8, len(goal), goal) and call(t, None)):
                 raise self._pending_error("loading the bridge helper failed")
         finally:
             self._discard_frame(fid)
@@ -722,7 +472,7 @@ class _JanusEngine:
 
         self._janus = janus_swi
         self._error: type[BaseException] = getattr(janus_swi, "PrologError", RuntimeError)
-        janus_swi.consult("retalisc_bridge", data=_helper_source())
+        janus_swi.consult(_helper_file())
         janus_swi.query_once("retalisc_bridge:set_flags")
 
     def run(self, mode: int, goal: str, aux: str) -> tuple[int, Any, str]:
