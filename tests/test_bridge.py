@@ -230,3 +230,14 @@ def test_calls_from_other_threads(pl: Bridge) -> None:
     assert not errors
     assert sorted(set(results)) == ["14", "21", "28", "7"]
     assert len(results) == 200
+
+
+def test_prolog_half_plunit(swipl):
+    """prolog_runtime/tests/test_bridge.pl: the Prolog half of the bridge (rtl_bridge.pl) on its own."""
+    import subprocess
+    from pathlib import Path
+
+    suite = Path(__file__).resolve().parent.parent / "prolog_runtime" / "tests" / "test_bridge.pl"
+    proc = subprocess.run([swipl, "--no-tty", "-q", "-g", "run_tests", "-t", "halt", str(suite)],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout
