@@ -53,11 +53,7 @@ of `swipl OUT.pl` without Python).
 :- use_module(library(lists)).
 
 :- thread_local collecting/0, collected/1.
-:- dynamic owner_thread/1, caller_owned/0, bridge_directory/1.
-
-:- prolog_load_context(directory, Dir),
-   retractall(bridge_directory(_)),
-   assertz(bridge_directory(Dir)).
+:- dynamic owner_thread/1, caller_owned/0.
 
 %!  bridge(+Mode:integer, +GoalText:text, +Aux:text, -Status, -Out, -ErrTerm) is det.
 %
@@ -237,7 +233,8 @@ message_text(E0, Msg) :-
 error_printer :-
     (   current_predicate(rtl_error_text:rtl_error_text/2)
     ->  true
-    ;   bridge_directory(Dir),
+    ;   module_property(retalisc_bridge, file(Bridge)),
+        file_directory_name(Bridge, Dir),
         directory_file_path(Dir, 'rtl_error_text.pl', File),
         use_module(File, [])
     ).
