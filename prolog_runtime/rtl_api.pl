@@ -30,7 +30,14 @@
             rtl_api_term_data/2,        % +Text, -Json
             rtl_api_save_state/3,       % +Path, +Identity, -Out
             rtl_api_restore_state/3,    % +Path, +Identity, -Out
-            rtl_api_state_digest/1      % -Hash
+            rtl_api_state_digest/1,     % -Hash
+            rtl_api_flag/2,             % +Name, -ValueText
+            rtl_api_end_stopped/1,      % -Yes
+            rtl_api_take_halted/1,      % -Reason
+            rtl_api_close_action_output/1, % -Out
+            rtl_api_run_event_file/4,   % +File, +AllowControl, +Strict, -Outcome
+            rtl_api_use_tracing/1,      % -Out
+            rtl_api_ground_canonical/2  % +Text, -Canonical
           ]).
 
 /** <module> The entry points of the Python Engine: values as data, never as program text
@@ -68,7 +75,9 @@ error: the output produced before it is returned, followed by a last line
 :- use_module(rtl_state).
 :- use_module(rtl_ros1).
 
-:- use_module(rtl_feed, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2]).
+:- use_module(rtl_feed, [rtl_feed_lines/4, rtl_end_of_input/2, rtl_summary/1, rtl_heartbeat/2,
+                          rtl_run_event_file/4]).
+:- use_module(rtl_halt, [rtl_take_halted/1]).
 
 %!  rtl_api_default_flags(-Out) is det.
 %
@@ -583,6 +592,81 @@ rtl_api_restore_state(Path, Identity, "") :-
 rtl_api_state_digest(Hash) :-
     rtl_state_digest(H),
     atom_string(H, Hash).
+
+%!  rtl_api_flag(+Name:text, -ValueText:string) is det.
+%
+%   The value of the runtime flag Name (rtl_flag/2) as text: `inf`, `2.5`, `true`.
+
+rtl_api_flag(NameText, Text) :-
+    must_be(text, NameText),
+    atom_string(Name, NameText),
+    rtl_flag(Name, Value),
+    format(string(Text), "~w", [Value]).
+
+%!  rtl_api_end_stopped(-Yes:string) is det.
+%
+%   `"yes"` when program code called halt in a match the end of the input ran
+%   (rtl_api_end_of_input/2), else `""`.
+
+rtl_api_end_stopped(Yes) :-
+    (   nb_current(rtl_end_stopped, true)
+    ->  Yes = "yes"
+    ;   Yes = ""
+    ).
+
+%!  rtl_api_take_halted(-Reason:string) is det.
+%
+%   Why loading the program stopped (program code called halt in a directive:
+%   rtl_take_halted/1), once; `""` when it did not.
+
+rtl_api_take_halted(Reason) :-
+    (   rtl_take_halted(Reason0)
+    ->  text_string(Reason0, Reason)
+    ;   Reason = ""
+    ).
+
+text_string(Text, String) :-
+    (   string(Text) -> String = Text ; format(string(String), "~w", [Text]) ).
+
+%!  rtl_api_close_action_output(-Out) is det.
+%
+%   Close the file of the action output (rtl_set_action_output/1), if any.
+
+rtl_api_close_action_output("") :-
+    rtl_close_action_output.
+
+%!  rtl_api_run_event_file(+File:text, +AllowControl:text, +Strict:text, -Outcome:string) is det.
+%
+%   rtl_run_event_file/4: the runtime's own loop over an event file (or `-`, standard input),
+%   writing the output to standard output. Outcome as that predicate gives it
+%   (`done`, `stopped`, `output gone`).
+
+rtl_api_run_event_file(File, AllowControl, Strict, Outcome) :-
+    must_be(text, File),
+    rtl_run_event_file(File, AllowControl, Strict, Outcome0),
+    text_string(Outcome0, Outcome).
+
+%!  rtl_api_use_tracing(-Out) is det.
+%
+%   Load the tracing of `explain` and `--trace` (rtl_trace.pl), whose entry points the
+%   driver then calls as it calls these (docs/architecture.md, "The Python/Prolog boundary").
+
+rtl_api_use_tracing("") :-
+    (   current_predicate(rtl_trace:rtl_trace_start/1)
+    ->  true
+    ;   module_property(rtl_api, file(Api)),          % the runtime this one belongs to
+        file_directory_name(Api, Dir),
+        directory_file_path(Dir, 'rtl_trace.pl', File),
+        use_module(File, [])
+    ).
+
+%!  rtl_api_ground_canonical(+Text:text, -Canonical:string) is det.
+%
+%   rtl_ground_canonical/2 (rtl_text.pl): Text read as one ground term, written back with
+%   write_canonical/1; `!Reason` when it is not one.
+
+rtl_api_ground_canonical(Text, Canonical) :-
+    rtl_ground_canonical(Text, Canonical).
 
 %!  rtl_api_term_data(+Text:string, -Json:string) is det.
 %

@@ -59,6 +59,7 @@
             aq_queries/1,           % -Ids
             aq_stats/1,             % -Stats
             aq_reset/0,
+            aq_reset_program/0,
             aq_run_script/1,        % +File
             aq_script_main/1,       % +File
             aq_script_batch/6,      % +File, +From, +Max, -Output, -Next, -Status
@@ -458,6 +459,22 @@ free_tables(Dead) :-
 :- dynamic aq_dead/1.
 
 state_owner(S, T) :- S \= q(_), arg(1, S, T).
+
+%!  aq_reset_program is det.
+%
+%   Before another program is loaded in place of this one (retalisc/driver/active_queries.py):
+%   aq_reset/0 (the globals made again first when they are gone, as after an Engine's snapshot
+%   restored in this process without them), and the facts asserted and the rules added at run
+%   time dropped too (reloading the program keeps them otherwise).
+
+aq_reset_program :-
+    (   nb_current(aq_subgoals, _) -> true ; init_globals ),
+    aq_reset,
+    forall(catch(user:'$aq_fact_pred'(F), _, fail), retractall(user:F)),
+    forall(member(P, ['$aq_act'(_, _), '$aq_go'(_, _, _), '$aq_final'(_, _, _, _, _, _), '$aq_kind'(_, _)]),
+           retractall(user:P)),
+    retractall(aq_rule(_, _, _)),
+    flag(aq_rule_id, _, 0).
 
 %!  aq_reset is det.
 %

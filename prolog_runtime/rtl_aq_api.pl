@@ -10,6 +10,7 @@
             aq_api_events/1,            % -EventLines
             aq_api_stats/1,             % -StatLines
             aq_api_unload/2,            % +File, -Out
+            aq_api_reset/1,             % -Out
             aq_api_script_batch/4,      % +File, +From, +Max, -Out
             aq_api_save_state/3,        % +Path, +Identity, -Out
             aq_api_restore_state/3,     % +Path, +Identity, -Out
@@ -111,6 +112,13 @@ aq_api_events(Out) :-
 aq_api_stats(Out) :-
     aq_stats(Stats),
     with_output_to(string(Out), forall(member(K=V, Stats), format("~w ~w~n", [K, V]))).
+
+%!  aq_api_reset(-Out) is det.
+%
+%   Before another program replaces the one loaded: aq_reset_program/0.
+
+aq_api_reset("") :-
+    aq_reset_program.
 
 %!  aq_api_unload(+File:text, -Out) is det.
 %

@@ -410,16 +410,15 @@ def _start_tracing(engine, unit, traces, late_file):
         known = ", ".join(b.rule_id for b in unit.rules)
         raise click.BadParameter(f"no rule {error.args[0]!r} in the program (its rules: {known})",
                                  param_hint="--trace") from None
-    engine.bridge.once("use_module(retalis_runtime(rtl_trace))")      # constant text
     if late_file is not None:
         output_file(late_file, "--late")
-        engine.bridge.apply("rtl_trace", "rtl_trace_late", late_file, late_rules(unit))
+        engine.trace("late", late_file, late_rules(unit))
     if specs:
-        engine.bridge.apply("rtl_trace", "rtl_trace_rules", specs)
+        engine.trace("rules", specs)
 
     def report() -> str:
-        text = engine.bridge.apply("rtl_trace", "rtl_trace_report") if specs else ""
-        engine.bridge.apply("rtl_trace", "rtl_trace_end")
+        text = engine.trace("report") if specs else ""
+        engine.trace("end")
         return text
     return report
 

@@ -87,16 +87,9 @@ class ActiveQueries:
         out.write_text(prolog, encoding="utf-8")
         previous = _loaded["path"]
         if previous is not None:
-            if self.bridge.once("current_predicate(rtl_aq:aq_reset/0)"):
-                # the globals of rtl_aq may be gone (an Engine snapshot restored in this
-                # process without them): made again first, then everything is reset
-                self.bridge.once("( nb_current(aq_subgoals, _) -> true ; rtl_aq:init_globals ), rtl_aq:aq_reset")
-            # drop the facts asserted at run time too (reloading keeps them otherwise), and the
-            # rules added at run time (their clauses and records)
-            self.bridge.once("forall(catch(user:'$aq_fact_pred'(F), _, fail), retractall(user:F))")
-            self.bridge.once("forall(member(P, ['$aq_act'(_, _), '$aq_go'(_, _, _), '$aq_final'(_, _, _, _, _, _), "
-                             "'$aq_kind'(_, _)]), retractall(user:P)), retractall(rtl_aq:aq_rule(_, _, _)), "
-                             "flag(aq_rule_id, _, 0)")
+            # every query, table and fact asserted or rule added at run time (rtl_aq.pl,
+            # aq_reset_program/0)
+            self.bridge.apply(_API, "aq_api_reset")
             self.bridge.apply(_API, "aq_api_unload", previous)
         self.bridge.consult(out)
         # the API module next to the runtime the program loaded (a constant goal, no values)

@@ -46,6 +46,9 @@ Number = Union[int, float]
 _python_queries = itertools.count(1)
 
 _API = "rtl_api"        # prolog_runtime/rtl_api.pl: the predicates an Engine calls
+# The entry points of prolog_runtime/rtl_trace.pl that Engine.trace calls (`rtl_trace_NAME`).
+_TRACE_REQUESTS = ("start", "stop", "feed_line", "feed_byte_line", "explain", "why_not", "late", "rules",
+                   "report", "end")
 
 
 @dataclass(frozen=True)
@@ -241,6 +244,7 @@ class Engine:
         self._consumers: Dict[str, List[Callable[[OutputEvent], None]]] = {}
         self._synchronized: Dict[str, "Future"] = {}
         self._lock = threading.RLock()    # one call (and its output delivery) at a time
+        self._tracing = False             # rtl_trace.pl loaded (trace)
         self.bridge.active_program = None                # this Engine takes over (see activate)
         self.bridge.once("set_prolog_flag(retalis_embedded, true)")     # constant text, no values
         self.bridge.serve("compile_rules", _compile_rules_for_the_runtime)
@@ -304,6 +308,12 @@ class Engine:
                 f"this Engine ({self.module}) is not the active one: the runtime processes one program per "
                 f"process, and {active} was loaded or activated after it (call activate() to switch back)")
         return self.bridge.apply(_API, name, *args)
+
+    def _predicate_call(self, module: str, name: str, *args) -> str:
+        """`module:name(Args..., Out)` of another API module (the tracing), as `_call`."""
+        if self._closed:
+            raise RuntimeError("this Engine is closed")
+        return self.bridge.apply(module, name, *args)
 
     def activate(self) -> None:
         """Make this Engine the one that processes events again, after another Engine was
@@ -769,6 +779,56 @@ class Engine:
                 self._call("rtl_api_restore_state", str(path), self.identity())
             except PrologError as error:
                 raise snapshot.StateError(f"{path}: {error}") from None
+
+    # ---- the runtime's loop, halts and action output (the driver's roads) ------------------
+
+    def flag(self, name: str) -> str:
+        """The value of the runtime flag `name` as text (`inf`, `2.5`, `true`)."""
+        with self._lock:
+            return self._call("rtl_api_flag", _text(name, "a flag name"))
+
+    def end_stopped(self) -> bool:
+        """Whether program code called halt in a match the end of the input ran (`end_of_input`)."""
+        with self._lock:
+            return self._call("rtl_api_end_stopped") == "yes"
+
+    def take_halted(self) -> str:
+        """Why loading the program stopped (program code called halt in a directive), once; ""
+        when it did not."""
+        with self._lock:
+            return self._call("rtl_api_take_halted")
+
+    def set_action_output(self, path: str) -> None:
+        """Send what program code prints (actions, conditions) to the file `path`; PrologError
+        when it cannot be opened."""
+        with self._lock:
+            self._call("rtl_api_set_action_output", _text(path, "a path"))
+
+    def close_action_output(self) -> None:
+        """Close the file of the action output, if any (`set_action_output`)."""
+        with self._lock:
+            self._call("rtl_api_close_action_output")
+
+    def run_event_file(self, path: str, allow_control: bool = False, strict: bool = False) -> str:
+        """The runtime's own loop over the event file `path` (`-`: standard input), writing the
+        output to standard output, as `swipl PROGRAM.pl FILE` does: "done", "stopped" (a halt,
+        or strict) or "output gone" (the reader of standard output went away)."""
+        with self._lock:
+            return self._call("rtl_api_run_event_file", _text(path, "a path"),
+                              "true" if allow_control else "false", "true" if strict else "false")
+
+    def trace(self, request: str, *args) -> str:
+        """A request to the runtime's tracing (prolog_runtime/rtl_trace.pl), for `explain` and
+        `--trace`: `request` names one of its entry points (`start`, `stop`, `feed_line`,
+        `feed_byte_line`, `explain`, `why_not`, `late`, `rules`, `report`, `end`), `args` its
+        values. Returns its output text."""
+        if request not in _TRACE_REQUESTS:
+            raise ValueError(f"no tracing request {request!r} (one of {', '.join(_TRACE_REQUESTS)})")
+        with self._lock:
+            if not self._tracing:
+                self._call("rtl_api_use_tracing")
+                self._tracing = True
+            return self._predicate_call("rtl_trace", f"rtl_trace_{request}", *args)
 
     def state_digest(self) -> str:
         """A hash of everything a snapshot holds (equal states, equal digests)."""

@@ -22,7 +22,7 @@ SKIP_CHUNK = 1 << 16        # bytes read at once while skipping the rest of a li
 
 def max_line_bytes(engine: "Engine") -> Optional[int]:
     """The runtime's limit on the length of an input line, in bytes (None: no limit)."""
-    value = engine.bridge.call_text("rtl_ele:rtl_flag(max_line_bytes, V)", "V")
+    value = engine.flag("max_line_bytes")
     return None if value == "inf" else int(value)
 
 

@@ -83,7 +83,6 @@ class Explainer:
     def __init__(self, result: CompileResult):
         self.result = result
         self.engine = Engine.from_compiled(result)
-        self.engine.bridge.once("use_module(retalis_runtime(rtl_trace))")      # constant text
         self.rules = rules_text(result.unit.program.event_rules)
         self.rejections: List[Tuple[object, Rejection]] = []   # (where: line number or TOPIC#N, rejection)
         self.outputs: List[OutputEvent] = []
@@ -100,12 +99,12 @@ class Explainer:
         self._feed(lines)
 
     def _feed(self, lines) -> None:
-        bridge = self.engine.bridge
-        bridge.apply("rtl_trace", "rtl_trace_start")
+        engine = self.engine
+        engine.trace("start")
         try:
             for line, where in lines:
-                feed = "rtl_trace_feed_byte_line" if isinstance(line, bytes) else "rtl_trace_feed_line"
-                output = bridge.apply("rtl_trace", feed, line, where)
+                feed = "feed_byte_line" if isinstance(line, bytes) else "feed_line"
+                output = engine.trace(feed, line, where)
                 for text in output.splitlines():
                     if text.startswith("!"):
                         line_no, _, rest = text[1:].partition("\t")
@@ -114,13 +113,13 @@ class Explainer:
                     elif text and not text.startswith("?"):
                         self.outputs.append(OutputEvent.from_line(text))
         finally:
-            bridge.apply("rtl_trace", "rtl_trace_stop")
+            engine.trace("stop")
 
     def explain(self, event: str, limit: int = 5) -> str:
-        return self.engine.bridge.apply("rtl_trace", "rtl_trace_explain", self.rules, event, limit)
+        return self.engine.trace("explain", self.rules, event, limit)
 
     def why_not(self, pattern: str) -> str:
-        return self.engine.bridge.apply("rtl_trace", "rtl_trace_why_not", self.rules, pattern)
+        return self.engine.trace("why_not", self.rules, pattern)
 
 
 # ---- run --trace RULE and --late FILE ------------------------------------------------------

@@ -405,7 +405,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     try:
         stops.install()
         if restored is None:
-            halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
+            halted = engine.take_halted()
             if halted:
                 print(halted, file=sys.stderr)
                 raise RunStopped()
@@ -456,7 +456,7 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
             source.close()
         if journal is not None:
             journal.close()
-        engine.bridge.once("retalis:rtl_close_action_output")
+        engine.close_action_output()
     if full is not None:
         print(f"retalis: cannot write {out}: {full.strerror}", file=sys.stderr)
     print_summary(engine, time.perf_counter() - started)

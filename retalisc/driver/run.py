@@ -186,7 +186,7 @@ def end_the_input(engine: Engine, write, drop_pending: bool, strict: bool) -> No
     with `strict`, when one of them failed."""
     failed = engine.stats().get("failed", 0)
     write(engine.end_of_input(drop_pending))
-    if engine.bridge.call_text("( nb_current(rtl_end_stopped, true) -> R = \"yes\" ; R = \"\" )", "R"):
+    if engine.end_stopped():
         raise RunStopped()
     if strict and engine.stats().get("failed", 0) > failed:
         raise RunStopped()
@@ -245,7 +245,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
     full: Optional[OSError] = None
     try:
         stops.install()
-        halted = engine.bridge.call_text("( retalis:rtl_take_halted(R) -> true ; R = \"\" )", "R")
+        halted = engine.take_halted()
         if halted:
             print(halted, file=sys.stderr)
             raise RunStopped()
@@ -261,8 +261,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         if stdin_in_prolog and in_prolog_loop(events, out, consumer_dir, progress, heartbeat):
             batches = iter(())
             sink.flush()
-            outcome = engine.bridge.apply("retalis", "rtl_run_event_file", events,
-                                          "true" if allow_control else "false", "true" if strict else "false")
+            outcome = engine.run_event_file(events, allow_control, strict)
             stops.retake()
             if outcome == "output gone":          # the reader of standard output went away
                 raise BrokenPipeError(errno.EPIPE, os.strerror(errno.EPIPE))
@@ -325,7 +324,7 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
             full = settle_output(sink.close, full)
         if consumers is not None:
             consumers.close()
-        engine.bridge.once("retalis:rtl_close_action_output")
+        engine.close_action_output()
     if report is not None:
         text = report()
         if text:
@@ -422,7 +421,7 @@ def _fileno(source) -> Optional[int]:
 def set_action_output(engine: Engine, path: str) -> None:
     """Send what program code prints (actions, conditions) to the file `path`; raises
     OSError-like PrologError when it cannot be opened."""
-    engine.bridge.apply("rtl_api", "rtl_api_set_action_output", path)
+    engine.set_action_output(path)
 
 
 def print_summary(engine: Engine, seconds: float, summary: Optional[str] = None) -> None:

@@ -25,7 +25,8 @@ from ..frontend.depth import with_room_for_depth
 from .bridge import Bridge, PrologError
 from ..runtime_location import runtime_dir
 
-__all__ = ["Term", "Variable", "Value", "QueryAnswer", "Time", "data_value", "parse_term", "time_value"]
+__all__ = ["Term", "Variable", "Value", "QueryAnswer", "Time", "data_value", "ground_canonical", "parse_term",
+           "time_value"]
 
 
 @dataclass(frozen=True)
@@ -99,6 +100,27 @@ def parse_term(text: str) -> Value:
         return data_value(json.loads(data))
     except RecursionError:                  # a deep term (input terms nest up to 1,000 levels)
         return with_room_for_depth(lambda: data_value(json.loads(data)))
+
+
+_text_reader_loaded = False
+
+
+def ground_canonical(text: str) -> str:
+    """`text` read by SWI-Prolog as one ground term (rtl_text.pl: read_term from a string, never
+    pasted into a goal) and written back with write_canonical/1 conventions (quoted, no
+    operators). ValueError when it is not one ground term."""
+    global _text_reader_loaded
+    bridge = Bridge()
+    if not _text_reader_loaded:           # the runtime's reader of untrusted text, once a process
+        bridge.consult(str(runtime_dir() / "rtl_text.pl"))
+        _text_reader_loaded = True
+    try:
+        out = bridge.apply("rtl_text", "rtl_ground_canonical", text)
+    except PrologError as error:
+        raise ValueError(f"not a term: {str(error).splitlines()[0]}") from None
+    if out.startswith("!"):
+        raise ValueError(out[1:])
+    return out
 
 
 def data_value(data) -> Value:

@@ -23,8 +23,7 @@ from typing import Union
 
 from ..frontend.parser import _number, _unescape
 from ..frontend.terms import Atom, Compound, String
-from ..driver.bridge import Bridge, PrologError
-from ..runtime_location import runtime_dir
+from ..driver.values import ground_canonical
 
 DataTerm = Union[int, float, Atom, String, Compound, list]
 
@@ -70,26 +69,7 @@ def _read_fast(text: str) -> DataTerm:
 def _canonical(text: str) -> str:
     """`text` read by SWI-Prolog (read_term from a string, never pasted into a goal) and
     written back with write_canonical/1: no operators left, which the fast reader reads."""
-    bridge = Bridge()
-    _load_text_reader(bridge)
-    try:
-        out = bridge.apply("rtl_text", "rtl_ground_canonical", text)
-    except PrologError as error:
-        raise ValueError(f"not a term: {str(error).splitlines()[0]}") from None
-    if out.startswith("!"):
-        raise ValueError(out[1:])
-    return out
-
-
-_TEXT_READER_LOADED = False
-
-
-def _load_text_reader(bridge) -> None:
-    """Load the runtime's reader of untrusted text (rtl_text.pl) once per process."""
-    global _TEXT_READER_LOADED
-    if not _TEXT_READER_LOADED:
-        bridge.consult(str(runtime_dir() / "rtl_text.pl"))
-        _TEXT_READER_LOADED = True
+    return ground_canonical(text)
 
 
 def _tokens(text: str) -> list:
