@@ -125,6 +125,60 @@ _COMMON_LINE = re.compile(r'\{"event": "([^"\\\x00-\x1f]*)", "start": (-?(?:0|[1
                           r'"end": (-?(?:0|[1-9][0-9]*))\}\Z')
 
 
+@dataclass
+class Answer:
+    """What a feeding predicate of prolog_runtime/rtl_api.pl answered, read once by
+    `read_answer` (the protocol: docs/architecture.md, "The Python/Prolog boundary"):
+    `outputs` the output lines (JSON objects, docs/runtime.md "Output"), `warnings` and
+    `rejections` in order, and `stop` the batch's last line when it ended early: "error"
+    (`index` the event that raised, `message` why), "undecodable" (`index`), "paced"
+    (`index` the items processed); "" when it did not."""
+
+    outputs: List[str]
+    warnings: List["EngineWarning"]
+    rejections: List["Rejection"]
+    stop: str = ""
+    index: int = -1
+    message: str = ""
+
+
+def read_answer(text: str) -> Answer:
+    """The `Answer` of an output string of rtl_api.pl: lines `{...}` (an output), `?LINE<TAB>TEXT`
+    (a warning; LINE empty outside a batch of lines), `!LINE<TAB>KIND<TAB>REASON` (a line not
+    processed), and as the last line `!error<TAB>INDEX<TAB>MESSAGE`, `!undecodable<TAB>INDEX`
+    or `!paced<TAB>N`."""
+    answer = Answer([], [], [])
+    for line in text.splitlines():
+        if not line:
+            continue
+        first = line[0]
+        if first == "?":
+            number, _, warning = line[1:].partition("\t")
+            answer.warnings.append(EngineWarning(int(number) if number else None, warning))
+        elif first == "!":
+            head, _, rest = line[1:].partition("\t")
+            if head.isdigit():
+                kind, _, reason = rest.partition("\t")
+                answer.rejections.append(Rejection(int(head), reason, kind))
+            else:
+                index, _, message = rest.partition("\t")
+                answer.stop, answer.index, answer.message = head, int(index), message
+        else:
+            answer.outputs.append(line)
+    return answer
+
+
+def _bad_item_index(error: PrologError) -> Optional[int]:
+    """The index of the item a feeding predicate refused before processing anything (its error
+    term `error(bad_item(Index, Error), _)`, rtl_api.pl); None for any other error."""
+    term = error.term or ""
+    prefix = "error(bad_item("
+    if not term.startswith(prefix):
+        return None
+    index = term[len(prefix):].partition(",")[0]
+    return int(index) if index.isdigit() else None
+
+
 class QueryError(Exception):
     """A query or memory request that was refused or failed. `kind` is "syntax" (the text does
     not parse), "unsafe" (the sandbox refused it) or "failed" (it raised an error)."""
@@ -452,29 +506,32 @@ class Engine:
         with self._lock:
             try:
                 args = extra if predicate == "rtl_api_feed_paced_rest" else (items, *extra)
-                output = self._call(predicate, *args)
+                answer = read_answer(self._call(predicate, *args))
             except PrologError as error:
-                if (error.term or "").startswith("error(bad_item(") and "error(invalid_time(" in error.term:
-                    raise ValueError(str(error)) from None
+                index = _bad_item_index(error)
+                if index is None:
+                    raise
+                # a bad item: nothing of the batch was processed
+                error.batch_index, error.delivered = index, []
+                if "error(invalid_time(" in (error.term or ""):
+                    bad = ValueError(str(error))
+                    bad.batch_index, bad.delivered = index, []
+                    raise bad from None
                 raise
-            lines = output.splitlines()
-            processed = len(items)
-            if lines and lines[-1].startswith("!paced\t"):
-                processed = int(lines.pop().split("\t")[1])
-            failure = lines.pop() if lines and lines[-1].startswith(("!error\t", "!undecodable\t")) else None
-            delivered = self._deliver_lines(lines)
-        if failure is not None and failure.startswith("!undecodable\t"):
-            index = int(failure.split("\t")[1])
+            processed = answer.index if answer.stop == "paced" else len(items)
+            delivered = self._deliver_answer(answer)
+        if answer.stop == "undecodable":
+            index = answer.index
             error = PrologError(f"event {index} of the batch ({items[index][1][:1]!r}): not one ROS 1 message of "
                                 f"its type, or a float that is not finite")
             error.batch_index = index
             error.delivered = delivered
             error.undecodable = True
             raise error
-        if failure is not None:
-            _, index, message = failure.split("\t", 2)
-            error = PrologError(f"event {index} of the batch ({items[int(index)][1]!r}): {message}")
-            error.batch_index = int(index)      # the events after it were not processed
+        if answer.stop == "error":
+            index = answer.index
+            error = PrologError(f"event {index} of the batch ({items[index][1]!r}): {answer.message}")
+            error.batch_index = index      # the events after it were not processed
             error.delivered = delivered
             raise error
         return delivered, processed
@@ -508,21 +565,13 @@ class Engine:
             raise TypeError(f"first_line must be an int, not {first_line!r}")
         feed = "rtl_api_feed_byte_lines" if isinstance(text, bytes) else "rtl_api_feed_lines"
         with self._lock:
-            output = self._call(feed, text if isinstance(text, bytes) else _text(text, "event lines"), first_line,
-                                "true" if allow_control else "false", "true" if strict else "false")
-            rejections = []
-            lines = []
-            for line in output.splitlines():
-                if line.startswith("!"):
-                    number, _, rest = line[1:].partition("\t")
-                    kind, _, reason = rest.partition("\t")
-                    rejections.append(Rejection(int(number), reason, kind))
-                elif line:
-                    lines.append(line)
-            return self._deliver_lines(lines), rejections
+            answer = read_answer(self._call(feed, text if isinstance(text, bytes) else _text(text, "event lines"),
+                                            first_line, "true" if allow_control else "false",
+                                            "true" if strict else "false"))
+            return self._deliver_answer(answer), answer.rejections
 
     def _deliver(self, output: str) -> List[OutputEvent]:
-        return self._deliver_lines([line for line in output.splitlines() if line])
+        return self._deliver_answer(read_answer(output))
 
     def take_warnings(self) -> List[EngineWarning]:
         """The warnings of the inputs fed since the last call (deletions outside the retraction
@@ -530,12 +579,9 @@ class Engine:
         warnings, self._warnings = self._warnings, []
         return warnings
 
-    def _deliver_lines(self, lines: List[str]) -> List[OutputEvent]:
-        for line in lines:
-            if line.startswith("?"):        # ?LINE<TAB>text: a warning (rtl_feed_lines/3)
-                number, _, text = line[1:].partition("\t")
-                self._warnings.append(EngineWarning(int(number) if number else None, text))
-        events = [OutputEvent.from_line(line) for line in lines if line and not line.startswith("?")]
+    def _deliver_answer(self, answer: "Answer") -> List[OutputEvent]:
+        self._warnings.extend(answer.warnings)
+        events = [OutputEvent.from_line(line) for line in answer.outputs]
         for event in events:
             if event.query is not None:
                 self._resolve(event.query)

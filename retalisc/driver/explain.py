@@ -18,7 +18,7 @@ from ..frontend.program import (Absence, Aggregate, Binary, Check, EventAtom, Ev
                                 Sliding, Where, Window)
 from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
 from ..passes.edbc import alarm_head
-from .engine import Engine, OutputEvent, Rejection
+from .engine import Engine, OutputEvent, Rejection, read_answer
 from .event_lines import batch_payload, max_line_bytes, read_lines
 from ..frontend.writer import write_term
 from ..frontend.program import walk_pattern
@@ -104,14 +104,9 @@ class Explainer:
         try:
             for line, where in lines:
                 feed = "feed_byte_line" if isinstance(line, bytes) else "feed_line"
-                output = engine.trace(feed, line, where)
-                for text in output.splitlines():
-                    if text.startswith("!"):
-                        line_no, _, rest = text[1:].partition("\t")
-                        kind, _, reason = rest.partition("\t")
-                        self.rejections.append((where, Rejection(int(line_no), reason, kind)))
-                    elif text and not text.startswith("?"):
-                        self.outputs.append(OutputEvent.from_line(text))
+                answer = read_answer(engine.trace(feed, line, where))
+                self.rejections.extend((where, rejection) for rejection in answer.rejections)
+                self.outputs.extend(OutputEvent.from_line(text) for text in answer.outputs)
         finally:
             engine.trace("stop")
 

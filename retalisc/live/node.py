@@ -162,7 +162,6 @@ class Transport:
 
 
 _STOP = object()
-_BATCH_INDEX = re.compile(r"^event (\d+) of the batch")
 
 
 class LiveNode:
@@ -413,10 +412,9 @@ class LiveNode:
                 self.fed += len(events)
                 events = []
             except PrologError as error:        # what the events before it produced is out
-                match = _BATCH_INDEX.match(str(error))
-                index = getattr(error, "batch_index", None)
+                index = getattr(error, "batch_index", None)      # Engine.feed_batch sets it
                 if index is None:
-                    index = int(match.group(1)) if match else len(events) - 1
+                    index = len(events) - 1
                 if getattr(error, "undecodable", False):     # the runtime refused the bytes: the text road
                     self.fed += index
                     topic, number, data, name, arrival_ns = events[index][2]
