@@ -89,3 +89,13 @@ def g(self, goal, name):
         "goal text that is not a constant literal (once)",
         "goal text that is not a constant literal (call_text)",
     ]
+
+
+def test_the_state_journal_uses_the_live_nodes_public_interface():
+    """live/state.py drives LiveNode through its public methods (its "recovery" section), never
+    through the node's private ones."""
+    source = (PACKAGE / "live" / "state.py").read_text(encoding="utf-8")
+    private = sorted({f"node.{node.attr}" for node in ast.walk(ast.parse(source))
+                      if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
+                      and node.value.id == "node" and node.attr.startswith("_")})
+    assert private == []

@@ -251,6 +251,45 @@ class LiveNode:
             self.state.close(self, snapshot=not self._thread.is_alive())     # (with its subscriber counts)
         self.transport.close()
 
+    # ---- recovery: what the state journal (live/state.py) restores and replays --------------
+    # Called from LiveNode.start, before live input is taken (the consumer thread is not running).
+
+    def restore_type(self, name: str, definition: str) -> None:
+        """A message type learned before the snapshot (its full definition, ROS 1), known again."""
+        if name not in self.store.fielddefs:
+            self._learn_type(name, definition)
+            self.learned[name] = definition
+
+    def advertise(self, topic: str, msgtype: str) -> Reply:
+        """Advertise `topic` (its message type) on the transport."""
+        return self._advertise(topic, msgtype)
+
+    def publish_again(self, topic: str, msgtype: str, data: bytes, how: str, seq: int) -> None:
+        """Publish again a message published before the snapshot, with its output number."""
+        self._send(topic, msgtype, data, how, seq)
+
+    def subscribe_input(self, topic: str, msgtype: str) -> Reply:
+        """Subscribe to an input topic again (as the add_input_subscription service does)."""
+        return self._add_input(topic, msgtype)
+
+    def feed_events(self, events: List[tuple]) -> None:
+        """Feed `(event, time, arrival)` items in order (journaled first when the node keeps one),
+        their outputs published."""
+        self._feed(events)
+
+    def replay_call(self, name: str, args, now: Optional[float]) -> Reply:
+        """A stateful service request by name, replayed from the journal (`now`: the wall-clock
+        time it first ran at)."""
+        return self._replay_call(name, args, now)
+
+    def message_event(self, topic: str, data: bytes, name: str, arrival_ns: int) -> Tuple[object, float]:
+        """(event, time) of a message of type `name` that arrived on `topic` at `arrival_ns`: for
+        ROS 1 its bytes (engine.Ros1Bytes) when the runtime reads them, else its text."""
+        fast = self.ros1_terms.event(data, name, topic, arrival_ns) if self.ros1_terms else None
+        if fast is not None:
+            return fast[0], fast[1]
+        return self._text_event(topic, data, name, arrival_ns)
+
     # ---- arrivals (any thread) ---------------------------------------------------------------
 
     def arrived(self, topic: str, data: bytes, msgtype: Optional[str] = None,

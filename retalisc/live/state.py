@@ -121,24 +121,22 @@ class LiveState:
         if not isinstance(saved, dict):
             raise RecoveryError(f"{self.directory.directory}: snapshot {restored['number']} is not one of a live node")
         for name, definition in saved.get("learned", {}).items():
-            if name not in node.store.fielddefs:
-                node._learn_type(name, definition)
-                node.learned[name] = definition
+            node.restore_type(name, definition)
         node.output_types.update(saved.get("output_types", {}))
         for topic, msgtype in node.output_types.items():
-            node._advertise(topic, msgtype)
+            node.advertise(topic, msgtype)
         for spec in node.config.publish:         # before the replay publishes on them
             if spec.name not in node.output_types:
-                node._advertise(spec.name, spec.msgtype)
+                node.advertise(spec.name, spec.msgtype)
         tail = saved.get("tail", [])
         if tail or any(path.stat().st_size for number, path in self.journal.segments()
                        if number >= restored["number"]):
             self._wait_for_subscribers(node, saved.get("subscribers", {}))
         for seq, topic, msgtype, data, how in tail:       # what the middleware may have lost
-            node._send(topic, msgtype, base64.b64decode(data), how, seq)
+            node.publish_again(topic, msgtype, base64.b64decode(data), how, seq)
         self.republished = len(tail)
         for topic, msgtype in saved.get("inputs", {}).items():
-            reply = node._add_input(topic, msgtype)
+            reply = node.subscribe_input(topic, msgtype)
             if not reply.ok:
                 self.log(f"retalisc: {topic}: cannot subscribe again: {reply.error}")
         node.outputs = saved.get("outputs", 0)
@@ -153,16 +151,16 @@ class LiveState:
                 except ValueError:
                     continue
                 if "c" in record:
-                    node._feed(pending)
+                    node.feed_events(pending)
                     pending = []
-                    node._replay_call(record["c"], record["a"], record["now"])
+                    node.replay_call(record["c"], record["a"], record["now"])
                     calls += 1
                 else:
                     event = self._event(node, record)
                     if event is not None:
                         pending.append(event)
                         events += 1
-            node._feed(pending)
+            node.feed_events(pending)
         finally:
             self.replaying = False
         self.replayed = (events, calls)
@@ -195,11 +193,8 @@ class LiveState:
         if "r" in record:                 # a ROS 1 message fed as its bytes: made again as it was
             data = base64.b64decode(record["r"])
             arrival = (record["p"], 0, data, record["n"], record["ns"])
-            fast = node.ros1_terms.event(data, record["n"], record["p"], record["ns"]) if node.ros1_terms else None
-            if fast is not None:
-                return fast[0], fast[1], arrival
-            text, seconds = node._text_event(record["p"], data, record["n"], record["ns"])
-            return text, seconds, arrival
+            event, seconds = node.message_event(record["p"], data, record["n"], record["ns"])
+            return event, seconds, arrival
         return record["e"], record["t"], None
 
     # ---- while live (the consumer thread) --------------------------------------------------
