@@ -52,9 +52,22 @@ must be ground; times finite numbers. Goals from outside (subscription condition
 rtl_check_goal/4 (rtl_sandbox.pl); rules pass it in rtl_install_rules/3 and queries in
 rtl_query.pl.
 
-Output is a string of lines. Feeding stops at the first event whose processing raises an
-error: the output produced before it is returned, followed by a last line
-`!error<TAB>Index<TAB>Message` (Index counts the batch's events from 0).
+## The protocol (docs/architecture.md, "The Python/Prolog boundary")
+
+The bridge calls these through retalisc_bridge:bridge_apply/6 (rtl_bridge.pl): Status 1, 0 or
+2 (an error, never raised into the C interface). The output of the feeding predicates is a
+string of lines, read once on the Python side (`retalisc.driver.engine.read_answer`):
+
+  - `{"event": ...}`: an output line (docs/runtime.md, "Output");
+  - `?LINE<TAB>TEXT`: a warning (LINE empty outside rtl_api_feed_lines/5);
+  - `!LINE<TAB>KIND<TAB>REASON`: an input line not processed (rtl_api_feed_lines/5);
+  - as the last line only: `!error<TAB>Index<TAB>Message` (feeding stopped at the event Index
+    of the batch, counted from 0, whose processing raised: the output produced before it
+    comes first), `!undecodable<TAB>Index` (ROS 1 bytes that are not one message of their
+    type), `!paced<TAB>N` (rtl_api_feed_paced/4: N items processed, more to come).
+
+A bad item raises error(bad_item(Index, Error), _) before anything of the batch runs. Queries
+and memory requests answer `!KIND<TAB>MESSAGE` when refused.
 */
 
 :- use_module(library(apply)).
