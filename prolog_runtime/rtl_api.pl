@@ -665,7 +665,7 @@ rtl_api_run_event_file(File, AllowControl, Strict, Outcome) :-
 %   driver then calls as it calls these (docs/architecture.md, "The Python/Prolog boundary").
 
 rtl_api_use_tracing("") :-
-    (   current_predicate(rtl_trace:rtl_trace_start/1)
+    (   current_module(rtl_trace)
     ->  true
     ;   module_property(rtl_api, file(Api)),          % the runtime this one belongs to
         file_directory_name(Api, Dir),
