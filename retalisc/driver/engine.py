@@ -511,11 +511,12 @@ class Engine:
                 index = _bad_item_index(error)
                 if index is None:
                     raise
-                # a bad item: nothing of the batch was processed
-                error.batch_index, error.delivered = index, []
+                # a bad item: nothing of the batch was processed (so no batch_index, which
+                # says that the items before it were)
+                error.refused_index = index
                 if "error(invalid_time(" in (error.term or ""):
                     bad = ValueError(str(error))
-                    bad.batch_index, bad.delivered = index, []
+                    bad.refused_index = index
                     raise bad from None
                 raise
             processed = answer.index if answer.stop == "paced" else len(items)

@@ -451,7 +451,9 @@ class LiveNode:
                 self.fed += len(events)
                 events = []
             except PrologError as error:        # what the events before it produced is out
-                index = getattr(error, "batch_index", None)      # Engine.feed_batch sets it
+                index = getattr(error, "batch_index", None)      # Engine.feed_batch sets them
+                if index is None:
+                    index = getattr(error, "refused_index", None)   # a bad item: none processed
                 if index is None:
                     index = len(events) - 1
                 if getattr(error, "undecodable", False):     # the runtime refused the bytes: the text road
