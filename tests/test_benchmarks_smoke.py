@@ -58,3 +58,18 @@ def test_absence_quick(tmp_path):
                for line in lines), lines
     assert "target met    the same situations detected by both" in lines
     assert (tmp_path / "absence_quick.json").exists() and (tmp_path / "absence_quick.png").exists()
+
+
+def test_call_cost_quick(tmp_path):
+    """benchmarks/call_cost.py: the fixed cost of a call on both roads, each targeted call's line."""
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "call_cost.py"), "--quick",
+                           "--out-dir", str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("target ")]
+    for call in (r"Engine\.feed \(matches nothing\)", r"Engine\.query\('true'\)"):
+        for road in ("handoff", "calling thread"):
+            assert any(re.match(rf"target (met|MISSED) +{call} fixed cost on the {road} road: [\d.]+ us", line)
+                       for line in lines), "\n".join(lines)
+    assert "fixed cost + the query's own work" in proc.stdout
+    assert (tmp_path / "call_cost.json").exists()
