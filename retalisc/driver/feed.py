@@ -407,9 +407,13 @@ def _delivered_next(produced: Sequence, index: int) -> bool:
 
 class TextSink:
     """JSON Lines to a text stream (standard output or `--out`); with `consumers`, the
-    subscription deliveries go to one file per consumer instead (`ConsumerFiles`)."""
+    subscription deliveries go to one file per consumer instead (`ConsumerFiles`). A batch's
+    lines are written in one call, or, with `by_line`, one call each (a recording's replay:
+    its reader going away is then seen at the next buffer's worth)."""
 
-    def __init__(self, stream: IO[str], out_name: str, owned: bool, consumers: Optional[ConsumerFiles] = None):
+    def __init__(self, stream: IO[str], out_name: str, owned: bool, consumers: Optional[ConsumerFiles] = None,
+                 by_line: bool = False):
+        self.by_line = by_line
         self.stream = stream
         self.out_name = out_name
         self.owned = owned
@@ -425,6 +429,8 @@ class TextSink:
         for event in produced:
             if self.consumers is not None and event.consumer is not None:
                 self.consumers.write(event)
+            elif self.by_line:
+                self.emit(event.line + "\n")
             else:
                 lines.append(event.line)
         if lines:

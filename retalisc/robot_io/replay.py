@@ -299,7 +299,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
             text = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
             consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
             main = TextSink(text, "standard output" if out == "-" else str(out), owned=text is not sys.stdout,
-                            consumers=consumers)
+                            consumers=consumers, by_line=True)
     except BaseException:
         bag.__exit__(None, None, None)
         for target in targets:
