@@ -86,7 +86,7 @@ def _feed_recording(explainer, values: dict) -> None:
         sys.exit(2)
     stats = ReplayStats()
     try:
-        explainer.feed_lines(((json.dumps({"event": text, "t": seconds}), f"{record.topic}#{stats.messages}")
+        explainer.feed_placed(((json.dumps({"event": text, "t": seconds}), f"{record.topic}#{stats.messages}")
                               for text, seconds, record in bag_events(bag, options, stats, report)), name)
     finally:
         bag.__exit__(None, None, None)

@@ -100,7 +100,7 @@ class Explainer:
             lines = read_lines(source, max_line_bytes(self.engine))
             self._feed(((batch_payload([raw]), number) for number, (raw, _) in enumerate(lines, start=1)), events)
 
-    def feed_lines(self, lines: Iterable[Tuple[str, str]], name: str = "<input>") -> None:
+    def feed_placed(self, lines: Iterable[Tuple[str, str]], name: str = "<input>") -> None:
         """Feed event lines, each `(line, where)`, its events logged as coming from `where`
         (a recording's messages: `TOPIC#N`); `name` names the input in messages."""
         self._feed(lines, name)

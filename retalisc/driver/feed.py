@@ -41,6 +41,7 @@ import threading
 import time
 from typing import IO, Callable, Iterable, Iterator, List, NamedTuple, Optional, Sequence, Tuple
 
+from .bridge import PrologError
 from .event_lines import batch_payload, read_lines, split_lines, too_long_line
 from .outputs import ConsumerFiles, detections_line
 from .signals import SignalStop, SignalStops
@@ -55,6 +56,11 @@ def problem_text(name: str, where, kind: str, text: str) -> str:
     control line, an event whose processing raised) or a `warning`, WHERE its line number or
     `TOPIC#N` (the N-th message replayed)."""
     return f"{name}:{where}: {kind}: {text}"
+
+
+def where_text(where, kind: str, text: str) -> str:
+    """`WHERE: KIND: TEXT`, a problem of a live node (whose input has no name): `TOPIC#N`."""
+    return f"{where}: {kind}: {text}"
 
 
 def rejection_kind(kind: str) -> str:
@@ -99,6 +105,8 @@ class Problem(NamedTuple):
     kind: str
     text: str
     order: float = 0          # problems are reported in this order (the line number)
+    item: object = None       # what the source keeps of the message (feed_resilient)
+    detail: str = ""          # an error's whole text
 
 
 def rejection_problems(rejected, warnings=()) -> List[Problem]:
@@ -378,6 +386,58 @@ class LineSource(EngineSource):
             self.wall.saw(engine.clock())
         stop = bool(rejected) and (self.strict or rejected[-1].kind == "halt")
         return rejection_problems(rejected, engine.take_warnings()), stop
+
+
+def feed_resilient(engine, items: list, write, retext, where, dues: Optional[List[float]] = None,
+                   tick: float = 0.01, delivered=None, flush=None, index_of=None) -> Tuple[List[Problem], int]:
+    """Feed `items`, (event, seconds, item) each, with `Engine.feed_batch` (or, with `dues`, the
+    wall-clock time each falls due, `Engine.feed_paced`, `delivered` getting each output as it
+    is produced) and `write` what they produce; an event the runtime fails on does not stop the
+    rest (a recording's source, the live nodes). Of a `PrologError` at the batch's N-th event
+    (`batch_index`; `index_of(error)` when it has none, else it is raised): the output before
+    it is written; an event whose bytes the runtime refused (`undecodable`) goes again as the
+    text `retext(item)` gives, or is a `rejected` problem when that raises (`ValueError` or
+    any error of the conversion: its text is the reason); another error is an `error` problem.
+    `where(item)` places a problem (`TOPIC#N`). Returns (the problems, the events processed:
+    the rejected ones not counted)."""
+    problems: List[Problem] = []
+    fed = 0
+    while items:
+        try:
+            if dues is None:
+                write(engine.feed_batch([(event, seconds) for event, seconds, _ in items]))
+            else:
+                write(engine.feed_paced([(event, seconds) for event, seconds, _ in items], dues, tick, delivered))
+                if flush is not None:
+                    flush()
+            return problems, fed + len(items)
+        except PrologError as error:
+            index = getattr(error, "batch_index", None)
+            if index is None:
+                if index_of is None:
+                    raise
+                index = index_of(error, len(items))
+            write(getattr(error, "delivered", None) or [])
+            _, seconds, item = items[index]
+            rest = items[index + 1:]
+            if dues is not None:
+                dues = dues[index:]             # the event's own due time, then the rest's
+            fed += index
+            if getattr(error, "undecodable", False):      # the runtime refused the bytes
+                try:
+                    text = retext(item)
+                except Exception as refusal:     # noqa: BLE001  (a message is data: any failure is its reason)
+                    problems.append(Problem(where(item), "rejected", str(refusal), item=item))
+                    items = rest
+                    dues = dues[1:] if dues is not None else None
+                else:
+                    items = [(text, seconds, item)] + rest      # the time the run's clock gave it
+                continue
+            problems.append(Problem(where(item), "error", str(error).split(": ", 1)[-1], item=item, detail=str(error)))
+            fed += 1
+            items = rest
+            dues = dues[1:] if dues is not None else None
+    return problems, fed
 
 
 # ---- sinks -----------------------------------------------------------------------------------

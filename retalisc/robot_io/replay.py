@@ -26,7 +26,7 @@ from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
 from .messages import CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from .ros1_terms import Ros1Terms
 from ..driver.bridge import PrologError
-from ..driver.feed import Batch, EngineSource, FeedLoop, Problem, Sinks, TextSink
+from ..driver.feed import Batch, EngineSource, FeedLoop, Problem, Sinks, TextSink, feed_resilient
 from ..driver.outputs import ConsumerFiles
 from . import MissingDependency
 from .bags import typestore
@@ -196,52 +196,27 @@ def feed_messages(engine, bag: Recording, converter: MessageConverter, record_st
                   write: Callable, flush: Callable[[], None], stats: ReplayStats, dues: Optional[List[float]] = None,
                   tick: float = RATE_TICK) -> List[Problem]:
     """Feeds `batch`, a list of (event, seconds, (topic, number, record)), writing what it
-    produces with `write`; returns the problems met (feed.Problem, reported by the feed loop).
-    With `dues` (the wall-clock time each message falls due), each message is fed at most
-    `tick` after it is due (`Engine.feed_paced`) and the output is written and flushed as it
-    is produced. A message whose processing fails is an `error` problem (`TOPIC#N`), counted in
-    `stats.failed`, and the batch goes on after it; a message whose bytes the runtime refuses
-    is converted as text instead (`message_event`), or is a `rejected` problem counted in
-    `stats.rejected` when that fails too."""
-    problems: List[Problem] = []
+    produces with `write` (feed.feed_resilient); returns the problems met (reported by the feed
+    loop). With `dues` (the wall-clock time each message falls due), each message is fed at
+    most `tick` after it is due (`Engine.feed_paced`) and the output is written and flushed as
+    it is produced. A message whose processing fails is an `error` problem (`TOPIC#N`),
+    counted in `stats.failed`, and the batch goes on after it; a message whose bytes the
+    runtime refuses is converted as text instead (`message_event`), or is a `rejected` problem
+    counted in `stats.rejected` when that fails too."""
+    def retext(item) -> str:
+        try:
+            return message_event(bag, converter, item[2], record_stamp)[0]
+        except _Rejected as refusal:
+            raise ValueError(str(refusal)) from None
 
     def delivered(produced) -> None:
         write(produced)
         flush()
 
-    while batch:
-        try:
-            if dues is None:
-                write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
-                return problems
-            write(engine.feed_paced([(text, seconds) for text, seconds, _ in batch], dues, tick, delivered))
-            flush()
-            return problems
-        except PrologError as error:
-            if getattr(error, "batch_index", None) is None:
-                raise
-            write(error.delivered)
-            index = error.batch_index
-            _, _, (topic, number, record) = batch[index]
-            rest = batch[index + 1:]
-            if dues is not None:
-                dues = dues[index:]             # the message's own due time, then the rest's
-            if getattr(error, "undecodable", False):      # the runtime refused the bytes
-                seconds = batch[index][1]           # the time the run's clock gave it
-                try:
-                    text, _ = message_event(bag, converter, record, record_stamp)
-                except _Rejected as refusal:
-                    stats.rejected += 1
-                    problems.append(Problem(f"{topic}#{number}", "rejected", str(refusal)))
-                    batch = rest
-                    dues = dues[1:] if dues is not None else None
-                else:
-                    batch = [(text, seconds, (topic, number, record))] + rest
-                continue
-            stats.failed += 1
-            problems.append(Problem(f"{topic}#{number}", "error", str(error).split(": ", 1)[-1]))
-            batch = rest
-            dues = dues[1:] if dues is not None else None
+    problems, _ = feed_resilient(engine, batch, write, retext, lambda item: f"{item[0]}#{item[1]}", dues, tick,
+                                 delivered, flush)
+    stats.rejected += sum(1 for problem in problems if problem.kind == "rejected")
+    stats.failed += sum(1 for problem in problems if problem.kind == "error")
     return problems
 
 
