@@ -18,13 +18,14 @@ Engine, the sinks that take what it produces (docs/architecture.md, "The event r
   calls it when the run starts and after every batch; its checkpoint is the source's position,
   the sink's position and the Engine's snapshot.
 
-On the roads that only Python has (a recording's replay, `retalisc run --bag`, and the live
-nodes) a delivery to a subscription (an `OutputEvent` with `consumer`) of an event the program
+On the roads that only Python has (a recording's replay, `retalisc run --bag`, with or without
+`--state`) a delivery to a subscription (an `OutputEvent` with `consumer`) of an event the program
 also writes as derived is printed once in JSON Lines and written once to MCAP and Foxglove: as
 the delivery, the line with `consumer` (`once_per_delivery`). The Engine's API (`feed_*`,
 `on_output`) and the runtime's own output (`swipl OUT.pl`, the hand-over, the event-file roads
 that must print what it prints) keep both lines, as the 2015 release did (docs/runtime.md,
-"Output").
+"Output"); so does a live node's `--out` (its outputs come one at a time through `on_output`),
+whose topics carry only the deliveries anyway.
 """
 from __future__ import annotations
 
@@ -555,8 +556,7 @@ class BinarySink:
 class Sinks:
     """The sinks of one run; the first is the JSON Lines output (its position is the one a
     checkpoint keeps). Each batch's output goes to every sink; with `once`, once per delivery
-    (`once_per_delivery`: the roads with no runtime-side twin, a recording's replay and the live
-    nodes); without, as the runtime writes it (the event-file roads, whose output is that of
+    (`once_per_delivery`: the roads with no runtime-side twin, a recording's replay); without, as the runtime writes it (the event-file roads, whose output is that of
     `swipl OUT.pl` and the hand-over)."""
 
     def __init__(self, sinks: Sequence, once: bool = False):
