@@ -21,6 +21,7 @@ LAYERS: List[Tuple[str, Tuple[str, ...]]] = [
                 "retalisc.driver.event_lines", "retalisc.driver.snapshot", "retalisc.driver.outputs",
                 "retalisc.driver.signals",
                 "retalisc.driver.engine")),
+    ("feed loop", ("retalisc.driver.feed",)),
     ("robot_io", ("retalisc.robot_io",)),
     ("run loops", ("retalisc.driver.run", "retalisc.driver.recovery", "retalisc.driver.explain",
                    "retalisc.driver.active_queries", "retalisc.driver.swipl_handover")),

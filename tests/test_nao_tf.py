@@ -56,7 +56,7 @@ def marker_poses(program, bag):
     for line in run.stdout.splitlines():
         row = json.loads(line)
         match = MARKER_POSE.fullmatch(row["event"])
-        if match and "consumer" not in row:
+        if match:                     # a derived pose, or its delivery (printed once)
             numbers = [float(x) for x in match.groups()[3:]]
             found[(match[3], int(match[1]), int(match[2]))] = (numbers[:3], numbers[3:])
     return found

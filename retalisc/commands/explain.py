@@ -48,16 +48,13 @@ def explain_command(program: str, event: Optional[str], events: Optional[str], w
     if events is None and bag["bag"] is None:
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
     result = compile_or_exit(program, module=unique_module_name(program))
-    explainer = Explainer(result)
+    explainer = Explainer(result, log=sys.stderr)    # its problems reported as every road reports them
     if max_delay is not None:
         explainer.engine.set_flag("max_delay", repr(max_delay))
     if events is not None:
         explainer.feed_file(events)
     else:
         _feed_recording(explainer, bag)
-    source = events if events is not None else bag["bag"]
-    for where, rejection in explainer.rejections:
-        click.echo(f"{source}:{where}: {rejection.kind}: {rejection.reason}", err=True)
     try:
         text = explainer.why_not(why_not) if why_not is not None else explainer.explain(event, limit)
     except PrologError as error:
@@ -70,6 +67,7 @@ def explain_command(program: str, event: Optional[str], events: Optional[str], w
 def _feed_recording(explainer, values: dict) -> None:
     """The messages of the recording of `values` (the --bag options) fed to `explainer` as
     event lines named `TOPIC#N`, converted as `retalisc run --bag` converts them."""
+    from ..driver.feed import problem_text
     from ..robot_io import MissingDependency
     from ..robot_io.replay import BagOptions, ReplayStats, bag_events, open_recording
 
@@ -77,7 +75,7 @@ def _feed_recording(explainer, values: dict) -> None:
     name = values["bag"]
 
     def report(topic: str, number: int, reason: str) -> None:
-        click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
+        click.echo(problem_text(name, f"{topic}#{number}", "rejected", reason), err=True)
 
     try:
         bag = open_recording(name, options)
@@ -88,8 +86,8 @@ def _feed_recording(explainer, values: dict) -> None:
         sys.exit(2)
     stats = ReplayStats()
     try:
-        explainer.feed_lines((json.dumps({"event": text, "t": seconds}), f"{record.topic}#{stats.messages}")
-                             for text, seconds, record in bag_events(bag, options, stats, report))
+        explainer.feed_placed(((json.dumps({"event": text, "t": seconds}), f"{record.topic}#{stats.messages}")
+                              for text, seconds, record in bag_events(bag, options, stats, report)), name)
     finally:
         bag.__exit__(None, None, None)
 

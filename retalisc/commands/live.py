@@ -13,6 +13,7 @@ from typing import Callable, Optional
 
 import click
 
+from ..driver.feed import summary_line
 from .compile import compile_or_exit
 from .options import Seconds, check_snapshot_options, output_file, state_options
 
@@ -93,6 +94,7 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
     stop = threading.Event()
     previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
     status = 0
+    started = time.perf_counter()
     try:
         try:
             node.start()
@@ -117,7 +119,7 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
         if sink is not None and sink is not sys.stdout:
             sink.close()
     click.echo(node.stats.summary(transport.name, transport.offers_services), err=True)
-    click.echo(engine.summary(), err=True)
+    click.echo(summary_line(engine.stats(), time.perf_counter() - started), err=True)   # feed.py's text, from the start
     return status
 
 

@@ -10,8 +10,9 @@ data; the event file is fed line by line so that every event is logged with its 
 """
 from __future__ import annotations
 
+import io
 from pathlib import Path
-from typing import Iterable, List, Tuple
+from typing import IO, Iterable, List, Optional, Tuple
 
 from ..compiler import CompileResult
 from ..frontend.program import (Absence, Aggregate, Binary, Check, EventAtom, EventRule, Negation, Pattern,
@@ -20,6 +21,7 @@ from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
 from ..passes.edbc import alarm_head
 from .engine import Engine, OutputEvent, Rejection, read_answer
 from .event_lines import batch_payload, max_line_bytes, read_lines
+from .feed import Batch, EngineSource, FeedLoop, Problem, Sinks, rejection_kind
 from ..frontend.writer import write_term
 from ..frontend.program import walk_pattern
 
@@ -78,10 +80,14 @@ def rules_text(rules: Iterable[EventRule]) -> str:
 
 
 class Explainer:
-    """A program run over an event file with every event logged, to be asked about."""
+    """A program run over an event file with every event logged, to be asked about. The lines
+    are fed by the feed loop (feed.FeedLoop, one line a batch, `TraceSource`); its problems (a
+    rejected line, an error) are kept in `rejections` and, with `log`, reported there as every
+    road reports them."""
 
-    def __init__(self, result: CompileResult):
+    def __init__(self, result: CompileResult, log: Optional[IO[str]] = None):
         self.result = result
+        self.log = log
         self.engine = Engine.from_compiled(result)
         self.rules = rules_text(result.unit.program.event_rules)
         self.rejections: List[Tuple[object, Rejection]] = []   # (where: line number or TOPIC#N, rejection)
@@ -91,30 +97,94 @@ class Explainer:
         """Feed the event file line by line, each event logged with its line number."""
         with open(events, "rb") as source:             # lines read as `retalisc run` reads them
             lines = read_lines(source, max_line_bytes(self.engine))
-            self._feed((batch_payload([raw]), number) for number, (raw, _) in enumerate(lines, start=1))
+            self._feed(((batch_payload([raw]), number) for number, (raw, _) in enumerate(lines, start=1)), events)
 
-    def feed_lines(self, lines: Iterable[Tuple[str, str]]) -> None:
+    def feed_placed(self, lines: Iterable[Tuple[str, str]], name: str = "<input>") -> None:
         """Feed event lines, each `(line, where)`, its events logged as coming from `where`
-        (a recording's messages: `TOPIC#N`)."""
-        self._feed(lines)
+        (a recording's messages: `TOPIC#N`); `name` names the input in messages."""
+        self._feed(lines, name)
 
-    def _feed(self, lines) -> None:
-        engine = self.engine
-        engine.trace("start")
-        try:
-            for line, where in lines:
-                feed = "feed_byte_line" if isinstance(line, bytes) else "feed_line"
-                answer = read_answer(engine.trace(feed, line, where))
-                self.rejections.extend((where, rejection) for rejection in answer.rejections)
-                self.outputs.extend(OutputEvent.from_line(text) for text in answer.outputs)
-        finally:
-            engine.trace("stop")
+    def _feed(self, lines, name: str) -> None:
+        source = TraceSource(self, lines, name)
+        FeedLoop(self.engine, source, Sinks([_Collected(self.outputs)]), signals=False,
+                 log=self.log if self.log is not None else io.StringIO()).run()
 
     def explain(self, event: str, limit: int = 5) -> str:
         return self.engine.trace("explain", self.rules, event, limit)
 
     def why_not(self, pattern: str) -> str:
         return self.engine.trace("why_not", self.rules, pattern)
+
+
+class TraceSource(EngineSource):
+    """Event lines fed one at a time with the runtime's event log on (rtl_trace.pl), as a
+    source of the feed loop; no end of input and no summary (`retalisc explain` asks about
+    the run instead)."""
+
+    def __init__(self, explainer: Explainer, lines, name: str):
+        self.explainer = explainer
+        self.lines = lines
+        self.name = name
+        self.started = False
+
+    @property
+    def batches(self):
+        for line, where in self.lines:
+            yield Batch(where, [line], 0)
+
+    def feed(self, engine, batch: Batch, write):
+        line, where = batch.lines[0], batch.first
+        feed = "feed_byte_line" if isinstance(line, bytes) else "feed_line"
+        answer = read_answer(engine.trace(feed, line, where))
+        problems = []
+        for rejection in answer.rejections:
+            self.explainer.rejections.append((where, rejection))
+            problems.append(Problem(where, rejection_kind(rejection.kind), rejection.reason))
+        write([OutputEvent.from_line(text) for text in answer.outputs])
+        return problems, False
+
+    def at_start(self, engine) -> str:
+        engine.trace("start")
+        self.started = True
+        return ""
+
+    def at_end(self, engine, write, drop_pending: bool, strict: bool) -> None:
+        pass
+
+    def release(self, engine) -> None:
+        if self.started:
+            engine.trace("stop")
+
+    def summary(self, engine, seconds: float, log) -> None:
+        pass
+
+
+class _Collected:
+    """A sink keeping the outputs in a list."""
+
+    once = False
+    out_name = "the outputs"
+
+    def __init__(self, outputs: list):
+        self.outputs = outputs
+
+    def write(self, produced) -> None:
+        self.outputs.extend(produced)
+
+    def write_text(self, text: str) -> None:
+        pass
+
+    def go_live(self) -> None:
+        pass
+
+    def flush(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+    def closing_lines(self):
+        return []
 
 
 # ---- run --trace RULE and --late FILE ------------------------------------------------------

@@ -1,6 +1,8 @@
-"""The state directory of a run that survives a crash (docs/recovery.md), and the
-recoverable run loops. How one snapshot file is written and tagged (its identity, the atomic
-replacement) is `snapshot.py`, below the Engine.
+"""The state directory of a run that survives a crash (docs/recovery.md), and `Recovery`, the
+wrapper that makes any source and sink of the feed loop (feed.py) recoverable: `retalisc run
+--state` over an event file, standard input or a recording, and `retalisc aq --state`. How one
+snapshot file is written and tagged (its identity, the atomic replacement) is `snapshot.py`,
+below the Engine.
 """
 from __future__ import annotations
 
@@ -15,16 +17,11 @@ from functools import wraps
 from pathlib import Path
 from typing import Optional, Union
 
-import click
-
-from ..robot_io.messages import Convention, MessageConverter
-from ..robot_io.replay import BagOptions, ReplayStats, bag_events, feed_messages, open_recording
-from ..robot_io.ros1_terms import Ros1Terms
+from ..robot_io.messages import Convention
+from ..robot_io.replay import BagOptions, replay_bag
 from .bridge import PrologError
-from .event_lines import batch_payload, max_line_bytes, read_lines
-from .outputs import detections_line
-from .run import Progress, RunStopped, _live_batches, end_the_input, output_full, print_summary, settle_output
-from .signals import SignalStop, SignalStops
+from .event_lines import max_line_bytes
+from .feed import Batch, BinarySink, FeedLoop, LineSource, Progress, RunStopped, Sinks, file_batches, live_batches
 from .snapshot import STATE_FORMAT, StateError, fsync_directory, replace_atomically
 
 
@@ -172,26 +169,6 @@ class StateDir:
         return records
 
 
-def _binary_batches(stream, offset: int, first_line: int, batch_size: int, limit: Optional[int] = None):
-    """(first line number, lines, bytes of the batch, byte offset after it) from `offset` of a
-    file opened in binary; the lines as bytes without their newlines, made text as `retalisc
-    run` makes them (`event_lines.batch_payload`), each at most `limit` bytes long
-    (`event_lines.read_lines`)."""
-    stream.seek(offset)
-    position, number = offset, first_line
-    batch, start, size = [], first_line, 0
-    for line, taken in read_lines(stream, limit):
-        position += taken
-        size += taken
-        batch.append(line)
-        number += 1
-        if len(batch) >= batch_size:
-            yield start, batch, size, position
-            batch, start, size = [], number, 0
-    if batch:
-        yield start, batch, size, position
-
-
 class EventJournal:
     """The journal of a live input (standard input), whose events cannot be read again: the
     lines read after snapshot N are appended to `events-N.jsonl` (flushed to the operating
@@ -337,6 +314,67 @@ def _holding_the_state_directory(run):
     return held
 
 
+class Recovery:
+    """Crash recovery around any source and sink of the feed loop (feed.FeedLoop's
+    `checkpoint`): a checkpoint is the source's position (`position(batch)`: the manifest's input
+    entries, e.g. the byte offset and line of an event file, the messages of a recording
+    replayed), the sink's position (the bytes of the output file, `BinarySink.tell`) and the
+    Engine's snapshot (`StateDir.save`). A snapshot is taken when a first run starts and then
+    every `every` input items or `seconds` seconds, at a batch boundary; each batch consumed
+    since is a journal record. `journal` (EventJournal): the source is a live input whose lines
+    are journaled; it is synced before and moved to the new segment after each snapshot.
+    `restored`: the manifest the run goes on from (None: a first run)."""
+
+    def __init__(self, directory: StateDir, engine, sink, input_key: str, input_name: str, restored,
+                 position, start: dict, every: int, seconds: float, log, journal: "Optional[EventJournal]" = None):
+        self.directory = directory
+        self.engine = engine
+        self.sink = sink
+        self.input_key = input_key
+        self.input_name = input_name
+        self.restored = restored
+        self.position = position
+        self.start = start
+        self.every = every
+        self.seconds = seconds
+        self.log = log
+        self.journal = journal
+        self.since_items, self.since_time = 0, time.monotonic()
+
+    def begin(self, first: bool) -> None:
+        """The loop starts: a first run takes its first snapshot (after the first output)."""
+        if first:
+            self.snapshot(self.start)
+        self.since_items, self.since_time = 0, time.monotonic()
+
+    def after(self, batch) -> None:
+        """A batch is consumed and its output written (a position of None: the source ended)."""
+        position = self.position(batch)
+        if position is not None:
+            self.advance(position, len(batch.lines))
+
+    def advance(self, position: dict, items: int) -> None:
+        self.since_items += items
+        self.directory.journal(dict(position, out_bytes=self.sink.tell()))
+        if self.since_items >= self.every or time.monotonic() - self.since_time >= self.seconds:
+            self.snapshot(position)
+            self.since_items, self.since_time = 0, time.monotonic()
+
+    def snapshot(self, position: dict):
+        if self.journal is not None:
+            self.journal.sync()
+        manifest = take_snapshot(self.directory, self.engine, self.sink.stream,
+                                 dict(position, **{self.input_key: self.input_name}), self.log)
+        if self.journal is not None and manifest is not None:
+            self.journal.open(manifest["number"])        # the lines read from now on
+            self.journal.prune(self.directory)
+        return manifest
+
+    def close(self) -> None:
+        if self.journal is not None:
+            self.journal.close()
+
+
 @_holding_the_state_directory
 def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batch_size: int = 2000,
                     snapshot_events: int = DEFAULT_SNAPSHOT_EVENTS,
@@ -353,125 +391,66 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
     full disk) is reported and the run goes on. With `events` '-' (standard input, a live
     input) the lines are journaled (EventJournal) before they are processed, a restart
     replays the journal after the snapshot and then reads standard input on; the output is
-    flushed after each batch. Returns the exit status."""
-
-
+    flushed after each batch. The loop is feed.FeedLoop, with `Recovery` around its source and
+    sink. Returns the exit status."""
     log = log or sys.stderr
-    started = time.perf_counter()
     directory = StateDir(state)
     live = events == "-"
     events_path = "-" if live else os.path.abspath(events)
     restored = restore_newest(directory, engine, "events", events_path, log)
-    sink = open_output(out, restored)
+    sink = BinarySink(open_output(out, restored), str(out))
     if restored is None:
         offset, line = 0, 1
     else:
         offset, line = restored.get("input_bytes", 0), restored["input_line"]
         print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
               f"(input line {line}, {restored['out_bytes']} output bytes)", file=log)
-    journal = EventJournal(directory) if live else None
-    if live and restored is None:
-        for _, path in journal.segments():              # of a run that never took its first snapshot
-            path.unlink(missing_ok=True)
+    name = "<stdin>" if live else events
+    journal = None
     if live:
-        source = None
+        journal = EventJournal(directory)
+        if restored is None:
+            for _, path in journal.segments():          # of a run that never took its first snapshot
+                path.unlink(missing_ok=True)
+        stream = None
         batches = _journaled_batches(journal, restored, line, batch_size, max_line_bytes(engine))
         display = Progress(stream=sys.stderr, total=None, enabled=False)
+
+        def position(batch):
+            return {"input_line": batch.first + len(batch.lines)}
+        start = {"input_line": line}
     else:
-        source = open(events_path, "rb")
-        batches = _binary_batches(source, offset, line, batch_size, max_line_bytes(engine))
+        stream = open(events_path, "rb")
+        batches = file_batches(stream, batch_size, max_line_bytes(engine), offset, line)
         display = Progress(stream=sys.stderr, total=os.path.getsize(events_path), enabled=progress)
-    status = 0
-    name = "<stdin>" if live else events
 
-    def write(produced):
-        for event in produced:
-            sink.write(event.line.encode("utf-8") + b"\n")
+        def position(batch):
+            return {"input_bytes": batch.position, "input_line": batch.first + len(batch.lines)}
+        start = {"input_bytes": offset, "input_line": line}
+    source = _ClosingLineSource(name, batches, stream, allow_control=allow_control, strict=strict, live=live)
+    recovery = Recovery(directory, engine, sink, "events", events_path, restored, position, start,
+                        snapshot_events, snapshot_seconds, log, journal)
+    loop = FeedLoop(engine, source, Sinks([sink]), display=display, drop_pending=drop_pending, strict=strict)
+    return loop.run(first_output, checkpoint=recovery)
 
-    def snapshot(offset, line):
-        position = {"events": events_path, "input_line": line}
-        if not live:
-            position["input_bytes"] = offset
-        else:
-            journal.sync()
-        manifest = take_snapshot(directory, engine, sink, position, log)
-        if live and manifest is not None:
-            journal.open(manifest["number"])        # the lines read from now on
-            journal.prune(directory)
-        return manifest
 
-    stops = SignalStops()
-    full = None
-    try:
-        stops.install()
-        if restored is None:
-            halted = engine.take_halted()
-            if halted:
-                print(halted, file=sys.stderr)
-                raise RunStopped()
-            for produced in first_output:
-                write(produced)
-            snapshot(offset, line)
-        since_events, since_time = 0, time.monotonic()
-        for first, lines, size, position in batches:
-            stops.batch_starts()                # a stop signal ends the run after the batch
-            produced, rejected = engine.feed_lines(batch_payload(lines), first, allow_control=allow_control,
-                                                   strict=strict)
-            write(produced)
-            messages = [(r.line, f"{'rejected' if r.kind == 'rejected' else 'error'}: {r.reason}")
-                        for r in rejected]
-            messages += [(w.line, f"warning: {w.text}") for w in engine.take_warnings()]
-            if messages:
-                display.clear()
-            for number, message in sorted(messages, key=lambda m: m[0]):
-                print(f"{name}:{number}: {message}", file=sys.stderr)
-            display.update(size, len(lines), len(produced))
-            if rejected and (strict or rejected[-1].kind == "halt"):
-                raise RunStopped()
-            offset, line = position, first + len(lines)
-            since_events += len(lines)
-            if live:
-                sink.flush()                    # the output of a live input leaves as it is made
-                directory.journal({"input_line": line, "out_bytes": sink.tell()})
-            else:
-                directory.journal({"input_bytes": offset, "input_line": line, "out_bytes": sink.tell()})
-            if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
-                snapshot(offset, line)
-                since_events, since_time = 0, time.monotonic()
-            stops.batch_ends()
-        stops.batch_starts()
-        end_the_input(engine, write, drop_pending, strict)
-    except RunStopped:
-        status = 1
-    except SignalStop:
-        pass
-    except OSError as error:
-        full, status = output_full(error), 1
-    finally:
-        stops.finishing()
-        display.close()
-        full = settle_output(sink.flush, full)
-        full = settle_output(sink.close, full)
-        if source is not None:
-            source.close()
-        if journal is not None:
-            journal.close()
-        engine.close_action_output()
-    if full is not None:
-        print(f"retalis: cannot write {out}: {full.strerror}", file=sys.stderr)
-    print_summary(engine, time.perf_counter() - started)
-    stops.restore()
-    return stops.status(status)
+class _ClosingLineSource(LineSource):
+    def __init__(self, name, batches, stream, **options):
+        super().__init__(name, batches, **options)
+        self.stream = stream
+
+    def close(self) -> None:
+        if self.stream is not None:
+            self.stream.close()
 
 
 def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int,
                        limit: Optional[int] = None):
-    """As `_binary_batches`, for standard input with a journal: first the journaled lines read
-    after the restored snapshot (replayed), then the lines of standard input as they arrive,
-    each batch appended to the journal before it is processed. The journal's segment is that
-    of the newest snapshot: the caller opens it when it takes the first snapshot of a new run."""
-
-
+    """The batches of standard input with a journal (a source of the feed loop): first the
+    journaled lines read after the restored snapshot (replayed), then the lines of standard
+    input as they arrive, each batch appended to the journal before it is processed. The
+    journal's segment is that of the newest snapshot: the caller opens it when it takes the
+    first snapshot of a new run."""
     line = first_line
     if restored is not None:
         replayed = journal.replay(restored["number"])
@@ -479,12 +458,11 @@ def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_s
         journal.open(segments[-1] if segments else restored["number"])
         for start in range(0, len(replayed), batch_size):
             lines = replayed[start:start + batch_size]
-            yield line, lines, 0, 0
+            yield Batch(line, lines, 0)
             line += len(lines)
-    for _, lines, size in _live_batches(sys.stdin.fileno(), batch_size, limit):
-        journal.append(lines)
-        yield line, lines, size, 0
-        line += len(lines)
+    for batch in live_batches(sys.stdin.fileno(), batch_size, limit, first_line=line):
+        journal.append(batch.lines)
+        yield batch
 
 
 DEFAULT_AQ_SNAPSHOT_COMMANDS = 10_000   # script commands between two snapshots of `retalisc aq --state`
@@ -509,40 +487,65 @@ def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], displ
     directory = StateDir(state)
     script_path = os.path.abspath(script)
     restored = restore_newest(directory, aq, "script", script_path, log)
-    sink = open_output(out, restored)
+    sink = BinarySink(open_output(out, restored), str(out))
     line = 1 if restored is None else restored["input_line"]
     if restored is not None:
         print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
               f"(script line {line}, {restored['out_bytes']} output bytes)", file=log)
+    source = _ScriptSource(script_path, display_name or script, line, batch_size)
+    recovery = Recovery(directory, aq, sink, "script", script_path, restored,
+                        lambda batch: None if source.done else {"input_line": source.line}, {"input_line": line},
+                        snapshot_commands, snapshot_seconds, log)
+    return FeedLoop(aq, source, Sinks([sink]), signals=False, log=log).run(checkpoint=recovery)
 
-    def snapshot(line):
-        return take_snapshot(directory, aq, sink, {"script": script_path, "input_line": line}, log)
 
-    status = 0
-    try:
-        if restored is None:
-            snapshot(line)
-        since_commands, since_time = 0, time.monotonic()
-        while True:
-            batch = aq.run_script_batch(script_path, line, batch_size)
-            sink.write(batch.output.encode("utf-8"))
-            if batch.status == "error":
-                sink.flush()
-                print(batch.message.replace(script_path, display_name or script), file=log)
-                status = batch.exit_status
-                break
-            since_commands += batch_size
-            line = batch.next_line
-            if batch.status == "done":
-                break
-            directory.journal({"input_line": line, "out_bytes": sink.tell()})
-            if since_commands >= snapshot_commands or time.monotonic() - since_time >= snapshot_seconds:
-                snapshot(line)
-                since_commands, since_time = 0, time.monotonic()
-    finally:
-        sink.flush()
-        sink.close()
-    return status
+class _ScriptSource:
+    """An update script of active queries as a source of the feed loop: a batch is at most
+    `batch_size` commands run by `ActiveQueries.run_script_batch` from the script line
+    reached; its output is the notifications' JSON Lines as `retalisc aq` prints them. A bad
+    line or a failed command ends the run with its message (status 2 or 1); there is no
+    Engine around it (no end of input, no summary)."""
+
+    live = False
+
+    def __init__(self, path: str, display_name: str, line: int, batch_size: int):
+        self.name = display_name
+        self.path = path
+        self.line = line
+        self.batch_size = batch_size
+        self.done = False
+
+    @property
+    def batches(self):
+        while not self.done:
+            yield Batch(self.line, [None] * self.batch_size, 0)
+
+    def feed(self, aq, batch, write):
+        ran = aq.run_script_batch(self.path, self.line, self.batch_size)
+        write(ran.output)
+        if ran.status == "error":
+            raise RunStopped(ran.message.replace(self.path, self.name), ran.exit_status)
+        self.line = ran.next_line
+        self.done = ran.status == "done"
+        return [], False
+
+    def at_start(self, aq) -> str:
+        return ""
+
+    def at_end(self, aq, write, drop_pending, strict) -> None:
+        pass
+
+    def release(self, aq) -> None:
+        pass
+
+    def closing_lines(self):
+        return []
+
+    def summary(self, aq, seconds, log) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
 
 
 @_holding_the_state_directory
@@ -551,14 +554,12 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
                         snapshot_seconds: float = DEFAULT_SNAPSHOT_SECONDS, drop_pending: bool = False,
                         first_output=(), log=None) -> int:
     """`retalisc run PROGRAM --bag RECORDING --out OUT --state DIR`: the recording replayed as
-    `replay_bag` replays it (as fast as possible), surviving a crash as `run_recoverable` does.
+    `replay_bag` replays it (as fast as possible), surviving a crash as `run_recoverable` does:
+    the same loop (replay_bag's), with `Recovery` around its source and sink.
     The input position is the number of messages of the selection replayed (the recording and
     the options that select and convert its messages are part of the snapshot's input name:
     a state directory of another selection is refused); a restart passes over that many
     messages and goes on. Returns the exit status (2: the recording cannot be read)."""
-
-
-
     log = log or sys.stderr
     options = options or BagOptions(convention=Convention.of_program(engine))
     directory = StateDir(state)
@@ -567,69 +568,17 @@ def run_bag_recoverable(engine, bag_path: str, out: str, state: Union[str, Path]
                             "typestore": options.typestore, "wrap_topic": options.convention.wrap_topic,
                             "plain_strings": options.convention.plain_strings}, sort_keys=True)
     restored = restore_newest(directory, engine, "bag", selection, log)
-    name = str(bag_path)
-    bag = open_recording(bag_path, options)
-    if bag is None:
-        return 2
-    sink = open_output(out, restored)
-    done = 0 if restored is None else restored["input_messages"]
-    if restored is not None:
-        print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
-              f"(message {done + 1}, {restored['out_bytes']} output bytes)", file=log)
-    stats = ReplayStats()
-    status = 0
-    started = time.perf_counter()
 
-    def write(produced):
-        for event in produced:
-            sink.write(event.line.encode("utf-8") + b"\n")
+    def checkpoint(sink):
+        done = 0 if restored is None else restored["input_messages"]
+        if restored is not None:
+            print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
+                  f"(message {done + 1}, {restored['out_bytes']} output bytes)", file=log)
+        return Recovery(directory, engine, sink, "bag", selection, restored,
+                        lambda batch: {"input_messages": batch.position}, {"input_messages": done},
+                        snapshot_events, snapshot_seconds, log)
 
-    def report(topic: str, number: int, reason: str) -> None:
-        click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
-
-    converter = MessageConverter(bag.typestore, options.convention)
-    # ROS 1 messages go to the runtime as bytes, as in replay_bag
-    ros1_terms = Ros1Terms(engine, bag.typestore, options.convention) if hasattr(engine, "ros1_schema") else None
-
-    def feed(batch) -> None:
-        feed_messages(engine, bag, converter, options.stamp == "record", batch, write, sink, stats, name, report)
-
-    def snapshot(done):
-        return take_snapshot(directory, engine, sink, {"bag": selection, "input_messages": done}, log)
-
-    try:
-        if restored is None:
-            for produced in first_output:
-                write(produced)
-            snapshot(done)
-        since_events, since_time = 0, time.monotonic()
-        batch = []
-        for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms, skip=done):
-            batch.append((text, seconds, (record.topic, stats.messages, record)))
-            if len(batch) >= batch_size:
-                feed(batch)
-                done = batch[-1][2][1]
-                since_events += len(batch)
-                batch = []
-                directory.journal({"input_messages": done, "out_bytes": sink.tell()})
-                if since_events >= snapshot_events or time.monotonic() - since_time >= snapshot_seconds:
-                    snapshot(done)
-                    since_events, since_time = 0, time.monotonic()
-        if batch:
-            feed(batch)
-        write(engine.end_of_input(drop_pending))
-    except PrologError as error:
-        sink.flush()
-        click.echo(f"{name}: error: {error}", err=True)
-        status = 1
-    finally:
-        bag.__exit__(None, None, None)
-        sink.flush()
-        sink.close()
-    stats.seconds = time.perf_counter() - started
-    click.echo(stats.summary(name), err=True)
-    detections = detections_line(engine.detections())
-    if detections:
-        click.echo(detections, err=True)
-    click.echo(engine.summary(), err=True)
-    return status
+    return replay_bag(engine, bag_path, out, options, batch_size=batch_size, drop_pending=drop_pending,
+                      first_output=first_output, progress=False,
+                      recoverable=(lambda: BinarySink(open_output(out, restored), str(out)), checkpoint,
+                                   0 if restored is None else restored["input_messages"]))

@@ -62,7 +62,8 @@ from ..robot_io.ros1_terms import Ros1Terms
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 from .state import STATEFUL_CALLS
 from ..robot_io.bags import typestore
-from ..driver.bridge import PrologError
+from ..driver.bridge import PrologError  # noqa: F401  (the name tests and callers use)
+from ..driver.feed import feed_resilient, where_text
 
 BATCH = 2000
 REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
@@ -426,10 +427,10 @@ class LiveNode:
     def _now(self) -> float:
         return self._clock() if self._replay_now is None else self._replay_now
 
-    def _reject(self, topic: str, number: int, error: Exception) -> None:
+    def _reject(self, topic: str, number: int, error) -> None:
         self.stats.rejected[topic] += 1
         if self.stats.rejected[topic] <= REPORTS_PER_TOPIC:
-            self.log(f"{topic}#{number}: rejected: {error}")
+            self.log(where_text(f"{topic}#{number}", "rejected", str(error)))
 
     def _learn_type(self, name: str, definition: Optional[str]) -> None:
         if not definition:
@@ -445,33 +446,21 @@ class LiveNode:
         if self.state is not None:
             self.state.events(events)       # journaled (flushed) before they are fed
         count = len(events)
-        while events:       # the output comes through _output (Engine.on_output), in order
-            try:
-                self.engine.feed_batch([(event, seconds) for event, seconds, _ in events])
-                self.fed += len(events)
-                events = []
-            except PrologError as error:        # what the events before it produced is out
-                index = getattr(error, "batch_index", None)      # Engine.feed_batch sets them
-                if index is None:
-                    index = getattr(error, "refused_index", None)   # a bad item: none processed
-                if index is None:
-                    index = len(events) - 1
-                if getattr(error, "undecodable", False):     # the runtime refused the bytes: the text road
-                    self.fed += index
-                    topic, number, data, name, arrival_ns = events[index][2]
-                    seconds = events[index][1]          # the time the run's clock gave it
-                    try:
-                        text, _ = self._text_event(topic, data, name, arrival_ns)
-                    except Exception as reason:
-                        self._reject(topic, number, reason)
-                        events = events[index + 1:]
-                    else:
-                        events = [(text, seconds, events[index][2])] + events[index + 1:]
-                    continue
-                self.stats.errors += 1
-                self.log(f"error: {error}")
-                self.fed += index + 1
-                events = events[index + 1:]
+        if events:          # the output comes through _output (Engine.on_output), in order
+
+            def retext(item) -> str:
+                topic, _, data, name, arrival_ns = item
+                return self._text_event(topic, data, name, arrival_ns)[0]
+
+            problems, fed = feed_resilient(self.engine, events, lambda produced: None, retext,
+                                           lambda item: f"{item[0]}#{item[1]}", index_of=lambda error, size: size - 1)
+            self.fed += fed
+            for problem in problems:
+                if problem.kind == "rejected":
+                    self._reject(problem.item[0], problem.item[1], problem.text)
+                else:
+                    self.stats.errors += 1
+                    self.log(f"error: {problem.detail}")
         if self.out is not None:
             self.out.flush()
         if count and (self._late_checked is None or time.monotonic() - self._late_checked >= LATE_CHECK_SECONDS):

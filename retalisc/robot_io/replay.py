@@ -18,7 +18,7 @@ import sys
 import time
 from collections import Counter
 from dataclasses import dataclass, field, replace
-from typing import IO, Callable, Iterator, List, Optional, Sequence, Tuple
+from typing import Callable, Iterator, List, Optional, Sequence, Tuple
 
 import click
 
@@ -26,7 +26,8 @@ from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
 from .messages import CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from .ros1_terms import Ros1Terms
 from ..driver.bridge import PrologError
-from ..driver.outputs import ConsumerFiles, detections_line
+from ..driver.feed import Batch, EngineSource, FeedLoop, Problem, Sinks, TextSink, feed_resilient
+from ..driver.outputs import ConsumerFiles
 from . import MissingDependency
 from .bags import typestore
 from .publish import EVENTS_TOPIC, FoxgloveSink, McapSink, Publisher
@@ -192,62 +193,31 @@ def message_event(bag: Recording, converter: MessageConverter, record: Record,
 
 
 def feed_messages(engine, bag: Recording, converter: MessageConverter, record_stamp: bool, batch: list,
-                  write: Callable, sink: IO, stats: ReplayStats, name: str,
-                  report: Callable[[str, int, str], None], dues: Optional[List[float]] = None,
-                  tick: float = RATE_TICK) -> None:
+                  write: Callable, flush: Callable[[], None], stats: ReplayStats, dues: Optional[List[float]] = None,
+                  tick: float = RATE_TICK) -> List[Problem]:
     """Feeds `batch`, a list of (event, seconds, (topic, number, record)), writing what it
-    produces with `write` to `sink`. With `dues` (the wall-clock time each message falls
-    due), each message is fed at most `tick` after it is due (`Engine.feed_paced`) and the
-    output is written and flushed as it is produced. A message whose processing fails is reported on standard
-    error as `NAME:TOPIC#N: error: ...`, counted in `stats.failed`, and the batch goes on after
-    it; a message whose bytes the runtime refuses is converted as text instead
-    (`message_event`), or goes to `report(topic, number, reason)` and `stats.rejected` when
-    that fails too."""
-    def rejected(topic: str, number: int, reason: str) -> None:
-        stats.rejected += 1
-        sink.flush()
-        report(topic, number, reason)
-
-    def failed(topic: str, number: int, reason: str) -> None:
-        sink.flush()
-        click.echo(f"{name}:{topic}#{number}: error: {reason}", err=True)
-        stats.failed += 1
+    produces with `write` (feed.feed_resilient); returns the problems met (reported by the feed
+    loop). With `dues` (the wall-clock time each message falls due), each message is fed at
+    most `tick` after it is due (`Engine.feed_paced`) and the output is written and flushed as
+    it is produced. A message whose processing fails is an `error` problem (`TOPIC#N`),
+    counted in `stats.failed`, and the batch goes on after it; a message whose bytes the
+    runtime refuses is converted as text instead (`message_event`), or is a `rejected` problem
+    counted in `stats.rejected` when that fails too."""
+    def retext(item) -> str:
+        try:
+            return message_event(bag, converter, item[2], record_stamp)[0]
+        except _Rejected as refusal:
+            raise ValueError(str(refusal)) from None
 
     def delivered(produced) -> None:
         write(produced)
-        sink.flush()
+        flush()
 
-    while batch:
-        try:
-            if dues is None:
-                write(engine.feed_batch([(text, seconds) for text, seconds, _ in batch]))
-                return
-            write(engine.feed_paced([(text, seconds) for text, seconds, _ in batch], dues, tick, delivered))
-            sink.flush()
-            return
-        except PrologError as error:
-            if getattr(error, "batch_index", None) is None:
-                raise
-            write(error.delivered)
-            index = error.batch_index
-            _, _, (topic, number, record) = batch[index]
-            rest = batch[index + 1:]
-            if dues is not None:
-                dues = dues[index:]             # the message's own due time, then the rest's
-            if getattr(error, "undecodable", False):      # the runtime refused the bytes
-                seconds = batch[index][1]           # the time the run's clock gave it
-                try:
-                    text, _ = message_event(bag, converter, record, record_stamp)
-                except _Rejected as refusal:
-                    rejected(topic, number, str(refusal))
-                    batch = rest
-                    dues = dues[1:] if dues is not None else None
-                else:
-                    batch = [(text, seconds, (topic, number, record))] + rest
-                continue
-            failed(topic, number, str(error).split(": ", 1)[-1])
-            batch = rest
-            dues = dues[1:] if dues is not None else None
+    problems, _ = feed_resilient(engine, batch, write, retext, lambda item: f"{item[0]}#{item[1]}", dues, tick,
+                                 delivered, flush)
+    stats.rejected += sum(1 for problem in problems if problem.kind == "rejected")
+    stats.failed += sum(1 for problem in problems if problem.kind == "error")
+    return problems
 
 
 def window(bag: Recording, options: BagOptions) -> Tuple[Optional[int], Optional[int]]:
@@ -273,7 +243,7 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
                batch_size: int = 2000, consumer_dir: Optional[str] = None, drop_pending: bool = False,
                first_output: Sequence = (), progress: Optional[bool] = None, out_bag: Optional[str] = None,
                foxglove: Optional[int] = None, foxglove_wait: Optional[float] = None,
-               clock: Optional["ReplayClock"] = None, trace_report=None) -> int:
+               clock: Optional["ReplayClock"] = None, trace_report=None, recoverable=None) -> int:
     """Replay the recording at `path` into `engine`; write the output JSON Lines to `out`
     ('-' for stdout, None to drop it), as `run_event_file` does. A progress bar shows on a
     terminal (`progress` forces it on or off). `out_bag` writes the input messages and what
@@ -285,158 +255,229 @@ def replay_bag(engine, path: str, out: Optional[str] = "-", options: Optional[Ba
     counted as failed, and the replay goes on. `clock` paces a replay with a rate (default:
     the wall clock). `trace_report()`, if given, returns text printed on standard error before
     the detections per rule and the summary (the counts of `--trace`). Without `options`,
-    strings are as the program says (Engine.ros_strings)."""
+    strings are as the program says (Engine.ros_strings). A delivery to a subscription of a
+    derived event is written once (feed.once_per_delivery). `recoverable` (recovery.py):
+    (the output sink, a function of it giving the checkpoint, the messages already replayed).
+    The loop is feed.FeedLoop with a `BagSource`."""
 
     options = options or BagOptions(convention=Convention.of_program(engine))    # the program's strings
     name = str(path)
     bag = open_recording(path, options)
     if bag is None:
         return 2
-    sink, consumers, sinks = None, None, []
+    text, consumers, targets = None, None, []
     try:
-        publisher, sinks = _open_sinks(bag, options, out_bag, foxglove, foxglove_wait)
-        sink = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
-        consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
+        publisher, targets = _open_sinks(bag, options, out_bag, foxglove, foxglove_wait)
+        if recoverable is not None:
+            main = recoverable[0]()
+        else:
+            text = sys.stdout if out == "-" else open(os.devnull if out is None else out, "w", encoding="utf-8")
+            consumers = ConsumerFiles(consumer_dir) if consumer_dir else None
+            main = TextSink(text, "standard output" if out == "-" else str(out), owned=text is not sys.stdout,
+                            consumers=consumers, by_line=True)
     except BaseException:
         bag.__exit__(None, None, None)
-        for target in sinks:
+        for target in targets:
             target.close()
-        if sink is not None and sink is not sys.stdout:
-            sink.close()
+        if text is not None and text is not sys.stdout:
+            text.close()
         raise
     if foxglove is not None and options.rate is None:
         options = replace(options, rate=1.0)
-    stats = ReplayStats()
-    status = 0
     if options.topics:
         unknown = [t for t in options.topics if t not in bag.topics()]
         if unknown:
             click.echo(f"{name}: warning: no topic {', '.join(unknown)} in this recording "
                        f"(it has {', '.join(bag.topics())})", err=True)
-
-    def write(produced) -> None:
-        for event in produced:
-            if consumers is not None and event.consumer is not None:
-                consumers.write(event)
-            else:
-                sink.write(event.line + "\n")
-            if publisher is not None:
-                message = publisher.output(event)
-                if message is not None:
-                    for target in sinks:
-                        target.write(message)
-
-    def report(topic: str, number: int, reason: str) -> None:
-        click.echo(f"{name}:{topic}#{number}: rejected: {reason}", err=True)
-
-    start_ns, stop_ns = window(bag, options)
-    first_ns = start_ns if start_ns is not None else bag.start_ns
-    last_ns = min(stop_ns, bag.end_ns) if stop_ns is not None else bag.end_ns
+    sinks = Sinks([main] + [_PublishedSink(publisher, target) for target in targets], once=True)
+    source = BagSource(engine, bag, options, name, sinks, publisher, targets, batch_size,
+                       clock=clock, skip=recoverable[2] if recoverable is not None else 0)
     show = progress if progress is not None else sys.stderr.isatty()
-    # With a rate on the wall clock, and nothing to publish as each message falls due, the
-    # runtime paces the messages itself (Engine.feed_paced): this loop hands it what falls
-    # due in the next PACED_AHEAD seconds in one call, instead of sleeping and calling once
-    # per batch.
-    paced = (options.rate is not None and clock is None and publisher is None
-             and hasattr(engine, "feed_paced"))
-    clock = clock or ReplayClock()
-    began = clock.now()
-    began_wall = time.time()
-    try:
-        with (click.progressbar(length=max(1, (last_ns - first_ns) // 1_000_000), label=f"replaying {name}",
-                                file=sys.stderr) if show else _NoBar()) as bar:
-            for produced in first_output:
-                write(produced)
-            batch: List[Tuple[object, float, Tuple[str, int, Record]]] = []   # event, time, (topic, number, record)
-            shown_ms = 0
-            converter = MessageConverter(bag.typestore, options.convention)
-            # ROS 1 messages go to the runtime as bytes (ros1_terms.py), unless the input
-            # messages are also published (--out-bag, --foxglove: they need them decoded)
-            ros1_terms = (Ros1Terms(engine, bag.typestore, options.convention)
-                          if publisher is None and hasattr(engine, "ros1_schema") else None)
+    display = _Bar(source, name) if show else None
+    checkpoint = recoverable[1](main) if recoverable is not None else None
+    loop = FeedLoop(engine, source, sinks, display=display, drop_pending=drop_pending, signals=False,
+                    engine_errors=(PrologError,))
+    return loop.run(first_output, checkpoint=checkpoint, report=trace_report)
 
-            def feed(batch, dues=None) -> None:
-                if publisher is not None:               # the input messages as they are fed
-                    for _, seconds, (topic, _, record) in batch:     # on the clock of the events
-                        message = publisher.input(topic, record.msgtype, round(seconds * 1e9), record.msg)
-                        for target in sinks:
-                            target.write(message)
-                    publisher.fed([(text, seconds) for text, seconds, _ in batch])
-                feed_messages(engine, bag, converter, options.stamp == "record", batch, write, sink, stats, name,
-                              report, dues, options.tick)
 
-            dues: List[float] = []
-            deadline = 0.0                      # with a rate: when the batch's first message is a tick late
+class BagSource(EngineSource):
+    """A recording's messages as a source of the feed loop: in record order, in batches of
+    `batch_size` messages; with a rate, a batch is what falls due by a tick after its first
+    message (the batches wait on `clock`), or, on the wall clock with nothing published, what
+    falls due in the next PACED_AHEAD seconds, handed to the runtime to pace
+    (`Engine.feed_paced`). The input messages go to the MCAP and Foxglove sinks as they are fed.
+    A batch's position is the number of messages replayed after it (a checkpoint's input
+    position); the first `skip` are passed over (a restart, recovery.py)."""
 
-            def wait_for(deadline: float) -> None:
-                wait = deadline - clock.now()
-                if wait > 0:
-                    clock.sleep(wait)
+    def __init__(self, engine, bag: Recording, options: BagOptions, name: str, sinks: Sinks, publisher, targets,
+                 batch_size: int, clock: Optional["ReplayClock"] = None, skip: int = 0):
+        self.engine = engine
+        self.bag = bag
+        self.options = options
+        self.name = name
+        self.sinks = sinks
+        self.publisher = publisher
+        self.targets = targets
+        self.batch_size = batch_size
+        self.skip = skip
+        self.stats = ReplayStats()
+        self.problems: List[Problem] = []
+        self.converter = MessageConverter(bag.typestore, options.convention)
+        # ROS 1 messages go to the runtime as bytes (ros1_terms.py), unless the input
+        # messages are also published (--out-bag, --foxglove: they need them decoded)
+        self.ros1_terms = (Ros1Terms(engine, bag.typestore, options.convention)
+                           if publisher is None and hasattr(engine, "ros1_schema") else None)
+        # With a rate on the wall clock, and nothing to publish as each message falls due, the
+        # runtime paces the messages itself (Engine.feed_paced): this source hands it what falls
+        # due in the next PACED_AHEAD seconds in one batch, instead of sleeping and feeding once
+        # per batch.
+        self.paced = (options.rate is not None and clock is None and publisher is None
+                      and hasattr(engine, "feed_paced"))
+        self.clock = clock or ReplayClock()
+        start_ns, stop_ns = window(bag, options)
+        self.first_ns = start_ns if start_ns is not None else bag.start_ns
+        self.last_ns = min(stop_ns, bag.end_ns) if stop_ns is not None else bag.end_ns
+        self.done_ms = 0
+        self.began = self.clock.now()
 
-            for text, seconds, record in bag_events(bag, options, stats, report, converter, ros1_terms):
-                record_ns = record.time_ns
-                if paced:
-                    due = began_wall + (record_ns - first_ns) / 1e9 / options.rate
-                    if batch and (due - time.time() > PACED_AHEAD or len(batch) >= batch_size):
-                        feed(batch, dues)
-                        batch, dues = [], []
-                    gap = due - time.time() - PACED_AHEAD
-                    if gap > 0:                 # a pause in the recording: waited here (Ctrl-C works)
-                        clock.sleep(gap)
-                    dues.append(due)
-                elif options.rate is not None:
-                    # the batch waits until its first message is a tick late and takes every
-                    # message due by then (the fewest wake-ups within that latency)
-                    due = began + (record_ns - first_ns) / 1e9 / options.rate
-                    if batch and due > deadline:
-                        wait_for(deadline)
-                        feed(batch)
-                        batch = []
-                        sink.flush()
-                    if not batch:
-                        deadline = due + options.tick
-                batch.append((text, seconds, (record.topic, stats.messages, record)))
-                if len(batch) >= batch_size and not paced:
-                    if options.rate is not None:
-                        wait_for(deadline)
-                    feed(batch)
-                    batch = []
-                done_ms = (record_ns - first_ns) // 1_000_000
-                if done_ms > shown_ms:
-                    bar.update(done_ms - shown_ms)
-                    shown_ms = done_ms
-            if batch:
-                if options.rate is not None and not paced:
+    def _report(self, topic: str, number: int, reason: str) -> None:
+        self.problems.append(Problem(f"{topic}#{number}", "rejected", reason))
+
+    @property
+    def batches(self) -> Iterator[Batch]:
+        options, clock, stats = self.options, self.clock, self.stats
+        self.began = clock.now()
+        began_wall = time.time()
+        batch: List[Tuple[object, float, Tuple[str, int, Record]]] = []   # event, time, (topic, number, record)
+        dues: List[float] = []
+        deadline = 0.0                      # with a rate: when the batch's first message is a tick late
+
+        def wait_for(deadline: float) -> None:
+            wait = deadline - clock.now()
+            if wait > 0:
+                clock.sleep(wait)
+
+        def ready(items, due_times=None) -> Batch:
+            return Batch(items[0][2][1] if items else stats.messages, items, 0,
+                         items[-1][2][1] if items else stats.messages, due_times)
+
+        for text, seconds, record in bag_events(self.bag, options, stats, self._report, self.converter,
+                                                self.ros1_terms, skip=self.skip):
+            record_ns = record.time_ns
+            if self.paced:
+                due = began_wall + (record_ns - self.first_ns) / 1e9 / options.rate
+                if batch and (due - time.time() > PACED_AHEAD or len(batch) >= self.batch_size):
+                    yield ready(batch, dues)
+                    batch, dues = [], []
+                gap = due - time.time() - PACED_AHEAD
+                if gap > 0:                 # a pause in the recording: waited here (Ctrl-C works)
+                    clock.sleep(gap)
+                dues.append(due)
+            elif options.rate is not None:
+                # the batch waits until its first message is a tick late and takes every
+                # message due by then (the fewest wake-ups within that latency)
+                due = self.began + (record_ns - self.first_ns) / 1e9 / options.rate
+                if batch and due > deadline:
                     wait_for(deadline)
-                feed(batch, dues if paced else None)
-            if publisher is not None:
-                publisher.fed([])
-            write(engine.end_of_input(drop_pending))
-        sink.flush()
-    except PrologError as error:
-        sink.flush()
-        click.echo(f"{name}: error: {error}", err=True)
-        status = 1
-    finally:
-        bag.__exit__(None, None, None)
-        if sink is not sys.stdout:
-            sink.close()
-        if consumers is not None:
-            consumers.close()
-        for target in sinks:
-            target.close()
-    stats.seconds = clock.now() - began
-    click.echo(stats.summary(name), err=True)
-    for target in sinks:
-        click.echo(f"{target.describe()}: {target.count:,} messages", err=True)
-    text = trace_report() if trace_report is not None else ""
-    if text:
-        click.echo(text, err=True)
-    detections = detections_line(engine.detections())
-    if detections:
-        click.echo(detections, err=True)
-    click.echo(engine.summary(), err=True)
-    return status
+                    yield ready(batch)
+                    batch = []
+                if not batch:
+                    deadline = due + options.tick
+            batch.append((text, seconds, (record.topic, stats.messages, record)))
+            self.done_ms = (record_ns - self.first_ns) // 1_000_000
+            if len(batch) >= self.batch_size and not self.paced:
+                if options.rate is not None:
+                    wait_for(deadline)
+                yield ready(batch)
+                batch = []
+        if batch:
+            if options.rate is not None and not self.paced:
+                wait_for(deadline)
+            yield ready(batch, dues if self.paced else None)
+        elif self.problems:
+            yield ready([])
+
+    def feed(self, engine, batch: Batch, write) -> Tuple[List[Problem], bool]:
+        problems, self.problems = self.problems, []
+        if not batch.lines:
+            return problems, False
+        if self.publisher is not None:               # the input messages as they are fed
+            for _, seconds, (topic, _, record) in batch.lines:     # on the clock of the events
+                message = self.publisher.input(topic, record.msgtype, round(seconds * 1e9), record.msg)
+                for target in self.targets:
+                    target.write(message)
+            self.publisher.fed([(text, seconds) for text, seconds, _ in batch.lines])
+        problems += feed_messages(engine, self.bag, self.converter, self.options.stamp == "record", batch.lines,
+                                  write, self.sinks.flush, self.stats, batch.extra, self.options.tick)
+        if self.options.rate is not None:
+            self.sinks.flush()
+        return problems, False
+
+    def at_end(self, engine, write, drop_pending: bool, strict: bool) -> None:
+        if self.publisher is not None:
+            self.publisher.fed([])
+        super().at_end(engine, write, drop_pending, strict)
+
+    def closing_lines(self) -> List[str]:
+        self.stats.seconds = self.clock.now() - self.began
+        return [self.stats.summary(self.name)]
+
+    def close(self) -> None:
+        self.bag.__exit__(None, None, None)
+
+
+class _PublishedSink:
+    """The MCAP file or Foxglove server of a replay as a sink of the feed loop: each output as
+    its message (Publisher.output; the input messages come from BagSource.feed)."""
+
+    def __init__(self, publisher, target):
+        self.publisher = publisher
+        self.target = target
+        self.out_name = target.describe()
+        self.once = True
+
+    def write(self, produced) -> None:
+        for event in produced:
+            message = self.publisher.output(event)
+            if message is not None:
+                self.target.write(message)
+
+    def write_text(self, text: str) -> None:
+        pass
+
+    def go_live(self) -> None:
+        pass
+
+    def flush(self) -> None:
+        pass
+
+    def close(self) -> None:
+        self.target.close()
+
+    def closing_lines(self) -> List[str]:
+        return [f"{self.target.describe()}: {self.target.count:,} messages"]
+
+
+class _Bar:
+    """The progress bar of a replay (the recording's time replayed), a display of the feed loop."""
+
+    def __init__(self, source: BagSource, name: str):
+        self.source = source
+        self.bar = click.progressbar(length=max(1, (source.last_ns - source.first_ns) // 1_000_000),
+                                     label=f"replaying {name}", file=sys.stderr).__enter__()
+        self.shown_ms = 0
+
+    def batch(self, batch: Batch, derived: int) -> None:
+        done = self.source.done_ms
+        if done > self.shown_ms:
+            self.bar.update(done - self.shown_ms)
+            self.shown_ms = done
+
+    def clear(self) -> None:
+        pass
+
+    def close(self) -> None:
+        self.bar.__exit__(None, None, None)
 
 
 def replay_from_cli(engine, out: str, values: dict, **run_options) -> int:
@@ -484,14 +525,3 @@ def _open_sinks(bag: Recording, options: BagOptions, out_bag: Optional[str], fox
             target.close()
         raise
     return publisher, sinks
-
-
-class _NoBar:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
-
-    def update(self, n: int) -> None:
-        pass
