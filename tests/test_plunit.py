@@ -72,9 +72,10 @@ HERE = [path for path in PLUNIT if not run_elsewhere(path)]
 
 @pytest.mark.parametrize("path", HERE, ids=[path.stem for path in HERE])
 def test_plunit_file(swipl, path):
-    done = subprocess.run([swipl, "--no-tty", "-q", "-g", "run_tests", "-t", "halt", str(path)],
+    done = subprocess.run([swipl, "--no-tty", "-g", "run_tests", "-t", "halt", str(path)],
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=300)
     assert done.returncode == 0, done.stdout
+    assert re.search(r"All \d+ tests passed", done.stdout), done.stdout     # not a halt half-way
 
 
 def test_every_runtime_module_has_plunit_tests_or_says_where_it_is_tested():
