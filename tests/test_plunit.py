@@ -3,8 +3,10 @@ not run by another test of this suite is run here, and every runtime module with
 of its own at Prolog level has a plunit file (or says below why it has none)."""
 from __future__ import annotations
 
+import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -72,8 +74,10 @@ HERE = [path for path in PLUNIT if not run_elsewhere(path)]
 
 @pytest.mark.parametrize("path", HERE, ids=[path.stem for path in HERE])
 def test_plunit_file(swipl, path):
+    env = {**os.environ, "RETALISC_PYTHON": sys.executable,      # compiled_program.pl compiles with it
+           "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
     done = subprocess.run([swipl, "--no-tty", "-g", "run_tests", "-t", "halt", str(path)],
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=300)
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=300, env=env)
     assert done.returncode == 0, done.stdout
     assert re.search(r"All \d+ tests passed", done.stdout), done.stdout     # not a halt half-way
 
