@@ -37,7 +37,6 @@ WITHOUT_PLUNIT = {
     "rtl_raise": "new_event/1,2,3 (tests/test_event_hooks.py, test_actions.py)",
     "rtl_ros1": "ROS 1 messages in C (tests/test_ros1_terms.py)",
     "rtl_rules": "rules added at run time (tests/test_control_lines.py, test_rules_in_process.py)",
-    "rtl_sandbox": "the goal boundary (tests/test_sandbox.py, test_boundary_property.py)",
     "rtl_state": "snapshots (tests/test_recovery_state.py, test_recovery_crafted.py)",
     "rtl_trace": "`retalisc run --trace`, `explain` (tests/test_explain_constructs.py, test_bag_trace.py)",
 }
