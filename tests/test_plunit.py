@@ -34,7 +34,6 @@ WITHOUT_PLUNIT = {
     "rtl_library": "program libraries, tested from Python (tests/test_retalis2015_builtins.py)",
     "rtl_load": "loading the .qlf files when up to date (tests/test_runtime_location.py, setup)",
     "rtl_load_check": "`retalisc check` loading a program (tests/test_check_loads.py)",
-    "rtl_raise": "new_event/1,2,3 (tests/test_event_hooks.py, test_actions.py)",
     "rtl_ros1": "ROS 1 messages in C (tests/test_ros1_terms.py)",
     "rtl_rules": "rules added at run time (tests/test_control_lines.py, test_rules_in_process.py)",
     "rtl_state": "snapshots (tests/test_recovery_state.py, test_recovery_crafted.py)",
