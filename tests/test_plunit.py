@@ -29,8 +29,6 @@ WITHOUT_PLUNIT = {
     "rtl_foreign": "the loader of the C helpers: the C and Prolog roads compared in test_lines.pl",
     "rtl_horizon": "the retraction horizon, tested from Python (tests/test_policy_deletion.py, "
                    "test_negation_store.py)",
-    "rtl_io": "the output lines and the event JSON, tested through the roads (tests/test_event_validation.py, "
-              "test_fast_reader.py)",
     "rtl_library": "program libraries, tested from Python (tests/test_retalis2015_builtins.py)",
     "rtl_load": "loading the .qlf files when up to date (tests/test_runtime_location.py, setup)",
     "rtl_load_check": "`retalisc check` loading a program (tests/test_check_loads.py)",
