@@ -29,7 +29,6 @@ WITHOUT_PLUNIT = {
     "rtl_foreign": "the loader of the C helpers: the C and Prolog roads compared in test_lines.pl",
     "rtl_horizon": "the retraction horizon, tested from Python (tests/test_policy_deletion.py, "
                    "test_negation_store.py)",
-    "rtl_library": "program libraries, tested from Python (tests/test_retalis2015_builtins.py)",
     "rtl_load": "loading the .qlf files when up to date (tests/test_runtime_location.py, setup)",
     "rtl_load_check": "`retalisc check` loading a program (tests/test_check_loads.py)",
     "rtl_ros1": "ROS 1 messages in C (tests/test_ros1_terms.py)",
