@@ -91,10 +91,6 @@ class RunOption:
         return self.help.replace("{default}", self.default_text())
 
 
-def _given(option: RunOption, value) -> bool:
-    return value is not None and value is not False
-
-
 RUN_OPTIONS: List[RunOption] = [
     RunOption("echo_input", "switch", False, "Also write the input events to the output.",
               ("flag", "echo_input")),
@@ -182,7 +178,7 @@ def given(values: Dict[str, object]) -> List[Tuple[RunOption, object]]:
     """The table's options given a value in `values` (a switch when true, another when not
     None), in table order; names not in the table are left alone."""
     return [(option, values[option.name]) for option in RUN_OPTIONS
-            if option.name in values and _given(option, values[option.name])]
+            if option.name in values and values[option.name] is not None and values[option.name] is not False]
 
 
 def arguments(values: Dict[str, object]) -> List[str]:
