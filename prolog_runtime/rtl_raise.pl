@@ -92,8 +92,8 @@ raise(Event, Start, End) :-
     ),
     (   nb_current(rtl_raise_busy, true)
     ->  enqueue(raised(Event, Start, End))
-    ;   prolog_load_context(source, _)          % a directive: waits for the first input event
-    ->  enqueue(raised(Event, Start, End))      % (prolog_load_context(module, _) holds anywhere)
+    ;   prolog_load_context(module, _)
+    ->  enqueue(raised(Event, Start, End))
     ;   rtl_input(add, Event, Start, End)
     ).
 
