@@ -25,6 +25,7 @@
 :- reexport(rtl_io).
 :- use_module(rtl_error_text, [rtl_error_text/2, rtl_term_text/2]).
 :- use_module(rtl_guard, [rtl_is_reserved_ball/1]).
+:- use_module(rtl_arguments, [rtl_read_arguments/2, rtl_usage_text/2]).
 :- reexport(rtl_time).
 :- reexport(rtl_raise).
 :- reexport(rtl_subscriptions).
@@ -97,23 +98,15 @@ run_declaration(Program, Goal) :-
 %
 %   Script entry: process the event files named on the command line, in order. Does
 %   nothing when the program is loaded by the Python driver (flag `retalis_embedded`).
-%   Options: `--echo-input` also writes the input events; `--max-delay=SECONDS`;
-%   `--consumer-dir=DIR` writes subscription deliveries to `DIR/<consumer>.jsonl`;
-%   `--drop-pending`; `--flush-timers` fires the pending timers (absences, alarms) at the end
-%   of the input; `--allow-control` obeys control lines (`add_rule`, `delete_rule`;
-%   refused by default); `--strict` ends the run (status 1) at the first line that is
-%   rejected or fails; `--max-steps=N` (inferences per input event, `inf` for no limit);
-%   `--max-timers=N` (pending timers at most, `inf` for no limit); `--max-event-types=N`
-%   (event types a run takes, default `inf`: rtl_event_types.pl); `--max-line-bytes=N`,
-%   `--max-digits=N`, `--max-future=SECONDS` (input limits, docs/runtime.md);
-%   `--action-output=FILE` sends what program code prints to FILE instead of standard
-%   error. Exit status: 0 when the input was processed (rejected and failed lines
-%   included), 1 when the run was stopped (`--strict`, `halt` in program code, standard
-%   output cannot be written), 2 for usage errors, 128 + N when the signal N (SIGTERM,
-%   SIGINT) ended it (stop_on_signal/1).
-%   `--retraction-horizon=SECONDS` (or `inf`) keeps deletions exact that long.
-%   `--detections=L1,L2,...` writes the detections per rule before the summary, the rules
-%   labelled L1, L2, ... first (`retalisc run` hands its runs over with it).
+%   The options (`--echo-input`, `--max-delay=SECONDS`, `--strict`, ...; docs/runtime.md,
+%   "Running a compiled program") stand anywhere among the files; which there are and how
+%   each is read is the table of run options (rtl_run_options.pl, written from
+%   retalisc/run_options.py), read by rtl_arguments.pl. `--detections=L1,L2,...` writes the
+%   detections per rule before the summary, the rules labelled L1, L2, ... first
+%   (`retalisc run` hands its runs over with it). Exit status: 0 when the input was
+%   processed (rejected and failed lines included), 1 when the run was stopped
+%   (`--strict`, `halt` in program code, standard output cannot be written), 2 for usage
+%   errors, 128 + N when the signal N (SIGTERM, SIGINT) ended it (stop_on_signal/1).
 
 rtl_main :-
     current_prolog_flag(retalis_embedded, true),
@@ -125,7 +118,7 @@ rtl_main :-
     set_stream(user_output, encoding(utf8)),
     set_stream(user_error, encoding(utf8)),
     nb_setval(rtl_stream_options, []),
-    catch(main_args(Argv, Files), error(Formal, _), (usage_error(Formal), rtl_exit(2))),
+    catch(rtl_read_arguments(Argv, Files), error(Formal, _), (usage_error(Formal), rtl_exit(2))),
     (   Files == []
     ->  usage_error(no_event_file), rtl_exit(2)
     ;   true
@@ -211,99 +204,10 @@ print_detections :-
     ).
 print_detections.
 
-main_args([], []).
-main_args([Arg|Args], Files) :-
-    (   Arg == '--echo-input'
-    ->  rtl_set_flag(echo_input, true), Files = Rest
-    ;   Arg == '--drop-pending'
-    ->  nb_setval(rtl_drop_pending, true), Files = Rest
-    ;   Arg == '--flush-timers'
-    ->  rtl_set_flag(flush_timers, true), Files = Rest
-    ;   Arg == '--allow-control'
-    ->  set_stream_option(allow_control(true)), Files = Rest
-    ;   Arg == '--strict'
-    ->  set_stream_option(strict(true)), Files = Rest
-    ;   atom_concat('--consumer-dir=', Dir, Arg)
-    ->  rtl_consumer_dir(Dir), Files = Rest
-    ;   atom_concat('--max-delay=', D, Arg)
-    ->  ( D == inf -> Delay = inf ; atom_number(D, Delay) ),
-        rtl_set_flag(max_delay, Delay), Files = Rest
-    ;   atom_concat('--max-steps=', N, Arg)
-    ->  (   N == inf -> Steps = inf
-        ;   atom_number(N, Steps), integer(Steps), Steps > 0 -> true
-        ;   domain_error(max_steps, N)
-        ),
-        rtl_set_flag(max_steps, Steps), Files = Rest
-    ;   atom_concat('--max-timers=', N, Arg)
-    ->  (   N == inf -> Timers = inf
-        ;   atom_number(N, Timers), integer(Timers), Timers > 0 -> true
-        ;   domain_error(max_timers, N)
-        ),
-        rtl_set_flag(max_timers, Timers), Files = Rest
-    ;   atom_concat('--max-event-types=', N, Arg)
-    ->  (   N == inf -> Types = inf
-        ;   atom_number(N, Types), integer(Types), Types > 0 -> true
-        ;   domain_error(max_event_types, N)
-        ),
-        rtl_set_flag(max_event_types, Types), Files = Rest
-    ;   input_limit_option(Arg, Flag, Value)
-    ->  rtl_set_flag(Flag, Value), Files = Rest
-    ;   atom_concat('--action-output=', File, Arg)
-    ->  catch(rtl_set_action_output(File), error(E, _), throw(error(action_output(File, E), _))),
-        Files = Rest
-    ;   atom_concat('--detections=', Text, Arg)
-    ->  (   Text == ''
-        ->  Labels = []
-        ;   atomic_list_concat(Labels, ',', Text)
-        ),
-        nb_setval(rtl_detection_labels, Labels), Files = Rest
-    ;   atom_concat('--retraction-horizon=', H, Arg)
-    ->  ( H == inf -> Horizon = inf ; atom_number(H, Horizon), Horizon >= 0 ),
-        rtl_set_flag(retraction_horizon, Horizon), Files = Rest
-    ;   sub_atom(Arg, 0, _, _, '--'), Arg \== '--'
-    ->  domain_error(option, Arg)
-    ;   Files = [Arg|Rest]
-    ),
-    main_args(Args, Rest).
-
-% --max-line-bytes=N, --max-digits=N (positive integers), --max-future=SECONDS (a number
-% >= 0), each also `inf` (docs/runtime.md, "Input limits").
-input_limit_option(Arg, Flag, Value) :-
-    input_limit_flag(Prefix, Flag),
-    atom_concat(Prefix, Text, Arg),
-    !,
-    (   Text == inf
-    ->  Value = inf
-    ;   catch(atom_number(Text, Value), _, fail),
-        rtl_valid_flag_value(Flag, Value)
-    ->  true
-    ;   domain_error(input_limit(Prefix), Text)
-    ).
-
-input_limit_flag('--max-line-bytes=', max_line_bytes).
-input_limit_flag('--max-digits=', max_digits).
-input_limit_flag('--max-future=', max_future).
-
-set_stream_option(Option) :-
-    nb_getval(rtl_stream_options, Options),
-    nb_setval(rtl_stream_options, [Option|Options]).
-
+% A usage error of the command line (rtl_arguments.pl reads it by the table of run options).
 usage_error(Formal) :-
-    (   Formal = domain_error(option, Opt)
-    ->  format(user_error, "error: unknown option ~w~n", [Opt])
-    ;   Formal = domain_error(max_steps, N)
-    ->  format(user_error, "error: --max-steps=~w: expected a positive integer or inf~n", [N])
-    ;   Formal = domain_error(max_timers, N)
-    ->  format(user_error, "error: --max-timers=~w: expected a positive integer or inf~n", [N])
-    ;   Formal = domain_error(max_event_types, N)
-    ->  format(user_error, "error: --max-event-types=~w: expected a positive integer or inf~n", [N])
-    ;   Formal = domain_error(input_limit(Prefix), Text)
-    ->  format(user_error, "error: ~w~w: expected a positive number or inf~n", [Prefix, Text])
-    ;   Formal = action_output(File, E)
-    ->  error_text(error(E, _), Why),
-        format(user_error, "error: --action-output=~w: cannot open the action output file (~s)~n", [File, Why])
-    ;   format(user_error, "usage: swipl PROGRAM.pl [--echo-input] [--max-delay=SECONDS] [--retraction-horizon=SECONDS] [--consumer-dir=DIR] [--drop-pending] [--flush-timers] [--allow-control] [--strict] [--max-steps=N] [--max-timers=N] [--max-event-types=N] [--max-line-bytes=N] [--max-digits=N] [--max-future=SECONDS] [--action-output=FILE] [--detections=LABELS] EVENTS.jsonl... (- for standard input)~n", [])
-    ).
+    rtl_usage_text(Formal, Text),
+    format(user_error, "~s~n", [Text]).
 
 %!  rtl_action(:Goal) is det.
 %

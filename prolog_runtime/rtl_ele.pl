@@ -70,6 +70,7 @@ deletion is too late).
 :- use_module(rtl_horizon).
 :- use_module(rtl_timers).
 :- use_module(rtl_time, [rtl_beyond_bound/3]).
+:- use_module(rtl_run_options, [rtl_run_option/5]).   % the defaults of the run options
 
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
@@ -79,19 +80,14 @@ deletion is too late).
                   rtl_add_type_output_hook(+, 4), rtl_remove_type_output_hook(+, 4).
 :- dynamic flag_value/2.
 
-flag_default(max_delay, 1.0).               % seconds an event may arrive behind the clock
-flag_default(echo_input, false).            % write input events to the output too
+% The flags that are run options (max_delay, echo_input, max_steps, retraction_horizon,
+% flush_timers, max_timers, max_event_types, max_line_bytes, max_digits, max_future) have
+% their defaults in the table of run options (rtl_run_options.pl, from retalisc/run_options.py).
+flag_default(Flag, Default) :-
+    rtl_run_option(_, _, _, Default, flag(Flag)).
 flag_default(event_consumption_policy, unrestricted).
 flag_default(query_time_limit, 10).          % seconds a query from outside may run
-flag_default(max_steps, 1000000).           % inferences per input event (inf: no limit)
 flag_default(max_term_depth, 1000).         % nesting of input event terms
-flag_default(retraction_horizon, auto).     % seconds deletions stay exact (rtl_horizon.pl)
-flag_default(flush_timers, false).          % fire pending timers at the end of the input (rtl_timers.pl)
-flag_default(max_timers, 100000).           % pending timers at most (rtl_timers.pl; inf: no limit)
-flag_default(max_event_types, inf).         % event types a run takes (rtl_event_types.pl)
-flag_default(max_line_bytes, 1048576).      % bytes of an input line at most (rtl_lines.pl)
-flag_default(max_digits, 4300).             % digits in a row in an input line at most (rtl_lines.pl)
-flag_default(max_future, 86400).            % seconds an input event may end after the clock
 
 %!  rtl_use_program(+Module) is det.
 %

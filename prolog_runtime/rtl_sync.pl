@@ -202,6 +202,16 @@ availability(Event, _, End, add) :- !,
     ).
 availability(_, _, _, _).
 
+%   rtl_clear/0 forgets what the program has seen: the histories made complete by
+%   `updated` events, the delays learned and the matches still postponed (not the delays
+%   the program declares).
+:- multifile rtl_ele:clear_hook/0.
+rtl_ele:clear_hook :-
+    rtl_program(M),
+    retractall(learned_delay(M, _, _, _)),
+    retractall(updated_until(M, _, _, _)),
+    forall(pending(N, _, M:_, _, _, _), forget(N)).
+
 %   Memories register the availability hook: `updated` events may come before any wait.
 :- multifile rtl_slr:instance_created_hook/2.
 rtl_slr:instance_created_hook(_, _) :-

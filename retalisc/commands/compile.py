@@ -6,7 +6,9 @@ from pathlib import Path
 
 import click
 
-from .options import LazyChoice, Seconds, check_snapshot_options, output_directory, output_file, state_options
+from .options import (LazyChoice, Seconds, check_snapshot_options, output_directory, output_file, run_options,
+                      state_options)
+from ..run_options import cli_options, engine_flags, keeps_python
 from ..robot_io.options import BAG_DEFAULTS, bag_options
 from .. import commands
 
@@ -139,19 +141,9 @@ Examples:
               help="Event JSON Lines file ('-' for standard input). Or --bag.")
 @click.option("--out", type=click.Path(dir_okay=False, allow_dash=True), default="-",
               help="Write the output JSON Lines here (default: standard output).")
-@click.option("--echo-input", is_flag=True, help="Also write the input events to the output.")
-@click.option("--max-delay", type=Seconds(), default=None,
-              help="Seconds an event may arrive behind the latest one and still be matched in full "
-                   "(default 1.0; a number >= 0, or inf).")
-@click.option("--retraction-horizon", type=Seconds(), default=None, metavar="SECONDS",
-              help="Keep what deletions need for this long: a deletion of an event that ended at most "
-                   "SECONDS before the latest one is exact (default and minimum: the delay bound plus the "
-                   "largest window; 'inf' keeps everything). Later deletions are reported and change nothing.")
+@run_options
 @click.option("--batch-size", type=click.IntRange(1), default=2000, show_default=True,
               help="Events handed to Prolog per call.")
-@click.option("--consumer-dir", type=click.Path(file_okay=False), default=None,
-              help="Write the subscription deliveries of each consumer to DIR/<consumer>.jsonl instead "
-                   "of the output.")
 @click.option("--subscribe", "subscriptions", multiple=True, metavar="'CONSUMER=QUERY[=>TEMPLATE]'",
               help="Subscribe CONSUMER to the events matching QUERY (Event or Event-[Goals]), delivered "
                    "as TEMPLATE (default: the event). Repeatable.")
@@ -165,44 +157,10 @@ Examples:
 @click.option("--query-timeout", type=Seconds(), default=None,
               help="A synchronized query still waiting when the clock reaches Z + SECONDS ends with status "
                    "\"timeout\" (default: it waits until the end of the input).")
-@click.option("--drop-pending", is_flag=True,
-              help="At the end of the input, discard the synchronized matches still waiting instead of "
-                   "running them.")
-@click.option("--flush-timers", is_flag=True,
-              help="At the end of the input, fire the timers still pending (absences not(C).[A, D] and "
-                   "alarm(E, D) heads) as if the clock had passed them; by default they do not fire, since "
-                   "the clock never reached them.")
 @click.option("--heartbeat", type=click.FloatRange(min=0.001), default=None, metavar="SECONDS",
               help="A live source (e.g. --events - fed by a robot): process lines as they arrive, and while "
                    "none arrives advance the clock with the wall clock every SECONDS, so that absences and "
                    "alarms fire on time.")
-@click.option("--allow-control", is_flag=True,
-              help="Obey control lines in the events ({\"op\": \"add_rule\", ...}, \"delete_rule\"); "
-                   "without it they are refused (an error each) and skipped.")
-@click.option("--strict", is_flag=True,
-              help="End the run with exit status 1 at the first line that is rejected or whose event "
-                   "fails, after writing everything produced before it.")
-@click.option("--max-steps", type=str, default=None, metavar="N",
-              help="Inferences one input event may take, everything it derives included, before it is "
-                   "stopped with an error (default 1000000; 'inf' for no limit).")
-@click.option("--max-timers", type=str, default=None, metavar="N",
-              help="Timers (absences, alarms) that may be pending at once; one more is not set, but counted "
-                   "and reported as a warning (default 100000; 'inf' for no limit).")
-@click.option("--max-event-types", type=str, default=None, metavar="N",
-              help="Distinct event types (Name/Arity) the run takes; a line of a new type beyond them is "
-                   "rejected (default 'inf': SWI-Prolog keeps each type's functor, ~140 bytes, for good).")
-@click.option("--max-line-bytes", type=str, default=None, metavar="N",
-              help="The longest input line, in bytes; a longer one is rejected, read without being kept "
-                   "(default 1048576; 'inf' for no limit; docs/runtime.md, \"Input limits\").")
-@click.option("--max-digits", type=str, default=None, metavar="N",
-              help="The longest run of digits in an input line (a number's size); a line with a longer one is "
-                   "rejected before any number of it is read (default 4300; 'inf' for no limit).")
-@click.option("--max-future", type=str, default=None, metavar="SECONDS",
-              help="How far after the clock (and the wall clock) an input event may end; a later one is "
-                   "rejected (default 86400; 'inf' for no limit).")
-@click.option("--action-output", type=click.Path(dir_okay=False), default=None, metavar="FILE",
-              help="Write the text that actions and conditions print to FILE (default: standard error; "
-                   "standard output carries only JSON Lines).")
 @click.option("--progress/--no-progress", default=None,
               help="Show a progress line on standard error (default: on a terminal, for inputs over 5 MB).")
 @click.option("--trace", "traces", multiple=True, metavar="RULE",
@@ -223,12 +181,9 @@ Examples:
     "With --state: a snapshot every S seconds of processing at the latest (default 60; inf: "
     "only by --snapshot-every).")
 @bag_options
-def run_command(program: str, events: str, out: str, echo_input: bool, max_delay, retraction_horizon, batch_size: int,
-                consumer_dir, subscriptions, memories, queries, query_timeout, drop_pending: bool,
-                flush_timers: bool, heartbeat, allow_control: bool, strict: bool, max_steps, max_timers,
-                max_event_types, max_line_bytes, max_digits, max_future, action_output, progress,
-                traces, late_file, no_cache, state, snapshot_every, snapshot_seconds,
-                **bag) -> None:
+def run_command(program: str, events: str, out: str, batch_size: int, subscriptions, memories, queries,
+                query_timeout, heartbeat, progress, traces, late_file, no_cache, state, snapshot_every,
+                snapshot_seconds, **options) -> None:
     """Run PROGRAM over an event file or a recording (--bag), printing derived events as JSON Lines.
 
     \b
@@ -238,6 +193,10 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     from ..compile_cache import CompiledProgram, cached_compile
     from ..compiler import unique_module_name
 
+    runtime = {option.name: options.pop(option.name) for option in cli_options()}   # run_options.py
+    bag = options
+    consumer_dir, action_output = runtime["consumer_dir"], runtime["action_output"]
+    drop_pending, allow_control, strict = runtime["drop_pending"], runtime["allow_control"], runtime["strict"]
     if (events is None) == (bag["bag"] is None):
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
     if bag["bag"] is None and any(bag[name] != default for name, default in BAG_DEFAULTS.items()):
@@ -256,16 +215,9 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
         if consumer_dir is not None:
             raise click.UsageError("--state does not go with --consumer-dir (the deliveries go to --out)")
         output_directory(state, "--state")
-    steps = _max_steps(max_steps)
-    timers = _max_steps(max_timers, DEFAULT_MAX_TIMERS, "--max-timers")
-    event_types = _max_steps(max_event_types, "inf", "--max-event-types")
-    limits = {"max_line_bytes": _max_steps(max_line_bytes, None, "--max-line-bytes"),
-              "max_digits": _max_steps(max_digits, None, "--max-digits"),
-              "max_future": _seconds_or_inf(max_future, "--max-future")}
-    limits = {flag: value for flag, value in limits.items() if value is not None}
     module = unique_module_name(program)        # a second run in one process loads anew
     handover = (bag["bag"] is None and state is None and not (subscriptions or memories or queries or traces)
-                and late_file is None and action_output is None and _runs_in_runtime_loop(events, out, consumer_dir,
+                and late_file is None and not keeps_python(runtime) and _runs_in_runtime_loop(events, out, consumer_dir,
                                                                                            progress, heartbeat))
     if traces or late_file:                     # these need the compiled unit itself
         result = compile_or_exit(program, module=module)
@@ -276,27 +228,15 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
     output_file(out, "--out")
     output_directory(consumer_dir, "--consumer-dir")
     if handover and compiled.file is not None:
-        _hand_over_to_swipl(compiled, events, echo_input=echo_input, max_delay=max_delay,
-                            retraction_horizon=retraction_horizon, max_steps=steps, max_timers=timers,
-                            max_event_types=event_types,
-                            drop_pending=drop_pending, flush_timers=flush_timers, allow_control=allow_control,
-                            strict=strict, limits=limits)
+        _hand_over_to_swipl(compiled, events, runtime)
     from ..driver.bridge import PrologError
     from ..driver.engine import Engine
     from ..driver.run import run_event_file, set_action_output
 
     in_this_thread = _calls_in_this_thread()
     engine = Engine.from_prolog(compiled.prolog, compiled.module, compiled.rules)
-    if echo_input:
-        engine.set_flag("echo_input", "true")
-    if max_delay is not None:
-        engine.set_flag("max_delay", repr(max_delay))
-    engine.set_flag("max_steps", str(steps))
-    engine.set_flag("max_timers", str(timers))
-    if event_types != "inf":
-        engine.set_flag("max_event_types", str(event_types))
-    for flag, value in limits.items():
-        engine.set_flag(flag, str(value))
+    for flag, value in engine_flags(runtime):
+        engine.set_flag(flag, value)
     if action_output is not None:
         try:
             set_action_output(engine, action_output)
@@ -304,10 +244,6 @@ def run_command(program: str, events: str, out: str, echo_input: bool, max_delay
             click.echo(f"error: --action-output {action_output}: cannot open the action output file ({error})",
                        err=True)
             sys.exit(2)
-    if retraction_horizon is not None:
-        engine.set_flag("retraction_horizon", repr(retraction_horizon))
-    if flush_timers:
-        engine.set_flag("flush_timers", "true")
     report = _start_tracing(engine, result.unit, traces, late_file) if traces or late_file else None
     for spec in subscriptions:
         add_cli_subscription(engine, spec)
@@ -375,12 +311,12 @@ def _process_streams() -> bool:
         return False
 
 
-def _hand_over_to_swipl(compiled, events: str, **options) -> None:
+def _hand_over_to_swipl(compiled, events: str, options) -> None:
     """Replace this process by `swipl` on the cached program file, when its command line can
     say the run (retalisc/driver/swipl_handover.py); returns when it cannot."""
     from ..driver.swipl_handover import hand_over, swipl_arguments, swipl_command
 
-    arguments = swipl_arguments(events, compiled.rules, **options)
+    arguments = swipl_arguments(events, compiled.rules, **options)      # the run options given
     command = swipl_command(str(compiled.file), arguments) if arguments is not None else None
     if command is not None:
         hand_over(command)
@@ -421,41 +357,6 @@ def _start_tracing(engine, unit, traces, late_file):
         engine.trace("end")
         return text
     return report
-
-
-DEFAULT_MAX_STEPS = 1_000_000
-DEFAULT_MAX_TIMERS = 100_000
-
-
-def _max_steps(text, default=DEFAULT_MAX_STEPS, option="--max-steps"):
-    """`--max-steps N` (or `--max-timers N`, `--max-event-types N`): a positive integer or 'inf'
-    (usage error otherwise)."""
-    if text is None:
-        return default
-    if text.strip() == "inf":
-        return "inf"
-    try:
-        value = int(text.replace("_", "").replace(",", ""))
-    except ValueError:
-        value = 0
-    if value <= 0:
-        raise click.BadParameter(f"{text!r}: expected a positive integer or 'inf'", param_hint=option)
-    return value
-
-
-def _seconds_or_inf(text, option):
-    """`--max-future SECONDS`: a finite number >= 0 or 'inf' (None when not given)."""
-    if text is None:
-        return None
-    if text.strip() == "inf":
-        return "inf"
-    try:
-        value = float(text)
-    except ValueError:
-        value = -1.0
-    if not 0 <= value < float("inf"):
-        raise click.BadParameter(f"{text!r}: expected a number of seconds >= 0 or 'inf'", param_hint=option)
-    return str(int(value)) if value.is_integer() else repr(value)     # as `swipl OUT.pl --max-future=S` reads it
 
 
 def post_cli_query(engine, number: int, at: float, goal: str, timeout):

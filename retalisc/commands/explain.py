@@ -9,7 +9,8 @@ import click
 
 from ..robot_io.options import bag_input_options, check_bag_input
 from .compile import compile_or_exit
-from .options import Seconds
+from .options import run_option
+from ..run_options import engine_flags
 
 
 @click.command("explain", epilog="""\b
@@ -24,7 +25,7 @@ Examples:
 @click.option("--why-not", "why_not", metavar="PATTERN",
               help="Say, for each rule that could derive PATTERN, how far its pattern got over the events: "
                    "the matches of each part and where matching stops.")
-@click.option("--max-delay", type=Seconds(), default=None, help="As for retalisc run.")
+@run_option("max_delay", help="As for retalisc run.")
 @click.option("--limit", type=click.IntRange(1), default=5, show_default=True,
               help="Explain at most this many derived events that match EVENT.")
 @bag_input_options
@@ -49,8 +50,8 @@ def explain_command(program: str, event: Optional[str], events: Optional[str], w
         raise click.UsageError("give the input: --events FILE or --bag RECORDING (one of them)")
     result = compile_or_exit(program, module=unique_module_name(program))
     explainer = Explainer(result, log=sys.stderr)    # its problems reported as every road reports them
-    if max_delay is not None:
-        explainer.engine.set_flag("max_delay", repr(max_delay))
+    for flag, value in engine_flags({"max_delay": max_delay}):      # retalisc/run_options.py
+        explainer.engine.set_flag(flag, value)
     if events is not None:
         explainer.feed_file(events)
     else:

@@ -15,7 +15,8 @@ import click
 
 from ..driver.feed import summary_line
 from .compile import compile_or_exit
-from .options import Seconds, check_snapshot_options, output_file, state_options
+from .options import Seconds, check_snapshot_options, output_file, run_option, state_options
+from ..run_options import engine_flags
 
 
 def _common(command):
@@ -31,7 +32,7 @@ def _common(command):
         click.option("--plain-strings", is_flag=True,
                      help="Strings are atoms holding the text ('/odom', the default) even for a program "
                           "that asks for the release's '\"/odom\"' (ros_strings(quoted), compile_event_file)."),
-        click.option("--max-delay", type=Seconds(), default=None, help="As for `retalisc run`."),
+        run_option("max_delay", help="As for `retalisc run`."),
         click.option("--duration", type=Seconds(allow_inf=False), default=None, metavar="SECONDS",
                      help="Stop after SECONDS (default: run until SIGINT or SIGTERM)."),
         click.option("--linger", type=Seconds(allow_inf=False), default=0.0, metavar="SECONDS",
@@ -75,8 +76,8 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
         click.echo(f"error: {error}", err=True)
         return 2
     engine = Engine.from_compiled(compile_or_exit(program))
-    if max_delay is not None:
-        engine.set_flag("max_delay", repr(max_delay))
+    for flag, value in engine_flags({"max_delay": max_delay}):      # retalisc/run_options.py
+        engine.set_flag(flag, value)
     state = None
     if recovery.get("state") is not None:
         from ..driver.recovery import DEFAULT_SNAPSHOT_EVENTS, DEFAULT_SNAPSHOT_SECONDS

@@ -7,6 +7,8 @@ import os
 
 import click
 
+from ..run_options import BY_NAME, cli_options
+
 
 class Seconds(click.ParamType):
     """A duration in seconds: a number >= 0, `inf` when `allow_inf` (no bound); never NaN or
@@ -113,3 +115,75 @@ class LazyChoice(click.Choice):
         if self._choices is None:
             self._choices = tuple(self._load())
         return self._choices
+
+
+class Count(click.ParamType):
+    """A positive integer or `inf` (`1_000` and `1,000` too): `--max-steps N` and the other
+    count options of the run (retalisc/run_options.py)."""
+
+    name = "count"
+
+    def convert(self, value, param, ctx):
+        if value == "inf" or (isinstance(value, int) and not isinstance(value, bool) and value > 0):
+            return value
+        text = str(value)
+        if text.strip() == "inf":
+            return "inf"
+        try:
+            number = int(text.replace("_", "").replace(",", ""))
+        except ValueError:
+            number = 0
+        if number <= 0:
+            self.fail(f"{text!r}: expected a positive integer or 'inf'", param, ctx)
+        return number
+
+
+class LimitSeconds(click.ParamType):
+    """A finite number of seconds >= 0 or `inf` (`--max-future SECONDS`)."""
+
+    name = "seconds"
+
+    def convert(self, value, param, ctx):
+        text = str(value)
+        if text.strip() == "inf":
+            return "inf"
+        try:
+            number = float(text)
+        except ValueError:
+            number = -1.0
+        if not 0 <= number < float("inf"):
+            self.fail(f"{text!r}: expected a number of seconds >= 0 or 'inf'", param, ctx)
+        return number
+
+
+def _click_type(option):
+    if option.kind == "count":
+        return Count()
+    if option.kind == "seconds":
+        return Seconds()
+    if option.kind == "limit":
+        return LimitSeconds()
+    if option.kind == "directory":
+        return click.Path(file_okay=False)
+    if option.kind == "file":
+        return click.Path(dir_okay=False)
+    raise ValueError(f"{option.name}: no click type for the kind {option.kind}")
+
+
+def run_option(name: str, help: str = None):
+    """The click option of the run option `name` (retalisc/run_options.py), with its own help
+    text unless `help` is given (`--max-delay` of `retalisc query`: "As for `retalisc run`.")."""
+    option = BY_NAME[name]
+    text = help if help is not None else option.help_text()
+    if option.kind == "switch":
+        return click.option(option.option, option.name, is_flag=True, help=text)
+    return click.option(option.option, option.name, type=_click_type(option), default=None,
+                        metavar=option.metavar, help=text)
+
+
+def run_options(command):
+    """The options of `retalisc run` that reach the runtime, all of the table of run options
+    (retalisc/run_options.py), in its order."""
+    for option in reversed(cli_options()):
+        command = run_option(option.name)(command)
+    return command

@@ -8,7 +8,8 @@ import click
 
 from ..robot_io.options import bag_input_options, check_bag_input
 from .compile import add_cli_memory, compile_or_exit
-from .options import Seconds
+from .options import run_option
+from ..run_options import engine_flags
 
 
 @click.command("query", epilog="""\b
@@ -24,7 +25,7 @@ Examples:
 @click.option("--at", "at", type=float, default=None,
               help="Answer the query as of time Z: mem/2 sees the records that end at or before Z.")
 @click.option("--first", is_flag=True, help="Print the first answer only.")
-@click.option("--max-delay", type=Seconds(), default=None, help="As for `retalisc run`.")
+@run_option("max_delay", help="As for `retalisc run`.")
 @click.option("--memory", "memories", multiple=True, metavar="'c_mem(Id, Event-Conds, N, L)'",
               help="Create (or delete, d_mem(Id)) a memory instance before the events. Repeatable.")
 @bag_input_options
@@ -41,8 +42,8 @@ def query_command(program: str, goal: str, events, at, first: bool, max_delay, m
         raise click.BadParameter("must be a number", param_hint="--at")
     check_bag_input(events, bag)
     engine = Engine.from_compiled(compile_or_exit(program))
-    if max_delay is not None:
-        engine.set_flag("max_delay", repr(max_delay))
+    for flag, value in engine_flags({"max_delay": max_delay}):      # retalisc/run_options.py
+        engine.set_flag(flag, value)
     for request in memories:
         add_cli_memory(engine, request)
     if events:

@@ -16,49 +16,31 @@ import shutil
 import sys
 from typing import List, Optional
 
+from ..run_options import BY_NAME, arguments, keeps_python
+
 #: Rule labels passed in `--detections=L1,L2`: names (what the compiler makes of a label).
 _LABEL = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
 
 
-def swipl_arguments(events: str, rules: List[str], echo_input: bool = False, max_delay: Optional[float] = None,
-                    retraction_horizon: Optional[float] = None, max_steps="1000000", max_timers="100000",
-                    max_event_types="inf", drop_pending: bool = False, flush_timers: bool = False,
-                    allow_control: bool = False, strict: bool = False,
-                    limits: Optional[dict] = None) -> Optional[List[str]]:
+def swipl_arguments(events: str, rules: List[str], **options) -> Optional[List[str]]:
     """The arguments after `swipl PROGRAM.pl` that run as `retalisc run` does with these
-    options (prolog_runtime/retalis.pl, rtl_main/0), or None when the runtime's command line
-    cannot say them: an events file name the runtime would read as an option, or not UTF-8,
-    or a rule label that is not a name."""
+    run options (keyword arguments named as in retalisc/run_options.py, the one table of
+    them: `max_delay=0.5`, `strict=True`, ...; None or False: not given), or None when the
+    runtime's command line cannot say them: an events file name the runtime would read as an
+    option, or not UTF-8, a rule label that is not a name, or an option `retalisc run` serves
+    in Python (`--consumer-dir`, `--action-output`)."""
+    unknown = [name for name in options if name not in BY_NAME or not BY_NAME[name].cli]
+    if unknown:
+        raise TypeError(f"swipl_arguments: not run options of retalisc run: {', '.join(unknown)}")
     if events != "-" and events.startswith("-"):
         return None
     try:
         events.encode("utf-8")
     except UnicodeEncodeError:
         return None
-    if not all(_LABEL.match(rule) for rule in rules):
+    if not all(_LABEL.match(rule) for rule in rules) or keeps_python(options):
         return None
-    arguments = []
-    if echo_input:
-        arguments.append("--echo-input")
-    if max_delay is not None:
-        arguments.append(f"--max-delay={max_delay!r}")
-    if retraction_horizon is not None:
-        arguments.append(f"--retraction-horizon={retraction_horizon!r}")
-    arguments += [f"--max-steps={max_steps}", f"--max-timers={max_timers}"]
-    if max_event_types != "inf":
-        arguments.append(f"--max-event-types={max_event_types}")
-    for flag, value in (limits or {}).items():      # the input limits given (max_line_bytes: --max-line-bytes)
-        arguments.append(f"--{flag.replace('_', '-')}={value}")
-    if drop_pending:
-        arguments.append("--drop-pending")
-    if flush_timers:
-        arguments.append("--flush-timers")
-    if allow_control:
-        arguments.append("--allow-control")
-    if strict:
-        arguments.append("--strict")
-    arguments.append("--detections=" + ",".join(rules))
-    return arguments + [events]
+    return arguments({**options, "detections": list(rules)}) + [events]
 
 
 def swipl_command(program_file: str, arguments: List[str]) -> Optional[List[str]]:
