@@ -253,6 +253,11 @@ def run_python_api(transforms: List[tuple], looks: List[tuple]) -> dict:
         for target, source, n in items:
             engine.query(f"tf_lookup('{target}', '{source}', ns({n}), P, S, R)")
         cpu[g] = (time.process_time() - t0, len(items))
+    # the fixed cost of one Engine.query (a goal that does nothing but bind its variable)
+    t0 = time.process_time()
+    for _ in range(400):
+        engine.query("X = 1")
+    cpu["query_fixed"] = (time.process_time() - t0, 400)
     engine.close(run_pending=False)
     return {"cpu": cpu}
 
@@ -359,6 +364,10 @@ def report(results: List[dict]) -> List[str]:
                       f" ({api / binding:.1f}x)")
                 target(f"{name} lookup {g} through the Python API vs tf2's binding", api / binding, TARGETS["python"])
         if "python_api" in res:
+            fixed = per_op(res["python_api"]["cpu"], "query_fixed")
+            if fixed is not None:
+                print(f"the fixed cost of one Engine.query (X = 1): {fixed * 1e6:.1f} us "
+                      f"(the Python bridge's, not the tf library's)")
             fed = per_op(res["python_api"]["cpu"], "ingest_events")
             print(f"ingest as tf message events through Engine.feed_batch: {fed * 1e6:.1f} us/transform")
         if "accuracy" in res:
