@@ -639,25 +639,25 @@ static foreign_t pl_parent(term_t m, term_t tframe, term_t ttime, term_t parent)
 static foreign_t pl_frames(term_t m, term_t frames) {
     atom_t program;
     if (!PL_get_atom(m, &program)) return FALSE;
-    term_t list = PL_new_term_ref();
+    term_t list = PL_new_term_ref(), head = PL_new_term_ref();
+    int ok = TRUE;
     PL_put_nil(list);
+    pthread_mutex_lock(&lock);
     store *s = get_store(program, FALSE);
     if (s)
-        for (uint32_t h = s->count; h >= 1; h--)
-            if (!PL_cons_list(list, PL_new_term_ref(), list)) return FALSE;
-    /* fill the heads in order */
-    term_t tail = PL_copy_term_ref(list), head = PL_new_term_ref();
-    if (s)
-        for (uint32_t h = 1; h <= s->count; h++) {
-            if (!PL_get_list(tail, head, tail) || !PL_unify_atom(head, s->frames[h].name)) return FALSE;
+        for (uint32_t h = s->count; ok && h >= 1; h--) {
+            PL_put_atom(head, s->frames[h].name);
+            ok = PL_cons_list(list, head, list);
         }
-    return PL_unify(frames, list);
+    pthread_mutex_unlock(&lock);
+    return ok && PL_unify(frames, list);
 }
 
 static foreign_t pl_counts(term_t m, term_t links, term_t records, term_t bytes) {
     atom_t program;
     if (!PL_get_atom(m, &program)) return FALSE;
     int64_t nl = 0, nr = 0, nb = 0;
+    pthread_mutex_lock(&lock);
     store *s = get_store(program, FALSE);
     if (s) {
         nb = sizeof(store) + (int64_t)s->cap * sizeof(frame) + (int64_t)s->nslots * sizeof(uint32_t);
@@ -667,6 +667,7 @@ static foreign_t pl_counts(term_t m, term_t links, term_t records, term_t bytes)
             nb += (int64_t)f->cap * sizeof(rec);
         }
     }
+    pthread_mutex_unlock(&lock);
     return PL_unify_int64(links, nl) && PL_unify_int64(records, nr) && PL_unify_int64(bytes, nb);
 }
 
@@ -695,13 +696,21 @@ static foreign_t pl_clear(term_t m) {
    frame(Name, Kind) per frame in handle order, then r(Handle, Stamp, Parent, X, Y, Z, QX, QY, QZ, QW)
    per record in stamp order (rtl_tf.pl checks the terms before tf_c_load/2 is called). */
 
+static int dump(store *s, term_t list, term_t item);
+
 static foreign_t pl_dump(term_t m, term_t terms) {
     atom_t program;
     if (!PL_get_atom(m, &program)) return FALSE;
     term_t list = PL_new_term_ref(), item = PL_new_term_ref();
     PL_put_nil(list);
-    store *s = get_store(program, FALSE);
-    if (!s) return PL_unify(terms, list);
+    pthread_mutex_lock(&lock);
+    int ok = dump(get_store(program, FALSE), list, item);
+    pthread_mutex_unlock(&lock);
+    return ok && PL_unify(terms, list);
+}
+
+static int dump(store *s, term_t list, term_t item) {
+    if (!s) return TRUE;
     for (uint32_t h = s->count; h >= 1; h--) {
         frame *f = &s->frames[h];
         for (uint32_t k = f->n; k-- > 0;) {
@@ -721,7 +730,7 @@ static foreign_t pl_dump(term_t m, term_t terms) {
             || !PL_unify_term(item, PL_FUNCTOR, f_frame, PL_ATOM, f->name, PL_ATOM, kind)
             || !PL_cons_list(list, item, list)) return FALSE;
     }
-    return PL_unify(terms, list);
+    return TRUE;
 }
 
 static foreign_t pl_load(term_t m, term_t terms) {
