@@ -10,9 +10,10 @@ Recordings: the NAO recording (examples/nao/make_bag.py, 10 s: every transform o
 frame pairs, all kept in the 10 s buffer), and the evo and franka bags of the shared test
 data (`--bags DIR`, default /work/shared/data/bags; skipped when absent). For each: the ingest
 of every transform (CPU per transform), memory per kept transform (tf2: malloc's bytes in use;
-the library: the size of its store's clauses), lookups of a chain of 1 link and of the
+the library: tf_bytes/1, the C store's allocations or the size of the Prolog store's clauses), lookups of a chain of 1 link and of the
 longest chain up to 5 links at 2,000 stamps within the data (CPU per lookup), through the
-Python API (`Engine.query`, 200 lookups each) against tf2's binding, and the answers: every
+Python API (`Engine.query`, 200 lookups each, and the fixed cost of one call) against tf2's
+binding, and the answers: every
 lookup against tf2 C++ (within 1e-9 m and 1e-6 degree, same stamps, same failures) and the
 failures' reasons against tf2's on lookups outside the data and of unknown or unconnected
 frames (tests/tf_scenarios.py; tf2's Python binding carries times as double seconds, so these
