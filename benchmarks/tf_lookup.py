@@ -413,7 +413,7 @@ def plot(results: List[dict], path: Path) -> Optional[Path]:
     width = 0.16
     xs = range(len(labels))
     road = results[0].get("road", "prolog") if results else "prolog"
-    for k, (values, label) in enumerate([(ours, f"tf library ({road} store, in rules)"),
+    for k, (values, label) in enumerate([(ours, f"tf library ({'C' if road == 'c' else 'Prolog'} store, in rules)"),
                                          (prolog, "tf library (Prolog store, in rules)"), (cpp, "tf2 C++"),
                                          (api, "tf library via Engine.query"), (binding, "tf2 Python binding")]):
         ax.bar([x + (k - 2) * width for x in xs], [v or float("nan") for v in values], width, label=label)
