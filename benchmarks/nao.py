@@ -83,9 +83,9 @@ def without_sync() -> str:
     """The world poses computed as soon as a detection arrives, without synchronization."""
     start = APP.index("syncronized(")
     end = APP.index("% ---- A.6")
-    rule = """geometry_msgs__0__PoseStamped(std_msgs__0__Header(Seq, [Sec, NSec], Name),
+    rule = """marker_pose(Name, geometry_msgs__0__PoseStamped(std_msgs__0__Header(Seq, [Sec, NSec], odom),
         geometry_msgs__0__Pose(geometry_msgs__0__Point(P11, P12, P13),
-                               geometry_msgs__0__Quaternion(Q11, Q12, Q13, Q14)))
+                               geometry_msgs__0__Quaternion(Q11, Q12, Q13, Q14))))
   <- ar_marker(Seq, Name, RelPose, Sec, NSec)
      where transform_marker(RelPose, [Sec, NSec], [[P11, P12, P13], [Q11, Q12, Q13, Q14]]).
 
@@ -165,7 +165,8 @@ def measure(spec: dict) -> dict:
             "derived": stats.get("derived", 0), "series": series, "steady": steady, "latency": latency}
 
 
-POSE = re.compile(r"geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\d+,\[(\d+),(\d+)\],'?\"?([^,\"')]+)\"?'?\)")
+# a world pose, marker_pose(Marker, PoseStamped) (not its delivery, a bare PoseStamped)
+POSE = re.compile(r"marker_pose\('?\"?([^,\"')]+)\"?'?,geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\d+,\[(\d+),(\d+)\],")
 
 
 def output_latency(bag_path: str, dues: List[float], outputs: List[tuple]) -> dict:
@@ -197,7 +198,7 @@ def output_latency(bag_path: str, dues: List[float], outputs: List[tuple]) -> di
         if not match or match.groups() in seen:     # (its copy to the marker's consumer)
             continue
         seen.add(match.groups())
-        sec, nsec, marker = int(match.group(1)), int(match.group(2)), match.group(3)
+        marker, sec, nsec = match.group(1), int(match.group(2)), int(match.group(3))
         stamp = sec * 10**9 + nsec
         needed = [detections[(marker, sec, nsec)]]
         needed += [min((i for ns, i in covering[pair] if ns > stamp), default=len(dues) - 1) for pair in pairs]

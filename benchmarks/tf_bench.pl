@@ -1,14 +1,19 @@
 /*  The tf library on a scenario of benchmarks/tf_lookup.py (the input format of
     benchmarks/tf2_peer.cpp, same output), in rules' terms: tf_add/6 per transform and
-    tf_lookup/6 per lookup, CPU time from statistics/2, memory the size of the store's clauses.
+    tf_lookup/6 per lookup, CPU time from statistics/2, memory tf_bytes/1 (the C store's
+    allocations, or the size of the Prolog store's clauses), on the road given (c or prolog,
+    default c):
 
-        swipl benchmarks/tf_bench.pl < SCENARIO.txt
+        swipl benchmarks/tf_bench.pl [c|prolog] < SCENARIO.txt
 */
 :- use_module('../prolog_runtime/retalis').
 
 :- initialization(main, main).
 
 main :-
+    current_prolog_flag(argv, Argv),
+    (   Argv = [Road0|_] -> atom_string(Road, Road0) ; Road = c ),
+    tf_set_road(Road),
     read_string(user_input, _, Text),
     split_string(Text, "\n", "", Lines),
     foldl(parse, Lines, Ops, []), !,
@@ -55,10 +60,13 @@ same_group([lookup(G, T, S, N)|Ls], G, [T-S-N|Run], Rest) :- !,
     same_group(Ls, G, Run, Rest).
 same_group(Ls, _, [], Ls).
 
+% A run of lookups is timed as a whole, as a rule makes them (each answer made and left);
+% the answers are collected in a second, untimed, pass.
 time_run(G-Run, Answers0, Answers) :-
     statistics(cputime, T0),
-    findall(Pose-Stamp-Result, ( member(T-S-N, Run), tf_lookup(T, S, ns(N), Pose, Stamp, Result) ), Found),
+    forall(member(T-S-N, Run), tf_lookup(T, S, ns(N), _, _, _)),
     statistics(cputime, T1),
+    findall(Pose-Stamp-Result, ( member(T-S-N, Run), tf_lookup(T, S, ns(N), Pose, Stamp, Result) ), Found),
     length(Run, Count),
     Seconds is T1 - T0,
     (   retract(group_total(G, S0, C0)) -> true ; S0 = 0, C0 = 0 ),
@@ -76,8 +84,4 @@ answer_line(Pose-Stamp-Result, [Line|Lines], Lines) :-
     ).
 
 store_bytes(Bytes) :-
-    aggregate_all(sum(B),
-                  ( member(P, [record/5, static_record/5, frame/4, handle_frame/3, range/3]),
-                    P = Name/Arity, functor(H, Name, Arity),
-                    predicate_property(rtl_tf:H, size(B)) ),
-                  Bytes).
+    tf_bytes(Bytes).

@@ -10,16 +10,19 @@ Recordings: the NAO recording (examples/nao/make_bag.py, 10 s: every transform o
 frame pairs, all kept in the 10 s buffer), and the evo and franka bags of the shared test
 data (`--bags DIR`, default /work/shared/data/bags; skipped when absent). For each: the ingest
 of every transform (CPU per transform), memory per kept transform (tf2: malloc's bytes in use;
-the library: the size of its store's clauses), lookups of a chain of 1 link and of the
+the library: tf_bytes/1, the C store's allocations or the size of the Prolog store's clauses), lookups of a chain of 1 link and of the
 longest chain up to 5 links at 2,000 stamps within the data (CPU per lookup), through the
-Python API (`Engine.query`, 200 lookups each) against tf2's binding, and the answers: every
+Python API (`Engine.query`, 200 lookups each, and the fixed cost of one call) against tf2's
+binding, and the answers: every
 lookup against tf2 C++ (within 1e-9 m and 1e-6 degree, same stamps, same failures) and the
 failures' reasons against tf2's on lookups outside the data and of unknown or unconnected
 frames (tests/tf_scenarios.py; tf2's Python binding carries times as double seconds, so these
 compare times within 1 us, and the latest common time is compared with tf2 C++ only).
 
-The library is measured on its Prolog road (tf_add/6 and tf_lookup/6 called from Prolog,
-benchmarks/tf_bench.pl): no C store is behind it yet.
+The library is measured on both its roads (tf_add/6 and tf_lookup/6 called from Prolog,
+benchmarks/tf_bench.pl): the C store (prolog_runtime/c/rtl_tfstore.c), which the targets are
+for, and the Prolog store, the reference, printed beside it (its answers are checked too).
+Without the C store built, the targets are measured on the Prolog road and say so.
 
 Usage: python benchmarks/tf_lookup.py [--quick] [--bags DIR] [--out-dir DIR] [--no-plot]
 Prints each figure with its ratio to the peer and `target met|MISSED` lines; writes
@@ -203,8 +206,12 @@ def parse_run(text: str) -> dict:
     return {"answers": answers, "cpu": cpu, "heap": heap, "kept": kept}
 
 
-def run_library(text: str) -> dict:
-    run = subprocess.run(["swipl", str(ROOT / "benchmarks" / "tf_bench.pl")], input=text, capture_output=True,
+def c_store_built() -> bool:
+    return any((ROOT / "prolog_runtime" / "foreign").glob("rtl_tfstore.*"))
+
+
+def run_library(text: str, road: str) -> dict:
+    run = subprocess.run(["swipl", str(ROOT / "benchmarks" / "tf_bench.pl"), road], input=text, capture_output=True,
                          text=True, check=True)
     return parse_run(run.stdout)
 
@@ -247,6 +254,11 @@ def run_python_api(transforms: List[tuple], looks: List[tuple]) -> dict:
         for target, source, n in items:
             engine.query(f"tf_lookup('{target}', '{source}', ns({n}), P, S, R)")
         cpu[g] = (time.process_time() - t0, len(items))
+    # the fixed cost of one Engine.query (a goal that does nothing but bind its variable)
+    t0 = time.process_time()
+    for _ in range(400):
+        engine.query("X = 1")
+    cpu["query_fixed"] = (time.process_time() - t0, 400)
     engine.close(run_pending=False)
     return {"cpu": cpu}
 
@@ -280,12 +292,18 @@ def measure(name: str, transforms: List[tuple], quick: bool, exe: Optional[Path]
     looks = lookups(groups, 200 if quick else 2000)
     text = scenario_text(transforms, looks)
     res: dict = {"name": name, "transforms": len(transforms), "groups": {g: list(v[:2]) for g, v in groups.items()}}
-    ours = run_library(text)
+    road = "c" if c_store_built() else "prolog"
+    ours = run_library(text, road)
+    res["road"] = road
     res["library"] = {"cpu": ours["cpu"], "heap": ours["heap"], "kept": ours["kept"]}
+    reference = run_library(text, "prolog") if road == "c" else ours
+    res["prolog_road"] = {"cpu": reference["cpu"], "heap": reference["heap"], "kept": reference["kept"]}
+    res["roads_agree"] = accuracy(ours["answers"], reference["answers"])
     if exe is not None:
         cpp = run_cpp(exe, text)
         res["cpp"] = {"cpu": cpp["cpu"], "heap": cpp["heap"]}
         res["accuracy"] = accuracy(ours["answers"], cpp["answers"])
+        res["prolog_accuracy"] = accuracy(reference["answers"], cpp["answers"])
     if python:
         res["tf2_python"] = {"cpu": run_tf2_python(text)["cpu"]}
         api_looks = [x for g in groups for x in [look for look in looks if look[0] == g][:200]]
@@ -312,22 +330,34 @@ def report(results: List[dict]) -> List[str]:
 
     for res in results:
         name = res["name"]
-        lib, cpp = res["library"], res.get("cpp")
+        lib, cpp, ref = res["library"], res.get("cpp"), res["prolog_road"]
+        road = res.get("road", "prolog")
         print(f"== {name}: {res['transforms']:,} transforms, kept {lib['kept']:,}; lookups "
-              + ", ".join(f"{g} {t} <- {s}" for g, (t, s) in res["groups"].items()))
+              + ", ".join(f"{g} {t} <- {s}" for g, (t, s) in res["groups"].items())
+              + f"; targets on the {road} road")
+
+        def ratio_text(mine: Optional[float], other: Optional[float]) -> str:
+            return f" ({mine / other:.1f}x)" if mine and other else ""
+
         ingest = per_op(lib["cpu"], "ingest")
         peer = per_op(cpp["cpu"], "ingest") if cpp else None
-        print(f"ingest: library {ingest * 1e6:.2f} us/transform"
-              + (f", tf2 C++ {peer * 1e6:.3f} us ({ingest / peer:.1f}x)" if peer else ""))
+        slow = per_op(ref["cpu"], "ingest")
+        print(f"ingest: library {road} {ingest * 1e6:.2f} us/transform"
+              + (f", tf2 C++ {peer * 1e6:.3f} us{ratio_text(ingest, peer)}" if peer else "")
+              + f"; Prolog road {slow * 1e6:.2f} us{ratio_text(slow, peer)}")
         target(f"{name} ingest in rules vs tf2 C++", ingest / peer if peer else None, TARGETS["ingest"])
         if cpp and cpp["heap"]:
-            ours_b, theirs_b = lib["heap"] / lib["kept"], cpp["heap"] / lib["kept"]
-            print(f"memory: library {ours_b:.0f} B/kept transform, tf2 C++ {theirs_b:.0f} B ({ours_b / theirs_b:.1f}x)")
+            ours_b, theirs_b, ref_b = lib["heap"] / lib["kept"], cpp["heap"] / lib["kept"], ref["heap"] / ref["kept"]
+            print(f"memory: library {road} {ours_b:.0f} B/kept transform, tf2 C++ {theirs_b:.0f} B "
+                  f"({ours_b / theirs_b:.1f}x); Prolog road {ref_b:.0f} B ({ref_b / theirs_b:.1f}x)")
             target(f"{name} memory per transform vs tf2", ours_b / theirs_b, TARGETS["memory"])
         for g in res["groups"]:
             mine = per_op(lib["cpu"], g)
             other = per_op(cpp["cpu"], g) if cpp else None
-            print(f"lookup {g}: library {mine * 1e6:.2f} us" + (f", tf2 C++ {other * 1e6:.3f} us ({mine / other:.1f}x)" if other else ""))
+            slow = per_op(ref["cpu"], g)
+            print(f"lookup {g}: library {road} {mine * 1e6:.2f} us"
+                  + (f", tf2 C++ {other * 1e6:.3f} us{ratio_text(mine, other)}" if other else "")
+                  + f"; Prolog road {slow * 1e6:.2f} us{ratio_text(slow, other)}")
             target(f"{name} lookup {g} in rules vs tf2 C++", mine / other if other else None, TARGETS["lookup"])
             if "python_api" in res:
                 api, binding = per_op(res["python_api"]["cpu"], g), per_op(res["tf2_python"]["cpu"], g)
@@ -335,6 +365,10 @@ def report(results: List[dict]) -> List[str]:
                       f" ({api / binding:.1f}x)")
                 target(f"{name} lookup {g} through the Python API vs tf2's binding", api / binding, TARGETS["python"])
         if "python_api" in res:
+            fixed = per_op(res["python_api"]["cpu"], "query_fixed")
+            if fixed is not None:
+                print(f"the fixed cost of one Engine.query (X = 1): {fixed * 1e6:.1f} us "
+                      f"(the Python bridge's, not the tf library's)")
             fed = per_op(res["python_api"]["cpu"], "ingest_events")
             print(f"ingest as tf message events through Engine.feed_batch: {fed * 1e6:.1f} us/transform")
         if "accuracy" in res:
@@ -343,6 +377,13 @@ def report(results: List[dict]) -> List[str]:
                   f"{acc['max_degree']:.2e} degree, {acc['mismatched']} with another stamp or failure")
             ok = acc["max_m"] <= 1e-9 and acc["max_degree"] <= 1e-6 and acc["mismatched"] == 0
             lines.append(f"target {'met' if ok else 'MISSED'}: {name} answers equal to tf2 (1e-9 m, 1e-6 degree)")
+        if "prolog_accuracy" in res:
+            acc = res["prolog_accuracy"]
+            print(f"answers of the Prolog road vs tf2 C++: max {acc['max_m']:.2e} m, {acc['max_degree']:.2e} degree, "
+                  f"{acc['mismatched']} with another stamp or failure")
+        agree = res["roads_agree"]
+        print(f"the two roads: {agree['compared']:,} lookups, max {agree['max_m']:.2e} m, "
+              f"{agree['max_degree']:.2e} degree apart, {agree['mismatched']} with another stamp or failure")
         if "reasons" in res:
             rs = res["reasons"]
             print(f"failures vs tf2's binding: {rs['failed']} lookups failed there, {len(rs['differences'])} differ "
@@ -359,20 +400,23 @@ def plot(results: List[dict], path: Path) -> Optional[Path]:
     plt = pyplot()
     if plt is None:
         return None
-    labels, ours, cpp, api, binding = [], [], [], [], []
+    labels, ours, prolog, cpp, api, binding = [], [], [], [], [], []
     for res in results:
         for g in ["ingest", *res["groups"]]:
             labels.append(f"{res['name']}\n{g}")
             ours.append(per_op(res["library"]["cpu"], g) * 1e6)
+            prolog.append(per_op(res["prolog_road"]["cpu"], g) * 1e6)
             cpp.append((per_op(res["cpp"]["cpu"], g) or 0) * 1e6 if "cpp" in res else 0)
             api.append((per_op(res["python_api"]["cpu"], g) or 0) * 1e6 if "python_api" in res and g != "ingest" else 0)
             binding.append((per_op(res["tf2_python"]["cpu"], g) or 0) * 1e6 if "tf2_python" in res else 0)
     fig, ax = plt.subplots(figsize=(max(8, 1.3 * len(labels)), 4.5))
-    width = 0.2
+    width = 0.16
     xs = range(len(labels))
-    for k, (values, label) in enumerate([(ours, "tf library (Prolog, in rules)"), (cpp, "tf2 C++"),
+    road = results[0].get("road", "prolog") if results else "prolog"
+    for k, (values, label) in enumerate([(ours, f"tf library ({'C' if road == 'c' else 'Prolog'} store, in rules)"),
+                                         (prolog, "tf library (Prolog store, in rules)"), (cpp, "tf2 C++"),
                                          (api, "tf library via Engine.query"), (binding, "tf2 Python binding")]):
-        ax.bar([x + (k - 1.5) * width for x in xs], [v or float("nan") for v in values], width, label=label)
+        ax.bar([x + (k - 2) * width for x in xs], [v or float("nan") for v in values], width, label=label)
     ax.set_yscale("log")
     ax.set_ylabel("CPU per operation (us)")
     ax.set_xticks(list(xs))

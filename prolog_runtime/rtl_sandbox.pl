@@ -146,6 +146,8 @@ builtin(any,  rtl_tf:tf_parent(_, _, _), []).
 builtin(any,  rtl_tf:tf_links(_), []).
 builtin(any,  rtl_tf:tf_records(_), []).
 builtin(any,  rtl_tf:tf_waiting(_), []).
+builtin(any,  rtl_tf:tf_road(_), []).
+builtin(any,  rtl_tf:tf_bytes(_), []).
 builtin(rule, rtl_tf:tf_wait(_, _, _, _, Goal), [Goal]).
 builtin(any,  rtl_math:G, []) :-
     (   var(G) -> true ; predicate_property(rtl_math:G, exported) ).

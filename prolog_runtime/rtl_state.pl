@@ -96,12 +96,7 @@ state_predicate(rtl_sync, declared_delay(program, atom, integer, data)).
 state_predicate(rtl_sync, learned_delay(program, atom, integer, data)).
 state_predicate(rtl_sync, updated_until(program, atom, integer, data)).
 state_predicate(rtl_sync, goal_set_of(program, atom, integer, data, data)).
-state_predicate(rtl_tf, frame(program, data, integer, atom)).          % the tf library's tree
-state_predicate(rtl_tf, handle_frame(integer, data, atom)).
-state_predicate(rtl_tf, static_record(integer, data, data, data, data)).
-state_predicate(rtl_tf, range(integer, integer, integer)).
-state_predicate(rtl_tf, record(integer, data, data, data, data)).
-state_predicate(rtl_tf, buffer_ns(program, integer)).
+state_predicate(rtl_tf, buffer_ns(program, integer)).           % the tree itself: state_data/4
 state_predicate(rtl_tf, waiting(program, data, data, data, data, data, goal)).
 state_predicate(rtl_time_index, entry(data, data, data, data, data)).
 state_predicate(rtl_time_index, low_bucket(data, data, data, data)).
@@ -158,6 +153,16 @@ state_global(rtl_seen_generation, seen_module).
 state_global(Key, integer) :-
     rtl_stat(Key, _).
 
+%!  state_data(?Module, ?Dump, ?Check, ?Load) is nondet.
+%
+%   State that Module keeps outside the Prolog database (the tf library's C store), as
+%   data: call(Module:Dump, Terms) gives it as a list of ground terms (written one a line,
+%   `data(Module, Term)`); on restore call(Module:Check, Terms) succeeds for the snapshot's
+%   terms of Module (else the snapshot is refused and nothing changes), and once the rest of
+%   the state is in place call(Module:Load, Terms) replaces the held state by them.
+
+state_data(rtl_tf, tf_state_dump, tf_state_check, tf_state_load).
+
 global_family('rtl_detected ', data).
 global_family('$rtl_slr_bounds_', data).
 
@@ -165,6 +170,7 @@ global_family('$rtl_slr_bounds_', data).
 state_hook(rtl_subscriptions:deliver).
 state_hook(rtl_sync:clock_moved).
 state_hook(rtl_tf:observe).
+state_hook(rtl_tf:clock_moved).
 state_hook(rtl_sync:availability).
 state_hook(rtl_trace:log_event).
 state_hook(rtl_trace:trace_phase).
@@ -239,9 +245,11 @@ write_state(Out, V, Identity, Program) :-
     findall(trie(Id, Es), member(Id-Es, TrieEntries), Tries),
     findall(global(K, Val), member(K-Val, Globals), GlobalTerms),
     findall(flag(K, Val), member(K-Val, Flags), FlagTerms),
+    findall(data(Mod, T), ( state_data(Mod, Dump, _, _), current_module(Mod), call(Mod:Dump, Ts), member(T, Ts) ),
+            DataTerms),
     append(Plain, WithRefs, Facts0),               % clause references point into the others
     append(Facts0, Facts),
-    append([Tries, Facts, GlobalTerms, FlagTerms], Rest),
+    append([Tries, Facts, GlobalTerms, FlagTerms, DataTerms], Rest),
     forall(member(T, Terms), write_term_line(Out, T)),
     length(Terms, Count),
     write_term_line(Out, end(Count)).
@@ -501,7 +509,9 @@ check_snapshot(Terms, Identity, Program, Plan) :-
     ->  Stores = []
     ;   state_error("an active-query snapshot holds no event rules", [])
     ),
-    partition_terms(Rest, TrieTerms, FactTerms, GlobalTerms, FlagTerms),
+    partition(data_term, Rest, DataTerms, Rest1),
+    partition_terms(Rest1, TrieTerms, FactTerms, GlobalTerms, FlagTerms),
+    check_data(DataTerms, Modules, Data),
     new_tries(TrieTerms, OldM, M, Map),
     (   Which == all                    % active queries of this process keep their code
     ->  findall(P-K, ( current_predicate(user:'$aq_kind'/2), user:'$aq_kind'(P, K) ), Kinds)
@@ -517,7 +527,27 @@ check_snapshot(Terms, Identity, Program, Plan) :-
     ),
     maplist(check_global(Ctx, Map), GlobalTerms, Globals),
     maplist(check_flag, FlagTerms, Flags),
-    Plan = plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map).
+    Plan = plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, Data).
+
+data_term(data(_, _)).
+
+% check_data(+DataTerms, +Modules, -Data): Mod-Terms for each module of state_data/4 the
+% snapshot replaces, its terms checked by its Check.
+check_data(DataTerms, Modules, Data) :-
+    (   member(data(Mod, _), DataTerms), \+ ( state_data(Mod, _, _, _), memberchk(Mod, Modules) )
+    ->  state_error("the snapshot holds data of ~q, which is not state", [Mod])
+    ;   true
+    ),
+    findall(Mod-Check-Ts,
+            ( state_data(Mod, _, Check, _), memberchk(Mod, Modules),
+              findall(T, member(data(Mod, T), DataTerms), Ts) ),
+            Data0),
+    forall(member(Mod-Check-Ts, Data0),
+           (   ground(Ts), catch(call(Mod:Check, Ts), _, fail)
+           ->  true
+           ;   state_error("the snapshot's data of ~q is not its state", [Mod])
+           )),
+    findall(Mod-Ts, member(Mod-_-Ts, Data0), Data).
 
 rename(OldM, NewM, T0, T) :-
     empty_assoc(None),
@@ -718,7 +748,7 @@ state_error(Format, Args) :-
     format(string(Message), Format, Args),
     throw(error(rtl_state_error(Message), _)).
 
-apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map)) :-
+apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, Data)) :-
     (   Which == all -> rtl_rules_restore_state(M, Added, Removed) ; true ),
     % A module loaded after the snapshot was taken (active queries next to an event program
     % in one process) keeps its state: only the modules the snapshot has are replaced.
@@ -733,7 +763,8 @@ apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map))
     forall(member(K-V, Globals), nb_setval(K, V)),
     captured_flags(CurrentFlags),               % 0 (as a new flag) unless the snapshot has it
     forall(( member(K-_, CurrentFlags), \+ memberchk(K-_, Flags), owned_by(K, Modules) ), flag(K, _, 0)),
-    forall(member(K-V, Flags), flag(K, _, V)).
+    forall(member(K-V, Flags), flag(K, _, V)),
+    forall(( member(Mod-Ts, Data), state_data(Mod, _, _, Load) ), call(Mod:Load, Ts)).
 
 plain_fact(clause(_, _, _)).
 plain_fact(fact(M, H)) :-

@@ -11,7 +11,10 @@
             tf_links/1,                 % -Count
             tf_records/1,               % -Count
             tf_waiting/1,               % -Count
-            tf_clear/0
+            tf_clear/0,
+            tf_road/1,                  % -Road
+            tf_set_road/1,              % +Road
+            tf_bytes/1                  % -Bytes
           ]).
 
 /** <module> tf: where was frame X relative to frame Y at time T (docs/tf.md)
@@ -48,11 +51,55 @@ a link whose parent changed between them are not interpolated, the older one is 
 fails with tf2's reasons. A pose is `[[X, Y, Z], [QX, QY, QZ, QW]]`: the pose of Source's
 origin in Target (tf2's `lookupTransform(Target, Source, Time)`).
 
-The store is per program (rtl_clear/0 empties it). The tests compare it with tf2's
-BufferCore (tests/test_tf.py).
+The store is per program (rtl_clear/0 empties it). It has two roads: the C store
+(`foreign/rtl_tfstore`, c/rtl_tfstore.c, built by setup.sh), used when it is built, and the
+Prolog store of this file, the reference, used without the C library or after
+tf_set_road(prolog). Both hold the same tree and give the same answers: the tests compare
+both roads with each other and with tf2's BufferCore (tests/test_tf.py). The tree is state
+in snapshots as data (rtl_state:state_data/4: tf_state_dump/1, tf_state_check/1,
+tf_state_load/1), the same on both roads.
 */
 
 :- use_module(rtl_ele).
+:- use_module(rtl_foreign).
+:- use_module(library(pairs)).
+:- use_module(library(assoc)).
+:- use_module(library(aggregate)).
+:- use_module(library(error)).
+:- use_module(library(apply)).
+:- use_module(library(lists)).
+
+% c_road: the C store is loaded and used (a property of the process, not state)
+:- dynamic c_road/0, c_loaded/0.
+
+load_c_store :-
+    (   rtl_load_foreign(rtl_tfstore, tf_c_lookup/7)
+    ->  retractall(c_loaded), assertz(c_loaded),
+        retractall(c_road), assertz(c_road)
+    ;   true
+    ).
+
+:- load_c_store.
+
+%!  tf_road(-Road) is det.
+%!  tf_set_road(+Road) is det.
+%
+%   The store in use: `c` (the C store, when it is built) or `prolog` (the reference).
+%   Setting the road empties the running program's tree first.
+
+tf_road(Road) :-
+    (   c_road -> Road = c ; Road = prolog ).
+
+tf_set_road(Road) :-
+    must_be(oneof([c, prolog]), Road),
+    (   Road == c, \+ c_loaded
+    ->  existence_error(foreign_library, rtl_tfstore)
+    ;   true
+    ),
+    current_program(M),
+    clear(M),
+    retractall(c_road),
+    (   Road == c -> assertz(c_road) ; true ).
 
 :- meta_predicate tf_wait(+, +, +, +, 0).
 
@@ -135,14 +182,25 @@ header_fields(std_msgs__0__Header(Stamp, Frame), Stamp, Frame).           % ROS 
 %   Add one transform, as a tf message does: Translation `[X, Y, Z]`, Rotation
 %   `[QX, QY, QZ, QW]`, Kind `dynamic` or `static`, Stamp a time (not `latest`).
 
-tf_add(Parent, Child, Time, [X, Y, Z], [QX, QY, QZ, QW], Kind) :-
-    must_be(oneof([dynamic, static]), Kind),
-    time_ns(Time, Stamp),
-    must_be(integer, Stamp),
+tf_add(Parent, Child, Time, V, Q, Kind) :-
     current_program(M),
-    add(M, Parent, Child, Stamp, v(X, Y, Z), q(QX, QY, QZ, QW), Kind),
+    (   c_road, tf_c_add(M, Parent, Child, Time, V, Q, Kind)
+    ->  true
+    ;   V = [X, Y, Z], Q = [QX, QY, QZ, QW],
+        must_be(oneof([dynamic, static]), Kind),
+        time_ns(Time, Stamp),
+        must_be(integer, Stamp),
+        add(M, Parent, Child, Stamp, v(X, Y, Z), q(QX, QY, QZ, QW), Kind)
+    ),
     wake(M).
 
+add(M, Parent0, Child0, Stamp, v(X, Y, Z), q(QX, QY, QZ, QW), Kind) :-
+    c_road,
+    !,
+    (   tf_c_add(M, Parent0, Child0, ns(Stamp), [X, Y, Z], [QX, QY, QZ, QW], Kind)
+    ->  true
+    ;   frame_id(Parent0, _), frame_id(Child0, _)      % raises for a frame id that is not text
+    ).                                                  % (a stamp past 64 bits: ignored)
 add(M, Parent0, Child0, Stamp, V, Q, Kind) :-
     frame_id(Parent0, Parent),
     frame_id(Child0, Child),
@@ -287,7 +345,8 @@ tf_set_buffer(Seconds) :-
     current_program(M),
     Ns is round(Seconds * 1_000_000_000),
     retractall(buffer_ns(M, _)),
-    assertz(buffer_ns(M, Ns)).
+    assertz(buffer_ns(M, Ns)),
+    (   c_loaded -> tf_c_set_buffer(M, Ns) ; true ).
 
 tf_buffer(Seconds) :-
     current_program(M),
@@ -433,6 +492,18 @@ tf_lookup(Target, Source, Time, Pose) :-
 %     - `loop`: the tree has a cycle (tf2: "the tf tree is invalid").
 
 tf_lookup(Target0, Source0, Time0, Pose, Stamp, Result) :-
+    c_road,
+    !,
+    current_program(M),
+    (   tf_c_lookup(M, Target0, Source0, Time0, Pose1, Stamp1, Result1)
+    ->  true
+    ;   frame_id(Target0, Target),                  % raises for what is not a frame or a time
+        frame_id(Source0, Source),
+        time_ns(Time0, Time1),
+        tf_c_lookup(M, Target, Source, ns(Time1), Pose1, Stamp1, Result1)
+    ),
+    Pose = Pose1, Stamp = Stamp1, Result = Result1.
+tf_lookup(Target0, Source0, Time0, Pose, Stamp, Result) :-
     frame_id(Target0, Target),
     frame_id(Source0, Source),
     time_ns(Time0, Time1),
@@ -455,6 +526,18 @@ stamp(Ns, [S, NS]) :-
 %   True when tf_lookup/6 would give `ok` (tf2's canTransform: false for unknown frames, but
 %   true for a frame and itself, known or not, as tf2 short-circuits it).
 
+tf_can_transform(Target0, Source0, Time0) :-
+    c_road,
+    !,
+    current_program(M),
+    (   tf_c_lookup(M, Target0, Source0, Time0, _, _, Result)
+    ->  true
+    ;   frame_id(Target0, Target),
+        frame_id(Source0, Source),
+        time_ns(Time0, Time),
+        tf_c_lookup(M, Target, Source, ns(Time), _, _, Result)
+    ),
+    Result == ok.
 tf_can_transform(Target0, Source0, Time0) :-
     frame_id(Target0, Target),
     frame_id(Source0, Source),
@@ -672,7 +755,8 @@ time_ns(T, _) :-
 %   Run Goal once as soon as tf_can_transform(Target, Source, Time) holds: now, or when
 %   a tf message makes it hold, with the event being processed then. When the clock
 %   (event time) passes Time plus Timeout seconds first, Goal is dropped (tf2's
-%   waitForTransform returning false). Time cannot be `latest`.
+%   waitForTransform returning false): checked as each event moves the clock (an output
+%   hook while goals wait), not only when tf messages arrive. Time cannot be `latest`.
 
 tf_wait(Target, Source, Time0, Timeout, Goal) :-
     time_ns(Time0, Time),
@@ -683,8 +767,28 @@ tf_wait(Target, Source, Time0, Timeout, Goal) :-
     ;   current_program(M),
         flag(rtl_tf_wait, N0, N0 + 1),
         Deadline is Time / 1_000_000_000 + Timeout,
-        assertz(waiting(M, N0, Target, Source, Time, Deadline, Goal))
+        assertz(waiting(M, N0, Target, Source, Time, Deadline, Goal)),
+        rtl_add_output_hook(rtl_tf:clock_moved)
     ).
+
+%   The output hook while goals wait: a goal whose deadline the clock has passed is
+%   dropped (for a tf message, observe/4 looks first whether it makes the lookup possible).
+clock_moved(Event, _, _, add) :-
+    \+ tf_message_type(Event),
+    !,
+    rtl_clock(Clock),
+    current_program(M),
+    (   number(Clock)
+    ->  forall(( waiting(M, N, _, _, _, Deadline, _), Clock > Deadline ),
+               retract(waiting(M, N, _, _, _, _, _)))
+    ;   true
+    ),
+    waiting_hook.
+clock_moved(_, _, _, _).
+
+% The hook stays while a goal waits.
+waiting_hook :-
+    (   waiting(_, _, _, _, _, _, _) -> true ; rtl_remove_output_hook(rtl_tf:clock_moved) ).
 
 %!  tf_waiting(-Count) is det.
 %
@@ -698,7 +802,8 @@ wake(M) :-
     (   waiting(M, _, _, _, _, _, _)
     ->  rtl_clock(Clock),
         forall(waiting(M, N, Target, Source, Time, Deadline, Goal),
-               wake_one(M, N, Target, Source, Time, Deadline, Goal, Clock))
+               wake_one(M, N, Target, Source, Time, Deadline, Goal, Clock)),
+        waiting_hook
     ;   true
     ).
 
@@ -719,12 +824,24 @@ wake_one(M, N, Target, Source, Time, Deadline, Goal, Clock) :-
 
 tf_frames(Frames) :-
     current_program(M),
-    findall(F, frame(M, F, _, _), Frames).
+    (   c_road
+    ->  tf_c_frames(M, Frames)
+    ;   findall(H-F, frame(M, F, H, _), Pairs0),
+        keysort(Pairs0, Pairs),
+        pairs_values(Pairs, Frames)
+    ).
 
 %!  tf_parent(+Frame, +Time, -Parent) is semidet.
 %
 %   The parent of Frame at Time (tf2's `_getParent`).
 
+tf_parent(Frame0, Time0, Parent) :-
+    c_road,
+    !,
+    frame_id(Frame0, Frame),
+    time_ns(Time0, Time),
+    current_program(M),
+    tf_c_parent(M, Frame, ns(Time), Parent).
 tf_parent(Frame0, Time0, Parent) :-
     frame_id(Frame0, Frame),
     time_ns(Time0, Time),
@@ -741,9 +858,19 @@ tf_parent(Frame0, Time0, Parent) :-
 %   The number of frames that have a parent (links), and of transforms kept.
 
 tf_links(Count) :-
+    c_road,
+    !,
+    current_program(M),
+    tf_c_counts(M, Count, _, _).
+tf_links(Count) :-
     current_program(M),
     aggregate_all(count, ( frame(M, _, _, Kind), Kind \== none ), Count).
 
+tf_records(Count) :-
+    c_road,
+    !,
+    current_program(M),
+    tf_c_counts(M, _, Count, _).
 tf_records(Count) :-
     current_program(M),
     aggregate_all(sum(N),
@@ -762,6 +889,7 @@ tf_clear :-
     clear(M).
 
 clear(M) :-
+    (   c_loaded -> tf_c_clear(M) ; true ),
     forall(retract(frame(M, _, H, _)),
            ( retractall(handle_frame(H, _, _)),
              retractall(static_record(H, _, _, _, _)),
@@ -769,12 +897,123 @@ clear(M) :-
              ->  forall(between(First, Last, N), ( key(H, N, K), retractall(record(K, _, _, _, _)) ))
              ;   true
              ) )),
-    retractall(waiting(M, _, _, _, _, _, _)).
+    retractall(waiting(M, _, _, _, _, _, _)),
+    waiting_hook.
 
 :- multifile rtl_ele:clear_hook/0.
 rtl_ele:clear_hook :-
     current_program(M),
     clear(M).
+
+%!  tf_bytes(-Bytes) is det.
+%
+%   The memory the running program's tree takes: on the C road the bytes its store
+%   allocated, on the Prolog road the size of its clauses.
+
+tf_bytes(Bytes) :-
+    current_program(M),
+    (   c_road
+    ->  tf_c_counts(M, _, _, Bytes)
+    ;   aggregate_all(sum(B),
+                      ( member(P, [record/5, static_record/5, frame/4, handle_frame/3, range/3]),
+                        P = Name/Arity, functor(H, Name, Arity),
+                        predicate_property(rtl_tf:H, size(B)) ),
+                      Bytes)
+    ).
+
+% ---- the tree in snapshots (rtl_state:state_data/4) ----------------------------------------
+%
+%   The same data on both roads: frame(Frame, Kind) per frame in the order they were first
+%   named (Kind static, dynamic or none), then r(I, Stamp, P, X, Y, Z, QX, QY, QZ, QW) per
+%   record of the I-th frame, in stamp order, P the number of its parent.
+
+%!  tf_state_dump(-Terms) is det.
+%!  tf_state_check(+Terms) is semidet.
+%!  tf_state_load(+Terms) is det.
+
+tf_state_dump(Terms) :-
+    current_program(M),
+    (   c_road
+    ->  tf_c_dump(M, Terms)
+    ;   findall(H-(F-K), frame(M, F, H, K), Pairs0),
+        keysort(Pairs0, Pairs),
+        findall(H-I, nth1(I, Pairs, H-_), Numbers),
+        list_to_assoc(Numbers, ByHandle),
+        findall(frame(F, K), member(_-(F-K), Pairs), Frames),
+        findall(R, ( member(H-(_-K), Pairs), prolog_record(K, H, ByHandle, R) ), Records),
+        append(Frames, Records, Terms)
+    ).
+
+prolog_record(static, H, ByHandle, r(I, S, P, X, Y, Z, QX, QY, QZ, QW)) :-
+    static_record(H, PH, S, v(X, Y, Z), q(QX, QY, QZ, QW)),
+    get_assoc(H, ByHandle, I),
+    get_assoc(PH, ByHandle, P).
+prolog_record(dynamic, H, ByHandle, r(I, S, P, X, Y, Z, QX, QY, QZ, QW)) :-
+    range(H, First, Last),
+    between(First, Last, N),
+    key(H, N, Key),
+    record(Key, S, PH, v(X, Y, Z), q(QX, QY, QZ, QW)),
+    get_assoc(H, ByHandle, I),
+    get_assoc(PH, ByHandle, P).
+
+tf_state_check(Terms) :-
+    is_list(Terms),
+    partition(is_frame_term, Terms, Frames, Records),
+    append(Frames, Records, Terms),             % the frames first
+    length(Frames, N),
+    forall(member(frame(F, K), Frames), ( atom(F), memberchk(K, [static, dynamic, none]) )),
+    findall(F, member(frame(F, _), Frames), Names),
+    sort(Names, Unique), length(Unique, N),
+    check_records(Records, Frames, N, 0, none),
+    forall(nth1(I, Frames, frame(_, K)),
+           (   K == none -> true ; memberchk(r(I, _, _, _, _, _, _, _, _, _), Records) )).
+
+is_frame_term(frame(_, _)).
+
+% records by frame (ascending numbers), each frame's in increasing stamp order, one for a static frame
+check_records([], _, _, _, _).
+check_records([r(I, S, P, X, Y, Z, QX, QY, QZ, QW)|Rs], Frames, N, I0, S0) :-
+    integer(I), integer(S), integer(P),
+    between(1, N, I), between(1, N, P),
+    I >= I0,
+    nth1(I, Frames, frame(_, K)),
+    K \== none,
+    maplist(number, [X, Y, Z, QX, QY, QZ, QW]),
+    (   I =:= I0 -> K == (dynamic), S0 \== none, S > S0 ; true ),
+    check_records(Rs, Frames, N, I, S).
+
+tf_state_load(Terms) :-
+    current_program(M),
+    clear(M),
+    (   c_road
+    ->  tf_c_load(M, Terms),
+        buffer(M, Buffer),
+        tf_c_set_buffer(M, Buffer)
+    ;   load_prolog(M, Terms)
+    ).
+
+load_prolog(M, Terms) :-
+    findall(F-K, member(frame(F, K), Terms), Frames),
+    foldl(load_frame(M), Frames, Handles, 1, _),
+    forall(member(r(I, S, P, X, Y, Z, QX, QY, QZ, QW), Terms),
+           (   nth1(I, Handles, H-K), nth1(P, Handles, PH-_),
+               load_record(K, H, S, PH, v(X, Y, Z), q(QX, QY, QZ, QW))
+           )).
+
+load_frame(M, F-K, H-K, I, I1) :-
+    I1 is I + 1,
+    flag(rtl_tf_handle, H0, H0 + 1),
+    H is H0 + 1,
+    assertz(frame(M, F, H, K)),
+    assertz(handle_frame(H, F, K)).
+
+load_record(static, H, S, PH, V, Q) :-
+    assertz(static_record(H, PH, S, V, Q)).
+load_record(dynamic, H, S, PH, V, Q) :-
+    (   retract(range(H, First, Last)) -> Next is Last + 1 ; First = 1, Next = 1 ),
+    key(H, Next, Key),
+    assertz(record(Key, S, PH, V, Q)),
+    assertz(range(H, First, Next)).
 
 current_program(M) :-
     (   rtl_program(M0) -> M = M0 ; M = user ).

@@ -225,15 +225,16 @@ def test_ros1_nao_application_live_against_the_ground_truth(ros, tmp_path):
     err = processes.err("nao_live")
     assert status == 0, err
     assert "ros: node /retalis" in err and " 0 rejected, 0 errors;" in err, err
-    keys = [(frame, sec, nsec) for _, _, sec, nsec, frame, _, _ in r["received"]]
+    # A.6: marker 4x4_K on /markerK, its pose in odom, the frame it is expressed in
+    assert all(frame == "odom" for *_, frame, _, _ in r["received"]), r["received"][:2]
+    keys = [("4x4_" + topic[len("/marker"):], sec, nsec) for topic, _, sec, nsec, _, _, _ in r["received"]]
     assert len(keys) == len(set(keys)), "a detection was published twice"
     want = {(row["marker"], row["stamp"][0], row["stamp"][1]): row for row in truth}
     assert len(want) == len(truth)
     assert set(keys) == set(want), (sorted(set(want) - set(keys)), sorted(set(keys) - set(want)))
     worst_position = worst_angle = 0.0
-    for topic, seq, sec, nsec, frame, position, orientation in r["received"]:
-        assert topic == "/marker" + frame.split("_")[1]          # A.6: marker 4x4_K on /markerK
-        row = want[(frame, sec, nsec)]
+    for (topic, seq, sec, nsec, frame, position, orientation), key in zip(r["received"], keys):
+        row = want[key]
         worst_position = max(worst_position, math.dist(position, row["position"]))
         dot = abs(sum(a * b for a, b in zip(orientation, row["orientation"])))
         worst_angle = max(worst_angle, 2 * math.acos(min(1.0, dot / math.sqrt(sum(a * a for a in orientation)))))
@@ -242,7 +243,7 @@ def test_ros1_nao_application_live_against_the_ground_truth(ros, tmp_path):
     assert worst_position < 0.001 and worst_angle < math.radians(0.1)
     # the node's own output file holds the same poses, each once
     lines = [json.loads(line) for line in out.read_text().splitlines()]
-    derived = [line for line in lines if "consumer" not in line and line["event"].startswith("geometry_msgs__0__PoseStamped(")]
+    derived = [line for line in lines if "consumer" not in line and line["event"].startswith("marker_pose(")]
     assert len(derived) == len(truth)
     # header.seq of each published pose is the line of its delivery in the output file
     assert all(lines[seq - 1].get("consumer") == topic[1:] for topic, seq, *_ in r["received"])

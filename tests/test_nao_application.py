@@ -23,10 +23,13 @@ pytest.importorskip("numpy")
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "nao"
-POSE = re.compile(
-    r"^geometry_msgs__0__PoseStamped\(std_msgs__0__Header\((\d+),\[(\d+),(\d+)\],'([^']+)'\),"
-    r"geometry_msgs__0__Pose\(geometry_msgs__0__Point\(([^,]+),([^,]+),([^,]+)\),"
-    r"geometry_msgs__0__Quaternion\(([^,]+),([^,]+),([^,]+),([^,]+)\)\)\)$")
+# marker_pose(Marker, PoseStamped) (derived) and the PoseStamped delivered to a consumer, in the
+# frame the pose is expressed in (odom)
+POSE_STAMPED = (r"geometry_msgs__0__PoseStamped\(std_msgs__0__Header\((\d+),\[(\d+),(\d+)\],([^,()]+)\),"
+                r"geometry_msgs__0__Pose\(geometry_msgs__0__Point\(([^,]+),([^,]+),([^,]+)\),"
+                r"geometry_msgs__0__Quaternion\(([^,]+),([^,]+),([^,]+),([^,]+)\)\)\)")
+MARKER_POSE = re.compile(r"^marker_pose\('([^']+)'," + POSE_STAMPED + r"\)$")
+DELIVERED_POSE = re.compile("^" + POSE_STAMPED + "$")
 MAX_POSITION_ERROR = 0.001                 # metres
 MAX_ANGLE_ERROR = math.radians(0.1)
 
@@ -51,21 +54,24 @@ def retalisc(*args, timeout=120):
 
 
 def world_poses(stdout: str):
-    """The PoseStamped lines: (derived, deliveries), each a list of (key, consumer, pose). A
-    derived event delivered to a subscription is one line, the delivery's (docs/runtime.md,
-    "Output")."""
+    """The world poses: (derived, deliveries), each a list of (key, consumer, pose); a derived
+    key is (marker, seq, sec, nsec), a delivered one (seq, sec, nsec). Every pose is in odom,
+    the frame it is expressed in."""
     derived, delivered = [], []
     for line in stdout.splitlines():
         row = json.loads(line)
-        match = POSE.match(row["event"])
+        match = (DELIVERED_POSE if "consumer" in row else MARKER_POSE).match(row["event"])
         if not match:
             continue
-        seq, sec, nsec, name = int(match[1]), int(match[2]), int(match[3]), match[4]
-        numbers = [float(x) for x in match.groups()[4:]]
-        item = ((name, seq, sec, nsec), row.get("consumer"), (numbers[:3], numbers[3:]))
-        if "consumer" in row:        # a delivery is printed once: its line is also the derived event's
-            delivered.append(item)
-        derived.append(item)
+        groups = list(match.groups())
+        name = groups.pop(0) if "consumer" not in row else None
+        seq, sec, nsec, frame = int(groups[0]), int(groups[1]), int(groups[2]), groups[3]
+        assert frame == "odom", row
+        numbers = [float(x) for x in groups[4:]]
+        if "consumer" in row:
+            delivered.append(((seq, sec, nsec), row["consumer"], (numbers[:3], numbers[3:])))
+        else:
+            derived.append(((name, seq, sec, nsec), None, (numbers[:3], numbers[3:])))
     return derived, delivered
 
 
@@ -99,9 +105,10 @@ def test_every_detection_once_within_a_millimetre_and_a_tenth_of_a_degree(bag10)
     print(f"max position error {position * 1000:.4f} mm, max angle error {math.degrees(angle):.5f} deg")
     assert position < MAX_POSITION_ERROR
     assert angle < MAX_ANGLE_ERROR
-    # A.6: each pose goes once to the consumer of its marker, and nowhere else.
-    assert sorted((key, consumer) for key, consumer, _ in delivered) == sorted(
-        (key, "marker" + key[0].split("_")[1]) for key, _, _ in derived)
+    # A.6: each pose goes once to the consumer of its marker, and nowhere else, as the
+    # PoseStamped in odom
+    assert sorted((key, consumer, pose) for key, consumer, pose in delivered) == sorted(
+        (key[1:], "marker" + key[0].split("_")[1], pose) for key, _, pose in derived)
     assert len({key[0] for key, _, _ in derived}) == 8
     # Listing 3.1: only the carried marker moves, and only alice is seen.
     situations = [json.loads(line)["event"] for line in result.stdout.splitlines()
@@ -145,8 +152,10 @@ def test_make_bag_is_deterministic(tmp_path):
 
 def test_the_two_file_form_runs_the_same(tmp_path):
     """eventRules.txt + goalPredicates.txt (the release's form: goal lines without a final
-    period, one per paragraph, the first loading the event rules) give the same output as
-    nao.rtl."""
+    period, one per paragraph, the first loading the event rules, unchanged) give the same
+    output as nao.rtl but for the form of the world poses: the release's PoseStamped carries
+    the marker name as its frame id (quoted), nao.rtl's marker_pose(Marker, PoseStamped) has
+    it in odom, the frame the pose is expressed in."""
     bag, _ = load_make_bag().write(tmp_path / "short.bag", seconds=2.5, seed=4)
     goals = [line for line in (EXAMPLE / "goalPredicates.txt").read_text().splitlines() if line.strip()]
     assert goals[0] == "compile_event_file('eventRules.txt')"
@@ -154,9 +163,20 @@ def test_the_two_file_form_runs_the_same(tmp_path):
     one = retalisc("run", str(EXAMPLE / "nao.rtl"), "--bag", str(bag))
     two = retalisc("run", str(EXAMPLE / "goalPredicates.txt"), "--bag", str(bag))
     assert one.returncode == 0 and two.returncode == 0, one.stderr + two.stderr
-    # the same but for the strings: plain in nao.rtl, the release's quoted form in its files
-    as_released = re.sub(r"'(4x4_\d)'|(?<=\()(alice)(?=[,)])", lambda m: "'\\\"" + (m[1] or m[2]) + "\\\"'",
-                         one.stdout)                         # in JSON text: '\"4x4_1\"'
-    assert as_released == two.stdout
-    assert "'\\\"4x4_" in two.stdout and "'4x4_" in one.stdout
-    assert one.stdout.count("PoseStamped") >= 12          # each pose once (a delivery is one line)
+
+    def as_released(row: dict) -> dict:
+        event = row["event"]
+        if row.get("consumer", "").startswith("marker"):       # the marker name as the frame id
+            event = event.replace(",odom),", f",'4x4_{row['consumer'][len('marker'):]}'),", 1)
+        # the strings: plain in nao.rtl, the release's quoted form in its files
+        event = re.sub(r"'(4x4_\d)'|(?<=\()(alice)(?=[,)])", lambda m: "'\"" + (m[1] or m[2]) + "\"'", event)
+        return {**row, "event": event}
+
+    # the release derives the PoseStamped itself and delivers it: one line, the delivery's
+    # (feed.once_per_delivery); nao.rtl derives marker_pose(Marker, PoseStamped), a line of its own
+    mine = [as_released(json.loads(line)) for line in one.stdout.splitlines()
+            if not json.loads(line)["event"].startswith("marker_pose(")]
+    released = [json.loads(line) for line in two.stdout.splitlines()]
+    assert mine == released
+    assert "'\\\"4x4_" in two.stdout and "marker_pose('4x4_" in one.stdout
+    assert one.stdout.count("PoseStamped") >= 20

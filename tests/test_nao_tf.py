@@ -44,9 +44,9 @@ def test_same_world_poses_as_the_original(bag4):
     assert_same_poses(mine, original)
 
 
-MARKER_POSE = re.compile(r"geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\[(\d+),(\d+)\],'?\"?([^,\"')]+)\"?'?\),"
+MARKER_POSE = re.compile(r"marker_pose\('([^']+)',geometry_msgs__0__PoseStamped\(std_msgs__0__Header\(\[(\d+),(\d+)\],odom\),"
                          r"geometry_msgs__0__Pose\(geometry_msgs__0__Point\(([^,]+),([^,]+),([^)]+)\),"
-                         r"geometry_msgs__0__Quaternion\(([^,]+),([^,]+),([^,]+),([^)]+)\)\)\)")
+                         r"geometry_msgs__0__Quaternion\(([^,]+),([^,]+),([^,]+),([^)]+)\)\)\)\)")
 
 
 def marker_poses(program, bag):
@@ -58,7 +58,7 @@ def marker_poses(program, bag):
         match = MARKER_POSE.fullmatch(row["event"])
         if match:                     # a derived pose, or its delivery (printed once)
             numbers = [float(x) for x in match.groups()[3:]]
-            found[(match[3], int(match[1]), int(match[2]))] = (numbers[:3], numbers[3:])
+            found[(match[1], int(match[2]), int(match[3]))] = (numbers[:3], numbers[3:])
     return found
 
 

@@ -41,7 +41,10 @@ def test_the_readme_setup_command_runs_twice_in_a_row(tmp_path):
             assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
         outputs.append(done.stdout)
     poses = [json.loads(line) for line in outputs[0].splitlines()]
-    assert poses and all(p["event"].startswith("geometry_msgs__0__PoseStamped(") for p in poses)
+    # the world poses in odom, the frame they are expressed in: marker_pose(Marker, PoseStamped)
+    # derived, its PoseStamped delivered to the marker's consumer
+    assert poses and all(p["event"].startswith("marker_pose(" if "consumer" not in p else "geometry_msgs__0__PoseStamped(")
+                         and "],odom)," in p["event"] for p in poses)
     assert outputs[0] == outputs[1]          # the same recording again, the same world poses
 
 

@@ -387,11 +387,12 @@ def test_a_second_process_on_the_same_state_directory_is_refused_and_a_killed_on
 
 # ---- a recording (--bag): the input position is the number of messages replayed --------------
 
-def test_kill_9_a_bag_replay_then_restart_gives_the_uninterrupted_output(tmp_path):
+@pytest.mark.parametrize("name", ["nao_markers.rtl", "nao_markers_tf.rtl"])     # memories; the tf library's store
+def test_kill_9_a_bag_replay_then_restart_gives_the_uninterrupted_output(tmp_path, name):
     from retalisc.robot_io.samples import write_nao_bag
 
     bag = write_nao_bag(tmp_path / "nao.bag", "ros1", seconds=8.0)
-    program = ROOT / "examples" / "nao_markers" / "nao_markers.rtl"
+    program = ROOT / "examples" / "nao_markers" / name
     run = [sys.executable, "-m", "retalisc", "run", str(program), "--bag", str(bag), "--batch-size", "100"]
     expected = tmp_path / "expected.jsonl"
     subprocess.run(run + ["--out", str(expected)], check=True, env=_env(), capture_output=True)

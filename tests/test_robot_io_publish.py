@@ -45,8 +45,7 @@ def test_out_bag_holds_inputs_and_derived_events_and_reads_back(nao_ros2, tmp_pa
     mcap = tmp_path / "derived.mcap"
     assert replay_bag(_nao_engine(echo), str(nao_ros2), str(out), BagOptions(), out_bag=str(mcap)) == 0
     lines = [json.loads(line) for line in out.read_text().splitlines()]
-    poses = [x for x in lines if x["event"].startswith("geometry_msgs__0__PoseStamped(") and "consumer" not in x
-             and "4x4_" in x["event"]]                       # derived, not the echoed /robot_pose inputs
+    poses = [x for x in lines if x["event"].startswith("marker_pose(") and "consumer" not in x]     # derived
     deliveries = Counter(x["consumer"] for x in lines if "consumer" in x)
     others = [x for x in lines if "consumer" not in x and not x["event"].startswith(("geometry_msgs__0__PoseStamped(",
                                                                                      "tf2_msgs", "ar_pose__0__",
@@ -61,13 +60,15 @@ def test_out_bag_holds_inputs_and_derived_events_and_reads_back(nao_ros2, tmp_pa
     for topic, count in inputs.items():
         assert topics[topic] == count                        # every input once, echoed or not
     assert topics["/ar_pose_marker"] > 5
-    # a delivery is written once, on its subscription's topic, not also as a derived event
-    assert topics["/retalis/geometry_msgs/PoseStamped"] == len(poses) == 0
+    # marker_pose(Marker, PoseStamped) is not a message: on /retalis/events; its PoseStamped, in
+    # odom, goes to the marker's consumer
+    assert topics["/retalis/geometry_msgs/PoseStamped"] == 0
     assert topics["/marker1"] == deliveries["marker1"] and topics["/marker2"] == deliveries["marker2"]
-    assert deliveries["marker1"] + deliveries["marker2"] > 5
+    assert topics["/marker1"] + topics["/marker2"] == len(poses) > 5
     assert topics["/retalis/events"] == len(others) > 5     # seen_again/1 (and the raised tf/4, ar_marker/3 with echo)
     schema, channel, message = by_topic["/marker1"][0]
     assert (channel.message_encoding, schema.name, schema.encoding) == ("cdr", "geometry_msgs/msg/PoseStamped", "ros2msg")
+    assert typestore("ros2_humble").deserialize_cdr(message.data, "geometry_msgs/msg/PoseStamped").header.frame_id == "odom"
     first = next(x for x in lines if x.get("consumer") == "marker1")
     assert message.log_time == round(first["end"] * 1e9)
     schema, channel, message = next(m for m in by_topic["/retalis/events"]
@@ -205,12 +206,13 @@ def test_foxglove_server_sends_inputs_and_derived_events_to_a_loopback_client(na
         client.join(10)
     assert status == 0 and not errors
     assert received["/tf"] == 100 and received["/robot_pose"] == 20
-    assert received["/marker1"] + received["/marker2"] > 5                # each delivery once, on its topic
+    poses = [data for _, data in payloads["/retalis/events"] if json.loads(data)["name"] == "marker_pose"]
+    assert received["/marker1"] + received["/marker2"] == len(poses) > 5
     assert received["/retalis/geometry_msgs/PoseStamped"] == 0
     assert received["/retalis/events"] > 5
     store = typestore("ros2_humble")
     _, data = payloads["/marker1"][0]
     pose = store.deserialize_cdr(data, "geometry_msgs/msg/PoseStamped")
-    assert pose.header.frame_id == "4x4_1"
-    assert all(json.loads(data)["name"] == "seen_again" for _, data in payloads["/retalis/events"])
+    assert pose.header.frame_id == "odom"
+    assert {json.loads(data)["name"] for _, data in payloads["/retalis/events"]} == {"seen_again", "marker_pose"}
     assert f"waiting for a client on ws://127.0.0.1:{port}" in capfd.readouterr().err

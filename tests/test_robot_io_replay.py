@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import os
 import math
+import re
 import subprocess
 import sys
 
@@ -85,14 +86,16 @@ def test_nao_markers_are_placed_in_the_world_the_same_from_every_format(nao_bags
     store = sample_store(2)
     records = nao_records(store, seconds=3.0)
     detections = [m for _, msgtype, _, m in records if msgtype == "ar_pose/msg/ARMarkers"]
-    poses = [line for line in outputs["ros2"] if line["event"].startswith("geometry_msgs__0__PoseStamped(")]
-    derived = [line for line in poses if "consumer" not in line]
-    delivered = [line for line in poses if "consumer" in line]
+    derived = [line for line in outputs["ros2"] if line["event"].startswith("marker_pose(") and "consumer" not in line]
+    delivered = [line for line in outputs["ros2"] if line["event"].startswith("geometry_msgs__0__PoseStamped(")
+                 and "consumer" in line]
+    poses = derived + delivered
     again = [line for line in outputs["ros2"] if line["event"].startswith("seen_again(")]
     assert again and all(0 < line["end"] - line["start"] <= 0.5 for line in again)
     assert len(outputs["ros2"]) == len(poses) + len(again)
-    # a delivery is printed once (feed.once_per_delivery): each derived pose is its delivery's line
-    assert not derived and len(detections) == len(delivered) > 10
+    # marker_pose(Marker, PoseStamped) and its PoseStamped's delivery are two events, each one
+    # line (a delivery repeating its derived event is printed once: feed.once_per_delivery)
+    assert len(detections) == len(derived) == len(delivered) > 10
     converter = MessageConverter(store)
     by_stamp = {}
     for message in detections:
@@ -100,17 +103,19 @@ def test_nao_markers_are_placed_in_the_world_the_same_from_every_format(nao_bags
         stamp = marker.header.stamp.sec * 1_000_000_000 + marker.header.stamp.nanosec
         position = marker.pose.pose.position
         by_stamp[stamp] = (marker.header.frame_id, (position.x, position.y, position.z))
-    for line in delivered:
-        msgtype, pose = converter.message(line["event"])
+    by_delivery = {line["event"]: line["consumer"] for line in delivered}
+    for line in derived:
+        marker, text = re.fullmatch(r"marker_pose\('([^']+)',(.*)\)", line["event"]).groups()
+        msgtype, pose = converter.message(text)
         assert msgtype == "geometry_msgs/msg/PoseStamped"
         stamp = pose.header.stamp.sec * 1_000_000_000 + pose.header.stamp.nanosec
         name, relative = by_stamp[stamp]
-        assert pose.header.frame_id == name and abs(line["start"] - stamp / 1e9) < 1e-6
+        # in odom, the frame the pose is expressed in; the marker beside it
+        assert marker == name and pose.header.frame_id == "odom" and abs(line["start"] - stamp / 1e9) < 1e-6
+        assert by_delivery[text] == "marker" + marker.split("_")[1]
         expected = _world_pose(records, stamp, relative)
         got = (pose.pose.position.x, pose.pose.position.y, pose.pose.position.z)
         assert all(abs(a - b) < 1e-4 for a, b in zip(got, expected)), (got, expected)
-    for line in delivered:
-        assert line["consumer"] == "marker" + line["event"].split("4x4_")[1][0]
 
 
 # ---- input events: record order, options ------------------------------------------------------
@@ -364,7 +369,8 @@ def test_cli_replays_a_bag_and_reports_bad_input(nao_bags, tmp_path):
     assert run.returncode == 0, run.stderr
     assert f"out-bag: {tmp_path / 'out.mcap'}: " in run.stderr and (tmp_path / "out.mcap").stat().st_size > 1000
     lines = [json.loads(line) for line in run.stdout.splitlines()]
-    assert lines and all(line["event"].startswith(("geometry_msgs__0__PoseStamped(", "seen_again(")) for line in lines)
+    assert lines and all(line["event"].startswith(("marker_pose(", "geometry_msgs__0__PoseStamped(", "seen_again("))
+                         for line in lines)
     assert {p.name for p in consumers.iterdir()} == {"marker1.jsonl", "marker2.jsonl"}
     assert "messages in" in run.stderr and "/ar_pose_marker" in run.stderr and "/robot_pose" not in run.stderr
     program = tmp_path / "cli_bad_bag.rtl"            # in this process: a module name of its own

@@ -8,6 +8,8 @@
       ["add", Parent, Child, StampNs, [X, Y, Z], [QX, QY, QZ, QW], Static]
       ["lookup", Target, Source, TimeNs]          (TimeNs 0: the latest)
       ["can", Target, Source, TimeNs]
+    The environment variable RTL_TF_ROAD (c or prolog) chooses the store (tf_set_road/1;
+    without it, the runtime's default: the C store when it is built).
     One JSON line per lookup on standard output: {"pose": [X, Y, Z, QX, QY, QZ, QW],
     "stamp": Ns}, or {"error": [Kind, ...]} with tf_lookup/6's reason as a list; per can,
     {"can": Bool}.
@@ -19,6 +21,7 @@
 
 main :-
     current_prolog_flag(argv, [File]),
+    (   getenv('RTL_TF_ROAD', Road0) -> atom_string(Road, Road0), tf_set_road(Road) ; true ),
     setup_call_cleanup(open(File, read, In), json_read_dict(In, Scenario, [value_string_as(atom)]), close(In)),
     forall(member(Op, Scenario.ops), ( op(Op) -> true ; format(user_error, "failed: ~q~n", [Op]), halt(1) )).
 

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import random
 import subprocess
 import tempfile
 from pathlib import Path
-from typing import List
+from typing import List, Optional
 
 ROOT = Path(__file__).resolve().parent.parent
 SYSTEM_PYTHON = "/usr/bin/python3"
@@ -81,6 +82,21 @@ def lookup_time(rng: random.Random, now: int, stamps: List[int]) -> int:
     if choice < 0.4 and stamps:
         return rng.choice(stamps)
     return now - rng.randrange(-SECOND, 12 * SECOND)
+
+
+def run_library(ops: list, swipl: str = "swipl", road: Optional[str] = None) -> list:
+    """The tf library's lines of one scenario (on `road`, c or prolog, else the default), as
+    parsed JSON."""
+    with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as f:
+        json.dump({"ops": ops}, f)
+        path = f.name
+    env = {**os.environ, **({"RTL_TF_ROAD": road} if road else {})}
+    try:
+        ours = subprocess.run([swipl, str(ROOT / "tests" / "tf_driver.pl"), path], capture_output=True,
+                              text=True, timeout=300, check=True, env=env).stdout
+    finally:
+        Path(path).unlink()
+    return [json.loads(x) for x in ours.splitlines()]
 
 
 def run_both(ops: list, swipl: str = "swipl") -> tuple:

@@ -3,12 +3,17 @@
     it only receives the events) whose path is in the environment variable TF_TEST_PROGRAM:
 
         TF_TEST_PROGRAM=/tmp/host.pl swipl -g run_tests -t halt prolog_runtime/tests/test_tf.pl
+
+    TF_TEST_ROAD (c or prolog) chooses the store the tests run on (tf_set_road/1), else the
+    runtime's default (the C store when it is built).
 */
 :- use_module(library(plunit)).
 
 :- set_prolog_flag(retalis_embedded, true).
 :- getenv('TF_TEST_PROGRAM', File) -> consult(File)
    ;  throw(error(existence_error(environment_variable, 'TF_TEST_PROGRAM'), _)).
+
+:- getenv('TF_TEST_ROAD', Road) -> atom_string(A, Road), tf_set_road(A) ; true.
 
 s2(S) :- S is sqrt(0.5).
 
@@ -137,4 +142,45 @@ test(runs_when_the_chain_has_data_past_the_time) :-
     tf_wait(a, b, 1.5, 5, assertz(seen(1.5))),
     seen(1.5).
 
+test(times_out_as_any_event_moves_the_clock) :-
+    tf_clear, retractall(seen(_)),
+    along_x(a, b, 1, 1),
+    tf_wait(a, b, 2, 0.5, assertz(seen(2))),
+    feed(tf_test_other(1), 2.4),
+    tf_waiting(1),
+    feed(tf_test_other(2), 2.6),
+    tf_waiting(0),
+    along_x(a, b, 3, 3),
+    \+ seen(_).
+
 :- end_tests(tf_wait).
+
+:- begin_tests(tf_state, [setup(tf_clear), cleanup(tf_clear)]).
+
+test(dump_check_load_round_trip) :-
+    tf_clear,
+    tf_add(map, odom, 0, [0, 0, 1], [0, 0, 0, 1], static),
+    along_x(odom, b, 1, 1),
+    along_x(odom, b, 2, 2),
+    tf_lookup(map, b, 1.5, Pose, _, ok),
+    rtl_tf:tf_state_dump(Terms),
+    rtl_tf:tf_state_check(Terms),
+    Terms = [frame(map, none), frame(odom, static), frame(b, dynamic)|_],
+    tf_clear,
+    tf_records(0),
+    rtl_tf:tf_state_load(Terms),
+    tf_records(3),
+    tf_lookup(map, b, 1.5, Pose, _, ok).
+
+test(refuses_what_is_not_a_tree) :-
+    \+ rtl_tf:tf_state_check([frame(a, none), r(1, 1, 1, 0, 0, 0, 0, 0, 0, 1)]),
+    \+ rtl_tf:tf_state_check([frame(a, none), frame(b, dynamic)]),
+    \+ rtl_tf:tf_state_check([frame(a, none), frame(b, static),
+                               r(2, 1, 1, 0, 0, 0, 0, 0, 0, 1), r(2, 2, 1, 0, 0, 0, 0, 0, 0, 1)]),
+    \+ rtl_tf:tf_state_check([frame(a, none), frame(b, dynamic),
+                               r(2, 2, 1, 0, 0, 0, 0, 0, 0, 1), r(2, 1, 1, 0, 0, 0, 0, 0, 0, 1)]),
+    \+ rtl_tf:tf_state_check([frame(a, none), frame(a, dynamic)]),
+    rtl_tf:tf_state_check([frame(a, none), frame(b, dynamic),
+                           r(2, 1, 1, 0, 0, 0, 0, 0, 0, 1), r(2, 2, 1, 0, 0, 0, 0, 0, 0, 1)]).
+
+:- end_tests(tf_state).
