@@ -108,7 +108,7 @@ def session(tmp_path_factory):
     domain = RosDomain()
     env = retalisc_env({"ROS_DOMAIN_ID": str(domain.id)})
     for key in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_STATIC_PEERS", "ROS_LOCALHOST_ONLY", "RMW_IMPLEMENTATION",
-                "FASTRTPS_DEFAULT_PROFILES_FILE", "RETALISC_ROS2_PYTHON"):
+                "FASTRTPS_DEFAULT_PROFILES_FILE"):
         env.pop(key, None)         # stock discovery settings on both sides
     processes = Processes(folder)
     forbidden = folder / "must_not_exist"
