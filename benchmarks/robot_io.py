@@ -277,8 +277,8 @@ def live(quick: bool, folder: Path, kinds=("ros1", "ros2", "zenoh"), lingers=LIN
     config.write_text(LIVE_CONFIG)
     rate, seconds, count = THESIS_RATE / TRANSFORMS, (1.0 if quick else 10.0), (300 if quick else 5000)
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    ros_python = ROOT / ".venv-ros" / "bin" / "python"
-    ros2_python = ROOT / ".venv-ros2" / "bin" / "python"
+    ros_python = Path(os.environ.get("RETALISC_ROS_PYTHON") or ROOT / ".venv-ros" / "bin" / "python")
+    ros2_python = Path(os.environ.get("RETALISC_ROS2_PYTHON") or ROOT / ".venv-ros2" / "bin" / "python")
     results: Dict[str, dict] = {}
     for kind, linger in [(kind, linger) for kind in kinds for linger in lingers]:
         label = kind if not linger else f"{kind} --linger {linger * 1e3:.0f}ms"
