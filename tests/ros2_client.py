@@ -6,6 +6,7 @@ topics and /clock, calls every Retalis service and prints what it saw as one JSO
     python ros2_client.py NODE_NAME FILE_THAT_MUST_NOT_APPEAR
     python ros2_client.py --tf FIRST LAST     (publish tf x = FIRST..LAST-1 on /tf_burst reliably, then exit)
     python ros2_client.py --bag BAG RATE TOPICS EXPECTED OUT_TOPICS    (play a ROS 1 recording as ROS 2 messages)
+    python ros2_client.py --sim     (sim time on /clock, /sensor in, /echo and /quiet out: --heartbeat, --linger)
 
 It prints `static published` on standard error once /tf_static is out (the test then starts
 the node: a late joiner of a transient-local topic).
@@ -157,7 +158,54 @@ def play_bag(path: str, rate: float, topics: str, expected: int, out_topics: str
     os._exit(0)
 
 
+def sim_time() -> None:
+    """The other side of the --heartbeat and --linger test (tests/live/ros2_heartbeat.rtl):
+    /clock every 50 ms of wall time, sim time moving 0.05 s a tick towards a target; five
+    /sensor values 20 ms apart at sim time 5000.0; then sim time held at 5001.0 for a second
+    (the timers, due at 5002.0, must not fire), then on to 5004.0 (they must). Prints the
+    wall times (since the first /sensor message) of the /echo deliveries and of the last
+    /sensor message, the /quiet values during the hold and after it."""
+    rclpy.init()
+    client = rclpy.create_node("retalis_test_sim")
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(client)
+    threading.Thread(target=executor.spin, daemon=True).start()
+    sim, target = [5000.0], [5000.0]
+    clock = client.create_publisher(Clock, "/clock", 10)
+
+    def tick():
+        sim[0] = min(target[0], sim[0] + 0.05)
+        clock.publish(Clock(clock=Time(sec=int(sim[0]), nanosec=int(round((sim[0] % 1) * 1e9)))))
+
+    client.create_timer(0.05, tick)
+    keep_all = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+    sensor = client.create_publisher(Vector3, "/sensor", keep_all)
+    echo, quiet = [], []
+    echo_sub = client.create_subscription(Vector3, "/echo", lambda m: echo.append((time.monotonic(), m.x)), keep_all)
+    quiet_sub = client.create_subscription(Vector3, "/quiet", lambda m: quiet.append(m.x), keep_all)
+    if not wait_for(lambda: sensor.get_subscription_count() > 0 and clock.get_subscription_count() > 0
+                    and echo_sub.get_publisher_count() > 0 and quiet_sub.get_publisher_count() > 0, 30):
+        sys.exit("the node did not match within 30 s")
+    time.sleep(1.0)                   # the node's clock is at 5000.0
+    first = time.monotonic()
+    for x in range(1, 6):
+        sensor.publish(Vector3(x=float(x)))
+        last = time.monotonic()
+        time.sleep(0.02)
+    wait_for(lambda: len(echo) >= 5, 10)
+    target[0] = 5001.0
+    time.sleep(1.5)
+    held = list(quiet)
+    target[0] = 5004.0
+    wait_for(lambda: len(quiet) >= 5, 15)
+    print(json.dumps({"echo": [[at - first, x] for at, x in echo], "last_sent": last - first, "quiet_held": held,
+                      "quiet": list(quiet)}), flush=True)
+    os._exit(0)
+
+
 def main() -> None:
+    if sys.argv[1] == "--sim":
+        return sim_time()
     if sys.argv[1] == "--tf":
         return publish_tf(int(sys.argv[2]), int(sys.argv[3]))
     if sys.argv[1] == "--bag":

@@ -372,3 +372,40 @@ def test_ros2_nao_application_live_against_the_ground_truth(tmp_path):
         numbers = r["numbers"].get(topic, [])
         assert len(numbers) == sum(1 for t, *_ in r["received"] if t == topic)
         assert all(lines[n - 1].get("consumer") == topic[1:] for n in numbers)
+
+
+@needs_ros2
+def test_ros2_heartbeat_on_sim_time_and_linger(tmp_path):
+    """--heartbeat and --linger over rclpy, the node's clock /clock (use_sim_time): five
+    messages 20 ms apart are fed in one batch half a second after the first (--linger 0.5: every
+    delivery after the last message, none earlier than 0.4 s); each arms a timer 2 s of event
+    time on, which fires through the heartbeat (an rclpy timer on the node's clock) while no
+    message arrives, when /clock passes it, and not while /clock is held before it; the
+    alarms at the messages' sim time + 2 s."""
+    domain = RosDomain()
+    env = retalisc_env({"ROS_DOMAIN_ID": str(domain.id)})
+    processes = Processes(tmp_path)
+    out = tmp_path / "out.jsonl"
+    try:
+        node = processes.start("beat", retalisc_argv(str(ROS2_PYTHON), "ros2", str(LIVE / "ros2_heartbeat.rtl"), "--config",
+                                                     str(LIVE / "ros2_heartbeat.xml"), "--out", str(out), "--heartbeat",
+                                                     "0.1", "--linger", "0.5", "--ros-args", "-p", "use_sim_time:=true"),
+                               env)
+        processes.wait_for_line(node, "ros2: node /retalis")
+        done = subprocess.run([str(ROS2_PYTHON), str(ROOT / "tests" / "ros2_client.py"), "--sim"], env=env,
+                              capture_output=True, text=True, timeout=90)
+        status = processes.stop(node)
+    finally:
+        processes.stop_all()
+        domain.release()
+    err = processes.err("beat")
+    assert done.returncode == 0, done.stderr + err
+    r = json.loads(done.stdout.strip().splitlines()[-1])
+    assert status == 0, err
+    assert sorted(x for _, x in r["echo"]) == [1.0, 2.0, 3.0, 4.0, 5.0]
+    assert all(at > r["last_sent"] and at > 0.4 for at, _ in r["echo"]), r       # one batch, after the linger
+    assert r["quiet_held"] == [], r
+    assert sorted(r["quiet"]) == [1.0, 2.0, 3.0, 4.0, 5.0], r
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    alarms = [line for line in lines if line["event"].startswith("silence(") and "consumer" not in line]
+    assert len(alarms) == 5 and all(line["start"] == 5000 and line["end"] == 5002 for line in alarms), alarms

@@ -335,6 +335,12 @@ class Ros2Transport(Transport):
                 break
             publisher.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
 
+    def every(self, seconds: float, callback) -> bool:
+        """An rclpy timer on the node's clock (ROS time: /clock under use_sim_time, so a paused
+        simulation pauses the heartbeat), run by the executor's thread."""
+        self._timers = getattr(self, "_timers", []) + [self.ros.create_timer(seconds, callback)]
+        return True
+
     def subscriber_count(self, topic: str) -> int:
         entry = self._publishers.get(topic)
         return 0 if entry is None else entry[1].get_subscription_count()
