@@ -89,8 +89,8 @@ class Channel:
             self.pub = self.node.create_publisher(TFMessage, "/tf", QoSProfile(
                 history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE))
             self.sub = self.node.create_subscription(
-                Vector3, "/out", lambda data: on_x(struct.unpack_from("<d", data, 4)[0], time.perf_counter()), 1000,
-                raw=True)
+                Vector3, "/out", lambda data: on_x(struct.unpack_from("<d", data, 4)[0], time.perf_counter()),
+                QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE), raw=True)
             threading.Thread(target=rclpy.spin, args=(self.node,), daemon=True).start()
             self.ready = lambda: self.pub.get_subscription_count() > 0 and self.node.count_publishers("/out") > 0
         else:

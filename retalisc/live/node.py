@@ -190,8 +190,8 @@ class LiveNode:
         self.store = typestore("ros1_noetic" if transport.wire == "ros1" else "ros2_humble")
         convention = convention or Convention.of_program(engine)     # the program's strings
         self.converter = MessageConverter(self.store, convention)
-        # ROS 1 messages go to the runtime as bytes, which it reads in C (ros1_terms.py)
-        self.ros1_terms = Ros1Terms(engine, self.store, convention) if transport.wire == "ros1" else None
+        # messages go to the runtime as bytes, which it reads in C (ros1_terms.py; CDR too)
+        self.ros1_terms = Ros1Terms(engine, self.store, convention, cdr=transport.wire == "cdr")
         self.clock = EventClock(log)             # the one clock rule (consumer thread only)
         self.out = out
         self.log = log
