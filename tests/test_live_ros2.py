@@ -211,12 +211,14 @@ def test_ros2_services(session):
 
 
 def test_ros2_qos_and_clock(session):
-    r = session[0]
+    r, err = session[0], session[1]
     # best-effort (sensor data) and reliable publishers both reach the default (best-effort)
     # reader; header-less, they are stamped with /clock's time (use_sim_time)
     assert r["xs"] == [{"X": "1.5", "T": "5000.0"}, {"X": "2.5", "T": "5000.0"}]
-    # a reliable reader (pub_sub.xml reliability="reliable") does not match a best-effort publisher
+    # a reliable reader (pub_sub.xml reliability="reliable") does not match a best-effort
+    # publisher, and the node says so (its readers' QoS events are the executor's)
     assert r["refused_pub_matched"] == 0
+    assert "/sensor_reliable', offering incompatible QoS" in err, err
 
 
 def test_ros2_burst_of_5000_nothing_lost(session):

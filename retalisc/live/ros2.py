@@ -295,6 +295,9 @@ class Ros2Transport(Transport):
         # the callback is never called (_own_reader_group): _read takes the bytes itself
         subscription = self.ros.create_subscription(cls, topic, lambda data: None, profile, raw=True,
                                                     callback_group=self._group)
+        for handler in subscription.event_handlers:     # its QoS events (incompatible QoS: a warning)
+            handler.callback_group = self.ros.default_callback_group      # stay the executor's
+            self.ros.default_callback_group.add_entity(handler)
         with self._lock:
             self._subscriptions[topic] = (subscription, definition)
         self._wake.trigger()
