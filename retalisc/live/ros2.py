@@ -2,9 +2,11 @@
 
 A real rclpy node (name and namespace from `--name`/`--namespace` or `--ros-args -r
 __node:=... -r __ns:=...`), so the graph API, `ros2 node info` and the parameter services
-see it. rclpy carries serialized CDR both ways (a subscription with `raw=True` hands over
-the bytes, `Publisher.publish(bytes)` sends them); the messages are read and written by
-rosbags, as in bag replay. rclpy 7 (Jazzy) has no dynamic types: the Python package of every
+see it. rclpy carries serialized CDR both ways (the input subscriptions' bytes, taken by a
+reader thread of the transport's own, `Ros2Transport._read`; `Publisher.publish(bytes)`);
+the runtime reads the messages into terms in C (robot_io/ros1_terms.py, `cdr=True`) and
+rosbags writes them, as in bag replay. rclpy's executor, in another thread, serves the
+services, the parameters, rclpy's /clock and the heartbeat's timer (`every`). rclpy 7 (Jazzy) has no dynamic types: the Python package of every
 type the node subscribes or publishes must be importable (its generated code supplies the
 type support), else the request is refused with an error naming the package and the node
 goes on. A type that rosbags does not ship (ar_pose/ARMarkers, a user's own) is read with the
