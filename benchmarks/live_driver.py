@@ -89,8 +89,8 @@ class Channel:
             self.pub = self.node.create_publisher(TFMessage, "/tf", QoSProfile(
                 history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE))
             self.sub = self.node.create_subscription(
-                Vector3, "/out", lambda data: on_x(struct.unpack_from("<d", data, 4)[0], time.perf_counter()), 1000,
-                raw=True)
+                Vector3, "/out", lambda data: on_x(struct.unpack_from("<d", data, 4)[0], time.perf_counter()),
+                QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE), raw=True)
             threading.Thread(target=rclpy.spin, args=(self.node,), daemon=True).start()
             self.ready = lambda: self.pub.get_subscription_count() > 0 and self.node.count_publishers("/out") > 0
         else:
@@ -161,9 +161,17 @@ def main() -> None:
         while sum(1 for key in sent if key in received) < load_count and time.monotonic() < wait_until:
             arrived.wait(0.1)
     latencies = sorted(received[key] - sent[key] for key in sent if key in received)
+
+    def quantile(q):
+        return latencies[min(len(latencies) - 1, int(len(latencies) * q))] if latencies else None
+
+    # the messages later than 20 ms: how many, and in how many stalls (runs of late messages
+    # less than 50 ms apart by their sending time): a few long stalls or many short delays
+    late = sorted(sent[key] for key in sent if key in received and received[key] - sent[key] > 0.020)
+    stalls = sum(1 for i, at in enumerate(late) if i == 0 or at - late[i - 1] > 0.050)
     result = {"latency": {"messages": load_count, "received": len(latencies), "rate": rate, "seconds": wall,
-                          "p50": latencies[len(latencies) // 2] if latencies else None,
-                          "p99": latencies[min(len(latencies) - 1, int(len(latencies) * 0.99))] if latencies else None,
+                          "p50": quantile(0.5), "p90": quantile(0.9), "p99": quantile(0.99),
+                          "max": latencies[-1] if latencies else None, "over_20ms": len(late), "stalls": stalls,
                           "cpu": cpu, "cpu_share": cpu / wall}}
     first = warm + load_count
     began = time.perf_counter()

@@ -5,6 +5,8 @@ topics and /clock, calls every Retalis service and prints what it saw as one JSO
 
     python ros2_client.py NODE_NAME FILE_THAT_MUST_NOT_APPEAR
     python ros2_client.py --tf FIRST LAST     (publish tf x = FIRST..LAST-1 on /tf_burst reliably, then exit)
+    python ros2_client.py --bag BAG RATE TOPICS EXPECTED OUT_TOPICS    (play a ROS 1 recording as ROS 2 messages)
+    python ros2_client.py --sim     (sim time on /clock, /sensor in, /echo and /quiet out: --heartbeat, --linger)
 
 It prints `static published` on standard error once /tf_static is out (the test then starts
 the node: a late joiner of a transient-local topic).
@@ -65,9 +67,149 @@ def publish_tf(first: int, last: int) -> None:
     rclpy.try_shutdown()
 
 
+def ros2_message(value, cls):
+    """The rclpy message of class `cls` with the fields of `value`, a message read by rosbags
+    (from a ROS 1 recording): field by field, nested messages and lists of messages too; a
+    field ROS 2 does not have (std_msgs/Header's seq) is left out."""
+    msg = cls()
+    for name, kind in cls.get_fields_and_field_types().items():
+        source = getattr(value, name)
+        current = getattr(msg, name)
+        if hasattr(type(current), "get_fields_and_field_types"):
+            setattr(msg, name, ros2_message(source, type(current)))
+        elif kind.startswith("sequence<") and "/" in kind:
+            package, type_name = kind[len("sequence<"):].rstrip(">").split(",")[0].split("/")
+            item = getattr(__import__(f"{package}.msg", fromlist=[type_name]), type_name)
+            setattr(msg, name, [ros2_message(element, item) for element in source])
+        else:
+            setattr(msg, name, source)
+    return msg
+
+
+def play_bag(path: str, rate: float, topics: str, expected: int, out_topics: str) -> None:
+    """Publish the messages of TOPICS (comma-separated) of a ROS 1 recording as ROS 2 messages
+    (rclpy's generated classes: tf2_msgs/TFMessage, ar_pose/ARMarkers; a header without its
+    seq), in record order, at RATE times its clock, as a robot would send them now: every header
+    stamp moved by the same whole number of seconds (`shift`), so that the first message is
+    stamped with the wall clock, as in tests/ros1_client.py `bag`. Publishers are reliable
+    (as tf2's broadcaster). Collects the geometry_msgs/PoseStamped messages on OUT_TOPICS
+    (and their output numbers on TOPIC/seq) until EXPECTED have come, then half a second more
+    to see duplicates; prints {"received": [[topic, sec, nsec, frame_id, [x, y, z], [qx, qy, qz,
+    qw]], ...], "numbers": {topic: [...]}, ...}, stamps moved back by `shift`."""
+    from geometry_msgs.msg import PoseStamped
+    from rosbags.highlevel import AnyReader
+    from pathlib import Path
+
+    rclpy.init()
+    client = rclpy.create_node("retalis_test_player")
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(client)
+    threading.Thread(target=executor.spin, daemon=True).start()
+    received, numbers, lock = [], {}, threading.Lock()
+    shift = 0
+
+    def on_pose(msg, topic):
+        p, q = msg.pose.position, msg.pose.orientation
+        with lock:
+            received.append([topic, msg.header.stamp.sec - shift, msg.header.stamp.nanosec, msg.header.frame_id,
+                             [p.x, p.y, p.z], [q.x, q.y, q.z, q.w]])
+
+    def on_number(msg, topic):
+        with lock:
+            numbers.setdefault(topic, []).append(msg.data)
+
+    reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    subscriptions = []
+    for topic in out_topics.split(","):
+        subscriptions.append(client.create_subscription(PoseStamped, topic, lambda m, t=topic: on_pose(m, t), reliable))
+        subscriptions.append(client.create_subscription(UInt64, topic + "/seq", lambda m, t=topic: on_number(m, t),
+                                                        reliable))
+    classes = {"tf2_msgs/msg/TFMessage": TFMessage, "ar_pose/msg/ARMarkers": ARMarkers}
+    wanted = topics.split(",")
+    with AnyReader([Path(path)]) as reader:
+        connections = [c for c in reader.connections if c.topic in wanted]
+        records = [(c.topic, c.msgtype, time_ns, reader.deserialize(raw, c.msgtype))
+                   for c, time_ns, raw in reader.messages(connections=connections)]
+    publishers = {topic: client.create_publisher(classes[msgtype], topic, reliable) for topic, msgtype, _, _ in records}
+    shift = int(time.time()) + 1 - records[0][2] // 1_000_000_000
+    messages = []
+    for topic, msgtype, time_ns, msg in records:
+        out = ros2_message(msg, classes[msgtype])
+        for stamped in (getattr(out, "transforms", None) or []) + (getattr(out, "markers", None) or []) + [out]:
+            if hasattr(stamped, "header"):
+                stamped.header.stamp.sec += shift
+        messages.append((topic, time_ns, out))
+    if not wait_for(lambda: all(p.get_subscription_count() > 0 for p in publishers.values())
+                    and all(s.get_publisher_count() > 0 for s in subscriptions), 30):
+        sys.exit("the node's readers and writers did not match within 30 s")
+    time.sleep(0.5)
+    began, first_ns = time.monotonic(), messages[0][1]
+    for topic, time_ns, msg in messages:
+        due = began + (time_ns - first_ns) / 1e9 / rate
+        if due > time.monotonic():
+            time.sleep(due - time.monotonic())
+        publishers[topic].publish(msg)
+    published = time.monotonic() - began
+    wait_for(lambda: len(received) >= expected, 20)
+    time.sleep(0.5)
+    with lock:
+        print(json.dumps({"received": received, "numbers": numbers, "published": len(messages),
+                          "publish_seconds": published, "shift": shift}), flush=True)
+    os._exit(0)
+
+
+def sim_time() -> None:
+    """The other side of the --heartbeat and --linger test (tests/live/ros2_heartbeat.rtl):
+    /clock every 50 ms of wall time, sim time moving 0.05 s a tick towards a target; five
+    /sensor values 20 ms apart at sim time 5000.0; then sim time held at 5001.0 for a second
+    (the timers, due at 5002.0, must not fire), then on to 5004.0 (they must). Prints the
+    wall times (since the first /sensor message) of the /echo deliveries and of the last
+    /sensor message, the /quiet values during the hold and after it."""
+    rclpy.init()
+    client = rclpy.create_node("retalis_test_sim")
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(client)
+    threading.Thread(target=executor.spin, daemon=True).start()
+    sim, target = [5000.0], [5000.0]
+    clock = client.create_publisher(Clock, "/clock", 10)
+
+    def tick():
+        sim[0] = min(target[0], sim[0] + 0.05)
+        clock.publish(Clock(clock=Time(sec=int(sim[0]), nanosec=int(round((sim[0] % 1) * 1e9)))))
+
+    client.create_timer(0.05, tick)
+    keep_all = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+    sensor = client.create_publisher(Vector3, "/sensor", keep_all)
+    echo, quiet = [], []
+    echo_sub = client.create_subscription(Vector3, "/echo", lambda m: echo.append((time.monotonic(), m.x)), keep_all)
+    quiet_sub = client.create_subscription(Vector3, "/quiet", lambda m: quiet.append(m.x), keep_all)
+    if not wait_for(lambda: sensor.get_subscription_count() > 0 and clock.get_subscription_count() > 0
+                    and echo_sub.get_publisher_count() > 0 and quiet_sub.get_publisher_count() > 0, 30):
+        sys.exit("the node did not match within 30 s")
+    time.sleep(1.0)                   # the node's clock is at 5000.0
+    first = time.monotonic()
+    for x in range(1, 6):
+        sensor.publish(Vector3(x=float(x)))
+        last = time.monotonic()
+        time.sleep(0.02)
+    wait_for(lambda: len(echo) >= 5, 10)
+    target[0] = 5001.0
+    time.sleep(1.5)
+    held = list(quiet)
+    target[0] = 5004.0
+    wait_for(lambda: len(quiet) >= 5, 15)
+    print(json.dumps({"echo": [[at - first, x] for at, x in echo], "last_sent": last - first, "quiet_held": held,
+                      "quiet": list(quiet)}), flush=True)
+    os._exit(0)
+
+
 def main() -> None:
+    if sys.argv[1] == "--sim":
+        return sim_time()
     if sys.argv[1] == "--tf":
         return publish_tf(int(sys.argv[2]), int(sys.argv[3]))
+    if sys.argv[1] == "--bag":
+        return play_bag(sys.argv[2], float(sys.argv[3]), sys.argv[4], int(sys.argv[5]), sys.argv[6])
     name, forbidden = sys.argv[1], sys.argv[2]
     rclpy.init()
     client = rclpy.create_node("retalis_test_client")

@@ -279,3 +279,43 @@ def test_ros_without_rospy_says_how_to_set_it_up(tmp_path):
                          env=retalisc_env())
     assert run.returncode == 2 and "python3-rospy" in run.stderr and ".venv-ros/bin/retalisc" in run.stderr
     assert "Traceback" not in run.stderr
+
+
+HEARTBEAT_PROGRAM = """
+alarm(silence(X), 0.3) <- geometry_msgs__0__Vector3(X, _, _).
+"""
+
+
+@pytest.mark.parametrize("heartbeat", [None, 0.05])
+def test_heartbeat_moves_the_clock_while_nothing_arrives(heartbeat):
+    """One message (stamped with its arrival: no header) arms a timer 0.3 s later; with a
+    heartbeat the node's clock moves the program's on while nothing more arrives and the
+    alarm fires, at the message's time + 0.3 s; without, the clock never gets there."""
+    engine = Engine.from_source(HEARTBEAT_PROGRAM, "beat.rtl")
+    seen = []
+    node = LiveNode(engine, MemoryTransport(), parse_config(
+        "<publish_subscribe><subscribe_to name='/v' msg_type='geometry_msgs/Vector3'/></publish_subscribe>"),
+        log=lambda text: None, heartbeat=heartbeat)
+    node._deliveries.append(seen.append)
+    node.start()
+    before = time.time()
+    node.arrived("/v", vector(7.0))
+    deadline = time.monotonic() + 3.0
+    while not any(e.event == "silence(7.0)" for e in seen) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    if heartbeat is None:
+        time.sleep(0.5)
+    node.close()
+    alarms = [e for e in seen if e.event == "silence(7.0)"]
+    if heartbeat is None:
+        assert alarms == []
+    else:
+        assert len(alarms) == 1
+        start = alarms[0].start if isinstance(alarms[0].start, float) else float(alarms[0].start)
+        assert before - 0.1 < start < before + 0.5 and abs(float(alarms[0].end) - start - 0.3) < 1e-6
+
+
+def test_heartbeat_does_not_go_with_a_state_directory(tmp_path):
+    with pytest.raises(ValueError, match="heartbeat"):
+        LiveNode(Engine.from_source(HEARTBEAT_PROGRAM, "beat.rtl"), MemoryTransport(), log=lambda text: None,
+                 heartbeat=0.1, state=object())

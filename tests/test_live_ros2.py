@@ -108,7 +108,7 @@ def session(tmp_path_factory):
     domain = RosDomain()
     env = retalisc_env({"ROS_DOMAIN_ID": str(domain.id)})
     for key in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_STATIC_PEERS", "ROS_LOCALHOST_ONLY", "RMW_IMPLEMENTATION",
-                "FASTRTPS_DEFAULT_PROFILES_FILE", "RETALISC_ROS2_PYTHON"):
+                "FASTRTPS_DEFAULT_PROFILES_FILE"):
         env.pop(key, None)         # stock discovery settings on both sides
     processes = Processes(folder)
     forbidden = folder / "must_not_exist"
@@ -211,12 +211,14 @@ def test_ros2_services(session):
 
 
 def test_ros2_qos_and_clock(session):
-    r = session[0]
+    r, err = session[0], session[1]
     # best-effort (sensor data) and reliable publishers both reach the default (best-effort)
     # reader; header-less, they are stamped with /clock's time (use_sim_time)
     assert r["xs"] == [{"X": "1.5", "T": "5000.0"}, {"X": "2.5", "T": "5000.0"}]
-    # a reliable reader (pub_sub.xml reliability="reliable") does not match a best-effort publisher
+    # a reliable reader (pub_sub.xml reliability="reliable") does not match a best-effort
+    # publisher, and the node says so (its readers' QoS events are the executor's)
     assert r["refused_pub_matched"] == 0
+    assert "/sensor_reliable', offering incompatible QoS" in err, err
 
 
 def test_ros2_burst_of_5000_nothing_lost(session):
@@ -281,3 +283,131 @@ def test_ros2_node_killed_and_restarted_with_state(tmp_path):
     assert outputs() == [f"geometry_msgs__0__Vector3({x}.0,0.0,0.0)" for x in range(10)], processes.err("again")
     # no snapshot since the start: the restart replayed the five messages from the journal
     assert "replayed 5 journaled events" in processes.err("again")
+
+
+def test_nao_ros2_program_is_nao_rtl_with_ros2_headers(tmp_path):
+    """examples/nao/nao_ros2.rtl over a ROS 1 recording: every output line of nao.rtl (poses,
+    deliveries, the situations), the poses with ROS 2's header (no seq)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("nao_make_bag", ROOT / "examples" / "nao" / "make_bag.py")
+    make_bag = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(make_bag)
+    bag, _ = make_bag.write(tmp_path / "nao.bag", seconds=4.0, seed=5)
+
+    def outputs(name):
+        run = subprocess.run(retalisc_argv(this_python, "run", str(ROOT / "examples" / "nao" / name), "--bag", str(bag)),
+                             env=retalisc_env(), capture_output=True, text=True, timeout=120)
+        assert run.returncode == 0, run.stderr
+        return [json.loads(line) for line in run.stdout.splitlines()]
+
+    mine, original = outputs("nao_ros2.rtl"), outputs("nao.rtl")
+    without_seq = re.compile(r"std_msgs__0__Header\(\d+,")
+    for line in original:
+        line["event"] = without_seq.sub("std_msgs__0__Header(", line["event"])
+    assert sum(1 for line in mine if line.get("consumer", "").startswith("marker")) >= 15
+    assert any(line["event"].startswith("person_moved_object(") for line in mine)
+    assert mine == original
+
+
+@needs_ros2
+def test_ros2_nao_application_live_against_the_ground_truth(tmp_path):
+    """The reference application as a live ROS 2 node: examples/nao/nao_ros2.rtl (nao.rtl in the
+    form that reads ROS 2 headers, docs/ros.md) with examples/nao/pub_sub.xml, its QoS the
+    defaults; a 4-second recording of examples/nao/make_bag.py played in real time by an
+    independent rclpy process as ROS 2 messages (tf2_msgs/TFMessage, ar_pose/ARMarkers, stamps
+    moved to now). The world pose of every detection comes on /markerK exactly once, within
+    1 mm and 0.1 degree of the ground truth, each with its output number on /markerK/seq (the
+    line of its delivery in the node's output file), as on ROS 1 (tests/test_live_ros1.py)."""
+    import importlib.util
+    import math
+
+    spec = importlib.util.spec_from_file_location("nao_make_bag", ROOT / "examples" / "nao" / "make_bag.py")
+    make_bag = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(make_bag)
+    bag, truth_path = make_bag.write(tmp_path / "nao.bag", seconds=4.0, seed=7)
+    truth = [json.loads(line) for line in truth_path.read_text().splitlines()]
+    assert len(truth) >= 20
+    example = ROOT / "examples" / "nao"
+    domain = RosDomain()
+    env = retalisc_env({"ROS_DOMAIN_ID": str(domain.id)})
+    processes = Processes(tmp_path)
+    out = tmp_path / "out.jsonl"
+    try:
+        node = processes.start("nao", retalisc_argv(str(ROS2_PYTHON), "ros2", str(example / "nao_ros2.rtl"), "--config",
+                                                    str(example / "pub_sub.xml"), "--out", str(out)), env)
+        processes.wait_for_line(node, "ros2: node /retalis")
+        topics = ",".join(f"/marker{k}" for k in range(1, 9))
+        played = subprocess.run([str(ROS2_PYTHON), str(ROOT / "tests" / "ros2_client.py"), "--bag", str(bag), "1.0",
+                                 "/tf,/ar_pose_marker", str(len(truth)), topics], env=env, capture_output=True,
+                                text=True, timeout=120)
+        status = processes.stop(node)
+    finally:
+        processes.stop_all()
+        domain.release()
+    err = processes.err("nao")
+    assert played.returncode == 0, played.stderr + err
+    r = json.loads(played.stdout.strip().splitlines()[-1])
+    assert status == 0, err
+    assert " 0 rejected, 0 errors;" in err and "warning: " not in err, err
+    summary = [line for line in err.splitlines() if line.startswith("retalis: ")]
+    assert summary and " late" not in summary[-1], err
+    keys = [(frame, sec, nsec) for _, sec, nsec, frame, _, _ in r["received"]]
+    assert len(keys) == len(set(keys)), "a detection was published twice"
+    want = {(row["marker"], row["stamp"][0], row["stamp"][1]): row for row in truth}
+    assert set(keys) == set(want), (sorted(set(want) - set(keys)), sorted(set(keys) - set(want)))
+    worst_position = worst_angle = 0.0
+    for topic, sec, nsec, frame, position, orientation in r["received"]:
+        assert topic == "/marker" + frame.split("_")[1]          # A.6: marker 4x4_K on /markerK
+        row = want[(frame, sec, nsec)]
+        worst_position = max(worst_position, math.dist(position, row["position"]))
+        dot = abs(sum(a * b for a, b in zip(orientation, row["orientation"])))
+        worst_angle = max(worst_angle, 2 * math.acos(min(1.0, dot / math.sqrt(sum(a * a for a in orientation)))))
+    print(f"live ROS 2: {len(keys)} detections, max position error {worst_position * 1000:.4f} mm, "
+          f"max angle error {math.degrees(worst_angle):.5f} deg")
+    assert worst_position < 0.001 and worst_angle < math.radians(0.1)
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    derived = [line for line in lines if "consumer" not in line and line["event"].startswith("geometry_msgs__0__PoseStamped(")]
+    assert len(derived) == len(truth)
+    # the output numbers on /markerK/seq: one per pose, each the line of a delivery to markerK
+    for topic in {topic for topic, *_ in r["received"]}:
+        numbers = r["numbers"].get(topic, [])
+        assert len(numbers) == sum(1 for t, *_ in r["received"] if t == topic)
+        assert all(lines[n - 1].get("consumer") == topic[1:] for n in numbers)
+
+
+@needs_ros2
+def test_ros2_heartbeat_on_sim_time_and_linger(tmp_path):
+    """--heartbeat and --linger over rclpy, the node's clock /clock (use_sim_time): five
+    messages 20 ms apart are fed in one batch half a second after the first (--linger 0.5: every
+    delivery after the last message, none earlier than 0.4 s); each arms a timer 2 s of event
+    time on, which fires through the heartbeat (an rclpy timer on the node's clock) while no
+    message arrives, when /clock passes it, and not while /clock is held before it; the
+    alarms at the messages' sim time + 2 s."""
+    domain = RosDomain()
+    env = retalisc_env({"ROS_DOMAIN_ID": str(domain.id)})
+    processes = Processes(tmp_path)
+    out = tmp_path / "out.jsonl"
+    try:
+        node = processes.start("beat", retalisc_argv(str(ROS2_PYTHON), "ros2", str(LIVE / "ros2_heartbeat.rtl"), "--config",
+                                                     str(LIVE / "ros2_heartbeat.xml"), "--out", str(out), "--heartbeat",
+                                                     "0.1", "--linger", "0.5", "--ros-args", "-p", "use_sim_time:=true"),
+                               env)
+        processes.wait_for_line(node, "ros2: node /retalis")
+        done = subprocess.run([str(ROS2_PYTHON), str(ROOT / "tests" / "ros2_client.py"), "--sim"], env=env,
+                              capture_output=True, text=True, timeout=90)
+        status = processes.stop(node)
+    finally:
+        processes.stop_all()
+        domain.release()
+    err = processes.err("beat")
+    assert done.returncode == 0, done.stderr + err
+    r = json.loads(done.stdout.strip().splitlines()[-1])
+    assert status == 0, err
+    assert sorted(x for _, x in r["echo"]) == [1.0, 2.0, 3.0, 4.0, 5.0]
+    assert all(at > r["last_sent"] and at > 0.4 for at, _ in r["echo"]), r       # one batch, after the linger
+    assert r["quiet_held"] == [], r
+    assert sorted(r["quiet"]) == [1.0, 2.0, 3.0, 4.0, 5.0], r
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    alarms = [line for line in lines if line["event"].startswith("silence(") and "consumer" not in line]
+    assert len(alarms) == 5 and all(line["start"] == 5000 and line["end"] == 5002 for line in alarms), alarms

@@ -139,6 +139,75 @@ def test_the_bytes_give_the_term_and_time_of_the_text(engine, msg, plain, wrap):
     assert text_road is not None and bytes_road == text_road
 
 
+# ---- CDR (ROS 2 and Zenoh nodes): the same road with CDR's alignment -------------------------------
+
+def make_cdr_store():
+    store = typestore("ros2_humble")
+    types = {}
+    types.update(get_types_from_msg(ALL_MSG.replace("time t", "builtin_interfaces/Time t")
+                                    .replace("duration d", "builtin_interfaces/Duration d"), "rtl_test/msg/All"))
+    types.update(get_types_from_msg(ITEM_MSG, "rtl_test/msg/Item"))
+    store.register(types)
+    return store
+
+
+CDR_STORE = make_cdr_store()
+
+
+def cdr_message(msg):
+    """The message `msg` (of STORE) in CDR_STORE's types: the header without its seq."""
+    values = {}
+    for name in msg.__dataclass_fields__:
+        value = getattr(msg, name)
+        if name == "header":
+            value = CDR_STORE.types["std_msgs/msg/Header"](stamp=value.stamp, frame_id=value.frame_id)
+        elif name == "items":
+            value = [CDR_STORE.types["rtl_test/msg/Item"](k=item.k, label=item.label, values=item.values) for item in value]
+        values[name] = value
+    return CDR_STORE.types["rtl_test/msg/All"](**values)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(msg=all_messages(), plain=st.booleans(), wrap=st.booleans())
+def test_cdr_bytes_give_the_term_and_time_of_the_text(engine, msg, plain, wrap):
+    """CDR bytes (every base type at every alignment, strings with their NUL, padding at the
+    end) read in C give the text road's term and time (the header's stamp)."""
+    msg = cdr_message(msg)
+    convention = Convention(plain_strings=plain, wrap_topic=wrap)
+    data = bytes(CDR_STORE.serialize_cdr(msg, "rtl_test/msg/All"))
+    text, seconds = MessageConverter(CDR_STORE, convention).event(msg, "rtl_test/msg/All", "/a/b", 1_500_000_000_123)
+    road = Ros1Terms(engine, CDR_STORE, convention, cdr=True).event(data, "rtl_test/msg/All", "/a/b",
+                                                                     1_500_000_000_123)
+    assert road is not None and road[1] == seconds
+    assert fed(engine, road[0], road[1]) == fed(engine, text, seconds)
+
+
+def test_cdr_tf_message_and_refusals(engine):
+    """A ROS 2 TFMessage: its first transform's stamp, ROS 2's header; damaged CDR is refused
+    (the text road then says what is wrong)."""
+    T2 = CDR_STORE.types
+    transform = T2["geometry_msgs/msg/TransformStamped"](
+        header=T2["std_msgs/msg/Header"](stamp=T2["builtin_interfaces/msg/Time"](sec=1413748205, nanosec=5),
+                                         frame_id="odom"),
+        child_frame_id="base_link",
+        transform=T2["geometry_msgs/msg/Transform"](translation=T2["geometry_msgs/msg/Vector3"](x=1.5, y=-0.0, z=1e-300),
+                                                    rotation=T2["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)))
+    msg = T2["tf2_msgs/msg/TFMessage"](transforms=[transform] * 3)
+    data = bytes(CDR_STORE.serialize_cdr(msg, "tf2_msgs/msg/TFMessage"))
+    terms = Ros1Terms(engine, CDR_STORE, Convention(), cdr=True)
+    road = terms.event(data, "tf2_msgs/msg/TFMessage", "/tf", 7)
+    text, seconds = MessageConverter(CDR_STORE).event(msg, "tf2_msgs/msg/TFMessage", "/tf", 7)
+    assert road[1] == seconds == 1413748205_000000005 / 1e9
+    out = fed(engine, road[0], road[1])
+    assert out == fed(engine, text, seconds)
+    assert out["event"].startswith("tf2_msgs__0__TFMessage([geometry_msgs__0__TransformStamped("
+                                   "std_msgs__0__Header([1413748205,5],odom),base_link,")
+    big_endian = data[:1] + b"\x00" + data[2:]
+    for bad in (data[:-1], data + b"\x00" * 4, data + b"\x01", big_endian, data[:4],
+                data.replace(b"odom\x00", b"odo\xff\x00")):
+        assert fed(engine, terms.event(bad, "tf2_msgs/msg/TFMessage", "/tf", 7)[0], 1.0) is None, bad
+
+
 def test_the_release_convention_on_the_nao_types(engine):
     transform = T["geometry_msgs/msg/TransformStamped"](
         header=T["std_msgs/msg/Header"](seq=3, stamp=T["builtin_interfaces/msg/Time"](sec=1413748205, nanosec=5),

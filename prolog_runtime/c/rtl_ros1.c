@@ -15,6 +15,16 @@
         tl([S, ...])                                 fields read into a list ([Sec, NSec])
         a(N, S)  q(S)                                arrays of N / of a uint32 count
         w(Functor, S)                                Functor(S): the topic wrapper
+        cdr(S)                                       at the top only: the bytes are ROS 2's
+                                                     CDR (little endian, its 4-byte
+                                                     encapsulation header first), S read with
+                                                     CDR's alignment (a value of N bytes at a
+                                                     multiple of min(N, 8) from the payload's
+                                                     start, counts and string lengths at a
+                                                     multiple of 4, a string's length counting
+                                                     its final NUL, a message without fields
+                                                     one byte), up to 3 zero bytes of padding
+                                                     after it
 
     rtl_ros1_term/3 fails, leaving the driver's conversion to read the message and say
     what is wrong with it, when the bytes do not hold exactly one message of the type
@@ -31,7 +41,7 @@
 #include <string.h>
 
 enum kind { K_F32, K_F64, K_I8, K_U8, K_I16, K_U16, K_I32, K_U32, K_I64, K_U64, K_BOOL,
-            K_RSTR, K_PSTR, K_MSG, K_TLIST, K_ARRAY, K_SEQ, K_WRAP };
+            K_RSTR, K_PSTR, K_MSG, K_TLIST, K_ARRAY, K_SEQ, K_WRAP, K_CDR };
 
 typedef struct node {
     enum kind kind;
@@ -47,7 +57,7 @@ static node *schemas[MAX_SCHEMAS];
 static size_t schema_count;
 static pthread_mutex_t schema_lock = PTHREAD_MUTEX_INITIALIZER;
 
-static atom_t a_true, a_false, a_m, a_tl, a_a, a_q, a_w;
+static atom_t a_true, a_false, a_m, a_tl, a_a, a_q, a_w, a_cdr;
 static struct { const char *name; enum kind kind; atom_t atom; } bases[] = {
     {"f32", K_F32, 0}, {"f64", K_F64, 0}, {"i8", K_I8, 0}, {"u8", K_U8, 0}, {"i16", K_I16, 0},
     {"u16", K_U16, 0}, {"i32", K_I32, 0}, {"u32", K_U32, 0}, {"i64", K_I64, 0}, {"u64", K_U64, 0},
@@ -89,6 +99,7 @@ static void set_min_size(node *n) {
     case K_ARRAY: size = n->count * n->children[0]->min_size; break;
     case K_SEQ: size = 4; break;
     case K_WRAP: size = n->children[0]->min_size; break;
+    case K_CDR: size = 4 + n->children[0]->min_size; break;
     default: return;
     }
     n->min_size = size;
@@ -112,6 +123,17 @@ static int compile_list(term_t list, node *n, int depth) {
 
 static node *compile(term_t t, int depth) {
     atom_t name;
+    if (depth == 0 && PL_is_functor(t, PL_new_functor(a_cdr, 1))) {
+        node *n = new_node(K_CDR);
+        term_t arg = PL_new_term_ref();
+        if (!n || !(n->children = calloc(1, sizeof(node *))) || !PL_get_arg(1, t, arg) ||
+            !(n->children[0] = compile(arg, 1))) {
+            free_node(n);
+            return NULL;
+        }
+        set_min_size(n);
+        return n;
+    }
     size_t arity;
     node *n = NULL;
     term_t arg = PL_new_term_ref(), arg2 = PL_new_term_ref();
@@ -180,13 +202,28 @@ static foreign_t pl_register(term_t schema, term_t handle) {
 
 typedef struct {
     const unsigned char *p, *end;
+    const unsigned char *base;  /* CDR: the payload's start (alignment is relative to it); else NULL */
 } cursor;
 
-static int take(cursor *c, size_t size, const unsigned char **at) {
+/* CDR: skip the padding before a value aligned to `align` bytes. */
+static int align_to(cursor *c, size_t align) {
+    if (!c->base || align <= 1) return TRUE;
+    size_t pad = (align - (size_t)(c->p - c->base) % align) % align;
+    if ((size_t)(c->end - c->p) < pad) return FALSE;
+    c->p += pad;
+    return TRUE;
+}
+
+static int take_bytes(cursor *c, size_t size, const unsigned char **at) {
     if ((size_t)(c->end - c->p) < size) return FALSE;
     *at = c->p;
     c->p += size;
     return TRUE;
+}
+
+/* A value of `size` bytes (a number, a count, a string's length), aligned in CDR. */
+static int take(cursor *c, size_t size, const unsigned char **at) {
+    return align_to(c, size < 8 ? size : 8) && take_bytes(c, size, at);
 }
 
 static uint64_t le(const unsigned char *b, int size) {
@@ -227,7 +264,12 @@ static int decode_string(const node *n, cursor *c, term_t t) {
     const unsigned char *b, *s;
     if (!take(c, 4, &b)) return FALSE;
     size_t len = (size_t)le(b, 4);
-    if (!take(c, len, &s) || !valid_utf8(s, len)) return FALSE;
+    if (!take_bytes(c, len, &s)) return FALSE;
+    if (c->base) {                  /* CDR: the length counts the final NUL */
+        if (len == 0 || s[len - 1] != 0) return FALSE;
+        len--;
+    }
+    if (!valid_utf8(s, len)) return FALSE;
     if (n->kind == K_PSTR) return PL_unify_chars(t, PL_ATOM | REP_UTF8, len, (const char *)s);
     char small[256];
     char *buf = len + 2 <= sizeof(small) ? small : malloc(len + 2);
@@ -288,7 +330,8 @@ static int decode(const node *n, cursor *c, term_t t) {
     case K_RSTR:
     case K_PSTR: return decode_string(n, c, t);
     case K_MSG: {
-        if (!n->count) return PL_unify_atom(t, n->name);
+        if (!n->count)          /* CDR: an empty message is one byte (rosidl's placeholder) */
+            return (!c->base || take(c, 1, &b)) && PL_unify_atom(t, n->name);
         if (!PL_unify_functor(t, n->functor)) return FALSE;
         term_t arg = PL_new_term_ref();
         for (size_t i = 0; i < n->count; i++)
@@ -313,6 +356,14 @@ static int decode(const node *n, cursor *c, term_t t) {
         term_t arg = PL_new_term_ref();
         return PL_unify_functor(t, n->functor) && PL_get_arg(1, t, arg) && decode(n->children[0], c, arg);
     }
+    case K_CDR: {               /* little-endian CDR (0x0001); the options are not read */
+        if (!take_bytes(c, 4, &b) || b[0] != 0 || b[1] != 1) return FALSE;
+        c->base = c->p;
+        if (!decode(n->children[0], c, t) || (size_t)(c->end - c->p) > 3) return FALSE;
+        while (c->p < c->end)   /* padding only */
+            if (*c->p++ != 0) return FALSE;
+        return TRUE;
+    }
     }
     return FALSE;
 }
@@ -330,7 +381,7 @@ static foreign_t pl_term(term_t handle, term_t bytes, term_t term) {
     /* a copy: building the term may move the stacks the string lives on */
     if (!PL_get_nchars(bytes, &len, &data, CVT_STRING | REP_ISO_LATIN_1 | BUF_MALLOC | CVT_EXCEPTION))
         return FALSE;
-    cursor c = {(const unsigned char *)data, (const unsigned char *)data + len};
+    cursor c = {(const unsigned char *)data, (const unsigned char *)data + len, NULL};
     term_t out = PL_new_term_ref();
     int ok = decode(n, &c, out) && c.p == c.end;
     PL_free(data);
@@ -345,6 +396,7 @@ install_t install_rtl_ros1(void) {
     a_a = PL_new_atom("a");
     a_q = PL_new_atom("q");
     a_w = PL_new_atom("w");
+    a_cdr = PL_new_atom("cdr");
     for (size_t i = 0; i < NBASES; i++) bases[i].atom = PL_new_atom(bases[i].name);
     PL_register_foreign("rtl_ros1_register", 2, pl_register, 0);
     PL_register_foreign("rtl_ros1_term", 3, pl_term, 0);

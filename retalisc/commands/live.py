@@ -38,6 +38,10 @@ def _common(command):
         click.option("--linger", type=Seconds(allow_inf=False), default=0.0, metavar="SECONDS",
                      help="Feed messages arriving within SECONDS of each other in one batch (fewer Prolog "
                           "calls, less CPU, that much more latency; default 0: feed what is waiting at once)."),
+        click.option("--heartbeat", type=click.FloatRange(min=0.001), default=None, metavar="SECONDS",
+                     help="While no message arrives, move the program's clock to the node's clock every "
+                          "SECONDS of it (ROS 2: /clock under use_sim_time), so that absences and alarms fire "
+                          "on time. Not with --state."),
     ]
     for option in reversed(options):
         command = option(command)
@@ -52,7 +56,7 @@ def _common(command):
 
 def serve(program: str, config_path: Optional[str], make_transport: Callable, out: Optional[str],
           wrap_topic: bool, plain_strings: bool, max_delay, duration, describe: Callable, linger: float = 0.0,
-          recovery: Optional[dict] = None) -> int:
+          recovery: Optional[dict] = None, heartbeat: Optional[float] = None) -> int:
     from ..driver.engine import Engine
     from ..driver.recovery import RecoveryError
     from ..live.config import ConfigError, PubSubConfig, load_config
@@ -63,6 +67,8 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
     output_file(out, "--out")
     recovery = recovery or {}
     check_snapshot_options(recovery.get("state"), recovery.get("snapshot_every"), recovery.get("snapshot_seconds"))
+    if recovery.get("state") is not None and heartbeat is not None:
+        raise click.UsageError("--state does not go with --heartbeat (a replay would not see the same clock)")
     if recovery.get("state") is not None and out == "-":
         raise click.UsageError("--state needs --out FILE (or no --out): standard output cannot be cut back")
     try:
@@ -91,7 +97,7 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
     else:
         sink = None if out is None else (sys.stdout if out == "-" else open(out, "w", encoding="utf-8"))
     node = LiveNode(engine, transport, config, Convention.of_program(engine, plain_strings, wrap_topic),
-                    out=sink, linger=linger, state=state)
+                    out=sink, linger=linger, state=state, heartbeat=heartbeat)
     stop = threading.Event()
     previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
     status = 0
@@ -135,8 +141,8 @@ Example (after `bash setup.sh`, with a ROS master running):
 @_common
 @click.option("--name", "node_name", default="retalis", show_default=True,
               help="The node's name; its services are /NAME/add_output_subscription, ... (docs/ros.md).")
-def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, state, snapshot_every,
-                snapshot_seconds, node_name) -> None:
+def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, heartbeat, state,
+                snapshot_every, snapshot_seconds, node_name) -> None:
     """Run PROGRAM as a live ROS 1 node: subscribe to the topics of PUB_SUB.xml, publish
     subscription deliveries, and offer the services of the 2015 release (thesis A.1):
     add/delete_output_subscription, add/delete_memory, add/delete_input_subscription,
@@ -160,7 +166,7 @@ def ros_command(program, config_path, out, wrap_topic, plain_strings, max_delay,
                 f"/{node_name}/query_one, /{node_name}/query_all")
 
     sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger,
-                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds)))
+                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds), heartbeat))
 
 
 @click.command("ros2", context_settings={"ignore_unknown_options": True}, epilog="""\b
@@ -175,8 +181,8 @@ With sim time and a name given the ROS 2 way (as a launch file does):
 @click.option("--domain", type=click.IntRange(0, 232), default=None,
               help="The ROS 2 domain (default: $ROS_DOMAIN_ID, else 0).")
 @click.argument("ros_args", nargs=-1, type=click.UNPROCESSED, metavar="[--ros-args ...]")
-def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, state, snapshot_every,
-                 snapshot_seconds, node_name, namespace, domain, ros_args) -> None:
+def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, heartbeat, state,
+                 snapshot_every, snapshot_seconds, node_name, namespace, domain, ros_args) -> None:
     """Run PROGRAM as a live ROS 2 node (rclpy): subscribe to the topics of PUB_SUB.xml (with
     their QoS), publish subscription deliveries, offer the services of the 2015 release
     (thesis A.1) with the types of ros/retalis_interfaces, and the parameters program, config,
@@ -209,7 +215,7 @@ def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay
                 f"{name}/query_all")
 
     sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger,
-                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds)))
+                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds), heartbeat))
 
 
 def _hand_over_to_ros2_venv() -> None:
@@ -237,7 +243,7 @@ Example: two components, the second consuming what the first delivers:
               help="Listen for other components here (tcp/127.0.0.1:PORT); repeatable.")
 @click.option("--connect", multiple=True, metavar="ENDPOINT",
               help="Connect to a component listening here; repeatable; retried until it is up.")
-def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, state,
+def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_delay, duration, linger, heartbeat, state,
                   snapshot_every, snapshot_seconds, listen, connect) -> None:
     """Run PROGRAM as a live component over Zenoh, without a ROS master: a Zenoh peer with
     multicast scouting off and explicit endpoints; topic /name is key `name`, messages are
@@ -254,7 +260,7 @@ def zenoh_command(program, config_path, out, wrap_topic, plain_strings, max_dela
                 f"{', '.join(connect) or 'nothing'}: subscribed to {_inputs(node)}")
 
     sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger,
-                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds)))
+                   dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds), heartbeat))
 
 
 def _master() -> str:

@@ -10,6 +10,14 @@ Prolog call; with `linger`, what arrives within that many seconds of the first m
 batch joins it, which saves Prolog calls at the cost of that latency). The queue has no
 bound: a burst is absorbed, never dropped.
 
+With `heartbeat` (seconds), while no message arrives the program's clock follows the node's
+clock: every `heartbeat` seconds of it (the transport's timer, `Transport.every`: ROS 2's
+runs on rclpy's clock, /clock under use_sim_time; otherwise a thread on the wall clock), once
+nothing has arrived for that long (and for `linger`, so that a heartbeat never cuts a batch
+short), the consumer moves the clock to the time a message without a stamp would get now
+(Engine.advance_clock), so that absences and alarms fire on time, as `retalisc run
+--heartbeat` does on a live input. Heartbeats are not journaled: not with `state`.
+
 Service requests (thesis A.1) go through the same queue (`call`): they run in the consumer
 thread between two batches, so a subscription added after a message arrived does not see
 it, and the caller waits for the reply. Every text a request carries is untrusted data: it
@@ -57,7 +65,7 @@ from dataclasses import dataclass, field
 from typing import IO, Any, Callable, Dict, List, Optional, Tuple
 
 from ..robot_io.data_terms import read_data_term, write_data_term
-from ..robot_io.messages import CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
+from ..robot_io.messages import CLOCK_JUMP, CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from ..robot_io.ros1_terms import Ros1Terms
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 from .state import STATEFUL_CALLS
@@ -158,6 +166,12 @@ class Transport:
         None: the middleware does not say."""
         return None
 
+    def every(self, seconds: float, callback: Callable[[], None]) -> bool:
+        """Call `callback()` every `seconds` of the node's clock (`now_ns`), from a thread of the
+        middleware's, until `close`; False: the middleware has no timers of its own (the node
+        then calls it from a thread of its own, on the wall clock)."""
+        return False
+
     def close(self) -> None:
         pass
 
@@ -169,15 +183,15 @@ class LiveNode:
     def __init__(self, engine, transport: Transport, config: Optional[PubSubConfig] = None,
                  convention: Optional[Convention] = None, out: Optional[IO[str]] = None,
                  log: Callable[[str], None] = lambda text: print(text, file=sys.stderr, flush=True),
-                 linger: float = 0.0, state=None):
+                 linger: float = 0.0, state=None, heartbeat: Optional[float] = None):
         self.engine = engine
         self.transport = transport
         self.config = config or PubSubConfig()
         self.store = typestore("ros1_noetic" if transport.wire == "ros1" else "ros2_humble")
         convention = convention or Convention.of_program(engine)     # the program's strings
         self.converter = MessageConverter(self.store, convention)
-        # ROS 1 messages go to the runtime as bytes, which it reads in C (ros1_terms.py)
-        self.ros1_terms = Ros1Terms(engine, self.store, convention) if transport.wire == "ros1" else None
+        # messages go to the runtime as bytes, which it reads in C (ros1_terms.py; CDR too)
+        self.ros1_terms = Ros1Terms(engine, self.store, convention, cdr=transport.wire == "cdr")
         self.clock = EventClock(log)             # the one clock rule (consumer thread only)
         self.out = out
         self.log = log
@@ -189,6 +203,12 @@ class LiveNode:
         self._deliveries: List[Callable] = []      # extra observers of outputs (tests, benchmark)
         self.fed = 0
         self.linger = linger       # seconds to wait for more messages before feeding a batch
+        if heartbeat is not None and state is not None:
+            raise ValueError("a heartbeat does not go with a state directory (a replay would not see the same clock)")
+        self.heartbeat = heartbeat          # seconds (the module's docstring) or None
+        self._last_arrival = 0.0            # time.monotonic() of the last arrival
+        self._beat_queued = False
+        self._closed = threading.Event()
         self.state = state         # live/state.py LiveState (--state DIR) or None
         if state is not None:
             transport.recoverable()
@@ -215,6 +235,37 @@ class LiveNode:
                 raise ValueError(reply.error)
         for spec in self.config.publish:
             self.call(self._advertise, spec.name, spec.msgtype, request=False)
+        if self.heartbeat is not None and not self.transport.every(self.heartbeat, self._beat):
+            threading.Thread(target=self._beating, name="retalis-heartbeat", daemon=True).start()
+
+    def _beating(self) -> None:
+        while not self._closed.wait(self.heartbeat):
+            self._beat()
+
+    def _beat(self) -> None:
+        """A tick of the heartbeat (any thread): a heartbeat for the consumer, unless something
+        arrived within the last `heartbeat` (and `linger`) seconds, or one is still queued."""
+        if self._beat_queued or time.monotonic() - self._last_arrival < max(self.heartbeat, self.linger):
+            return
+        self._beat_queued = True
+        self._queue.put((self._heartbeat, (), Future(), False))
+
+    def _heartbeat(self) -> Reply:
+        """Move the program's clock to the time the one clock rule (EventClock) gives a message
+        without a stamp arriving now, if that is later; what the timers then raise is output."""
+        self._beat_queued = False
+        clock, now = self.clock, self.transport.now_ns() / 1e9
+        if clock.clock_time is not None:           # the node reads /clock: its latest
+            target = clock.clock_time
+        elif clock.offset is not None and abs(clock.offset) > CLOCK_JUMP:
+            target = now + clock.offset            # the messages carry another clock
+        else:
+            target = now
+        if target > self.engine.clock():
+            self.engine.advance_clock(target)     # the output comes through _output
+            if self.out is not None:
+                self.out.flush()
+        return Reply(True)
 
     def _advertise(self, topic: str, msgtype: str) -> Reply:
         if store_type(msgtype) not in self.store.fielddefs:
@@ -241,6 +292,7 @@ class LiveNode:
 
     def close(self, timeout: float = 10.0) -> None:
         """Stop taking messages, process what is queued, close the transport."""
+        self._closed.set()
         if self._thread.is_alive():
             self._queue.put(_STOP)
             self._thread.join(timeout)
@@ -298,6 +350,7 @@ class LiveNode:
         """A message of `topic` arrived: its serialized bytes, the type its publisher gave
         (ROS 1 connection header; None: the subscribed type) and that type's full definition
         (ROS 1), for types the node does not know."""
+        self._last_arrival = time.monotonic()
         self._queue.put((topic, data, msgtype, definition, self.transport.now_ns()))
 
     def call(self, function: Callable[..., Reply], *args, timeout: float = CALL_TIMEOUT,

@@ -2,9 +2,11 @@
 
 A real rclpy node (name and namespace from `--name`/`--namespace` or `--ros-args -r
 __node:=... -r __ns:=...`), so the graph API, `ros2 node info` and the parameter services
-see it. rclpy carries serialized CDR both ways (a subscription with `raw=True` hands over
-the bytes, `Publisher.publish(bytes)` sends them); the messages are read and written by
-rosbags, as in bag replay. rclpy 7 (Jazzy) has no dynamic types: the Python package of every
+see it. rclpy carries serialized CDR both ways (the input subscriptions' bytes, taken by a
+reader thread of the transport's own, `Ros2Transport._read`; `Publisher.publish(bytes)`);
+the runtime reads the messages into terms in C (robot_io/ros1_terms.py, `cdr=True`) and
+rosbags writes them, as in bag replay. rclpy's executor, in another thread, serves the
+services, the parameters, rclpy's /clock and the heartbeat's timer (`every`). rclpy 7 (Jazzy) has no dynamic types: the Python package of every
 type the node subscribes or publishes must be importable (its generated code supplies the
 type support), else the request is refused with an error naming the package and the node
 goes on. A type that rosbags does not ship (ar_pose/ARMarkers, a user's own) is read with the
@@ -149,6 +151,26 @@ def qos_profile(spec: Optional[QosSpec], topic: str, subscriber: bool):
     return profile
 
 
+def _own_reader_group():
+    """A callback group (rclpy's, imported here: rclpy is optional) that no executor runs."""
+    from rclpy.callback_groups import CallbackGroup
+
+    class OwnReader(CallbackGroup):
+        """The callback group of the input subscriptions: no executor ever waits on them or
+        runs them (Ros2Transport._read does)."""
+
+        def can_execute(self, entity) -> bool:
+            return False
+
+        def beginning_execution(self, entity) -> bool:
+            return False
+
+        def ending_execution(self, entity) -> None:
+            pass
+
+    return OwnReader()
+
+
 class Ros2Transport(Transport):
     wire = "cdr"
     name = "ros2"
@@ -165,9 +187,13 @@ class Ros2Transport(Transport):
         self.ros_args = list(ros_args)
         self.parameters = dict(parameters or {})
         self.domain = int(os.environ.get("ROS_DOMAIN_ID") or 0) if domain is None else domain
-        self._subscriptions: Dict[str, object] = {}
+        self._subscriptions: Dict[str, tuple] = {}     # topic -> (subscription, definition), read by _read
+        self._retired: List[object] = []                 # subscriptions for _read to destroy
+        self._lock = threading.Lock()
+        self._closing = False
         self._publishers: Dict[str, tuple] = {}
         self._thread: Optional[threading.Thread] = None
+        self._reader: Optional[threading.Thread] = None
         self.context = None
 
     def start(self, node: LiveNode) -> None:
@@ -187,15 +213,19 @@ class Ros2Transport(Transport):
         self.clock = self.ros.get_clock()
         self._served = [self.ros.create_service(cls, f"~/{name}", self._handler(name))
                         for name, cls in self.services.items()]
-        # One executor thread for topics and services. rclpy's MultiThreadedExecutor, which
-        # would let messages be taken while a service request waits for the consumer thread,
-        # costs so much per callback that at the thesis's load (633 messages/s) the node fell
-        # behind (p50 0.7 s, against 1.4 ms with this one); during a request the messages wait
-        # in their readers' history (INPUT_DEPTH).
+        # Services, parameters and rclpy's /clock (use_sim_time) in an executor's thread; the
+        # input topics in a reader thread of their own (_read), out of the executor's sight
+        # (their callback group never lets it run them, _own_reader_group).
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.ros)
         self._thread = threading.Thread(target=self._spin, name="retalis-rclpy", daemon=True)
         self._thread.start()
+        from rclpy.guard_condition import GuardCondition
+
+        self._group = _own_reader_group()
+        self._wake = GuardCondition(None, None, context=self.context)
+        self._reader = threading.Thread(target=self._read, name="retalis-ros2-reader", daemon=True)
+        self._reader.start()
 
     def _spin(self) -> None:
         try:
@@ -203,6 +233,51 @@ class Ros2Transport(Transport):
         except Exception:        # the context was shut down (close)
             if self.context.ok():
                 raise
+
+    def _read(self) -> None:
+        """The reader thread: wait (without the GIL) until an input subscription has data, then
+        take every message waiting in each, one from each subscription in turn, and hand the
+        bytes to the LiveNode. rclpy's executor costs about 300 us of Python per message
+        (it builds its wait set and a task for each callback), which at the thesis's load took
+        a fifth of a core and kept the GIL from the consumer thread; this loop costs a few
+        tens of microseconds a message and takes a burst in one wake-up (docs/ros.md,
+        Performance). Subscriptions are added and destroyed here, between two waits
+        (`subscribe` and `unsubscribe` wake it)."""
+        from contextlib import ExitStack
+
+        from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+
+        arrived = self.node.arrived
+        wait_set, size = None, -1
+        while not self._closing:
+            with self._lock:
+                for subscription in self._retired:
+                    self.ros.destroy_subscription(subscription)
+                self._retired.clear()
+                readers = list(self._subscriptions.items())
+            with ExitStack() as held:          # the handles stay valid while they are waited on
+                held.enter_context(self.context.handle)
+                for _, (subscription, _) in readers:
+                    held.enter_context(subscription.handle)
+                held.enter_context(self._wake.handle)
+                if size != len(readers):
+                    wait_set, size = _rclpy.WaitSet(len(readers), 1, 0, 0, 0, 0, self.context.handle), len(readers)
+                wait_set.clear_entities()
+                for _, (subscription, _) in readers:
+                    wait_set.add_subscription(subscription.handle)
+                wait_set.add_guard_condition(self._wake.handle)
+                wait_set.wait(-1)
+                ready = wait_set.get_ready_entities("subscription")
+                pending = [(topic, subscription.handle, subscription.msg_type, definition)
+                           for topic, (subscription, definition) in readers if subscription.handle.pointer in ready]
+                while pending and not self._closing:
+                    left = []
+                    for topic, handle, cls, definition in pending:
+                        taken = handle.take_message(cls, True)
+                        if taken is not None:
+                            arrived(topic, taken[0], None, definition)
+                            left.append((topic, handle, cls, definition))
+                    pending = left
 
     @property
     def fully_qualified_name(self) -> str:
@@ -219,15 +294,23 @@ class Ros2Transport(Transport):
         definition = (None if store_type(msgtype) in self.node.store.fielddefs
                       else message_definition(msgtype, self.node.store.fielddefs))
         profile = qos_profile(self.node.config.qos(topic, True), topic, True)
-        arrived = self.node.arrived
-        self._subscriptions[topic] = self.ros.create_subscription(
-            cls, topic, lambda data: arrived(topic, data, None, definition), profile, raw=True)
+        # the callback is never called (_own_reader_group): _read takes the bytes itself
+        subscription = self.ros.create_subscription(cls, topic, lambda data: None, profile, raw=True,
+                                                    callback_group=self._group)
+        for handler in subscription.event_handlers:     # its QoS events (incompatible QoS: a warning)
+            handler.callback_group = self.ros.default_callback_group      # stay the executor's
+            self.ros.default_callback_group.add_entity(handler)
+        with self._lock:
+            self._subscriptions[topic] = (subscription, definition)
+        self._wake.trigger()
 
     def unsubscribe(self, topic: str) -> bool:
-        subscription = self._subscriptions.pop(topic, None)
-        if subscription is None:
-            return False
-        self.ros.destroy_subscription(subscription)
+        with self._lock:
+            entry = self._subscriptions.pop(topic, None)
+            if entry is None:
+                return False
+            self._retired.append(entry[0])
+        self._wake.trigger()
         return True
 
     def advertise(self, topic: str, msgtype: str):
@@ -257,6 +340,12 @@ class Ros2Transport(Transport):
                 break
             publisher.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
 
+    def every(self, seconds: float, callback) -> bool:
+        """An rclpy timer on the node's clock (ROS time: /clock under use_sim_time, so a paused
+        simulation pauses the heartbeat), run by the executor's thread."""
+        self._timers = getattr(self, "_timers", []) + [self.ros.create_timer(seconds, callback)]
+        return True
+
     def subscriber_count(self, topic: str) -> int:
         entry = self._publishers.get(topic)
         return 0 if entry is None else entry[1].get_subscription_count()
@@ -264,6 +353,10 @@ class Ros2Transport(Transport):
     def close(self) -> None:
         if self.context is None:
             return
+        self._closing = True
+        if self._reader is not None:
+            self._wake.trigger()
+            self._reader.join(2)
         self.executor.shutdown(timeout_sec=2)
         self.ros.destroy_node()
         self.rclpy.try_shutdown(context=self.context)

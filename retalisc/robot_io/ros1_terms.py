@@ -10,6 +10,10 @@ the runtime; then each message goes to the runtime as its serialized bytes
 time the message carries is read from the bytes too (the header stamp, or a TFMessage's first
 transform's, when its position is fixed), as `MessageConverter.stamp_ns` gives it.
 
+ROS 2 messages (`cdr=True`: the live ROS 2 and Zenoh nodes, whose messages are CDR) take the
+same road: the schema says `cdr(...)` and the helper reads the bytes with CDR's alignment;
+the stamp is read when the header is the type's first field (or its stamped list's items').
+
 A type takes the text road when the schema cannot say it (a base type the helper does not
 read, a header that is not at a fixed place, a ROS 1 header without `seq` in the store),
 when the runtime has no C helper, and message by message when the helper refuses the bytes
@@ -41,8 +45,9 @@ class Ros1Terms:
     """The schemas of one type store's messages, registered with `engine`. `event(...)` is
     `(Ros1Bytes, seconds)` for a message, or None when its type takes the text road."""
 
-    def __init__(self, engine, typestore, convention: Convention = Convention()):
+    def __init__(self, engine, typestore, convention: Convention = Convention(), cdr: bool = False):
         self.engine = engine
+        self.cdr = cdr              # the bytes are CDR (ROS 2), the types those of `typestore`
         self.typestore = typestore
         self.convention = convention
         self._string = "ps" if convention.plain_strings else "rs"
@@ -86,7 +91,7 @@ class Ros1Terms:
             text = f"w({atom_text(topic_functor(topic))},{text})"
         elif static_tf_wrapper(topic, msgtype, self.convention):
             text = f"w({static_tf_wrapper(topic, msgtype, self.convention)},{text})"
-        return text
+        return f"cdr({text})" if self.cdr else text
 
     def _register(self, msgtype: str, topic: str):
         self._ros1_bytes = Ros1Bytes
@@ -107,7 +112,7 @@ class Ros1Terms:
                 raise _NoSchema(msgtype)
             return "tl([" + ",".join(self._value(fields[name]) for name in ("sec", "nanosec")) + "])"
         fields = _fields(self.typestore, msgtype)
-        if msgtype == HEADER_TYPE and (not fields or fields[0][0] != "seq"):
+        if msgtype == HEADER_TYPE and not self.cdr and (not fields or fields[0][0] != "seq"):
             raise _NoSchema("a ROS 1 header has seq")       # rosbags skips it: the text road
         return f"m({atom_text(type_functor(msgtype))},[" + ",".join(self._value(desc) for _, desc in fields) + "])"
 
@@ -141,6 +146,8 @@ class Ros1Terms:
         MessageConverter.stamp_ns gives it (`header.stamp`, or the first item's of a stamped
         list: a TFMessage's first transform; 0 for an empty list); None for a type that
         carries no time. Raises _NoSchema when the stamp is not at a fixed offset."""
+        if self.cdr:
+            return self._cdr_stamp_reader(msgtype)
         offset = self._header_stamp_offset(msgtype)
         if offset is None:
             items = stamped_list(self.typestore, msgtype)
@@ -165,6 +172,46 @@ class Ros1Terms:
                 sec, nanosec = unpack(data, first)
                 return sec * 1_000_000_000 + nanosec
 
+        return stamp
+
+    def _cdr_stamp_reader(self, msgtype: str) -> Optional[Callable[[bytes], int]]:
+        """As _stamp_reader, for CDR bytes: the header must be the first field (of the type,
+        or of its stamped list's items) and its stamp the header's first, at the payload's
+        start (4: after the encapsulation header) or after the list's count (8)."""
+        def header_first(name: str) -> bool:
+            fields = _fields(self.typestore, name)
+            if not fields or fields[0] != ("header", (NAME, HEADER_TYPE)):
+                raise _NoSchema("the header is not the first field")
+            header = _fields(self.typestore, HEADER_TYPE)
+            if not header or header[0][0] != "stamp":
+                raise _NoSchema("the stamp is not the header's first field")
+            return True
+
+        time_fields = _fields(self.typestore, "builtin_interfaces/msg/Time")
+        layout = tuple(desc[1][0] if desc[0] == BASE else None for _, desc in time_fields)
+        if [name for name, _ in time_fields] != ["sec", "nanosec"] or layout not in _STAMP_FORMATS:
+            raise _NoSchema("the stamp")
+        unpack = struct.Struct(_STAMP_FORMATS[layout]).unpack_from
+        if has_header(self.typestore, msgtype):
+            header_first(msgtype)
+
+            def stamp(data: bytes, unpack=unpack) -> int:
+                sec, nanosec = unpack(data, 4)
+                return sec * 1_000_000_000 + nanosec
+            return stamp
+        items = stamped_list(self.typestore, msgtype)
+        if items is None:
+            return None
+        fields = _fields(self.typestore, msgtype)
+        if fields[0][0] != items:
+            raise _NoSchema("the stamped list is not the first field")
+        header_first(dict(fields)[items][1][0][1])
+
+        def stamp(data: bytes, unpack=unpack) -> int:
+            if not int.from_bytes(data[4:8], "little"):
+                return 0
+            sec, nanosec = unpack(data, 8)
+            return sec * 1_000_000_000 + nanosec
         return stamp
 
     def _header_stamp_offset(self, msgtype: str) -> Optional[int]:
