@@ -47,13 +47,12 @@ from __future__ import annotations
 
 from ..unit import Unit
 from .alarms import alarm_head
-from .relations import RELATIONS
 from .rule_policies import RULE_POLICIES, policy_inputs, rule_policy, signature
 from .steps import generate
 
 name = "edbc"
 
-__all__ = ["RELATIONS", "RULE_POLICIES", "alarm_head", "name", "policy_inputs", "rule_policy", "run", "signature"]
+__all__ = ["RULE_POLICIES", "alarm_head", "name", "policy_inputs", "rule_policy", "run", "signature"]
 
 
 def run(unit: Unit) -> Unit:

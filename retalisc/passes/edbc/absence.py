@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from ...frontend.terms import Atom, Number
+from ...frontend.terms import Atom, Number, substitute
 from ..unit import Step
 from . import negation
 from .clauses import C, V, clause, conj, operand_vars, plain_number, split_key
 from .generator import RuleGenerator
+from .relations import absence_result, blocker, plain_var
 
 
 def absence_clauses(g: RuleGenerator, step: Step) -> None:
@@ -34,11 +35,15 @@ def absence_clauses(g: RuleGenerator, step: Step) -> None:
     arrivals = decided_at[0] if decided_at else None
     decided = g.store(stores, "decided", left_key + left_other + decided_at + [s1, e1, close])
     negs = g.store(stores, "negs", negated_key + negated_other + [sn, en])
-    inside = [C("<", e1, sn), C("=<", en, close), Atom("!")]
+    # the result's interval and what blocks it (rtl_relations.pl): the result's end is `close`
+    start, end = absence_result()
+    s = g.renamed(plain_var(start, "start of an absence"))
+    blocking = g.expr([substitute(b, {"E2": close}) for b in blocker("absence")])
+    inside = blocking + [Atom("!")]
     unblocked = negation.unblocked_goal(g, stores, f"{step.name}_blocked", negated_key + [e1, close], negs, inside, e1)
-    closing = C("is", close, C("+", e1, Number(duration)))
+    closing = C("is", close, g.renamed(substitute(end, {"D": Number(duration)})))
     decide = C(f"{step.name}_decide", *left_vars, s1, e1)
-    window = g.window_check(step, s1, close)
+    window = g.window_check(step, s, close)
     derivable = conj([window, unblocked])
     # L arrives: wait for the clock; L is deleted: cancel the wait, or take back the result
     handler = f"{step.name}_left"
@@ -47,18 +52,18 @@ def absence_clauses(g: RuleGenerator, step: Step) -> None:
     g.clauses.append(clause(C(handler + "_retract", *left_vars, s1, e1), [
         closing,
         C(";", C("->", C("rtl_timer_cancel", decide), Atom("true")),
-          g.if_stored(stores, decided, C(";", C("->", derivable, g.output(step, s1, close, retract=True,
+          g.if_stored(stores, decided, C(";", C("->", derivable, g.output(step, s, close, retract=True,
                                                                                 arrivals=arrivals)),
                                                 Atom("true"))))]))
     g.clauses.append(clause(decide, [
         closing] + [C("rtl_policy_arrival", a) for a in decided_at] + [C("assertz", decided),
-        C(";", C("->", derivable, g.output(step, s1, close, arrivals=arrivals)), Atom("true"))]))
+        C(";", C("->", derivable, g.output(step, s, close, arrivals=arrivals)), Atom("true"))]))
     # a blocker takes back the decided results it falls inside of; deleting it restores them
     handler = f"{step.name}_negated"
     g.arrival(step.negated, handler, sn, en)
-    found = conj([g.lookup(stores, decided, en), C("<", e1, sn), C("=<", en, close), derivable])
+    found = conj([g.lookup(stores, decided, en)] + blocking + [derivable])
     g.clauses.append(clause(C(handler, *negated_vars, sn, en), [
-        C("forall", found, g.output(step, s1, close, retract=True, arrivals=arrivals)), C("assertz", negs)]))
+        C("forall", found, g.output(step, s, close, retract=True, arrivals=arrivals)), C("assertz", negs)]))
     g.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
-        g.if_stored(stores, negs, g.restoring(C("forall", found, g.output(step, s1, close,
+        g.if_stored(stores, negs, g.restoring(C("forall", found, g.output(step, s, close,
                                                                                   arrivals=arrivals))))]))

@@ -8,7 +8,7 @@ from ...frontend.terms import Atom, Term, Var, substitute
 from ..unit import Step
 from .clauses import C, V, clause, conj, operand_vars, split_key
 from .generator import RuleGenerator
-from .relations import RELATIONS
+from . import relations
 
 
 def first_join_clauses(g: RuleGenerator, step: Step) -> None:
@@ -18,7 +18,7 @@ def first_join_clauses(g: RuleGenerator, step: Step) -> None:
     pairing of each L: a right instance that arrives (late) before an L's partner takes its
     place, and deleting the partner pairs the L with the next one; so the output is always
     that of the events present."""
-    relation, start_expr, end_expr = RELATIONS[step.op]
+    relation, start_expr, end_expr = relations.relation(step.op)
     s1, e1, s2, e2 = g.t("S1"), g.t("E1"), g.t("S2"), g.t("E2")
     left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
     key, left_other = split_key(left_vars, right_vars)

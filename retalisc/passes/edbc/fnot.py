@@ -6,6 +6,7 @@ from ..unit import Step
 from . import negation
 from .clauses import C, clause, conj, operand_vars, split_key
 from .generator import RuleGenerator
+from .relations import blocker, blocker_window
 
 
 def fnot_clauses(g: RuleGenerator, step: Step) -> None:
@@ -18,9 +19,12 @@ def fnot_clauses(g: RuleGenerator, step: Step) -> None:
     arrivals = al[0] if al else None
     lefts = g.store(step, "lefts", left_key + left_other + al + [s1, e1])
     negs = g.store(step, "negs", negated_key + negated_other + [sn, en])
-    before = [C("<", en, s1), g.window_check(step, sn, e1), Atom("!")]
+    # what blocks L, and the span of a blocker the window bounds (rtl_relations.pl)
+    blocking = g.expr(blocker("fnot"))
+    within = g.window_check(step, *(g.renamed(t) for t in blocker_window("fnot")))
+    before = blocking + [within, Atom("!")]
     unblocked = negation.unblocked_goal(g, step, f"{step.name}_blocked", negated_key + [s1, e1], negs,
-                               [g for g in before if g is not None], e1)
+                                        [goal for goal in before if goal is not None], e1)
     handler = f"{step.name}_left"
     g.arrival(step.left, handler, s1, e1, *al)
     derivable = conj([unblocked, g.window_check(step, s1, e1)])
@@ -33,7 +37,7 @@ def fnot_clauses(g: RuleGenerator, step: Step) -> None:
     g.clauses.append(clause(C(handler + "_retract", *left_vars, *al, s1, e1), [taken]))
     handler = f"{step.name}_negated"
     g.arrival(step.negated, handler, sn, en)
-    after = conj([g.lookup(step, lefts, en), C("<", en, s1), g.window_check(step, sn, e1), unblocked])
+    after = conj([g.lookup(step, lefts, en)] + blocking + [within, unblocked])
     g.clauses.append(clause(C(handler, *negated_vars, sn, en), [
         C("forall", after, g.output(step, s1, e1, retract=True, arrivals=arrivals)), C("assertz", negs)]))
     g.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [

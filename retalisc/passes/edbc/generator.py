@@ -56,7 +56,7 @@ class RuleGenerator(Stores):
         return V(self.time_names[base])
 
     def expr(self, goals: List[Term]) -> List[Term]:
-        """Goals over the time variables (`RELATIONS`), renamed to this rule's names."""
+        """Goals over the time variables (`relations`), renamed to this rule's names."""
         return [self.renamed(g) for g in goals]
 
     def renamed(self, term: Term) -> Term:

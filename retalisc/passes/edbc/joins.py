@@ -11,7 +11,7 @@ from ..unit import Step
 from . import first, policies
 from .clauses import C, V, clause, conj, list_term, operand_vars, split_key
 from .generator import RuleGenerator
-from .relations import RELATIONS
+from . import relations
 
 
 def forward_clauses(g: RuleGenerator, step: Step) -> None:
@@ -36,7 +36,7 @@ def join_clauses(g: RuleGenerator, step: Step) -> None:
     if g.first:
         first.first_join_clauses(g, step)
         return
-    relation, start_expr, end_expr = RELATIONS[step.op]
+    relation, start_expr, end_expr = relations.relation(step.op)
     s1, e1, s2, e2 = g.t("S1"), g.t("E1"), g.t("S2"), g.t("E2")
     left_vars, right_vars = operand_vars(step.left), operand_vars(step.right)
     key, left_other = split_key(left_vars, right_vars)

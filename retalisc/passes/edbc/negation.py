@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from typing import List
 
-from ...frontend.terms import Atom, Number, Term, Var, distinct_variables
+from ...frontend.terms import Atom, Number, Term, Var, distinct_variables, variables
 from ..unit import Step
 from . import joins, policies
 from .clauses import C, V, clause, conj, operand_vars, split_key
 from .generator import RuleGenerator
+from .relations import blocker, over, plain_var, relation
 from .rule_policies import signature
 
 
@@ -31,14 +32,18 @@ def negation_clauses(g: RuleGenerator, step: Step) -> None:
     lefts = g.store(step, "lefts", key + left_other + pl + al + [s1, e1], newest_first=recent)
     rights = g.store(step, "rights", key + right_other + pr + ar + [s2, e2], newest_first=recent)
     negs = g.store(step, "negs", negated_key + negated_other + pn + [sn, en])
-    between = [C("<", e1, sn), C("<", en, s2), Atom("!")]
+    # the pair's relation and what blocks it (rtl_relations.pl)
+    relation_goals, start, end = relation("cnot")
+    s, e = g.renamed(plain_var(start, "start of a cnot")), g.renamed(plain_var(end, "end of a cnot"))
+    blocking = blocker("cnot")
+    between = g.expr(blocking) + [Atom("!")]
     if pn:
         # under a policy a blocker blocks the pairs made after it arrived (rtl_policy.pl)
         between.insert(0, C("<", pn[0], C("max", pl[0], pr[0])))
-    unblocked = unblocked_goal(g, step, f"{step.name}_blocked", negated_key + [e1, s2] + pl + pr, negs, between, e2)
-    window = g.window_check(step, s1, e2)
-    pair = [C("<", e1, s2), window, unblocked]
-    matched = policies.matched_record(g, step, lefts, rights, s1, e2)
+    unblocked = unblocked_goal(g, step, f"{step.name}_blocked", negated_key + [e1, s2] + pl + pr, negs, between, e)
+    window = g.window_check(step, s, e)
+    pair = g.expr(relation_goals) + [window, unblocked]
+    matched = policies.matched_record(g, step, lefts, rights, s, e)
     forget_blockers(g, step, lefts, negs, s1, e1, sn, en)
     for side, operand, own_vars, own_arrivals, own_store, partner_store in (
             ("left", step.left, left_vars, al, lefts, rights),
@@ -49,12 +54,15 @@ def negation_clauses(g: RuleGenerator, step: Step) -> None:
         skip = C("rtl_started_after", oe) if side == "left" else None     # as for `seq` (join_clauses)
         found = conj([skip, g.lookup(step, partner_store, oe)] + pair)
         joins.join_handlers(g, step, handler, own_vars, own_arrivals, os_, oe, own_store, partner_store, found,
-                           matched, s1, e2, key, side, arrivals)
-    policies.policy_facts(g, step, key, lefts, rights, matched, s1, e2, negs if pn else None)
+                           matched, s, e, key, side, arrivals)
+    policies.policy_facts(g, step, key, lefts, rights, matched, s, e, negs if pn else None)
     # a blocker takes back the results it falls inside of; deleting it restores them
     handler = f"{step.name}_negated"
     g.arrival(step.negated, handler, sn, en)
-    inside = conj([g.lookup(step, lefts, en), C("<", e1, sn), g.lookup(step, rights, en), C("<", en, s2),
+    # (the blocker's comparisons with L as soon as L is found, then those with R)
+    with_left = over(blocking, {"S1", "E1", "SN", "EN"})
+    inside = conj([g.lookup(step, lefts, en)] + g.expr(with_left) + [g.lookup(step, rights, en)]
+                  + g.expr([b for b in blocking if b not in with_left]) + [
                    window, unblocked])
     if g.policy != "unrestricted":
         # the pairs made after the blocker arrived are made again without it, or with it
@@ -67,10 +75,10 @@ def negation_clauses(g: RuleGenerator, step: Step) -> None:
             C("rtl_policy_delete", Atom(step.name), Atom("negated"), V("_"), negs)]))
         return
     g.clauses.append(clause(C(handler, *negated_vars, sn, en), [
-        C("forall", inside, g.output(step, s1, e2, retract=True, arrivals=arrivals)), C("assertz", negs)]))
+        C("forall", inside, g.output(step, s, e, retract=True, arrivals=arrivals)), C("assertz", negs)]))
     g.clauses.append(clause(C(handler + "_retract", *negated_vars, sn, en), [
         g.if_stored(step, negs,
-                       g.restoring(C("forall", inside, g.output(step, s1, e2, arrivals=arrivals))))]))
+                       g.restoring(C("forall", inside, g.output(step, s, e, arrivals=arrivals))))]))
 
 
 def forget_blockers(g: RuleGenerator, step: Step, lefts: Term, negs: Term, s1: Var, e1: Var, sn: Var, en: Var) -> None:
@@ -97,10 +105,12 @@ def forget_blockers(g: RuleGenerator, step: Step, lefts: Term, negs: Term, s1: V
 
 
 def unblocked_goal(g: RuleGenerator, step: Step, name_: str, args: List[Term], negs: Term, check: List[Term],
-              late_end: Term) -> Term:
+                   late_end: Term) -> Term:
     """`\\+ Blocked`: no stored blocker passes `check`. The clause `name_(args)` searches the
     live blockers; for a windowed step, `name__late` also the kept ones, for a match that
     ends late (at `late_end`)."""
+    known = {v.name for t in args + [negs] for v in variables(t)}
+    assert {v.name for t in check for v in variables(t)} <= known, f"{name_}: {check} reads a variable not in {args}"
     blocked = C(name_, *args)
     g.clauses.append(clause(blocked, [negs] + check))
     if step.window is None:

@@ -1,34 +1,49 @@
-"""The temporal relation and result interval of each binary operator (docs/language.md has
-the same table)."""
+"""The temporal relations of the operators, from the runtime's table
+(prolog_runtime/rtl_relations.pl, read by retalisc/frontend/relations.py), which `retalisc
+explain` evaluates too: the comparisons and result interval of each binary operator, what
+blocks a negation, an absence's result and a window, as goals over the canonical time
+variables (S1-E1 left, S2-E2 right, SN-EN blocker), renamed per rule by the generator."""
 from __future__ import annotations
 
-from typing import Dict, List, Tuple
+from typing import List, Tuple
 
-from ...frontend.terms import Compound, Term, Var
-
-# Temporal relation and result interval of each binary operator, on the intervals
-# [S1, E1] (left) and [S2, E2] (right), as terms over these variable names (renamed per rule).
-_S1, _E1, _S2, _E2 = Var("S1"), Var("E1"), Var("S2"), Var("E2")
+from ...frontend.relations import relation_table
+from ...frontend.terms import Term, Var, substitute, variables
 
 
-def _lt(a: Term, b: Term) -> Term:
-    return Compound("<", (a, b))
+def relation(op: str) -> Tuple[List[Term], Term, Term]:
+    """The comparisons on [S1, E1] (left) and [S2, E2] (right) under which `op` holds, and
+    the start and end of its result."""
+    return relation_table().relations[op]
 
 
-def _eq(a: Term, b: Term) -> Term:
-    return Compound("=:=", (a, b))
+def blocker(op: str) -> List[Term]:
+    """The comparisons under which a negated event over [SN, EN] blocks a match of `op`."""
+    return relation_table().blockers[op]
 
 
-_MIN, _MAX = Compound("min", (_S1, _S2)), Compound("max", (_E1, _E2))
+def blocker_window(op: str) -> Tuple[Term, Term]:
+    """The span [From, To] of a blocker of `op` that a window bounds."""
+    return relation_table().blocker_windows[op]
 
-RELATIONS: Dict[str, Tuple[List[Term], Term, Term]] = {
-    "seq": ([_lt(_E1, _S2)], _S1, _E2),
-    "and": ([], _MIN, _MAX),
-    "par": ([_lt(_S1, _E2), _lt(_S2, _E1)], _MIN, _MAX),
-    "equals": ([_eq(_S1, _S2), _eq(_E1, _E2)], _S1, _E1),
-    "meets": ([_eq(_E1, _S2)], _S1, _E2),
-    "during": ([_lt(_S2, _S1), _lt(_E1, _E2)], _S2, _E2),
-    "starts": ([_eq(_S1, _S2), _lt(_E1, _E2)], _S1, _E2),
-    "finishes": ([_eq(_E1, _E2), _lt(_S2, _S1)], _S2, _E1),
-    "cnot": ([_lt(_E1, _S2)], _S1, _E2),
-}
+
+def absence_result() -> Tuple[Term, Term]:
+    """The start and end of an absence's result, over S1, E1 and the duration D."""
+    return relation_table().absence_result
+
+
+def window_goal(start: Term, end: Term, length: Term) -> Term:
+    """The goal by which [start, end] fits the window `length`."""
+    return substitute(relation_table().window, {"From": start, "To": end, "W": length})
+
+
+def over(goals: List[Term], names: set) -> List[Term]:
+    """The goals whose variables all have one of `names` (canonical names)."""
+    return [g for g in goals if {v.name for v in variables(g)} <= names]
+
+
+def plain_var(term: Term, what: str) -> Var:
+    """A result bound that must be one of the operands' own (a variable)."""
+    if not isinstance(term, Var):
+        raise ValueError(f"rtl_relations.pl: the {what} must be an operand's start or end, not {term}")
+    return term

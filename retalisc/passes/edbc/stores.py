@@ -9,6 +9,7 @@ from typing import List, Optional
 from ...frontend.terms import Atom, Compound, Number, Term, Var
 from ..unit import Step
 from .clauses import C, conj, list_term, plain_number
+from .relations import window_goal
 
 
 class Stores:
@@ -95,7 +96,7 @@ class Stores:
     def window_check(self, step: Step, s: Var, e: Var) -> Optional[Term]:
         if step.window is None:
             return None
-        return C("=<", C("-", e, s), Number(plain_number(step.window)))
+        return window_goal(s, e, Number(plain_number(step.window)))
 
     def take_arrival(self, step: Step, stored: Term, own: List[Term], then: Term) -> Term:
         """if_own_stored for a store whose instances carry arrival numbers: a deletion of an
