@@ -44,6 +44,7 @@ class RuleGenerator(Stores):
         self.stores: List[tuple] = []
         self.records: List[tuple] = []
         self.kept: List[tuple] = []
+        self.roles: Dict[str, Tuple[str, str]] = {}     # store -> (step, what it holds)
         self.consumers: Dict[str, Tuple[str, bool]] = {}   # step -> the handler its results go to, with arrivals?
         # policy steps whose join key may be unbound in a partial match (a rule with `or`):
         # step name -> the variables recording each side's key as it was before the join

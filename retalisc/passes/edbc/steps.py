@@ -64,4 +64,4 @@ def generate(rule: BinaryRule, policy: str, provenance: bool = False) -> Generat
         outputs.output_clauses(g, step)
     source = g.rule.rule
     comment = f"{source.span}: {source.source.strip()}"
-    return GeneratedRule(g.rule.rule_id, comment, g.clauses, g.triggers, g.stores, g.records, g.kept)
+    return GeneratedRule(g.rule.rule_id, comment, g.clauses, g.triggers, g.stores, g.records, g.kept, g.roles)

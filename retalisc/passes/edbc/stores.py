@@ -20,6 +20,7 @@ class Stores:
         """A store of partial matches (its last two arguments are their interval); a windowed
         step's store has two kept generations for deletions and late events."""
         name_ = f"{step.name}_{suffix}"
+        self.roles[name_] = (step.name, suffix)
         self.stores.append((name_, len(args), step.window))
         if step.window is not None:
             self.kept.append((name_, len(args), name_ + "_kept_a", name_ + "_kept_b",
@@ -31,6 +32,7 @@ class Stores:
         generations (`_a`, `_b`) that the runtime empties in turn after the retraction
         horizon; the others (of unwindowed aggregates) are kept as long as the program runs."""
         name_ = f"{step.name}_{suffix}"
+        self.roles[name_] = (step.name, suffix)
         if rotated:
             self.records.append((name_, len(args), name_ + "_a", name_ + "_b"))
         else:
