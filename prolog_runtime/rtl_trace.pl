@@ -5,6 +5,7 @@
             rtl_trace_feed_byte_line/3, % +Bytes, +LineNo, -Output
             rtl_trace_explain/4,        % +RulesText, +TargetText, +Limit, -Text
             rtl_trace_why_not/3,        % +RulesText, +PatternText, -Text
+            rtl_trace_matches/3,        % +RulesText, +PatternText, -Text
             rtl_trace_rules/2,          % +Specs, -Out
             rtl_trace_report/1,         % -Text
             rtl_trace_late/3,           % +File, +Rules, -Out
@@ -209,6 +210,25 @@ derivation(Rules, Event, Start, End, Seq, Rule, Items) :-
     S =:= Start, E =:= End,
     !,
     flatten(Items0, Items).
+
+%!  rtl_trace_matches(+RulesText, +PatternText, -Text) is det.
+%
+%   Every event unifying with the pattern that a rule's pattern matches in the whole log,
+%   as explain evaluates it: one line `Event<TAB>Start<TAB>End<TAB>Rule` each (the event
+%   written with writeq), sorted, without duplicates. What explain can account for, to hold
+%   against what the program detected (tests/test_explain_agrees.py).
+
+rtl_trace_matches(RulesText, PatternText, Text) :-
+    read_rules(RulesText, Rules, Target, PatternText),
+    rtl_program(M),
+    findall(Line,
+            ( member(Rule0, Rules),
+              copy_term(Rule0-Target, rule(Label, _, Head, Pattern)-Head),
+              match(M, inf, Pattern, S, E, _),
+              format(string(Line), "~q\t~w\t~w\t~w", [Head, S, E, Label]) ),
+            Lines0),
+    sort(Lines0, Lines),
+    atomic_list_concat(Lines, "\n", Text).
 
 % ---- evaluating patterns over the log -----------------------------------------------------
 

@@ -128,6 +128,16 @@ class Explainer:
     def why_not(self, pattern: str) -> str:
         return self.engine.bridge.apply("rtl_trace", "rtl_trace_why_not", self.rules, pattern)
 
+    def matches(self, pattern: str) -> List[Tuple[str, float, float, str]]:
+        """Every event unifying with `pattern` that a rule's pattern matches in the whole
+        log, as explain evaluates the rules: (event text, start, end, rule label), sorted."""
+        text = self.engine.bridge.apply("rtl_trace", "rtl_trace_matches", self.rules, pattern)
+        found = []
+        for line in text.splitlines():
+            event, start, end, label = line.split("\t")
+            found.append((event, float(start), float(end), label))
+        return found
+
 
 # ---- run --trace RULE and --late FILE ------------------------------------------------------
 
