@@ -392,7 +392,7 @@ part(M, Names, Pattern, node(_, Text, Count, [NP, NQ])) :-
     (   Op == or
     ->  text(Text, "or: ~d match~a", [Count, es(Count)])
     ;   aggregate_all(count, ( match(M, inf, P, _, _, _), match(M, inf, Q, _, _, _) ), Joined),
-        relation_text(Op, Relation),
+        (   relation_text(Op, Relation) -> true ; Relation = "as its relation requires" ),
         text(Text, "~w: ~d pair~a with equal shared variables, ~d of them ~w",
              [Op, Joined, s(Joined), Count, Relation])
     ).
