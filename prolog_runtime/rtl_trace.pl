@@ -57,6 +57,7 @@ Conditions run in the program module.
 :- use_module(rtl_lines, [rtl_utf8_line/2]).
 :- use_module(rtl_policy, [rtl_policy_positioned/2]).
 :- use_module(rtl_relations).
+:- use_module(rtl_sliding, [rtl_sliding_change/5]).
 :- use_module(retalis, [rtl_feed_lines/3, rtl_feed_lines/4]).
 
 :- dynamic logged/6.            % logged(Seq, Line, Kind, Event, Start, End); Kind input or derived
@@ -278,9 +279,10 @@ match(M, B, sliding(F, P, G, D, V), T, T, [Items, note(Note)]) :-
     copy_term(G-P, G1-P1),
     distinct(G1-T, ( match(M, B, P1, _, E0, _), ( T = E0 ; T is E0 + D ) )),
     G = G1,
-    findall(F-I, ( match(M, B, P, _, E, I), E > T - D, E =< T ), Members),
-    pairs_keys_values(Members, Functions, Items),
-    sliding_value(F, Functions, V),
+    findall(E-(X-I), ( match(M, B, P, _, E, I), aggregated(F, X) ), Matches),
+    findall(E-X, member(E-(X-_), Matches), Values),
+    rtl_sliding_change(F, D, Values, T, V),         % (the value the compiled rule outputs at T)
+    findall(I, ( member(E-(_-I), Matches), E > T - D, E =< T ), Items),
     length(Items, Count),
     text(Note, "(the value over the ~d match~a of group ~q in the last ~w s)", [Count, es(Count), G, D]).
 
@@ -314,20 +316,11 @@ fits(From, To, Window) :-
 holds(Goal) :-
     call(Goal).
 
-%   sliding_value(+Function, +Instances, ?Value): Value is Function over the matches in the
-%   window, Instances being Function with each match's bindings (equal as numbers when Value
-%   is given); fails where Function has no value.
+%   aggregated(+Function, -X): the value Function aggregates for a match (its argument, with
+%   the match's bindings; 1 for count), as the compiled rule stores it.
 
-sliding_value(F, Instances, V) :-
-    findall(X, ( member(Instance, Instances), compound(Instance), arg(1, Instance, X) ), Xs),
-    function_value(F, Instances, Xs, V0),
-    (   var(V) -> V = V0 ; V =:= V0 ).
-
-function_value(count, Instances, _, V) :- length(Instances, V).
-function_value(sum(_), _, Xs, V) :- sum_list(Xs, V).
-function_value(min(_), _, Xs, V) :- Xs \== [], min_list(Xs, V).
-function_value(max(_), _, Xs, V) :- Xs \== [], max_list(Xs, V).
-function_value(avg(_), _, Xs, V) :- Xs \== [], sum_list(Xs, Sum), length(Xs, N), V is Sum / N.
+aggregated(F, X) :-
+    (   compound(F) -> arg(1, F, X) ; X = 1 ).
 
 check_goal(Goal, S, E, Goal1) :-
     mapsubterms(check_time(S, E), Goal, Goal1).

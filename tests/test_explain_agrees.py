@@ -1,10 +1,11 @@
 """`retalisc explain` and the compiled program agree: for random programs over the operators
 with a temporal relation (the binary operators, `or`, `not(N).[L, R]`, `fnot`, absence,
-windows, `where`) and random event streams, the events explain's evaluation of the rules
+windows, `where`), and sliding aggregates over them, and random event streams, the events explain's evaluation of the rules
 matches in the log (rtl_trace.pl, rtl_trace_matches/3) are exactly the events the program
 detected, and explain accounts for every detection by its rule. Both read the operators'
 relations from prolog_runtime/rtl_relations.pl (the compiler through
-retalisc/frontend/relations.py): a relation written twice, or read differently, fails here."""
+retalisc/frontend/relations.py), and a sliding aggregate's changes from rtl_sliding.pl
+(rtl_sliding_change/5): a relation written twice, or read differently, fails here."""
 from __future__ import annotations
 
 from collections import Counter
@@ -64,14 +65,9 @@ def _detections(outputs) -> set:
     return {key for key, count in net.items() if count > 0}
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-@given(pattern=patterns, events=streams())
-# (an N long before L does not block `L fnot N` inside a window: docs/language.md)
-@example(pattern="((a(X) fnot b(X))).2", events='{"event": "b(1)", "t": 0}\n{"event": "a(1)", "t": 5}\n'
-                                             '{"event": "tick", "t": 105}\n')
-def test_explain_matches_exactly_what_the_program_detects(pattern, events, tmp_path_factory):
+def _agree(rule: str, events: str, tmp_path_factory, target: str = "h(_)") -> None:
     try:
-        result = compile_source(f"h(X) <- {pattern}.\n", f"agree_{next(_PROGRAMS)}.rtl")
+        result = compile_source(rule + "\n", f"agree_{next(_PROGRAMS)}.rtl")
     except RetalisError:
         assume(False)
     path = tmp_path_factory.mktemp("agree") / "events.jsonl"
@@ -80,9 +76,33 @@ def test_explain_matches_exactly_what_the_program_detects(pattern, events, tmp_p
     explainer.feed_file(str(path))
     assert explainer.rejections == []
     detected = _detections(explainer.outputs)
-    explained = {(event, start, end) for event, start, end, _rule in explainer.matches("h(_)")}
-    assert explained == detected, (pattern, events)
+    explained = {(event, start, end) for event, start, end, _rule in explainer.matches(target)}
+    assert explained == detected, (rule, events)
     if detected:
-        text = explainer.explain("h(_)", limit=len(detected) + 10)
+        text = explainer.explain(target, limit=len(detected) + 10)
         tops = [line for line in text.splitlines() if line.startswith("h(")]
         assert all("derived by rule r1" in line for line in tops), text
+
+
+SETTINGS = settings(max_examples=120, deadline=None,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+
+
+@SETTINGS
+@given(pattern=patterns, events=streams())
+# (an N long before L does not block `L fnot N` inside a window: docs/language.md)
+@example(pattern="((a(X) fnot b(X))).2", events='{"event": "b(1)", "t": 0}\n{"event": "a(1)", "t": 5}\n'
+                                             '{"event": "tick", "t": 105}\n')
+def test_explain_matches_exactly_what_the_program_detects(pattern, events, tmp_path_factory):
+    _agree(f"h(X) <- {pattern}.", events, tmp_path_factory)
+
+
+@settings(SETTINGS, max_examples=60)
+@given(function=st.sampled_from(["count", "sum(X)", "min(X)", "max(X)", "avg(X)"]), pattern=patterns,
+       seconds=st.sampled_from([1, 2, 3, 5]), events=streams())
+# (the value is output where it changes only, as the compiled rule outputs it)
+@example(function="count", pattern="a(X)", seconds=5,
+         events='{"event": "a(1)", "t": 0}\n{"event": "a(1)", "t": 5}\n{"event": "tick", "t": 105}\n')
+def test_explain_matches_exactly_the_values_a_sliding_aggregate_gives(function, pattern, seconds, events,
+                                                                       tmp_path_factory):
+    _agree(f"h(X, V) <- sliding({function}, {pattern}, X, {seconds}, V).", events, tmp_path_factory, "h(_, _)")
