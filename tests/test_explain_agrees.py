@@ -1,8 +1,9 @@
 """`retalisc explain` and the compiled program agree: for random programs over the operators
 with a temporal relation (the binary operators, `or`, `not(N).[L, R]`, `fnot`, absence,
-windows, `where`), and sliding aggregates over them, and random event streams, the events explain's evaluation of the rules
-matches in the log (rtl_trace.pl, rtl_trace_matches/3) are exactly the events the program
-detected, and explain accounts for every detection by its rule. Both read the operators'
+windows, `where`), sliding aggregates and timers over them, and random event streams, the
+events explain's evaluation of the rules matches in the log (rtl_trace.pl,
+rtl_trace_matches/3) are exactly the events the program detected, and explain accounts for
+every detection by its rule. Both read the operators'
 relations from prolog_runtime/rtl_relations.pl (the compiler through
 retalisc/frontend/relations.py), and a sliding aggregate's changes from rtl_sliding.pl
 (rtl_sliding_change/5): a relation written twice, or read differently, fails here."""
@@ -106,3 +107,9 @@ def test_explain_matches_exactly_what_the_program_detects(pattern, events, tmp_p
 def test_explain_matches_exactly_the_values_a_sliding_aggregate_gives(function, pattern, seconds, events,
                                                                        tmp_path_factory):
     _agree(f"h(X, V) <- sliding({function}, {pattern}, X, {seconds}, V).", events, tmp_path_factory, "h(_, _)")
+
+
+@settings(SETTINGS, max_examples=40)
+@given(pattern=patterns, delay=st.sampled_from([1, 2, 3]), events=streams())
+def test_explain_matches_exactly_the_events_a_timer_raises(pattern, delay, events, tmp_path_factory):
+    _agree(f"alarm(h(X), {delay}) <- {pattern}.", events, tmp_path_factory)

@@ -6,9 +6,9 @@ from typing import List
 
 from ...frontend.terms import Atom, Term, Var, substitute
 from ..unit import Step
+from . import relations
 from .clauses import C, V, clause, conj, operand_vars, split_key
 from .generator import RuleGenerator
-from . import relations
 
 
 def first_join_clauses(g: RuleGenerator, step: Step) -> None:

@@ -8,10 +8,9 @@ from typing import List, Optional
 
 from ...frontend.terms import Atom, Term, Var, substitute
 from ..unit import Step
-from . import first, policies
+from . import first, policies, relations
 from .clauses import C, V, clause, conj, list_term, operand_vars, split_key
 from .generator import RuleGenerator
-from . import relations
 
 
 def forward_clauses(g: RuleGenerator, step: Step) -> None:

@@ -113,7 +113,8 @@ def numbered_sliding_clauses(g: RuleGenerator, step: Step) -> None:
         C("rtl_policy_arrival", arrival), C("assertz", C(matched.name, *group_vars, x, s1, arrival, e1, e1))]
         + upto_goals + [
         C(f"{base}_refresh", *group_vars, e1, upto, C("at", arrival)),
-        C(";", C("->", C(">", leave, clock), C("rtl_timer_add", leave, Atom("at"), C(f"{base}_reach", *group_vars, leave))),
+        C(";", C("->", C(">", leave, clock),
+                 C("rtl_timer_add", leave, Atom("at"), C(f"{base}_reach", *group_vars, leave))),
           Atom("true"))]))
     stored = C(matched.name, *group_vars, x, s1, V("_"), e1, e1)
     g.clauses.append(clause(C(handler + "_retract", *inner_vars, s1, e1), [
