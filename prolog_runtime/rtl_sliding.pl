@@ -1,7 +1,8 @@
 :- module(rtl_sliding,
           [ rtl_sliding_refresh/8,      % +Function, +Seconds, +From, +To, :Matches, :Shown, :Show, :Unshow
-            rtl_sliding_refresh_numbered/10 % +Function, +Seconds, +From, +To, +Op, :Matches, :Shown,
+            rtl_sliding_refresh_numbered/10, % +Function, +Seconds, +From, +To, +Op, :Matches, :Shown,
                                             % :Reached, :Show, :Unshow
+            rtl_sliding_change/5        % +Function, +Seconds, +Items, +Time, ?Value
           ]).
 
 /** <module> Sliding aggregates by group: the values as they change
@@ -151,6 +152,16 @@ desired_changes(F, D, Items, From, To, Desired) :-
     sort(Times0, Times),
     findall(T-V, ( member(T, Times), change(F, D, Items, T, V) ), Desired0),
     msort(Desired0, Desired).
+
+%!  rtl_sliding_change(+Function, +Seconds, +Items, +Time, ?Value) is semidet.
+%
+%   Value is the value at Time of the sliding aggregate over the matches Items (`End-X`
+%   pairs, X the value Function aggregates), and it differs from the value just before Time:
+%   a change the compiled rule outputs at Time. `retalisc explain` (rtl_trace.pl) accounts
+%   for a derived value with it.
+
+rtl_sliding_change(F, D, Items, T, V) :-
+    change(F, D, Items, T, V).
 
 % The value at T, when it differs from the value just before T.
 change(F, D, Items, T, V) :-

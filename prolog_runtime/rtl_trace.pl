@@ -5,6 +5,7 @@
             rtl_trace_feed_byte_line/3, % +Bytes, +LineNo, -Output
             rtl_trace_explain/4,        % +RulesText, +TargetText, +Limit, -Text
             rtl_trace_why_not/3,        % +RulesText, +PatternText, -Text
+            rtl_trace_matches/3,        % +RulesText, +PatternText, -Text
             rtl_trace_rules/2,          % +Specs, -Out
             rtl_trace_report/1,         % -Text
             rtl_trace_late/3,           % +File, +Rules, -Out
@@ -37,10 +38,12 @@ event that arrives more than the delay bound behind the clock, with its lateness
 rules whose partners it may have missed. Without these calls no listener or hook exists.
 
 Both evaluations of patterns below evaluate the rules' patterns over the log with the declarative semantics of the
-language (docs/language.md, "Patterns"): rules come from the compiler as terms
+language (docs/language.md, "Patterns"), the operators' temporal relations read from the table
+the compiler compiles them from (rtl_relations.pl): rules come from the compiler as terms
 `rule(Label, Place, Head, Pattern)`, Pattern built from `ev(Event, Start, End)`,
 `seq(P, Q)` (and the other binary operators), `where(P, Goal)`, `check(P, Goal)`,
-`win(P, Seconds)`, `neg(N, P1, P2)`, `absent(N, P, Seconds)`, `fnot(P, N)`,
+`win(P, Seconds)`, `neg(N, P1, P2)`, `absent(N, P, Seconds)`, `fnot(P, N, Window)` (Window
+the number of seconds of the windows around it, or `none`),
 `agg(Function, P, Value)`, `sliding(Function, P, Group, Seconds, Value)`, `timer(P, Delay)`
 for the pattern of a timer rule (`alarm(E, Delay) <- P`, whose head is then E) and
 `sync(P, Query)` for that of a synchronized rule (its head the synchronized event).
@@ -53,6 +56,8 @@ Conditions run in the program module.
 :- use_module(rtl_io, [rtl_json_string_escape/2, rtl_parse_event_line/2]).
 :- use_module(rtl_lines, [rtl_utf8_line/2]).
 :- use_module(rtl_policy, [rtl_policy_positioned/2]).
+:- use_module(rtl_relations).
+:- use_module(rtl_sliding, [rtl_sliding_change/5]).
 :- use_module(retalis, [rtl_feed_lines/3, rtl_feed_lines/4]).
 
 :- dynamic logged/6.            % logged(Seq, Line, Kind, Event, Start, End); Kind input or derived
@@ -207,6 +212,25 @@ derivation(Rules, Event, Start, End, Seq, Rule, Items) :-
     !,
     flatten(Items0, Items).
 
+%!  rtl_trace_matches(+RulesText, +PatternText, -Text) is det.
+%
+%   Every event unifying with the pattern that a rule's pattern matches in the whole log,
+%   as explain evaluates it: one line `Event<TAB>Start<TAB>End<TAB>Rule` each (the event
+%   written with writeq), sorted, without duplicates. What explain can account for, to hold
+%   against what the program detected (tests/test_explain_agrees.py).
+
+rtl_trace_matches(RulesText, PatternText, Text) :-
+    read_rules(RulesText, Rules, Target, PatternText),
+    rtl_program(M),
+    findall(Line,
+            ( member(Rule0, Rules),
+              copy_term(Rule0-Target, rule(Label, _, Head, Pattern)-Head),
+              match(M, inf, Pattern, S, E, _),
+              format(string(Line), "~q\t~w\t~w\t~w", [Head, S, E, Label]) ),
+            Lines0),
+    sort(Lines0, Lines),
+    atomic_list_concat(Lines, "\n", Text).
+
 % ---- evaluating patterns over the log -----------------------------------------------------
 
 %   match(+M, +Before, +Pattern, -Start, -End, -Items) is nondet.
@@ -214,27 +238,13 @@ derivation(Rules, Event, Start, End, Seq, Rule, Items) :-
 match(_, Before, ev(Event, S, E), S, E, [Seq]) :-
     logged(Seq, _, _, Event, S, E),
     Seq < Before.
-match(M, B, seq(P, Q), S1, E2, [I1, I2]) :-
-    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2), E1 < S2.
-match(M, B, and(P, Q), S, E, [I1, I2]) :-
+match(M, B, Pattern, S, E, [I1, I2]) :-
+    binary(Pattern, Op, P, Q),
+    Op \== or, !,
     match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2),
-    S is min(S1, S2), E is max(E1, E2).
-match(M, B, par(P, Q), S, E, [I1, I2]) :-
-    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2),
-    S1 < E2, S2 < E1,
-    S is min(S1, S2), E is max(E1, E2).
+    related(Op, S1-E1, S2-E2, S, E).
 match(M, B, or(P, Q), S, E, I) :-
     (   match(M, B, P, S, E, I) ; match(M, B, Q, S, E, I) ).
-match(M, B, equals(P, Q), S1, E1, [I1, I2]) :-
-    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2), S1 =:= S2, E1 =:= E2.
-match(M, B, meets(P, Q), S1, E2, [I1, I2]) :-
-    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2), E1 =:= S2.
-match(M, B, during(P, Q), S2, E2, [I1, I2]) :-
-    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2), S2 < S1, E1 < E2.
-match(M, B, starts(P, Q), S1, E2, [I1, I2]) :-
-    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2), S1 =:= S2, E1 < E2.
-match(M, B, finishes(P, Q), S2, E1, [I1, I2]) :-
-    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2), E1 =:= E2, S2 < S1.
 match(M, B, where(P, Goal), S, E, I) :-
     match(M, B, P, S, E, I),
     catch(M:Goal, _, fail).
@@ -243,19 +253,21 @@ match(M, B, check(P, Goal), S, E, I) :-
     check_goal(Goal, S, E, Goal1),
     catch(M:Goal1, _, fail).
 match(M, B, win(P, Q), S, E, I) :-
-    match(M, B, P, S, E, I), E - S =< Q.
-match(M, B, neg(N, P, Q), S1, E2, [I1, I2]) :-
-    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2), E1 < S2,
-    \+ ( match(M, B, N, SN, EN, _), E1 < SN, EN < S2 ).
-match(M, B, fnot(P, N), S, E, I) :-
+    match(M, B, P, S, E, I), fits(S, E, Q).
+match(M, B, neg(N, P, Q), S, E, [I1, I2]) :-
+    match(M, B, P, S1, E1, I1), match(M, B, Q, S2, E2, I2),
+    related(cnot, S1-E1, S2-E2, S, E),
+    \+ ( match(M, B, N, SN, EN, _), blocks(cnot, S1-E1, S2-E2, SN-EN, none) ).
+match(M, B, fnot(P, N, W), S, E, I) :-
     match(M, B, P, S, E, I),
-    \+ ( match(M, B, N, _, EN, _), EN < S ).
+    \+ ( match(M, B, N, SN, EN, _), blocks(fnot, S-E, none, SN-EN, W) ).
 match(M, B, agg(_, P, _), S, E, [I, note("(the value aggregates the matches of this pattern so far)")]) :-
     match(M, B, P, S, E, I).
 match(M, B, absent(N, P, D), S, E, I) :-
-    match(M, B, P, S, E1, I),
-    \+ ( match(M, B, N, SN, EN, _), E1 < SN, EN =< E1 + D ),
-    E is E1 + D.
+    match(M, B, P, S1, E1, I),
+    rtl_absence_result(S1-E1, D, Start, End),
+    S is Start, E is End,
+    \+ ( match(M, B, N, SN, EN, _), blocks(absence, S1-E1, S-E, SN-EN, none) ).
 match(M, B, timer(P, Delay), S, E, [I, note(Note)]) :-
     match(M, B, P, S, E1, I),
     catch(D is Delay, _, fail),
@@ -267,26 +279,48 @@ match(M, B, sliding(F, P, G, D, V), T, T, [Items, note(Note)]) :-
     copy_term(G-P, G1-P1),
     distinct(G1-T, ( match(M, B, P1, _, E0, _), ( T = E0 ; T is E0 + D ) )),
     G = G1,
-    findall(F-I, ( match(M, B, P, _, E, I), E > T - D, E =< T ), Members),
-    pairs_keys_values(Members, Functions, Items),
-    sliding_value(F, Functions, V),
+    findall(E-(X-I), ( match(M, B, P, _, E, I), aggregated(F, X) ), Matches),
+    findall(E-X, member(E-(X-_), Matches), Values),
+    rtl_sliding_change(F, D, Values, T, V),         % (the value the compiled rule outputs at T)
+    findall(I, ( member(E-(_-I), Matches), E > T - D, E =< T ), Items),
     length(Items, Count),
     text(Note, "(the value over the ~d match~a of group ~q in the last ~w s)", [Count, es(Count), G, D]).
 
-%   sliding_value(+Function, +Instances, ?Value): Value is Function over the matches in the
-%   window, Instances being Function with each match's bindings (equal as numbers when Value
-%   is given); fails where Function has no value.
+%   related(+Op, +Left, +Right, -Start, -End): the relation of the binary operator Op holds
+%   between the intervals Left and Right, and its result is over [Start, End]
+%   (rtl_relations.pl, the table the compiler compiles the rules from).
 
-sliding_value(F, Instances, V) :-
-    findall(X, ( member(Instance, Instances), compound(Instance), arg(1, Instance, X) ), Xs),
-    function_value(F, Instances, Xs, V0),
-    (   var(V) -> V = V0 ; V =:= V0 ).
+related(Op, Left, Right, S, E) :-
+    rtl_relation(Op, Left, Right, Goals, Start, End),
+    maplist(holds, Goals),
+    S is Start, E is End.
 
-function_value(count, Instances, _, V) :- length(Instances, V).
-function_value(sum(_), _, Xs, V) :- sum_list(Xs, V).
-function_value(min(_), _, Xs, V) :- Xs \== [], min_list(Xs, V).
-function_value(max(_), _, Xs, V) :- Xs \== [], max_list(Xs, V).
-function_value(avg(_), _, Xs, V) :- Xs \== [], sum_list(Xs, Sum), length(Xs, N), V is Sum / N.
+%   blocks(+Op, +Left, +Right, +Blocker, +Window): the negated event over Blocker blocks the
+%   match of Op (its operands over Left and Right): a blocker inside a window (not `none`)
+%   only when it fits it where rtl_blocker_window/5 says.
+
+blocks(Op, Left, Right, Blocker, Window) :-
+    rtl_blocker(Op, Left, Right, Blocker, Goals),
+    maplist(holds, Goals),
+    (   Window \== none, rtl_blocker_window(Op, Left, Blocker, From, To)
+    ->  fits(From, To, Window)
+    ;   true
+    ).
+
+%   fits(+From, +To, +Window): [From, To] fits the window (rtl_window/4).
+
+fits(From, To, Window) :-
+    rtl_window(From, To, Window, Goal),
+    holds(Goal).
+
+holds(Goal) :-
+    call(Goal).
+
+%   aggregated(+Function, -X): the value Function aggregates for a match (its argument, with
+%   the match's bindings; 1 for count), as the compiled rule stores it.
+
+aggregated(F, X) :-
+    (   compound(F) -> arg(1, F, X) ; X = 1 ).
 
 check_goal(Goal, S, E, Goal1) :-
     mapsubterms(check_time(S, E), Goal, Goal1).
@@ -351,7 +385,7 @@ part(M, Names, Pattern, node(_, Text, Count, [NP, NQ])) :-
     (   Op == or
     ->  text(Text, "or: ~d match~a", [Count, es(Count)])
     ;   aggregate_all(count, ( match(M, inf, P, _, _, _), match(M, inf, Q, _, _, _) ), Joined),
-        relation_text(Op, Relation),
+        (   relation_text(Op, Relation) -> true ; Relation = "as its relation requires" ),
         text(Text, "~w: ~d pair~a with equal shared variables, ~d of them ~w",
              [Op, Joined, s(Joined), Count, Relation])
     ).
@@ -371,10 +405,10 @@ part(M, Names, neg(N, P, Q), node(_, Text, Count, [NP, NQ])) :- !,
     count_matches(M, neg(N, P, Q), Count),
     (   N = ev(NE, _, _) -> named(Names, NE, NText) ; NText = "the negated pattern" ),
     text(Text, "not ~s in between: ~d of ~d sequences have none", [NText, Count, Pairs]).
-part(M, Names, fnot(P, N), node(_, Text, Count, [NP])) :- !,
+part(M, Names, fnot(P, N, W), node(_, Text, Count, [NP])) :- !,
     part(M, Names, P, NP),
     node_count(NP, CP),
-    count_matches(M, fnot(P, N), Count),
+    count_matches(M, fnot(P, N, W), Count),
     text(Text, "fnot: ~d of ~d without a blocking event before", [Count, CP]).
 part(M, Names, agg(F, P, V), node(_, Text, Count, [NP])) :- !,
     part(M, Names, P, NP),
@@ -449,7 +483,11 @@ bind_name(Name = Var) :-
 binary(Pattern, Op, P, Q) :-
     compound(Pattern),
     compound_name_arguments(Pattern, Op, [P, Q]),
-    memberchk(Op, [seq, and, par, or, equals, meets, during, starts, finishes]).
+    (   Op == or
+    ->  true
+    ;   Op \== cnot,                           % (the pair of `neg/3`)
+        once(rtl_relation(Op, _, _, _, _, _))
+    ).
 
 relation_text(seq, "in order (the first ends before the second starts)").
 relation_text(and, "(any order)").

@@ -239,7 +239,7 @@ PASSES_DIR = Path(__file__).resolve().parent.parent / "retalisc" / "passes"
 PARSER_NAMES = {"parse_program", "build_program", "read_program", "read_term", "read_definite_program"}
 
 
-@pytest.mark.parametrize("path", sorted(PASSES_DIR.glob("*.py")), ids=lambda p: p.name)
+@pytest.mark.parametrize("path", sorted(PASSES_DIR.rglob("*.py")), ids=lambda p: str(p.relative_to(PASSES_DIR)))
 def test_passes_neither_render_nor_parse(path):
     """A pass imports nothing from the backends and never calls the parser: the frontend reads
     text, the backend writes it."""

@@ -47,7 +47,7 @@ _python_queries = itertools.count(1)
 
 _API = "rtl_api"        # prolog_runtime/rtl_api.pl: the predicates an Engine calls
 # The entry points of prolog_runtime/rtl_trace.pl that Engine.trace calls (`rtl_trace_NAME`).
-_TRACE_REQUESTS = ("start", "stop", "feed_line", "feed_byte_line", "explain", "why_not", "late", "rules",
+_TRACE_REQUESTS = ("start", "stop", "feed_line", "feed_byte_line", "explain", "why_not", "matches", "late", "rules",
                    "report", "end")
 
 
@@ -867,7 +867,7 @@ class Engine:
     def trace(self, request: str, *args) -> str:
         """A request to the runtime's tracing (prolog_runtime/rtl_trace.pl), for `explain` and
         `--trace`: `request` names one of its entry points (`start`, `stop`, `feed_line`,
-        `feed_byte_line`, `explain`, `why_not`, `late`, `rules`, `report`, `end`), `args` its
+        `feed_byte_line`, `explain`, `why_not`, `matches`, `late`, `rules`, `report`, `end`), `args` its
         values. Returns its output text."""
         if request not in _TRACE_REQUESTS:
             raise ValueError(f"no tracing request {request!r} (one of {', '.join(_TRACE_REQUESTS)})")

@@ -4,7 +4,7 @@ about or why a pattern was not detected.
 
 The rules go to the runtime as one term, `[rule(Label, Place, Head, Pattern), ...]`, with the
 pattern in the plain form rtl_trace.pl evaluates (`ev/3`, `seq/2`, ..., `where/2`, `win/2`,
-`neg/3`, `absent/3`, `fnot/2`, `agg/3`, `sliding/5`, and `timer/2` or `sync/2` around the
+`neg/3`, `absent/3`, `fnot/3`, `agg/3`, `sliding/5`, and `timer/2` or `sync/2` around the
 pattern of a timer or synchronized rule, whose head is then the raised event), written by `retalisc.frontend.terms.to_prolog` and read back as
 data; the event file is fed line by line so that every event is logged with its line.
 """
@@ -30,32 +30,38 @@ def _fresh(counter: List[int], what: str) -> Var:
     return Var(f"_RtlTrace{what}{counter[0]}")
 
 
-def pattern_term(pattern: Pattern, counter: List[int]) -> Term:
-    """The pattern in the form rtl_trace.pl evaluates."""
+def pattern_term(pattern: Pattern, counter: List[int], window: Optional[float] = None) -> Term:
+    """The pattern in the form rtl_trace.pl evaluates; `window` is the innermost window around
+    it, which bounds the blockers of an `fnot` (the compiler's binarize gives each step the
+    same)."""
+    def inner(part: Pattern) -> Term:
+        return pattern_term(part, counter, window)
+
     if isinstance(pattern, EventAtom):
         start = pattern.start if pattern.start is not None else _fresh(counter, "S")
         end = pattern.end if pattern.end is not None else (start if pattern.start is not None
                                                            else _fresh(counter, "E"))
         return Compound("ev", (pattern.term, start, end))
+    if isinstance(pattern, Binary) and pattern.op == "fnot":
+        return Compound("fnot", (inner(pattern.left), inner(pattern.right),
+                                 Atom("none") if window is None else Number(window)))
     if isinstance(pattern, Binary):
-        left, right = pattern_term(pattern.left, counter), pattern_term(pattern.right, counter)
-        return Compound(pattern.op, (left, right))
+        return Compound(pattern.op, (inner(pattern.left), inner(pattern.right)))
     if isinstance(pattern, Where):
-        return Compound("where", (pattern_term(pattern.pattern, counter), pattern.condition))
+        return Compound("where", (inner(pattern.pattern), pattern.condition))
     if isinstance(pattern, Check):
-        return Compound("check", (pattern_term(pattern.pattern, counter), pattern.condition))
+        return Compound("check", (inner(pattern.pattern), pattern.condition))
     if isinstance(pattern, Window):
-        return Compound("win", (pattern_term(pattern.pattern, counter), Number(pattern.length)))
+        length = pattern.length if window is None else min(window, pattern.length)
+        return Compound("win", (pattern_term(pattern.pattern, counter, length), Number(pattern.length)))
     if isinstance(pattern, Negation):
-        return Compound("neg", (pattern_term(pattern.negated, counter), pattern_term(pattern.first, counter),
-                                pattern_term(pattern.second, counter)))
+        return Compound("neg", (inner(pattern.negated), inner(pattern.first), inner(pattern.second)))
     if isinstance(pattern, Absence):
-        return Compound("absent", (pattern_term(pattern.negated, counter), pattern_term(pattern.first, counter),
-                                   Number(pattern.duration)))
+        return Compound("absent", (inner(pattern.negated), inner(pattern.first), Number(pattern.duration)))
     if isinstance(pattern, Aggregate):
-        return Compound("agg", (pattern.function, pattern_term(pattern.pattern, counter), pattern.value))
+        return Compound("agg", (pattern.function, inner(pattern.pattern), pattern.value))
     if isinstance(pattern, Sliding):
-        return Compound("sliding", (pattern.function, pattern_term(pattern.pattern, counter), pattern.group,
+        return Compound("sliding", (pattern.function, inner(pattern.pattern), pattern.group,
                                     Number(pattern.duration), pattern.value))
     raise TypeError(f"rtl_trace has no form for the pattern {type(pattern).__name__}")
 
@@ -114,6 +120,16 @@ class Explainer:
 
     def why_not(self, pattern: str) -> str:
         return self.engine.trace("why_not", self.rules, pattern)
+
+    def matches(self, pattern: str) -> List[Tuple[str, float, float, str]]:
+        """Every event unifying with `pattern` that a rule's pattern matches in the whole
+        log, as explain evaluates the rules: (event text, start, end, rule label), sorted."""
+        text = self.engine.trace("matches", self.rules, pattern)
+        found = []
+        for line in text.splitlines():
+            event, start, end, label = line.split("\t")
+            found.append((event, float(start), float(end), label))
+        return found
 
 
 class TraceSource(EngineSource):
@@ -208,15 +224,14 @@ def trace_specs(unit, labels: Iterable[str]) -> list:
         if label not in rules:
             raise KeyError(label)
         binary, code = rules[label], generated[label]
-        steps = {step.name: step for step in binary.steps}
+        steps = {step.name: (number, step) for number, step in enumerate(binary.steps, start=1)}
         stores = []
         for name, arity, _window in code.stores:
-            step_name, _, side = name.rpartition("_")
-            step = steps.get(step_name)
-            number = step_name.rsplit("_", 1)[-1]
-            side_name = {"lefts": "left", "rights": "right"}.get(side)
-            what = (f"step {number} {side_name} {_step_description(step, side_name)}" if step and side_name
-                    else f"step {number} {side}")
+            step_name, role = code.roles[name]          # (what the edbc pass says the store holds)
+            number, step = steps[step_name]
+            side_name = {"lefts": "left", "rights": "right"}.get(role)
+            what = (f"step {number} {side_name} {_step_description(step, side_name)}" if side_name
+                    else f"step {number} {role}")
             stores.append([name, arity, "live", what])
         for live, arity, kept_a, kept_b, _order in code.kept:
             what = next((s[3] for s in stores if s[0] == live), live)

@@ -128,6 +128,16 @@ class RunStopped(Exception):
         self.status = status
 
 
+def beat(engine, target: float, write) -> bool:
+    """A heartbeat: move the program's clock to `target` if that is later and `write` what its
+    timers then raise; whether the clock moved (a live source with nothing arrived, the live
+    nodes' --heartbeat)."""
+    if target <= engine.clock():
+        return False
+    write(engine.advance_clock(target))
+    return True
+
+
 def end_the_input(engine, write, drop_pending: bool, strict: bool) -> None:
     """Run (or, with `drop_pending`, drop) the matches postponed to the end of the input and
     `write` what they produce. RunStopped when program code called halt in one of them, or,
@@ -377,8 +387,8 @@ class LineSource(EngineSource):
         """Feed `batch`, `write` what it produces; (the problems, whether the run stops)."""
         if not batch.lines:                     # a heartbeat: nothing arrived
             target = self.wall.estimate()
-            if target is not None and target > engine.clock():
-                write(engine.advance_clock(target))
+            if target is not None:
+                beat(engine, target, write)
             return [], False
         produced, rejected = engine.feed_lines(batch_payload(batch.lines), batch.first,
                                                allow_control=self.allow_control, strict=self.strict)

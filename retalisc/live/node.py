@@ -71,7 +71,7 @@ from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 from .state import STATEFUL_CALLS
 from ..robot_io.bags import typestore
 from ..driver.bridge import PrologError  # noqa: F401  (the name tests and callers use)
-from ..driver.feed import feed_resilient, where_text
+from ..driver.feed import beat, feed_resilient, where_text
 
 BATCH = 2000
 REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
@@ -261,8 +261,7 @@ class LiveNode:
             target = now + clock.offset            # the messages carry another clock
         else:
             target = now
-        if target > self.engine.clock():
-            self.engine.advance_clock(target)     # the output comes through _output
+        if beat(self.engine, target, lambda produced: None):    # the output comes through _output
             if self.out is not None:
                 self.out.flush()
         return Reply(True)

@@ -91,6 +91,9 @@ class GeneratedRule:
     # "newest_first" or "oldest_first")
     records: List[tuple] = field(default_factory=list)
     kept: List[tuple] = field(default_factory=list)
+    # what each store and record holds: name -> (the step's name, `lefts`, `rights`, `negs`,
+    # `matched`, ...), for the tools that show them (`retalisc run --trace`)
+    roles: Dict[str, Tuple[str, str]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
