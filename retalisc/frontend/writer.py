@@ -9,7 +9,7 @@ the one-line text has a space or after an opening bracket, and never inside an a
 a number, so SWI-Prolog reads both texts as the same term."""
 from __future__ import annotations
 
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 from .operators import STANDARD_OPERATORS, OperatorTable
 from .terms import NIL, Atom, Compound, Number, String, Term, Var, format_number, quote_atom, to_prolog
@@ -29,12 +29,14 @@ def write_term(term: Term, max_priority: int = 1200, ops: OperatorTable = STANDA
 
 def layout_term(term: Term, max_priority: int = 1200, column: int = 0, trailing: int = 0,
                 ops: OperatorTable = STANDARD_OPERATORS, event_operators: bool = True,
-                width: int = WIDTH, break_control: bool = False) -> str:
+                width: Optional[int] = None, break_control: bool = False) -> str:
     """The text of `write_term`, broken over lines to stay within `width` where it can be:
     `column` is where its first line starts (its other lines are indented from there) and
-    `trailing` the number of characters that will follow its last line (`,`, `.`, ` :-`).
+    `trailing` the number of characters that will follow its last line (`,`, `.`, ` :-`);
+    `width` is WIDTH unless given.
     With `break_control`, a term that is a bracketed control construct (`( If -> Then ; Else
     )`) is broken even when it would fit (a body goal of a clause)."""
+    width = WIDTH if width is None else width
     doc = _Writer(ops, event_operators).write(term, max_priority)
     if break_control and isinstance(doc, _Block):
         return _layout_block(doc, column, width)
