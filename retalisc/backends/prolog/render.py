@@ -2,8 +2,9 @@
 clauses of rules to add to a running program.
 
 Layout lives in `templates/program.pl.j2` and `templates/added_rules.pl.j2`; this module only
-turns terms into text: each clause is written with operators, one body goal per line, and the
-`forall/2` loops of EDBC rules on two lines, so a user debugging a rule recognises it.
+turns terms into text: each clause is written with operators, one body goal a line, an
+if-then-else in the usual Prolog layout and any longer term broken over lines within
+`frontend.writer.WIDTH` columns (`layout_term`), so a user debugging a rule recognises it.
 """
 from __future__ import annotations
 
