@@ -187,29 +187,29 @@ ele_untrigger(b(X), RStart, REnd) :-
 e_r3_1_left(X, LStart, LEnd) :-
     rtl_next_seq(Seq),
     assertz(e_r3_1_lefts(X, Seq, none, LStart, LEnd)),
-    forall(rtl_aggregate_initial(count, StarTimes_5), e_r3_1(X, StarTimes_5, LStart, LEnd)).
+    forall(rtl_aggregate_initial(count, StarTimes_17_26), e_r3_1(X, StarTimes_17_26, LStart, LEnd)).
 e_r3_1_left_retract(X, LStart, LEnd) :-
     (   retract(e_r3_1_lefts(X, Seq, _, LStart, LEnd))
     ->  forall(
-            rtl_aggregate_initial(count, StarTimes_5),
-            e_r3_1_retract(X, StarTimes_5, LStart, LEnd)),
+            rtl_aggregate_initial(count, StarTimes_17_26),
+            e_r3_1_retract(X, StarTimes_17_26, LStart, LEnd)),
         findall(
             RSeq - (count - RStart - REnd),
             (e_r3_1_rights(X, RSeq, RStart, REnd), RSeq > Seq, LEnd < RStart),
             Items),
         rtl_aggregate_values(Items, _, Values),
         forall(
-            member(_ - (StarTimes_5 - REnd), Values),
-            e_r3_1_retract(X, StarTimes_5, LStart, REnd))
+            member(_ - (StarTimes_17_26 - REnd), Values),
+            e_r3_1_retract(X, StarTimes_17_26, LStart, REnd))
     ;   true
     ).
 e_r3_1_right(X, RStart, REnd) :-
     forall(
         (e_r3_1_lefts(X, Seq, Acc0, LStart, LEnd), LEnd < RStart),
-        (   rtl_aggregate(count, Acc0, Acc, StarTimes_5),
+        (   rtl_aggregate(count, Acc0, Acc, StarTimes_17_26),
             retract(e_r3_1_lefts(X, Seq, Acc0, LStart, LEnd)),
             assertz(e_r3_1_lefts(X, Seq, Acc, LStart, LEnd)),
-            e_r3_1(X, StarTimes_5, LStart, REnd)
+            e_r3_1(X, StarTimes_17_26, LStart, REnd)
         )),
     rtl_next_seq(RSeq),
     assertz(e_r3_1_rights(X, RSeq, RStart, REnd)).
@@ -226,16 +226,18 @@ e_r3_1_redo(X, Seq, LStart, LEnd, Removed) :-
         (e_r3_1_rights(X, RSeq, RStart, REnd), RSeq > Seq, LEnd < RStart),
         Items),
     rtl_aggregate_redo(Items, Removed, Acc, Retracts, Adds),
-    forall(member(StarTimes_5 - REnd, Retracts), e_r3_1_retract(X, StarTimes_5, LStart, REnd)),
-    forall(member(StarTimes_5 - REnd, Adds), e_r3_1(X, StarTimes_5, LStart, REnd)),
+    forall(
+        member(StarTimes_17_26 - REnd, Retracts),
+        e_r3_1_retract(X, StarTimes_17_26, LStart, REnd)),
+    forall(member(StarTimes_17_26 - REnd, Adds), e_r3_1(X, StarTimes_17_26, LStart, REnd)),
     (   retract(e_r3_1_lefts(X, Seq, _, LStart, LEnd))
     ->  assertz(e_r3_1_lefts(X, Seq, Acc, LStart, LEnd))
     ;   true
     ).
-e_r3_1(X, StarTimes_5, Start, End) :-
+e_r3_1(X, StarTimes_17_26, Start, End) :-
     rtl_detected(r3),
     rtl_derived(trail(X), Start, End).
-e_r3_1_retract(X, StarTimes_5, Start, End) :-
+e_r3_1_retract(X, StarTimes_17_26, Start, End) :-
     rtl_underived(trail(X), Start, End).
 
 % ---- r4 --------------------------------------------------------------------
@@ -256,29 +258,29 @@ ele_untrigger(b(X, V), RStart, REnd) :-
 e_r4_1_left(X, LStart, LEnd) :-
     rtl_next_seq(Seq),
     assertz(e_r4_1_lefts(X, Seq, none, LStart, LEnd)),
-    forall(rtl_aggregate_initial(count, StarTimes_6), e_r4_1(X, StarTimes_6, LStart, LEnd)).
+    forall(rtl_aggregate_initial(count, StarTimes_20_26), e_r4_1(X, StarTimes_20_26, LStart, LEnd)).
 e_r4_1_left_retract(X, LStart, LEnd) :-
     (   retract(e_r4_1_lefts(X, Seq, _, LStart, LEnd))
     ->  forall(
-            rtl_aggregate_initial(count, StarTimes_6),
-            e_r4_1_retract(X, StarTimes_6, LStart, LEnd)),
+            rtl_aggregate_initial(count, StarTimes_20_26),
+            e_r4_1_retract(X, StarTimes_20_26, LStart, LEnd)),
         findall(
             RSeq - (count - RStart - REnd),
             (e_r4_1_rights(X, V, RSeq, RStart, REnd), RSeq > Seq, LEnd < RStart),
             Items),
         rtl_aggregate_values(Items, _, Values),
         forall(
-            member(_ - (StarTimes_6 - REnd), Values),
-            e_r4_1_retract(X, StarTimes_6, LStart, REnd))
+            member(_ - (StarTimes_20_26 - REnd), Values),
+            e_r4_1_retract(X, StarTimes_20_26, LStart, REnd))
     ;   true
     ).
 e_r4_1_right(X, V, RStart, REnd) :-
     forall(
         (e_r4_1_lefts(X, Seq, Acc0, LStart, LEnd), LEnd < RStart),
-        (   rtl_aggregate(count, Acc0, Acc, StarTimes_6),
+        (   rtl_aggregate(count, Acc0, Acc, StarTimes_20_26),
             retract(e_r4_1_lefts(X, Seq, Acc0, LStart, LEnd)),
             assertz(e_r4_1_lefts(X, Seq, Acc, LStart, LEnd)),
-            e_r4_1(X, StarTimes_6, LStart, REnd)
+            e_r4_1(X, StarTimes_20_26, LStart, REnd)
         )),
     rtl_next_seq(RSeq),
     assertz(e_r4_1_rights(X, V, RSeq, RStart, REnd)).
@@ -295,16 +297,18 @@ e_r4_1_redo(X, Seq, LStart, LEnd, Removed) :-
         (e_r4_1_rights(X, V, RSeq, RStart, REnd), RSeq > Seq, LEnd < RStart),
         Items),
     rtl_aggregate_redo(Items, Removed, Acc, Retracts, Adds),
-    forall(member(StarTimes_6 - REnd, Retracts), e_r4_1_retract(X, StarTimes_6, LStart, REnd)),
-    forall(member(StarTimes_6 - REnd, Adds), e_r4_1(X, StarTimes_6, LStart, REnd)),
+    forall(
+        member(StarTimes_20_26 - REnd, Retracts),
+        e_r4_1_retract(X, StarTimes_20_26, LStart, REnd)),
+    forall(member(StarTimes_20_26 - REnd, Adds), e_r4_1(X, StarTimes_20_26, LStart, REnd)),
     (   retract(e_r4_1_lefts(X, Seq, _, LStart, LEnd))
     ->  assertz(e_r4_1_lefts(X, Seq, Acc, LStart, LEnd))
     ;   true
     ).
-e_r4_1(X, StarTimes_6, Start, End) :-
+e_r4_1(X, StarTimes_20_26, Start, End) :-
     rtl_detected(r4),
     rtl_derived(big(X), Start, End).
-e_r4_1_retract(X, StarTimes_6, Start, End) :-
+e_r4_1_retract(X, StarTimes_20_26, Start, End) :-
     rtl_underived(big(X), Start, End).
 
 % ---- r5 --------------------------------------------------------------------
