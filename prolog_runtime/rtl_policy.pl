@@ -94,7 +94,9 @@ passed on at their own positions (rtl_policy_at/2, rtl_sliding.pl).
 %
 %   The position of the instance a policy step is receiving: a new arrival number (Mode
 %   `now`), or, inside a replay, the position of the instance replayed (Mode `replay`: the
-%   instance comes from the past).
+%   instance comes from the past). The code compiled for a policy step calls it for every
+%   instance (passes/edbc.py), also in rules added at run time: the goal boundary
+%   (rtl_sandbox.pl) allows it, and compiled code reads no runtime global itself.
 
 rtl_position(Position, Mode) :-
     nb_getval(rtl_replay_position, R),          % set by rtl_reset/0

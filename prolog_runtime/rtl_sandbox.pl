@@ -586,16 +586,9 @@ walk_clause(IM, S, _-Body, V0, V) :-
 
 % ---- system and library predicates --------------------------------------------------------
 
-%   rule_readable_global(?Key): a runtime global the code compiled for an added rule reads in
-%   line (edbc.py: the position of a policy step's replay, read for every instance).
-rule_readable_global(rtl_replay_position).
-
 %   system_goal(+G, +IM, +M, +S, -G1, +V0, -V): G, defined in the system or library module
 %   IM, must be listed by allowed/1 and pass library(sandbox) (with stand-ins for the goals
 %   it calls, walked here); the goals that can only be judged when they run are guarded.
-system_goal(nb_getval(Key, Value), system, _, st(rule(_, _, _), _, _), nb_getval(Key, Value), V, V) :-
-    atom(Key),
-    rule_readable_global(Key), !.
 system_goal(G, IM, M, S, G1, V0, V) :-
     functor(G, Name, Arity),
     (   system_module(IM), allowed(Name/Arity)

@@ -17,7 +17,7 @@ os.environ["RETALISC_CACHE_DIR"] = _CACHE.name
 
 def pytest_addoption(parser):
     parser.addoption("--update-golden", action="store_true",
-                     help="Rewrite the expected output of golden tests (review the diff!)")
+                     help="Rewrite every expectation of the golden cases, tests/golden_cases.py (review the diff!)")
 
 
 @pytest.fixture

@@ -1,16 +1,13 @@
-"""Golden active-query cases in the XSB style: `tests/golden_aq/<case>/` holds `program.pl`,
-`queries.txt` (one goal per line, ids q1, q2, ...), `updates.txt` (`+fact.`, `-fact.`, and `?`
-checkpoints), `modes.txt` (the transformations that terminate on it) and `expected.txt`: at the
-start, at every `?` and at the end, each query's sorted duplicate-free answers in writeq form.
+"""Golden active-query cases in the XSB style (`tests/golden/<case>/` with a `program.pl`; the
+layout and the one switch, `pytest --update-golden`, are described in tests/golden_cases.py).
 
-The expectations come from SWI-Prolog's own `:- table` (never from our code): run with
-RETALIS_UPDATE_GOLDEN=1 to rewrite them, then review the diff.  The test drives the
-`retalisc aq` command and rebuilds the answer sets from its add/delete notifications.
+The expectations (`expected.txt`) come from SWI-Prolog's own `:- table` (never from our code).
+The test drives the `retalisc aq` command and rebuilds the answer sets from its add/delete
+notifications.
 """
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import pytest
@@ -18,9 +15,9 @@ from click.testing import CliRunner
 
 from retalisc.cli import main
 from aq_support import run_all
+from golden_cases import GOLDEN, aq_cases, check_expected, modes
 
-GOLDEN = Path(__file__).with_name("golden_aq")
-CASES = sorted(p.name for p in GOLDEN.iterdir() if p.is_dir())
+CASES = [case.name for case in aq_cases()]
 
 
 def _lines(path: Path):
@@ -88,12 +85,9 @@ def oracle_expected(case: Path) -> str:
 
 
 @pytest.mark.parametrize("case", CASES)
-def test_expected_is_swi_tabling(case):
+def test_expected_is_swi_tabling(case, update_golden):
     path = GOLDEN / case
-    expected = oracle_expected(path)
-    if os.environ.get("RETALIS_UPDATE_GOLDEN") or not (path / "expected.txt").exists():
-        (path / "expected.txt").write_text(expected)
-    assert (path / "expected.txt").read_text() == expected
+    check_expected(path / "expected.txt", oracle_expected(path), update_golden)
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -101,7 +95,7 @@ def test_expected_is_swi_tabling(case):
                                               ("naive", False)])
 def test_golden(case, mode, subsumption, tmp_path, monkeypatch):
     path = GOLDEN / case
-    if mode not in (path / "modes.txt").read_text().split():
+    if mode not in modes(path):
         pytest.skip(f"{mode} does not terminate on {case} (left recursion or cycles)")
     goals = [_goal(g) for g in _lines(path / "queries.txt")]
     updates = _lines(path / "updates.txt")

@@ -1,4 +1,4 @@
-"""XSB compatibility of `retalisc aq` beyond the golden cases (tests/golden_aq/xsb_*): the notes
+"""XSB compatibility of `retalisc aq` beyond the golden cases (tests/golden/xsb_*): the notes
 for ignored XSB directives and the directives refused, multi-line quoted atoms in update
 scripts, the checks on rules added at run time, rules added for a predicate with stored facts
 only (checked against SWI-Prolog's tabling with hypothesis), builtin tests placed where their

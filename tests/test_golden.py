@@ -1,19 +1,18 @@
-"""Golden tests: a folder per case with a program, an event stream and the expected output.
-
-Each case runs twice, through standalone `swipl` on the compiled program and through the
-Python driver; both must print exactly the expected lines. An `options` file holds options
-for the run (`--allow-control` for the cases with control lines). `pytest --update-golden`
-rewrites the expectations from the standalone run (review the diff before committing).
+"""Golden tests of the event-program cases (the layout and the one switch, `pytest
+--update-golden`, are described in tests/golden_cases.py): each case runs twice, through
+standalone `swipl` on the compiled program and through the Python driver; both must print
+exactly the expected lines. The examples with an event stream (`examples/<name>/events.jsonl`
+and `expected.jsonl`) run the same way. Every golden case (active-query cases too) also
+compares its generated Prolog with its `compiled*.pl` files.
 """
 import subprocess
 from pathlib import Path
 
 import pytest
 
+from golden_cases import GOLDEN, ROOT, check_expected, compiled_files, event_cases
 from retalisc.compiler import compile_file
 from retalisc.driver.engine import Engine
-
-ROOT = Path(__file__).resolve().parent.parent
 
 
 def _options(folder: Path):
@@ -25,9 +24,8 @@ def _options(folder: Path):
 
 def _cases():
     cases = []
-    for folder in sorted((ROOT / "tests" / "golden").iterdir()):
-        if (folder / "program.rtl").exists():
-            cases.append(pytest.param(folder / "program.rtl", folder, id=f"golden/{folder.name}"))
+    for folder in event_cases():
+        cases.append(pytest.param(folder / "program.rtl", folder, id=f"golden/{folder.name}"))
     for folder in sorted((ROOT / "examples").iterdir()):
         programs = sorted(folder.glob("*.rtl"))
         if programs and (folder / "events.jsonl").exists():
@@ -42,10 +40,7 @@ def test_standalone_swipl(program, folder, tmp_path, swipl, update_golden):
     run = subprocess.run([swipl, str(compiled), *_options(folder), str(folder / "events.jsonl")], capture_output=True,
                          text=True, cwd=tmp_path, timeout=120)
     assert run.returncode == 0, run.stderr
-    expected = folder / "expected.jsonl"
-    if update_golden:
-        expected.write_text(run.stdout)
-    assert run.stdout == expected.read_text()
+    check_expected(folder / "expected.jsonl", run.stdout, update_golden)
 
 
 @pytest.mark.parametrize("program, folder", _cases())
@@ -57,3 +52,13 @@ def test_python_driver(program, folder):
     produced += engine.end_of_input()
     expected = (folder / "expected.jsonl").read_text().splitlines()
     assert [e.line for e in produced] == expected
+
+
+@pytest.mark.parametrize("case", sorted(GOLDEN.iterdir()), ids=lambda p: p.name)
+def test_generated_prolog(case, update_golden):
+    """The generated Prolog of every golden case is its `compiled*.pl`: a change of the
+    compiler's output is seen (and reviewed) in the diff of these files."""
+    files = compiled_files(case)
+    assert files, f"{case} has no program"
+    for path, prolog in files:
+        check_expected(path, prolog, update_golden)

@@ -66,6 +66,9 @@ UNSAFE_RULES = [
     ("null do sub(1, c, Q, x, 0) <- trig(Q).", "only known when it runs"),       # conditions from data
     ("null do c_mem(m, Q, 1, inf) <- trig(Q).", "only known when it runs"),
     ("null do memorize(x(_), C, x, m, 1) <- trig(C).", "only known when it runs"),
+    # runtime globals, the policy steps' replay position among them (compiled code reads it
+    # through rtl_policy:rtl_position/2), are not for added rules to read
+    ("alarm(X) <- trig where nb_getval(rtl_replay_position, X).", "unsafe goal: nb_getval/2"),
 ]
 
 
@@ -147,6 +150,22 @@ def test_every_rule_of_the_examples_passes_when_added_at_run_time():
             engine.add_rules("\n".join(rules))
             checked += len(rules)
     assert checked >= 60
+
+
+def test_a_rule_added_under_a_policy_reads_its_position_through_the_runtime():
+    """A step under a consumption policy asks rtl_position/2 for the position of each
+    instance; the code compiled for an added rule reads no runtime global, and passes."""
+    policy = ":- set_etalis_flag(event_consumption_policy, recent).\nr1 : ab(X, Y) <- a(X) seq b(Y).\n"
+    added = "r2([property(consumption_policy, recent)]) 'rule:' ba(X, Y) <- b(X) seq a(Y)."
+    prolog = compile_source(policy + added + "\n", "policy.rtl").prolog
+    assert "rtl_position(" in prolog and "nb_getval" not in prolog
+    engine = Engine.from_source(policy, "policy.rtl")
+    assert engine.add_rules(added) == ["r2"]
+    events = [("a(1)", 1), ("b(2)", 2), ("a(3)", 3), ("a(4)", 4), ("b(5)", 5), ("b(6)", 6), ("a(7)", 7)]
+    out = [o.event for o in engine.feed_batch(events)]
+    written = Engine.from_source(policy + added + "\n", "written.rtl")      # the oracle: the rule in the file
+    assert out == [o.event for o in written.feed_batch(events)]
+    assert "ab(1,2)" in out and any(e.startswith("ba(") for e in out)
 
 
 def test_control_lines_reach_the_same_check(engine, tmp_path):

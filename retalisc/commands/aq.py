@@ -53,7 +53,7 @@ def _prolog_atom(text: str) -> str:
 
 @click.command("aq", epilog="""\b
 Example:
-  retalisc aq tests/golden_aq/program1/program.pl --script UPDATES.txt --mode tabled
+  retalisc aq tests/golden/program1/program.pl --script UPDATES.txt --mode tabled
 with UPDATES.txt:
   ?q1 a(X, Z).
   +d(4).

@@ -68,7 +68,7 @@ Examples:
   swipl fire_alarm.pl examples/fire_alarm/events.jsonl
   swipl fire_alarm.pl - < examples/fire_alarm/events.jsonl      # '-': standard input
   retalisc compile examples/fire_alarm/fire_alarm.rtl --dump-after binarize
-  retalisc compile tests/golden_aq/program1/program.pl --active-queries tabled -o aq.pl""")
+  retalisc compile tests/golden/program1/program.pl --active-queries tabled -o aq.pl""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the Prolog program here "
               "(default: standard output).")

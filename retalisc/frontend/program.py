@@ -8,7 +8,6 @@ the parser into these dataclasses; patterns become `Pattern` trees.
 from __future__ import annotations
 
 import bisect
-import itertools
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -519,8 +518,6 @@ def _extract_subpatterns(term: Term, clause: ReadClause, found: List["EventRule"
     return term
 
 
-_STAR_COUNTER = itertools.count(1)
-
 # Operators whose operands (the first only for where, check, timestamp, event_multiply) are patterns.
 _PATTERN_OPERATORS = set(BINARY_OPERATORS) | {"cnot", "where", "check", "timestamp", "event_multiply",
                                                "star_times"}
@@ -578,9 +575,11 @@ def to_pattern(term: Term, span: Span) -> Pattern:
                                      "P seq prolog(Goal) (it means P where Goal)", where)
         if term.arity == 2 and term.name == "seq" and _is(term.args[1], "star_times", 1):
             repeated = to_pattern(term.args[1].args[0], span)
+            at = span_of(term.args[1]) or where
+            # the count's variable is named by where it is written: the same source gives the
+            # same program text whatever was compiled before in the process
             return Binary("seq", to_pattern(term.args[0], span),
-                          Aggregate(Atom("count"), repeated, Var(f"StarTimes_{next(_STAR_COUNTER)}"),
-                                    span_of(term.args[1]) or where, True),
+                          Aggregate(Atom("count"), repeated, Var(f"StarTimes_{at.line}_{at.column}"), at, True),
                           where)
         if term.arity == 2 and term.name == "seq" and any(_is(side, "prolog", 1) for side in term.args):
             # ETALIS: `P seq prolog(Goal)` (and `prolog(Goal) seq P`) calls Goal when P is detected

@@ -29,9 +29,10 @@ from typing import List
 import jinja2
 
 from ...frontend.definite import Program, Rule, term_vars
-from ...frontend.terms import Compound, Term, quote_atom, to_prolog
+from ...frontend.terms import Atom, Compound, Number, Term, Var, make_list, quote_atom
 from ...passes.unit import AqUnit
 from ...runtime_location import runtime_dir
+from .render import write_clause, write_term
 
 _ENV = jinja2.Environment(
     loader=jinja2.FileSystemLoader(str(Path(__file__).with_name("templates"))),
@@ -78,14 +79,19 @@ def _fresh_var(rule: Rule, base: str, taken=()) -> str:
     return name
 
 
-def _conj(goals: List[str]) -> str:
-    return ", ".join(goals) if goals else "true"
-
-
-def _clause(head: str, goals: List[str]) -> str:
+def _conj(goals: List[Term]) -> Term:
     if not goals:
-        return f"{head}."
-    return f"{head} :-\n    " + ",\n    ".join(goals) + "."
+        return Atom("true")
+    term = goals[-1]
+    for goal in reversed(goals[:-1]):
+        term = Compound(",", (goal, term))
+    return term
+
+
+def _clause(head: Term, goals: List[Term]) -> str:
+    """A clause as render.write_clause writes the clauses of event programs: one goal a line,
+    an if-then-else in the usual layout, long terms broken over lines."""
+    return write_clause(Compound(":-", (head, _conj(goals))) if goals else head)
 
 
 def rule_clauses(rule: Rule) -> List[str]:
@@ -99,70 +105,64 @@ def variant_clauses(rules: List[Rule]) -> List[str]:
     if-then-else whose last branch takes the masks the others do not); then the steps of each."""
     first = rules[0]
     t = _fresh_var(first, "T")
-    m = _fresh_var(first, "M", taken=[t, _fresh_var(first, "R", taken=[t])])
+    m = Var(_fresh_var(first, "M", taken=[t, _fresh_var(first, "R", taken=[t])]))
     names, _ = first.guard
-    branches = []
-    for n, rule in enumerate(rules):
-        goals = ",\n        ".join(_activation(rule))
-        if n + 1 < len(rules):
-            test = f"memberchk({m}, [{', '.join(map(str, rule.guard[1]))}])"
-            branches.append(f"{'(' if n == 0 else ';'}   {test}\n    ->  {goals}")
-        else:
-            branches.append(f";   {goals}")
-    dispatch = "\n    ".join(branches) + "\n    )"
-    act = _clause(_act_head(first), [f"aq_adornment([{', '.join(names)}], {m})", dispatch])
+    dispatch = _conj(_activation(rules[-1]))
+    for rule in reversed(rules[:-1]):
+        test = Compound("memberchk", (m, make_list([Number(mask) for mask in rule.guard[1]])))
+        dispatch = Compound(";", (Compound("->", (test, _conj(_activation(rule)))), dispatch))
+    adornment = Compound("aq_adornment", (make_list([Var(name) for name in names]), m))
+    act = _clause(_act_head(first), [adornment, dispatch])
     return [act] + [c for rule in rules for c in step_clauses(rule)]
 
 
-def _act_head(rule: Rule) -> str:
-    return f"'$aq_act'({to_prolog(rule.head)}, {_fresh_var(rule, 'T')})"
+def _act_head(rule: Rule) -> Term:
+    return Compound("$aq_act", (rule.head, Var(_fresh_var(rule, "T"))))
 
 
 def _waits(rule: Rule) -> List[int]:
     return [i for i, lit in enumerate(rule.body) if lit.kind != "builtin"]
 
 
-def _state(rule: Rule, i: int) -> str:
+def _state(rule: Rule, i: int) -> Term:
     t = _fresh_var(rule, "T")
     env = term_vars([rule.head] + [literal.term for literal in rule.body[:i]])
-    return f"s{rule.index}_{i + 1}({', '.join([t] + env)})"
+    return Compound(f"s{rule.index}_{i + 1}", tuple(Var(name) for name in [t] + env))
 
 
-def _builtins(rule: Rule, lo: int, hi: int) -> List[str]:
-    return [to_prolog_goal(rule.body[j].term) for j in range(lo, hi)]
+def _builtins(rule: Rule, lo: int, hi: int) -> List[Term]:
+    return [rule.body[j].term for j in range(lo, hi)]
 
 
-def _enter(rule: Rule, i: int) -> str:
+def _enter(rule: Rule, i: int) -> Term:
     lit = rule.body[i]
     if lit.negated:
-        return f"aq_wait_neg({lit.kind}, {to_prolog(lit.term)}, {_state(rule, i)}, {rule.stratum})"
+        return Compound("aq_wait_neg", (Atom(lit.kind), lit.term, _state(rule, i), Number(rule.stratum)))
     pred = "aq_wait_call" if lit.kind == "call" else "aq_wait_fact"
-    return f"{pred}({to_prolog(lit.term)}, {_state(rule, i)})"
+    return Compound(pred, (lit.term, _state(rule, i)))
 
 
-def _answer(rule: Rule, rank: str) -> str:
-    return f"aq_answer({_fresh_var(rule, 'T')}, {to_prolog(rule.head)}, {rank})"
+def _answer(rule: Rule, rank: Term) -> Term:
+    return Compound("aq_answer", (Var(_fresh_var(rule, "T")), rule.head, rank))
 
 
-def _activation(rule: Rule) -> List[str]:
+def _activation(rule: Rule) -> List[Term]:
     """The goals of e_k0: the builtins before the first wait point, then the wait (or the answer)."""
     waits = _waits(rule)
     first_hi = waits[0] if waits else len(rule.body)
-    return _builtins(rule, 0, first_hi) + [_enter(rule, waits[0]) if waits else _answer(rule, "0")]
+    return _builtins(rule, 0, first_hi) + [_enter(rule, waits[0]) if waits else _answer(rule, Number(0))]
 
 
 def step_clauses(rule: Rule) -> List[str]:
     """'$aq_go' for every wait point, and '$aq_final'."""
     t = _fresh_var(rule, "T")
-    r = _fresh_var(rule, "R", taken=[t])
-    head = to_prolog(rule.head)
+    r = Var(_fresh_var(rule, "R", taken=[t]))
     body = rule.body
     waits = _waits(rule)
 
-    def literal(i: int) -> str:
+    def literal(i: int) -> Term:
         """The literal a state resumes with: an answer or fact, or '$aq_not'(G) once `\\+ G` holds."""
-        text = to_prolog(body[i].term)
-        return f"'$aq_not'({text})" if body[i].negated else text
+        return Compound("$aq_not", (body[i].term,)) if body[i].negated else body[i].term
 
     def kind(i: int) -> str:
         return "neg" if body[i].negated else body[i].kind
@@ -172,25 +172,16 @@ def step_clauses(rule: Rule) -> List[str]:
         hi = waits[n + 1] if n + 1 < len(waits) else len(body)
         last = n + 1 == len(waits)
         nxt = _answer(rule, r) if last else _enter(rule, waits[n + 1])
-        clauses.append(_clause(f"'$aq_go'({_state(rule, i)}, {literal(i)}, {r if last else '_'})",
+        clauses.append(_clause(Compound("$aq_go", (_state(rule, i), literal(i), r if last else Var("_"))),
                                _builtins(rule, i + 1, hi) + [nxt]))
     if waits:
         j = waits[-1]
-        clauses.append(f"'$aq_final'({head}, {t}, {_state(rule, j)}, {kind(j)}, {literal(j)}, "
-                       f"({_conj(_builtins(rule, j + 1, len(body)))})).")
+        clauses.append(_clause(Compound("$aq_final", (rule.head, Var(t), _state(rule, j), Atom(kind(j)), literal(j),
+                                                      _conj(_builtins(rule, j + 1, len(body))))), []))
     else:
-        clauses.append(f"'$aq_final'({head}, {t}, act({t}), none, true, ({_conj(_builtins(rule, 0, len(body)))})).")
+        clauses.append(_clause(Compound("$aq_final", (rule.head, Var(t), Compound("act", (Var(t),)), Atom("none"),
+                                                      Atom("true"), _conj(_builtins(rule, 0, len(body))))), []))
     return clauses
-
-
-_INFIX = {"<", ">", "=<", ">=", "=:=", "=\\=", "is", "=", "\\=", "==", "\\==", "@<", "@>", "@=<", "@>="}
-
-
-def to_prolog_goal(term: Term) -> str:
-    """Builtins are written infix (readable); their arguments canonically."""
-    if isinstance(term, Compound) and term.name in _INFIX and term.arity == 2:
-        return f"{to_prolog(term.args[0])} {term.name} {to_prolog(term.args[1])}"
-    return to_prolog(term)
 
 
 def _render(program: Program) -> str:
@@ -211,12 +202,12 @@ def _render(program: Program) -> str:
         })
     order = {ind: n for n, ind in enumerate(program.dynamic)}
     grouped = sorted(program.facts, key=lambda f: order.get(_indicator(f.term), len(order)))
-    facts = [f"{to_prolog(f.term)}." for f in grouped]
+    facts = [write_clause(f.term) for f in grouped]
     rules = []
     for group in _variant_groups(program.rules):
         rule = group[0]
         where = str(rule.span) if rule.span else ""
-        text = " ".join(rule.text.split()) if rule.text else to_prolog(rule.head)
+        text = " ".join(rule.text.split()) if rule.text else write_term(rule.head)
         if len(group) == 1:
             label, clauses = f"rule {rule.index}", rule_clauses(rule)
         else:

@@ -2,8 +2,9 @@
 clauses of rules to add to a running program.
 
 Layout lives in `templates/program.pl.j2` and `templates/added_rules.pl.j2`; this module only
-turns terms into text: each clause is written with operators, one body goal per line, and the
-`forall/2` loops of EDBC rules on two lines, so a user debugging a rule recognises it.
+turns terms into text: each clause is written with operators, one body goal a line, an
+if-then-else in the usual Prolog layout and any longer term broken over lines within
+`frontend.writer.WIDTH` columns (`layout_term`), so a user debugging a rule recognises it.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import jinja2
 
 from ...frontend.program import Declaration, Directive, StaticClause
 from ...frontend.terms import Atom, Compound, Term, Var, conjuncts, quote_atom
+from ...frontend.writer import layout_term
 from ...frontend.writer import write_term as _write_term
 from ...passes.unit import GeneratedRule, Unit
 from ...runtime_location import runtime_dir
@@ -127,12 +129,17 @@ def _start_up_text(clause) -> str:
     """A start-up declaration, or `'$directive'(Where, Goal)` for a directive that calls the
     runtime (run after the load, reported at Where when it fails or raises)."""
     if isinstance(clause, Declaration):
-        return write_term(clause.goal, 999)
+        return _declaration_text(clause.goal)
     goal = clause.goal
     if isinstance(goal, Compound) and goal.name == "initialization" and goal.arity == 1:
         goal = goal.args[0]                 # it runs after the load anyway
     where = Atom(f"{clause.span.file}:{clause.span.line}")
-    return write_term(Compound("$directive", (where, goal)), 999)
+    return _declaration_text(Compound("$directive", (where, goal)))
+
+
+def _declaration_text(goal: Term) -> str:
+    """The argument of an `ele_declaration(...).` line of templates/program.pl.j2."""
+    return layout_term(goal, 999, column=len("ele_declaration("), trailing=len(")."), event_operators=False)
 
 
 def _is_copied(clause) -> bool:
@@ -149,7 +156,7 @@ def _is_copied(clause) -> bool:
 
 def _static_text(clause) -> str:
     if isinstance(clause, Directive):
-        return _full_stop(f":- {write_term(clause.goal, 1199)}")
+        return _full_stop(f":- {layout_term(clause.goal, 1199, column=3, trailing=1, event_operators=False)}")
     return write_clause(clause.term)
 
 
@@ -163,28 +170,21 @@ _SYMBOL_CHARS = set("+-*/\\^<>=~:.?@#&$")
 
 
 def write_clause(term: Term) -> str:
-    """A clause as text: `Head :-` then one goal per line, indented by four spaces."""
+    """A clause as text: `Head :-` then one goal per line, indented by four spaces, a goal that
+    is an if-then-else or a disjunction in the usual layout (`(   If` / `->  Then` / `;   Else`
+    / `)`), and any term longer than the line width broken over lines (writer.layout_term)."""
     if isinstance(term, Compound) and term.name == ":-" and term.arity == 2:
         head, body = term.args
         if isinstance(body, Var):
             body = Compound("call", (body,))      # `H :- X.` means call(X); SWI-Prolog wants it written
         goals = conjuncts(body)
-        lines = [write_term(head, 1199) + " :-"]
+        lines = [layout_term(head, 1199, trailing=3, event_operators=False) + " :-"]
         for i, goal in enumerate(goals):
-            lines.append("    " + (_full_stop(_goal_text(goal)) if i == len(goals) - 1 else _goal_text(goal) + ","))
+            last = i == len(goals) - 1
+            text = layout_term(goal, 999, column=4, trailing=1, event_operators=False, break_control=True)
+            lines.append("    " + (_full_stop(text) if last else text + ","))
         return "\n".join(lines)
-    return _full_stop(write_term(term, 1199))
-
-
-def _goal_text(goal: Term) -> str:
-    if isinstance(goal, Compound) and goal.name == "forall" and goal.arity == 2:
-        condition, action = goal.args
-        inner = ", ".join(write_term(g, 999) for g in conjuncts(condition))
-        return f"forall(( {inner} ),\n           {write_term(action, 999)})"
-    if isinstance(goal, Compound) and goal.name == ";" and goal.arity == 2:
-        return f"( {write_term(goal.args[0], 1099)}\n    ; {write_term(goal.args[1], 1099)}\n    )"
-    return write_term(goal, 999)
-
+    return _full_stop(layout_term(term, 1199, trailing=1, event_operators=False))
 
 
 def _printed_clause(spec: tuple) -> str:

@@ -24,12 +24,10 @@ def positioned(g: RuleGenerator, step: Step, key: Optional[List[Var]], position:
     """Process an instance at its position (`body`, also the clause of `at`): now, or,
     when it comes from a replay (its position is in the past), rewinding the step first
     (rtl_policy_insert/4)."""
-    # (rtl_position/2 inline: this runs for every instance)
-    replay = V(g.fresh("Replay"))
+    mode = V(g.fresh("Mode"))
     insert = C("rtl_policy_insert", Atom(step.name), V("_") if key is None else list_term(key), position, at)
-    return conj([C("nb_getval", Atom("rtl_replay_position"), replay),
-                 C(";", C("->", C("==", replay, Atom("none")), conj([C("rtl_next_seq", position), body])),
-                   conj([C("=", position, replay), insert]))])
+    return conj([C("rtl_position", position, mode),
+                 C(";", C("->", C("==", mode, Atom("now")), body), insert)])
 
 
 def policy_facts(g: RuleGenerator, step: Step, key: List[Var], lefts: Term, rights: Term, matched: Optional[Term],
