@@ -38,6 +38,9 @@
     aq_configure([dred(basic)]) over-deletes every reachable answer instead.
     Facts are a set: a fact stored twice is one fact (see "A state can be
     derived more than once").
+
+    Update scripts (`retalisc aq --script`) are read and run by
+    rtl_aq_script.pl, through the exports of this module.
 */
 
 :- module(rtl_aq,
