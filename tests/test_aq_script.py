@@ -1,6 +1,8 @@
 """The update-script interpreter of active queries (prolog_runtime/rtl_aq_script.pl): its
 plunit suite, prolog_runtime/tests/test_aq_script.pl, run on Program 4 of the thesis compiled
-in each transformation (the notifications a script prints do not depend on the mode)."""
+in each transformation that terminates on its left recursion (the notifications a script
+prints do not depend on the mode; `optimized` makes a fresh table for every call and does not
+terminate here, tests/golden_aq/left_recursion/modes.txt)."""
 from __future__ import annotations
 
 import os
@@ -21,7 +23,7 @@ edge(1, 2).
 """
 
 
-@pytest.mark.parametrize("mode", ["tabled", "optimized", "naive"])
+@pytest.mark.parametrize("mode", ["tabled", "naive"])
 def test_plunit_rtl_aq_script(tmp_path, swipl, mode):
     program = tmp_path / "p4.pl"
     program.write_text(compile_source(PROGRAM4, "program4.pl", active_queries=AqOptions(mode)).prolog)
