@@ -31,6 +31,7 @@ arguments are data. Out is a string: lines of writeq text.
 :- use_module(library(apply)).
 :- use_module(library(lists)).
 :- use_module(rtl_aq).
+:- use_module(rtl_aq_script, [aq_script_batch/6]).
 :- use_module(rtl_text).
 :- use_module(rtl_state).
 

@@ -13,11 +13,6 @@
             rtl_future_problem/2,       % +End, -Problem
             rtl_started_after/1,        % +Time
             rtl_blockers_due/4,         % +Step, +Partner, +Clock, -Before
-            rtl_set_flag/2,             % +Flag, +Value
-            rtl_valid_flag_value/2,     % +Flag, @Value
-            rtl_flag/2,                 % ?Flag, ?Value
-            rtl_max_steps/1,            % -Steps
-            rtl_default_flags/0,
             rtl_set_action_output/1,    % +Target
             rtl_action_stream/1,        % -Stream
             rtl_close_action_output/0,
@@ -26,8 +21,6 @@
             rtl_output_pending/0,
             rtl_emit/5,                 % +Event, +Start, +End, +Consumer, +Op
             rtl_emit_line/1,            % +Line
-            rtl_stat/2,                 % ?Name, ?Value
-            rtl_count/1,                % +Name
             rtl_detected/1,             % +Rule
             rtl_detections/1,           % -Pairs
             rtl_store_size/1,           % -Clauses
@@ -37,7 +30,9 @@
             rtl_remove_output_hook/1,   % :Hook
             rtl_add_type_output_hook/2, % +Pattern, :Hook
             rtl_remove_type_output_hook/2, % +Pattern, :Hook
-            rtl_remove_type_output_hooks/0
+            rtl_remove_type_output_hooks/0,
+            rtl_dry_run/3,              % :Goal, -Retracted, -Derived
+            rtl_dry_running/0
           ]).
 
 /** <module> ELE runtime: event ingestion, derivation, output and forgetting
@@ -66,29 +61,19 @@ deletion is too late).
 */
 
 :- use_module(library(assoc)).
+:- reexport(rtl_flags).
 :- use_module(rtl_io).
 :- use_module(rtl_horizon).
 :- use_module(rtl_timers).
 :- use_module(rtl_time, [rtl_beyond_bound/3]).
-:- use_module(rtl_run_options, [rtl_run_option/5]).   % the defaults of the run options
 
 :- dynamic rtl_output_line/1.
 :- dynamic output_hook/1.
 :- dynamic type_output_hook/2.              % type_output_hook(Skeleton, Hook)
 :- dynamic counter_key_of/2.                % counter_key_of(Rule, GlobalKey)
+:- meta_predicate rtl_dry_run(0, -, -).
 :- meta_predicate rtl_add_output_hook(4), rtl_remove_output_hook(4),
                   rtl_add_type_output_hook(+, 4), rtl_remove_type_output_hook(+, 4).
-:- dynamic flag_value/2.
-
-% The flags that are run options (max_delay, echo_input, max_steps, retraction_horizon,
-% flush_timers, max_timers, max_event_types, max_line_bytes, max_digits, max_future) have
-% their defaults in the table of run options (rtl_run_options.pl, from retalisc/run_options.py).
-flag_default(Flag, Default) :-
-    rtl_run_option(_, _, _, Default, flag(Flag)).
-flag_default(event_consumption_policy, unrestricted).
-flag_default(query_time_limit, 10).          % seconds a query from outside may run
-flag_default(max_term_depth, 1000).         % nesting of input event terms
-
 %!  rtl_use_program(+Module) is det.
 %
 %   Make Module (a compiled Retalis program) the program that processes events.
@@ -116,7 +101,7 @@ rtl_reset :-
     nb_setval(rtl_blockers_swept_by_type, NoIntervals),
     nb_setval(rtl_next_sweep, inf),
     nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
-    forall(counter(S), nb_setval(S, 0)),
+    rtl_reset_counters,
     nb_setval(rtl_late_sweep, 64),
     forget_detections,
     forget_blocker_sweeps,
@@ -145,87 +130,18 @@ rtl_clear :-
 
 :- multifile clear_hook/0.
 
-%!  rtl_set_flag(+Flag, +Value) is det.
-%!  rtl_flag(?Flag, ?Value) is nondet.
+%!  expiry_hook(+Clock) is nondet.
 %
-%   Flags: `max_delay` (seconds, a non-negative number; `inf` keeps every partial match),
-%   `echo_input` (true or false), `event_consumption_policy` (unrestricted, recent,
-%   chronological), `query_time_limit` (seconds, a positive number), `max_steps` (the
-%   inferences one input event may take, everything it derives included; `inf` for no
-%   limit; default 1,000,000) and `max_term_depth` (how deep an input event term may be
-%   nested; default 1,000), `max_timers` (how many timers may be pending, absences and
-%   alarms; `inf` for no limit; default 100,000), `max_line_bytes` (the longest input line,
-%   default 1,048,576 bytes), `max_digits` (the longest run of digits in an input line or
-%   event text, default 4,300), `max_future` (seconds an input event may end after the
-%   clock or the wall clock, the later of the two; default 86,400; rtl_future_problem/2)
-%   and `retraction_horizon` (`auto`, seconds or `inf`: how long
-%   deletions stay exact, at least max_delay plus the largest window; rtl_horizon.pl). A bad value raises a type or domain error and changes nothing.
+%   Multifile: the clock moved to Clock, past the time in the global `rtl_slr_next_expiry`
+%   (rtl_slr.pl forgets the memory records that expire).
 
-rtl_set_flag(Flag, Value) :-
-    (   flag_default(Flag, _)
-    ->  true
-    ;   domain_error(retalis_flag, Flag)
-    ),
-    (   rtl_valid_flag_value(Flag, Value)
-    ->  true
-    ;   var(Value)
-    ->  instantiation_error(Value)
-    ;   domain_error(Flag, Value)
-    ),
-    retractall(flag_value(Flag, _)),
-    assertz(flag_value(Flag, Value)),
-    (   Flag == echo_input -> nb_setval(rtl_echo_input, Value) ; true ),   % read on every event
-    (   Flag == max_steps -> nb_setval(rtl_max_steps, Value) ; true ),     % read on every event
-    (   Flag == max_event_types -> rtl_event_types:rtl_cap_event_types(Value) ; true ),
-    (   memberchk(Flag, [max_delay, retraction_horizon]) -> schedule_sweep ; true ).
+:- multifile expiry_hook/1.
 
-rtl_valid_flag_value(max_delay, V) :-
-    (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
-rtl_valid_flag_value(echo_input, V) :-
-    ( V == true ; V == false ), !.
-rtl_valid_flag_value(flush_timers, V) :-
-    ( V == true ; V == false ), !.
-rtl_valid_flag_value(event_consumption_policy, V) :-
-    atom(V), memberchk(V, [unrestricted, recent, chronological]).
-rtl_valid_flag_value(query_time_limit, V) :-
-    number(V), V > 0, V =\= inf.
-rtl_valid_flag_value(retraction_horizon, V) :-
-    (   V == auto -> true ; V == inf -> true ; number(V), V >= 0, V =\= inf ).
-rtl_valid_flag_value(max_steps, V) :-
-    (   V == inf -> true ; integer(V), V > 0 ).
-rtl_valid_flag_value(max_timers, V) :-
-    (   V == inf -> true ; integer(V), V > 0 ).
-rtl_valid_flag_value(max_event_types, V) :-
-    (   V == inf -> true ; integer(V), V > 0 ).
-rtl_valid_flag_value(max_line_bytes, V) :-
-    (   V == inf -> true ; integer(V), V > 0 ).
-rtl_valid_flag_value(max_future, V) :-
-    (   V == inf -> true ; number(V), V >= 0, V =\= inf ).
-rtl_valid_flag_value(max_digits, V) :-
-    (   V == inf -> true ; integer(V), V > 0 ).
-rtl_valid_flag_value(max_term_depth, V) :-
-    (   V == inf -> true ; integer(V), V > 0 ).
-
-%!  rtl_default_flags is det.
-%
-%   Every flag back to its default (a new Engine in a process where another ran).
-
-rtl_default_flags :-
-    retractall(flag_value(_, _)),
-    nb_setval(rtl_echo_input, false),
-    nb_setval(rtl_max_steps, []),
-    rtl_event_types:rtl_forget_event_types.
-
-%!  rtl_max_steps(-Steps) is det.
-%
-%   The flag `max_steps`, read on every input event.
-
-rtl_max_steps(Steps) :-
-    (   nb_current(rtl_max_steps, Steps0), Steps0 \== []
-    ->  Steps = Steps0
-    ;   rtl_flag(max_steps, Steps),
-        nb_setval(rtl_max_steps, Steps)
-    ).
+% A new delay bound or retraction horizon moves the next sweep (rtl_flags.pl).
+:- multifile rtl_flags:flag_changed_hook/2.
+rtl_flags:flag_changed_hook(Flag, _) :-
+    memberchk(Flag, [max_delay, retraction_horizon]),
+    schedule_sweep.
 
 %!  rtl_set_action_output(+Target) is det.
 %
@@ -260,10 +176,6 @@ rtl_close_action_output :-
     ;   true
     ).
 
-rtl_flag(Flag, Value) :-
-    flag_default(Flag, Default),
-    (   flag_value(Flag, V) -> Value = V ; Value = Default ).
-
 %!  rtl_clock(-Clock:number) is det.
 
 rtl_clock(Clock) :-
@@ -287,7 +199,7 @@ rtl_event(Event, Start, End) :-
     (   End > Clock0
     ->  nb_linkval(rtl_clock, End),
         (   nb_current(rtl_slr_next_expiry, Expiry), Expiry < End   % a memory record to forget
-        ->  rtl_slr:rtl_slr_clock_moved(End)
+        ->  forall(expiry_hook(End), true)
         ;   true
         ),
         (   nb_current(rtl_next_timer, Due), Due < End      % a timer due before the event
@@ -296,9 +208,9 @@ rtl_event(Event, Start, End) :-
         )
     ;   late_check(End, Clock0)
     ),
-    nb_getval(events, N0),
+    nb_getval(rtl_stat_events, N0),
     N is N0 + 1,
-    nb_linkval(events, N),
+    nb_linkval(rtl_stat_events, N),
     (   nb_current(rtl_echo_input, true) -> rtl_emit(Event, Start, End, echo(input), add) ; true ),
     (   type_output_hook(Event, Hook), call(Hook, Event, Start, End, add), fail ; true ),
     (   nb_current(rtl_output_hooks, true) -> run_hooks_of_every_type(Event, Start, End, add) ; true ),
@@ -391,7 +303,7 @@ rtl_advance_clock(Time) :-
     (   Time > Clock0
     ->  nb_setval(rtl_clock, Time),
         (   nb_current(rtl_slr_next_expiry, Expiry), Expiry < Time
-        ->  rtl_slr:rtl_slr_clock_moved(Time)
+        ->  forall(expiry_hook(Time), true)
         ;   true
         ),
         rtl_timers_run(after),
@@ -428,7 +340,7 @@ late_check(End, Clock) :-
     (   rtl_beyond_bound(End, Clock, Delay)
     ->  rtl_count(late),
         (   nb_current(rtl_late_sweep, Due) -> true ; Due = 64 ),
-        nb_getval(late, Late),
+        nb_getval(rtl_stat_late, Late),
         (   Late >= Due
         ->  rtl_collect_garbage(whole),
             rtl_store_size(Size),
@@ -464,9 +376,9 @@ rtl_retract_event(Event, Start, End) :-
 %   Called by compiled rules when they derive Event: deliver it and feed it back in.
 
 rtl_derived(Event, Start, End) :-
-    nb_getval(derived, D0),                                     % rtl_count/1, inline
+    nb_getval(rtl_stat_derived, D0),                            % rtl_count/1, inline
     D is D0 + 1,
-    nb_linkval(derived, D),
+    nb_linkval(rtl_stat_derived, D),
     (   End > Start -> note_duration(Event, Start, End) ; true ),
     (   nb_current(rtl_latest_start, Latest), Start > Latest     % note_start/1, inline
     ->  nb_linkval(rtl_latest_start, Start)
@@ -530,9 +442,44 @@ rtl_remove_type_output_hook(Pattern, Hook) :-
     type_skeleton(Pattern, Skeleton),
     retractall(type_output_hook(Skeleton, Hook)).
 
+%!  rtl_dry_run(:Goal, -Retracted:integer, -Derived:integer) is det.
+%
+%   Run Goal without effect: outputs, output hooks and actions are off, and every change of
+%   the database is undone. Retracted and Derived count the derived events Goal would have
+%   taken back and derived.
+%
+%   Nothing on the path of ordinary events checks for a dry run: the output goes to the
+%   buffer (rtl_ele keeps buffered lines as clauses, undone), the output hooks are removed
+%   inside the snapshot (undone) and switched off, and the counters of rtl_ele are put back;
+%   only rtl_action/1 checks rtl_dry_running/0.
+
+rtl_dry_run(Goal, Retracted, Derived) :-
+    Saved = [rtl_output_sink, rtl_output_hooks, rtl_stat_derived, rtl_stat_underived],
+    findall(Key-Value, ( member(Key, Saved), nb_current(Key, Value) ), Values),
+    rtl_stat(derived, Derived0),
+    rtl_stat(underived, Retracted0),
+    setup_call_cleanup(( nb_setval(rtl_dry_run, true),
+                         nb_setval(rtl_output_sink, buffer),
+                         nb_setval(rtl_output_hooks, false) ),
+                       snapshot(( rtl_remove_type_output_hooks,
+                                  forall(Goal, true),
+                                  rtl_stat(derived, Derived1),
+                                  rtl_stat(underived, Retracted1) )),
+                       ( nb_setval(rtl_dry_run, false),
+                         forall(member(Key-Value, Values), nb_setval(Key, Value)) )),
+    Derived is Derived1 - Derived0,
+    Retracted is Retracted1 - Retracted0.
+
+%!  rtl_dry_running is semidet.
+%
+%   A dry run (rtl_dry_run/3) is going on.
+
+rtl_dry_running :-
+    nb_current(rtl_dry_run, true).
+
 %!  rtl_remove_type_output_hooks is det.
 %
-%   Remove the hooks of every type (inside the snapshot of a dry run, rtl_horizon.pl).
+%   Remove the hooks of every type (inside the snapshot of a dry run, rtl_dry_run/3).
 
 rtl_remove_type_output_hooks :-
     retractall(type_output_hook(_, _)).
@@ -604,34 +551,6 @@ rtl_take_output(Lines) :-
 rtl_output_pending :-
     rtl_output_line(_),
     !.
-
-%!  rtl_stat(?Name, ?Value) is nondet.
-%
-%   Counters: events, retracted, derived, underived, late, rejected (input lines refused),
-%   failed (input events whose processing raised an error), too_late (deletions outside the
-%   retraction horizon, not counted as retracted), timers_refused (timers not set because
-%   `max_timers` were pending, rtl_timers.pl).
-
-rtl_stat(Name, Value) :-
-    counter(Name),
-    nb_getval(Name, Value).
-
-counter(events).
-counter(retracted).
-counter(derived).
-counter(underived).
-counter(late).
-counter(rejected).
-counter(failed).
-counter(too_late).
-counter(timers_refused).
-
-%!  rtl_count(+Name) is det.
-
-rtl_count(Name) :-
-    nb_getval(Name, N0),
-    N is N0 + 1,
-    nb_linkval(Name, N).
 
 %!  rtl_detected(+Rule:atom) is det.
 %
@@ -783,7 +702,7 @@ schedule_next_sweep :-
         (   Clock =:= -inf -> Next = -inf ; Next is Clock + Step )
     ;   Next = inf, MinEvents = 0
     ),
-    nb_getval(events, Events),
+    nb_getval(rtl_stat_events, Events),
     SweepAfter is Events + MinEvents,
     nb_setval(rtl_sweep_after, SweepAfter),
     nb_setval(rtl_next_sweep, Next).
@@ -803,6 +722,6 @@ sweep_period(M, Delay, Period, MinEvents) :-
     ).
 
 periodic_sweep :-
-    nb_getval(events, Events),
+    nb_getval(rtl_stat_events, Events),
     nb_getval(rtl_sweep_after, After),
     (   Events >= After -> rtl_collect_garbage ; true ).

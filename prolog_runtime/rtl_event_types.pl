@@ -22,20 +22,21 @@ text is known, and refused, once it is read. While the cap is set, lines are rea
 */
 
 :- dynamic known_type/2.          % known_type(Name, Arity): an event type this run takes
-:- dynamic reader_held_back/0.    % the C reader is off while the cap is set
+
+%!  capped_hook(+Capped:boolean) is nondet.
+%
+%   Multifile: the cap was set (`true`) or taken off (`false`); rtl_io.pl holds its C reader
+%   back while the cap is set.
+
+:- multifile capped_hook/1.
 
 %!  rtl_cap_event_types(+Max) is det.
 %
 %   Called when the flag `max_event_types` is set to Max (an integer > 0 or `inf`).
 
 rtl_cap_event_types(Max) :-
-    (   Max == inf
-    ->  (   retract(reader_held_back) -> rtl_io:rtl_use_fast_reader(true) ; true )
-    ;   current_predicate(rtl_io:rtl_fast_reader_used/0), rtl_io:rtl_fast_reader_used
-    ->  rtl_io:rtl_use_fast_reader(false),
-        assertz(reader_held_back)
-    ;   true
-    ),
+    (   Max == inf -> Capped = false ; Capped = true ),
+    forall(capped_hook(Capped), true),
     nb_setval(rtl_max_event_types, Max).
 
 %!  rtl_forget_event_types is det.

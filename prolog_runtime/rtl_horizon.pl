@@ -8,8 +8,6 @@
             rtl_retire_store/5,         % +Module, +Name, +Arity, +Before, +Scan
             rtl_forget_kept/2,          % +Module, +Clock
             rtl_retraction_too_late/1,  % +End
-            rtl_dry_run/3,              % :Goal, -Retracted, -Derived
-            rtl_dry_running/0,
             rtl_too_late_text/4,        % +End, +Retracted, +Derived, -Text
             rtl_warning/1,              % +Text
             rtl_take_warnings/1,        % -Texts
@@ -54,7 +52,7 @@ processed exactly too; a blocker (negation) that late takes back what it blocks.
 A deletion of an event that ended more than H before the clock is *too late*: it changes
 nothing (the runtime may have forgotten part of what the event derived). It is counted apart
 and reported with the number of derived events it took part in that the runtime can still
-find, by a dry run of the deletion inside snapshot/1 (rtl_dry_run/3): outputs, hooks and
+find, by a dry run of the deletion inside snapshot/1 (rtl_ele:rtl_dry_run/3): outputs, hooks and
 actions are off, the counters tell what it would have retracted or derived again, and every
 change to the database is undone. The count is exact when the runtime has forgotten nothing
 that the deletion of the event could need (rtl_too_late_text/4 says "at least" otherwise).
@@ -68,7 +66,7 @@ record, and deleting an A or a P replays the P's of the affected accumulators
 :- use_module(library(pairs), [pairs_values/2]).
 :- use_module(rtl_time, [rtl_beyond_bound/3]).
 
-:- meta_predicate rtl_dry_run(0, -, -), rtl_take_instance(:, +).
+:- meta_predicate rtl_take_instance(:, +).
 
 :- dynamic warning_text/1.
 
@@ -296,42 +294,6 @@ rtl_retraction_too_late(End) :-
     nb_getval(rtl_clock, Clock),
     number(Clock),
     rtl_beyond_bound(End, Clock, H).
-
-%!  rtl_dry_run(:Goal, -Retracted:integer, -Derived:integer) is det.
-%
-%   Run Goal without effect: outputs, output hooks and actions are off, and every change of
-%   the database is undone. Retracted and Derived count the derived events Goal would have
-%   taken back and derived.
-
-%
-%   Nothing on the path of ordinary events checks for a dry run: the output goes to the
-%   buffer (rtl_ele keeps buffered lines as clauses, undone), the output hooks are removed
-%   inside the snapshot (undone) and switched off, and the counters of rtl_ele are put back;
-%   only rtl_action/1 checks rtl_dry_running/0.
-
-rtl_dry_run(Goal, Retracted, Derived) :-
-    Saved = [rtl_output_sink, rtl_output_hooks, derived, underived],
-    findall(Key-Value, ( member(Key, Saved), nb_current(Key, Value) ), Values),
-    nb_getval(derived, Derived0),
-    nb_getval(underived, Retracted0),
-    setup_call_cleanup(( nb_setval(rtl_dry_run, true),
-                         nb_setval(rtl_output_sink, buffer),
-                         nb_setval(rtl_output_hooks, false) ),
-                       snapshot(( rtl_ele:rtl_remove_type_output_hooks,
-                                  forall(Goal, true),
-                                  nb_getval(derived, Derived1),
-                                  nb_getval(underived, Retracted1) )),
-                       ( nb_setval(rtl_dry_run, false),
-                         forall(member(Key-Value, Values), nb_setval(Key, Value)) )),
-    Derived is Derived1 - Derived0,
-    Retracted is Retracted1 - Retracted0.
-
-%!  rtl_dry_running is semidet.
-%
-%   A dry run (rtl_dry_run/3) is going on.
-
-rtl_dry_running :-
-    nb_current(rtl_dry_run, true).
 
 %!  rtl_too_late_text(+End, +Retracted, +Derived, -Text:string) is det.
 %

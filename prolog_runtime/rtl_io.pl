@@ -33,6 +33,7 @@ also names the reason of a rejection. Without the C reader, every line takes the
 :- use_module(rtl_lines, [rtl_nul_problem/2, rtl_digits_problem/3, rtl_long_line/4]).
 :- use_module(rtl_event_types, [rtl_event_text_refused/2, rtl_event_type_refused/2]).
 :- use_module(rtl_foreign).
+:- use_module(rtl_flags, [rtl_flag/2]).
 
 :- dynamic fast_reader/0, fast_writer/0.
 
@@ -72,6 +73,20 @@ rtl_use_fast_reader(true) :-
 rtl_use_fast_reader(false) :-
     retractall(fast_reader),
     retractall(fast_writer).
+
+% While the cap on event types is set, lines are read in Prolog (rtl_event_types.pl: the C
+% reader makes the event's term before its type could be checked); the C reader is back
+% when the cap is taken off.
+:- dynamic reader_held_back/0.
+:- multifile rtl_event_types:capped_hook/1.
+rtl_event_types:capped_hook(false) :-
+    (   retract(reader_held_back) -> rtl_use_fast_reader(true) ; true ).
+rtl_event_types:capped_hook(true) :-
+    (   fast_reader
+    ->  rtl_use_fast_reader(false),
+        assertz(reader_held_back)
+    ;   true
+    ).
 
 %!  rtl_fast_reader_used is semidet.
 %
@@ -173,13 +188,9 @@ c_limit(Flag, Limit) :-
     input_limit(Flag, Value),
     ( Value == inf -> Limit = -1 ; Limit = Value ).
 
-% An input limit is a flag of the runtime (rtl_ele.pl); this module loaded without it (a
-% test of the readers) reads without limits.
+% An input limit is a flag of the runtime (rtl_flags.pl).
 input_limit(Flag, Value) :-
-    (   current_predicate(rtl_ele:rtl_flag/2)
-    ->  rtl_ele:rtl_flag(Flag, Value)
-    ;   Value = inf
-    ).
+    rtl_flag(Flag, Value).
 
 rule_change("add_rule", add).
 rule_change("delete_rule", delete).

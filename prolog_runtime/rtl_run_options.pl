@@ -5,7 +5,7 @@
 Written by `python -m retalisc.run_options` from the table of retalisc/run_options.py,
 where the run options are declared once; tests/test_run_options.py fails when this file
 is not what the table makes. rtl_arguments.pl reads `swipl PROGRAM.pl` command lines by
-these facts, and rtl_ele.pl takes the defaults of the flags from them.
+these facts, and rtl_flags.pl takes the defaults of the flags from them.
 */
 
 %!  rtl_run_option(?Option, ?Kind, ?Metavar, ?Default, ?Road) is nondet.

@@ -123,8 +123,8 @@ builtin(any,  rtl_library:datime_plus_sec(_, _, _), []).
 builtin(any,  rtl_library:datime_minus_sec(_, _, _), []).
 builtin(any,  rtl_time:rtl_time_seconds(_, _), []).
 builtin(any,  rtl_time:rtl_interval_seconds(_, _, _), []).
-builtin(any,  rtl_ele:rtl_flag(_, _), []).
-builtin(any,  rtl_ele:rtl_stat(_, _), []).
+builtin(any,  rtl_flags:rtl_flag(_, _), []).
+builtin(any,  rtl_flags:rtl_stat(_, _), []).
 builtin(any,  rtl_ele:rtl_store_size(_), []).
 builtin(any,  rtl_ele:rtl_started_after(_), []).          % (`seq` steps; reads a number)
 builtin(any,  rtl_slr:rtl_memory(_, _, _, _, _), []).

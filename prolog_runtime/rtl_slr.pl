@@ -25,6 +25,8 @@
             rtl_with_view/2,            % +Z, :Goal
             rtl_with_needs/2,           % :Goal, -Needs
             rtl_slr_clock_moved/1,      % +Clock
+            rtl_slr_type_hook/1,        % @Hook
+            rtl_slr_watch_predicate/1,  % @Name
             rtl_slr_clear/0
           ]).
 
@@ -314,6 +316,11 @@ rtl_memory_records(Id, Records) :-
     ;   existence_error(memory_instance, Id)
     ).
 
+%   The clock moved past the next expiry of a memory record (rtl_ele.pl).
+:- multifile rtl_ele:expiry_hook/1.
+rtl_ele:expiry_hook(Clock) :-
+    rtl_slr_clock_moved(Clock).
+
 %   rtl_clear/0 forgets the records of every instance (the instances stay).
 :- multifile rtl_ele:clear_hook/0.
 rtl_ele:clear_hook :-
@@ -352,6 +359,27 @@ unwatch(M, Pattern, H) :-
     ->  rtl_remove_type_output_hook(Pattern, rtl_slr:observe(P))
     ;   true
     ).
+
+%!  rtl_slr_type_hook(@Hook) is semidet.
+%
+%   Hook has the shape of the per-type output hooks this module registers with rtl_ele
+%   (`rtl_slr:observe(P)`, P the index predicate of a watched type): rtl_state.pl checks the
+%   hooks a snapshot holds with it.
+
+rtl_slr_type_hook(Hook) :-
+    nonvar(Hook),
+    Hook = Module:observe(P),
+    Module == rtl_slr,
+    rtl_slr_watch_predicate(P).
+
+%!  rtl_slr_watch_predicate(@Name) is semidet.
+%
+%   Name is the name of the index predicate (arity 3, in this module) of a watched event
+%   type: `'$slr_watch Name/Arity'` (watch_head/4).
+
+rtl_slr_watch_predicate(Name) :-
+    atom(Name),
+    sub_atom(Name, 0, _, _, '$slr_watch ').
 
 % watch_head(+Pattern, +Program, +H, -Head): Head is `P(FirstArgOfPattern, Program, H)`
 % for the type's index predicate P (created on first use).
@@ -581,7 +609,7 @@ close_gap(H, B, First, Last, Gap) :-
 %
 % A record of an instance with time limit L is forgotten when the clock moves beyond L
 % seconds after its end (rtl_beyond_bound/3), at that clock move, with its
-% memory_record_forgotten event: rtl_ele calls rtl_slr_clock_moved/1 before the event that
+% memory_record_forgotten event: rtl_ele calls rtl_slr_clock_moved/1 (its expiry_hook/1) before the event that
 % moved the clock is processed (and on a heartbeat), so every query, rule and timer from
 % then on sees the memory without it, and a consumer of the memory events hears of it when
 % it happens (the last clock move of the input included), not at the next record.

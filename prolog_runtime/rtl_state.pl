@@ -57,6 +57,7 @@ restoring (retalisc/driver/recovery.py).
 :- use_module(rtl_rules, [rtl_rules_state/3, rtl_rules_check_state/4, rtl_rules_restore_state/3]).
 :- use_module(rtl_sandbox, [rtl_check_goal/4]).
 :- use_module(rtl_io, [rtl_too_deep_text/2]).
+:- use_module(rtl_slr, [rtl_slr_type_hook/1, rtl_slr_watch_predicate/1]).
 :- use_module(library(readutil)).
 
 state_version(2).
@@ -73,7 +74,7 @@ state_version(2).
 %   the watch predicates of rtl_slr.pl (`'$slr_watch Name/Arity'/3`) and the predicates an
 %   active-query program names are state (family_predicate/4).
 
-state_predicate(rtl_ele, flag_value(atom, data)).
+state_predicate(rtl_flags, flag_value(atom, data)).
 state_predicate(rtl_ele, output_hook(output_hook)).
 state_predicate(rtl_ele, type_output_hook(data, type_output_hook)).
 state_predicate(rtl_event_types, known_type(atom, integer)).
@@ -135,7 +136,7 @@ state_predicate(rtl_aq, aq_rule(data, data, clause_refs)).     % the clauses of 
 %
 %   The global variables (nb_setval/2) that are state, and the type of their values; keys
 %   `'rtl_detected <Rule>'` and `'$rtl_slr_bounds_<N>'` too (global_family/2), and the
-%   counters of rtl_ele.pl (`events`, `derived`, ...).
+%   counters of rtl_flags.pl (`rtl_stat_events`, `rtl_stat_derived`, ...: rtl_stat_global/2).
 
 state_global(Key, data) :-
     member(Key, [rtl_blockers_swept_by_type, rtl_clock, rtl_complete_since, rtl_detection_labels,
@@ -151,7 +152,7 @@ state_global(Key, data) :-
 state_global(aq_nstates, aq_nstates).     % its entries' negated literals are called
 state_global(rtl_seen_generation, seen_module).
 state_global(Key, integer) :-
-    rtl_stat(Key, _).
+    rtl_stat_global(_, Key).
 
 %!  state_data(?Module, ?Dump, ?Check, ?Load) is nondet.
 %
@@ -195,8 +196,7 @@ seen_module(Module) :-
     forall(member(C, Codes), code_type(C, digit)).
 
 watch_name(Name) :-
-    atom(Name),
-    sub_atom(Name, 0, _, _, '$slr_watch ').
+    rtl_slr_watch_predicate(Name).
 
 % ---- saving ----------------------------------------------------------------------------
 
@@ -659,8 +659,8 @@ arg_ok(seen_module, _, _, V) :- ( V == [] -> true ; seen_module(V) ).     % [] f
 arg_ok(watch_predicate, _, _, V) :- watch_name(V).
 arg_ok(bounds_global, _, _, V) :- atom(V), sub_atom(V, 0, _, _, '$rtl_slr_bounds_').
 arg_ok(output_hook, _, _, V) :- ground(V), state_hook(V).
-arg_ok(type_output_hook, _, _, V) :-
-    (   V = Q:observe(W), Q == rtl_slr -> watch_name(W) ; ground(V), state_hook(V) ).   % data: a hook term
+arg_ok(type_output_hook, _, _, V) :-                % data: a hook term
+    (   rtl_slr_type_hook(V) -> true ; ground(V), state_hook(V) ).
 arg_ok(goal, Ctx, _, V) :-
     nonvar(V), V = Q:G, program_module(Ctx, Q), state_goal(Q, G).
 arg_ok(conditions, Ctx, _-_-Head, V) :-    % run in the program module the fact names

@@ -34,6 +34,8 @@ the flag `flush_timers` is true (rtl_timers_flush/0): then every timer pending a
 moment fires in time order, as if the clock had passed the last of them.
 */
 
+:- use_module(rtl_flags, [rtl_flag/2, rtl_count/1]).
+
 :- meta_predicate rtl_timer_add(+, +, :), rtl_timer_cancel(:), rtl_absence_wait(+, :),
                   rtl_timers_drop(+, 1).
 
@@ -47,12 +49,12 @@ moment fires in time order, as if the clock had passed the last of them.
 %   (`timers_refused`) and reported as a warning of the input line being processed.
 
 rtl_timer_add(Due, _Kind, _Goal) :-
-    rtl_ele:rtl_flag(max_timers, Max),
+    rtl_flag(max_timers, Max),
     Max \== inf,
     rtl_timers_pending(Pending),
     Pending >= Max,
     !,
-    rtl_ele:rtl_count(timers_refused),
+    rtl_count(timers_refused),
     format(string(Text), "~D timers pending (max_timers): a timer due at ~w was not set", [Pending, Due]),
     rtl_horizon:rtl_warning(Text).
 rtl_timer_add(Due, Kind, Goal) :-
@@ -82,7 +84,7 @@ rtl_timer_cancel(Goal) :-
 %   rtl_timers_flush/0.
 
 rtl_absence_wait(Close, Goal) :-
-    rtl_ele:rtl_flag(max_delay, Delay),
+    rtl_flag(max_delay, Delay),
     (   Delay == inf -> Due = inf ; Due is Close + Delay ),
     rtl_timer_add(Due, after, Goal).
 

@@ -591,7 +591,7 @@ change(asserta, kept, ignore) :- !.
 change(erase, Kind, What) :- !,
     change(retract, Kind, What).
 change(retract, Kind, What) :-
-    (   in_ancestor(rtl_horizon:rtl_dry_run/3)
+    (   in_ancestor(rtl_ele:rtl_dry_run/3)
     ->  What = ignore
     ;   in_ancestor(rtl_ele:rtl_collect_garbage/1)              % a sweep (clock-driven or of late events)
     ->  ( Kind == live -> What = expired ; What = dropped )

@@ -2,8 +2,9 @@
     no circle of modules importing each other (use_module/1,2, reexport/1,2), and a module
     names another's predicate, `Module:Goal` or `Module:Name/Arity` in a clause body, only
     when that module exports it (or declares it multifile: a hook) and does not import the
-    first one (known_upward_call/2 lists the calls left); the C helpers are loaded by
-    rtl_foreign.pl alone.
+    first one (a call up into an importer: a lower module reaches an upper one through a
+    hook the upper one defines, never by name); the C helpers are loaded by rtl_foreign.pl
+    alone.
 
         swipl -g run_tests -t halt prolog_runtime/tests/test_wiring.pl
 
@@ -38,7 +39,7 @@ runtime_files(Directory, Files) :-
 %   The modules of Directory loaded and cross-referenced; Problems lists, as text, every
 %   circle of modules importing each other, every `Module:Goal` naming a predicate Module
 %   neither exports nor declares multifile, and every call up into a module that imports
-%   the caller (hooks and known_upward_call/2 aside).
+%   the caller (hooks aside).
 
 wiring_problems(Directory, Problems) :-
     runtime_files(Directory, Files),
@@ -60,7 +61,6 @@ wiring_problems(Directory, Problems) :-
     transitive_closure(Graph, Imports),
     findall(Text, ( member(reference(M, Q, Ref), Refs), \+ hook(Q, Ref),
                     neighbours(Q, Imports, Below), memberchk(M, Below),
-                    \+ known_upward_call(M, Q:Ref),
                     format(string(Text), "~w calls ~w:~w, but ~w imports ~w", [M, Q, Ref, Q, M]) ),
             Upward),
     findall(Text, ( circle(Graph, Circle),
@@ -68,20 +68,6 @@ wiring_problems(Directory, Problems) :-
                     format(string(Text), "circle of modules: ~w", [Path]) ),
             Circles),
     append([Circles, Hidden, Upward], Problems).
-
-%   known_upward_call(?Module, ?Call): the calls of a module up into one that imports it
-%   left today (the flags and counters are rtl_ele's, which imports rtl_timers and
-%   rtl_horizon); a new one fails the test.
-known_upward_call(rtl_timers, rtl_ele:rtl_flag/2).
-known_upward_call(rtl_timers, rtl_ele:rtl_count/1).
-known_upward_call(rtl_horizon, rtl_ele:rtl_remove_type_output_hooks/0).
-known_upward_call(rtl_io, rtl_ele:rtl_flag/2).                 % the input limits (h-limits)
-%   and the ones the last merge of main brought: rtl_ele tells rtl_slr that the clock moved
-%   past a memory record's expiry (h-slr), and the cap on event types turns rtl_io's C reader
-%   off and on again (h-misc, rtl_ele sets the cap: rtl_set_flag/2).
-known_upward_call(rtl_ele, rtl_slr:rtl_slr_clock_moved/1).
-known_upward_call(rtl_event_types, rtl_io:rtl_use_fast_reader/1).
-known_upward_call(rtl_event_types, rtl_io:rtl_fast_reader_used/0).
 
 %   qualified_reference(+Predicates, +Modules, -Module, -Other, -Indicator): a clause of a
 %   predicate of module Predicates, written in module Module (another one for a clause of a

@@ -1,7 +1,7 @@
 """`retalisc aq PROGRAM.pl --script UPDATES.txt`: run active queries over an update script.
 
 Compiles the definite program with the chosen transformation and runs the script in a plain
-`swipl` process (`aq_script_main/1` of `prolog_runtime/rtl_aq.pl`), printing one JSON object
+`swipl` process (`aq_script_main/1` of `prolog_runtime/rtl_aq_script.pl`), printing one JSON object
 per notification on standard output or to `--out FILE` (docs/active_queries.md). With
 `--state DIR` the script runs in this process instead (the in-process bridge), with snapshots
 of the active queries in DIR so that a run killed and started again ends with the same
