@@ -104,12 +104,12 @@ def test_the_summary_is_the_runtimes(counts, seconds):
     """feed.summary_line writes what rtl_summary/2 (the runtime's own roads) writes, for any counts."""
     engine = _engine()
     for name, value in counts.items():
-        engine.bridge.once(f"nb_setval({name}, {value})")
+        engine.bridge.once(f"nb_setval(rtl_stat_{name}, {value})")
     try:
         runtime = engine.bridge.call_text(f"rtl_feed:rtl_summary({seconds!r}, S)", "S")
     finally:
         for name in counts:
-            engine.bridge.once(f"nb_setval({name}, 0)")
+            engine.bridge.once(f"nb_setval(rtl_stat_{name}, 0)")
     assert feed.summary_line(dict(counts), seconds) == runtime
 
 

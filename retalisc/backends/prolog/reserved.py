@@ -3,7 +3,7 @@ the `loadable` pass: a program may not define them, and its directives may call 
 
 - SWI-Prolog's builtins and autoloaded library (`swi_predicates.py`);
 - the predicates the module imports from the runtime, read from the export lists of
-  `prolog_runtime/retalis.pl` and of the modules it re-exports, in the runtime directory the
+  `prolog_runtime/retalis.pl` and of the modules it re-exports (in turn), in the runtime directory the
   generated program will load;
 - the predicates every generated module defines (`templates/program.pl.j2`).
 """
@@ -33,18 +33,25 @@ _REEXPORT = re.compile(r"^:- reexport\((\w+)\)\.", re.M)
 
 @lru_cache(maxsize=4)
 def _runtime_exports(directory: str) -> Dict[Indicator, str]:
-    """Exported predicate -> module, for retalis.pl and the modules it re-exports."""
+    """Exported predicate -> module, for retalis.pl and the modules it re-exports (and those
+    re-export)."""
     found: Dict[Indicator, str] = {}
     root = Path(directory)
     try:
         main = (root / "retalis.pl").read_text(encoding="utf-8")
     except OSError:
         return found
-    for module in ["retalis"] + _REEXPORT.findall(main):
+    modules, seen = ["retalis"], set()
+    while modules:                  # retalis.pl, the modules it re-exports, theirs in turn
+        module = modules.pop(0)
+        if module in seen:
+            continue
+        seen.add(module)
         try:
             text = main if module == "retalis" else (root / f"{module}.pl").read_text(encoding="utf-8")
         except OSError:
             continue
+        modules += _REEXPORT.findall(text)
         header = _MODULE_HEADER.search(text)
         if header is None:
             continue

@@ -65,6 +65,7 @@ user:file_search_path(retalis_runtime, Dir) :-
                                     the runtime\")", []))
    ).
 :- use_module(retalis_runtime(rtl_aq)).
+:- use_module(retalis_runtime(rtl_aq_script)).   % the update-script interpreter (aq_script_main/1)
 :- style_check(-singleton).
 :- aq_configure([mode(tabled), subsumption(false), negation(false)]).
 
