@@ -19,8 +19,8 @@ Paths (CPU seconds, user + system, so that other jobs on the machine count less;
             process's CPU from outside (loading ETALIS and reading the terms included)
   flink     Flink CEP 2.3.0 (benchmarks/flink_cep_peer/FlinkCepPeer.java, its own JVM, a local mini
             cluster of parallelism 1, `keyBy(Id)`, arrival order): in memory is the process CPU of the
-            job over the stream less that of the same job over one event run just before it (job
-            start-up and a first warm-up excluded); flink/e2e is the JVM's CPU from outside
+            job over the stream less that of the same job over one event run just before it (a job's
+            start and stop excluded; a first one-event job warms the JVM up); flink/e2e is the JVM's CPU from outside
             (JVM start, reading the file, starting the mini cluster included). Modes: `restart`
             (`begin(a, skipPastLastEvent())`) and `each` (`noSkip()`).
 

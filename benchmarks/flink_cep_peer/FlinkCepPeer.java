@@ -11,8 +11,9 @@
 
     Prints one line of JSON: the detections (matches of the pattern), the process CPU seconds and
     the wall seconds of the job over the whole stream, and those of the same job over a stream of
-    one event run before it (the cost of starting a job in the mini cluster, and a first warm-up),
-    so that the in-memory cost of the events is job - baseline.
+    one event run just before it (the baseline: starting and stopping a job in the mini cluster),
+    after a first such job that warms the JVM up, so that the in-memory cost of the events is
+    job - baseline.
 */
 
 import java.io.BufferedReader;
@@ -206,7 +207,8 @@ public final class FlinkCepPeer {
             System.exit(2);
         }
         events = read(args[0]);
-        double[] baseline = runJob(args[1], args[2], 1);
+        runJob(args[1], args[2], 1);                          // warm-up: the first job's code is compiled
+        double[] baseline = runJob(args[1], args[2], 1);      // a warm job's start and stop
         double[] job = runJob(args[1], args[2], events.length);
         System.out.printf("{\"events\": %d, \"detections\": %d, \"job_cpu\": %.6f, \"job_wall\": %.6f, "
                 + "\"baseline_cpu\": %.6f, \"baseline_wall\": %.6f}%n",
