@@ -442,12 +442,17 @@ def plot(results, sizes, path: Path) -> None:
     plt = pyplot()
     if plt is None:
         return
-    fig, axes = plt.subplots(1, len(sizes), figsize=(7 * len(sizes), 5), squeeze=False)
+    fig, axes = plt.subplots(1, len(sizes), figsize=(7 * len(sizes), 5), squeeze=False, sharex=True)
+    colours = {}                                  # one colour a row label, the same in every panel
+    for n in sizes:
+        for label, _ in table_rows(results, n)[1]:
+            colours.setdefault(label.split(" (")[0], f"C{len(colours)}")
     for ax, n in zip(axes[0], sizes):
         keys, rows = table_rows(results, n)
         width = 0.8 / len(rows)
         for i, (label, cells) in enumerate(rows):
-            ax.barh([j + i * width for j in range(len(keys))], [cells[k] or 0 for k in keys], width, label=label)
+            ax.barh([j + i * width for j in range(len(keys))], [cells[k] or 0 for k in keys], width, label=label,
+                    color=colours[label.split(" (")[0]], hatch="//" if "outside" in label else None)
         ax.set_xscale("log")
         ax.set_yticks([j + width * (len(rows) - 1) / 2 for j in range(len(keys))])
         ax.set_yticklabels([f"{k} {PATTERNS[k][0]}" for k in keys])
