@@ -37,6 +37,7 @@ the share of garbage collection and (--profile) the top predicates of a profile 
 
 Usage: python benchmarks/cep_peers.py [--sizes 100000 1000000] [--repeat K] [--quick] [--no-flink]
                                       [--no-etalis] [--cache DIR] [--out-dir DIR] [--profile]
+                                      [--replot DIR/cep_peers.json]
 Writes DIR/cep_peers.json and DIR/cep_peers.png.
 """
 from __future__ import annotations
@@ -266,7 +267,13 @@ def main() -> int:
     parser.add_argument("--flink-wheel", type=Path, help="an apache-flink-libraries wheel already downloaded")
     parser.add_argument("--profile", action="store_true", help="profile P1 in memory at the largest size")
     parser.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
+    parser.add_argument("--replot", type=Path, help="only draw the plot again from a cep_peers.json")
     args = parser.parse_args()
+    if args.replot:
+        summary = json.loads(args.replot.read_text())
+        results = {int(n): v for n, v in summary["results"].items()}
+        plot(results, sorted(results), args.replot.with_suffix(".png"))
+        return 0
     if args.quick:
         args.sizes, args.patterns, args.large_patterns, args.no_flink = [1_000], ["P0", "P1", "P3"], [], True
     args.out_dir.mkdir(parents=True, exist_ok=True)
@@ -442,7 +449,7 @@ def plot(results, sizes, path: Path) -> None:
     plt = pyplot()
     if plt is None:
         return
-    fig, axes = plt.subplots(1, len(sizes), figsize=(7 * len(sizes), 5), squeeze=False, sharex=True)
+    fig, axes = plt.subplots(1, len(sizes), figsize=(6 * len(sizes) + 3, 5), squeeze=False, sharex=True)
     colours = {}                                  # one colour a row label, the same in every panel
     for n in sizes:
         for label, _ in table_rows(results, n)[1]:
@@ -458,8 +465,12 @@ def plot(results, sizes, path: Path) -> None:
         ax.set_yticklabels([f"{k} {PATTERNS[k][0]}" for k in keys])
         ax.invert_yaxis()
         ax.set_xlabel("events per CPU second (log scale)")
-        ax.set_title(f"{n:,} events (Esper: measured outside the project)")
-        ax.legend(fontsize=7)
+        ax.set_title(f"{n:,} events (Esper, hatched: measured outside the project)")
+    handles = {}                                  # one legend for every panel, right of the last one
+    for ax in axes[0]:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label.split(" (")[0], handle)
+    axes[0][-1].legend(list(handles.values()), list(handles), fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1))
     fig.tight_layout()
     fig.savefig(path, dpi=100)
 
