@@ -1,5 +1,6 @@
 """Smoke tests of the benchmarks: they run (scaled down) and print every target line.
 They check that the figures are produced, not that the targets are met."""
+import json
 import re
 import subprocess
 import sys
@@ -46,6 +47,32 @@ def test_cep_vs_etalis_quick(tmp_path):
     assert sum("retalisc run within 1.3x of swipl" in line for line in targets) == 3      # P0, P1, P3
     assert "disagree" not in proc.stdout
     assert (tmp_path / "cep_vs_etalis.png").exists()
+
+
+def test_cep_peers_quick(tmp_path):
+    """benchmarks/cep_peers.py --quick: retalisc (and ETALIS where it is found) on 1,000 events, Flink
+    skipped with its message; issue 42's targets printed against Esper's figures, the scaling lines."""
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "cep_peers.py"), "--quick",
+                           "--out-dir", str(tmp_path)],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = proc.stdout
+    assert "Flink CEP peer skipped: --no-flink" in out
+    targets = [line for line in out.splitlines() if line.startswith("target ")]
+    assert any(re.match(r"target (met|MISSED) +P0 in memory >= Esper's 2.50M events/CPU-s \(", t) for t in targets)
+    assert sum(bool(re.match(r"target (met|MISSED) +P[13] in memory within 1.5x of Esper's", t)) for t in targets) == 2
+    assert any("P1 end to end at 1M events" in t for t in targets)
+    assert any(re.match(r"target (met|MISSED) +max RSS end to end <= a quarter of Esper's .* ours \d+ MB\)", t)
+               for t in targets)
+    assert "| Esper 9.0.0 in memory (100k events, outside the project) | 2.50M | 357k | 263k |" in out
+    assert "disagree" not in out
+    assert re.search(r"P1:     1,000: +[\d.]+ us \(gc +[\d.]+ %\)", out)
+    summary = json.loads((tmp_path / "cep_peers.json").read_text())
+    cells = summary["results"]["1000"]
+    assert cells["P0"]["engine"]["derived"] == 0 and cells["P1"]["engine"]["derived"] > 0
+    for key in ("P0", "P1", "P3"):
+        assert cells[key]["engine"]["derived"] == cells[key]["swipl"]["derived"]
+    assert (tmp_path / "cep_peers.png").exists()
 
 
 def test_absence_quick(tmp_path):
