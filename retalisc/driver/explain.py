@@ -21,7 +21,7 @@ from ..frontend.terms import Atom, Compound, Number, Term, Var, to_prolog
 from ..passes.edbc import alarm_head
 from .engine import Engine, OutputEvent, Rejection, read_answer
 from .event_lines import batch_payload, max_line_bytes, read_lines
-from .feed import Batch, EngineSource, FeedLoop, Problem, Sinks, rejection_kind
+from .feed import Batch, EngineSource, FeedLoop, Problem, Sink, Sinks, rejection_kind
 from ..frontend.writer import write_term
 from ..frontend.program import walk_pattern
 
@@ -175,10 +175,9 @@ class TraceSource(EngineSource):
         pass
 
 
-class _Collected:
+class _Collected(Sink):
     """A sink keeping the outputs in a list."""
 
-    once = False
     out_name = "the outputs"
 
     def __init__(self, outputs: list):
@@ -186,21 +185,6 @@ class _Collected:
 
     def write(self, produced) -> None:
         self.outputs.extend(produced)
-
-    def write_text(self, text: str) -> None:
-        pass
-
-    def go_live(self) -> None:
-        pass
-
-    def flush(self) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-    def closing_lines(self):
-        return []
 
 
 # ---- run --trace RULE and --late FILE ------------------------------------------------------

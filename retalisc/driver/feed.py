@@ -370,18 +370,25 @@ class LineSource(EngineSource):
     """Event lines (an event file, a pipe, standard input, the journal of a recoverable run)
     fed with `Engine.feed_lines`: `batches` yields `Batch`es of lines; with `heartbeat`, a
     batch without lines moves the clock with the wall clock (`WallClock`), so absences and
-    alarms fire on time. `live`: the output of each batch leaves at once."""
+    alarms fire on time. `live`: the output of each batch leaves at once. `owned`: a stream
+    the run opened for the batches, closed with the source."""
 
     def __init__(self, name: str, batches: Iterable[Batch], allow_control: bool = False, strict: bool = False,
-                 heartbeat: bool = False, live: bool = False, total: Optional[int] = None):
+                 heartbeat: bool = False, live: bool = False, total: Optional[int] = None,
+                 owned: Optional[IO] = None):
         self.name = name
         self.batches = batches
+        self.owned = owned                  # a stream the run opened: closed with the source
         self.allow_control = allow_control
         self.strict = strict
         self.heartbeat = heartbeat
         self.live = live or heartbeat
         self.total = total
         self.wall = WallClock()
+
+    def close(self) -> None:
+        if self.owned is not None:
+            self.owned.close()
 
     def feed(self, engine, batch: Batch, write) -> Tuple[List[Problem], bool]:
         """Feed `batch`, `write` what it produces; (the problems, whether the run stops)."""
@@ -478,7 +485,35 @@ def _delivered_next(produced: Sequence, index: int) -> bool:
     return False
 
 
-class TextSink:
+class Sink:
+    """What the loop asks of a sink; a sink overrides what it does. `write(produced)` takes a
+    batch's output events; `write_text` text the loop itself writes (JSON Lines sinks only);
+    `once`: a delivery repeating its derived event is written once (`once_per_delivery`)."""
+
+    once = False
+    out_name = "the output"
+
+    def write(self, produced) -> None:
+        raise NotImplementedError
+
+    def write_text(self, text: str) -> None:
+        pass
+
+    def go_live(self) -> None:
+        """From now on each batch's output leaves at once."""
+
+    def flush(self) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+    def closing_lines(self) -> List[str]:
+        """The sink's own lines before the summary."""
+        return []
+
+
+class TextSink(Sink):
     """JSON Lines to a text stream (standard output or `--out`); with `consumers`, the
     subscription deliveries go to one file per consumer instead (`ConsumerFiles`). A batch's
     lines are written in one call, or, with `by_line`, one call each (a recording's replay:
@@ -524,11 +559,8 @@ class TextSink:
         if self.consumers is not None:
             self.consumers.close()
 
-    def closing_lines(self) -> List[str]:
-        return []
 
-
-class BinarySink:
+class BinarySink(Sink):
     """JSON Lines to a file opened for binary writing whose position (`tell`) a checkpoint
     records and a restart cuts the file back to (recovery.py)."""
 
@@ -545,9 +577,6 @@ class BinarySink:
     def write_text(self, text: str) -> None:
         self.stream.write(text.encode("utf-8"))
 
-    def go_live(self) -> None:
-        pass
-
     def tell(self) -> int:
         return self.stream.tell()
 
@@ -560,9 +589,6 @@ class BinarySink:
 
     def close(self) -> None:
         self.stream.close()
-
-    def closing_lines(self) -> List[str]:
-        return []
 
 
 class Sinks:

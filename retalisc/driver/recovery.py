@@ -427,21 +427,11 @@ def run_recoverable(engine, events: str, out: str, state: Union[str, Path], batc
         def position(batch):
             return {"input_bytes": batch.position, "input_line": batch.first + len(batch.lines)}
         start = {"input_bytes": offset, "input_line": line}
-    source = _ClosingLineSource(name, batches, stream, allow_control=allow_control, strict=strict, live=live)
+    source = LineSource(name, batches, owned=stream, allow_control=allow_control, strict=strict, live=live)
     recovery = Recovery(directory, engine, sink, "events", events_path, restored, position, start,
                         snapshot_events, snapshot_seconds, log, journal)
     loop = FeedLoop(engine, source, Sinks([sink]), display=display, drop_pending=drop_pending, strict=strict)
     return loop.run(first_output, checkpoint=recovery)
-
-
-class _ClosingLineSource(LineSource):
-    def __init__(self, name, batches, stream, **options):
-        super().__init__(name, batches, **options)
-        self.stream = stream
-
-    def close(self) -> None:
-        if self.stream is not None:
-            self.stream.close()
 
 
 def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_size: int,

@@ -110,23 +110,11 @@ def run_event_file(engine: Engine, events: str, out: Optional[str] = "-", batch_
         batches = live_batches(fd, batch_size, max_line_bytes(engine))
     else:
         batches = file_batches(stream, batch_size, max_line_bytes(engine))
-    source = _OwnedLineSource(name, batches, stream if events != "-" else None, allow_control=allow_control,
-                              strict=strict, heartbeat=heartbeat is not None, live=live)
+    source = LineSource(name, batches, owned=stream if events != "-" else None, allow_control=allow_control,
+                        strict=strict, heartbeat=heartbeat is not None, live=live)
     loop = FeedLoop(engine, source, Sinks([sink]), display=Progress(stream=sys.stderr, total=total, enabled=progress),
                     drop_pending=drop_pending, strict=strict)
     return loop.run(first_output, report=report, runtime_loop=runtime_loop)
-
-
-class _OwnedLineSource(LineSource):
-    """A LineSource over a file this run opened (closed at the end)."""
-
-    def __init__(self, name, batches, stream, **options):
-        super().__init__(name, batches, **options)
-        self.stream = stream
-
-    def close(self) -> None:
-        if self.stream is not None:
-            self.stream.close()
 
 
 def in_prolog_loop(events: str, out: Optional[str], consumer_dir: Optional[str], progress: Optional[bool],

@@ -26,7 +26,7 @@ from .bags import DEFAULT_ROS2_STORE, BagError, Record, Recording, topic_list
 from .messages import CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from .ros1_terms import Ros1Terms
 from ..driver.bridge import PrologError
-from ..driver.feed import Batch, EngineSource, FeedLoop, Problem, Sinks, TextSink, feed_resilient
+from ..driver.feed import Batch, EngineSource, FeedLoop, Problem, Sink, Sinks, TextSink, feed_resilient
 from ..driver.outputs import ConsumerFiles
 from . import MissingDependency
 from .bags import typestore
@@ -426,30 +426,22 @@ class BagSource(EngineSource):
         self.bag.__exit__(None, None, None)
 
 
-class _PublishedSink:
+class _PublishedSink(Sink):
     """The MCAP file or Foxglove server of a replay as a sink of the feed loop: each output as
     its message (Publisher.output; the input messages come from BagSource.feed)."""
+
+    once = True
 
     def __init__(self, publisher, target):
         self.publisher = publisher
         self.target = target
         self.out_name = target.describe()
-        self.once = True
 
     def write(self, produced) -> None:
         for event in produced:
             message = self.publisher.output(event)
             if message is not None:
                 self.target.write(message)
-
-    def write_text(self, text: str) -> None:
-        pass
-
-    def go_live(self) -> None:
-        pass
-
-    def flush(self) -> None:
-        pass
 
     def close(self) -> None:
         self.target.close()
