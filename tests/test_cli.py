@@ -166,3 +166,11 @@ def test_commands_are_imported_when_used():
     assert all(f"  {name} " in listing for names in COMMAND_MODULES.values() for name in names
                if name not in ("ros", "ros2", "zenoh"))
     assert CliRunner().invoke(main, ["no-such"]).exit_code == 2
+
+
+def test_compile_output_dash_is_standard_output(tmp_path):
+    to_stdout = retalisc("compile", FIRE / "fire_alarm.rtl", cwd=tmp_path)
+    dash = retalisc("compile", FIRE / "fire_alarm.rtl", "-o", "-", cwd=tmp_path)
+    assert dash.returncode == 0
+    assert dash.stdout == to_stdout.stdout != ""
+    assert not (tmp_path / "-").exists()

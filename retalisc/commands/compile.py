@@ -71,7 +71,7 @@ Examples:
   retalisc compile tests/golden/program1/program.pl --active-queries tabled -o aq.pl""")
 @click.argument("program", type=click.Path(exists=True, dir_okay=False))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the Prolog program here "
-              "(default: standard output).")
+              "(default, or -: standard output).")
 @click.option("--dump-after", type=LazyChoice(lambda: _pipeline().PASS_NAMES),
               help="Print the program after this pass and stop (with --active-queries: aq_program or the pass of the transformation).")
 @click.option("--active-queries", "active_queries", type=LazyChoice(lambda: _pipeline().AQ_MODES),
@@ -96,9 +96,10 @@ def compile_command(program: str, output: str, dump_after: str, active_queries: 
                                    f"{', '.join(pass_names(options))}")
         compile_or_exit(program, dump_after=dump_after, dump=click.echo, active_queries=options)
         return
-    result = compile_or_exit(program, werror, output_name=Path(output).name if output else "PROGRAM.pl",
+    to_file = output not in (None, "-")
+    result = compile_or_exit(program, werror, output_name=Path(output).name if to_file else "PROGRAM.pl",
                              active_queries=options)
-    if output:
+    if to_file:
         try:
             Path(output).write_text(result.prolog, encoding="utf-8")
         except OSError as error:
