@@ -27,7 +27,6 @@
             rtl_api_store_size/1,       % -Size
             rtl_api_clock/1,            % -Clock
             rtl_api_advance_clock/2,    % +Time, -Output
-            rtl_api_term_data/2,        % +Text, -Json
             rtl_api_save_state/3,       % +Path, +Identity, -Out
             rtl_api_restore_state/3,    % +Path, +Identity, -Out
             rtl_api_state_digest/1,     % -Hash
@@ -58,7 +57,9 @@ The bridge calls these through retalisc_bridge:bridge_apply/6 (rtl_bridge.pl): S
 2 (an error, never raised into the C interface). The output of the feeding predicates is a
 string of lines, read once on the Python side (`retalisc.driver.engine.read_answer`):
 
-  - `{"event": ...}`: an output line (docs/runtime.md, "Output");
+  - first, when there are outputs, `[...]`: every output of the call, in order, as one
+    JSON array of data (rtl_output_data/2 in rtl_io.pl: each event's writeq text, times and
+    term as data; a synchronized query's result object), read with one JSON decoding;
   - `?LINE<TAB>TEXT`: a warning (LINE empty outside rtl_api_feed_lines/5);
   - `!LINE<TAB>KIND<TAB>REASON`: an input line not processed (rtl_api_feed_lines/5);
   - as the last line only: `!error<TAB>Index<TAB>Message` (feeding stopped at the event Index
@@ -149,15 +150,15 @@ rtl_api_feed_events(Items, Output) :-
 
 %   batch_output(:Goal, ?Last, -Output): run Goal, which processes events, with what program
 %   code prints going to the action output, not into the output; Output holds the output
-%   lines, the warnings (deletions outside the retraction horizon) and, when Goal bound it,
-%   the line Last.
+%   as one JSON array line (rtl_take_output_data/1), the warnings (deletions outside the
+%   retraction horizon) and, when Goal bound it, the line Last.
 
 batch_output(Goal, Last, Output) :-
     rtl_output_to(buffer),
     rtl_action_stream(Stream),
     current_output(Old),
     setup_call_cleanup(set_output(Stream), Goal, set_output(Old)),
-    rtl_take_output(Lines0),
+    rtl_take_output_data(Lines0),
     rtl_take_warnings(Warnings),
     findall(W, ( member(T, Warnings), format(string(W), "?\t~s", [T]) ), Ws),
     append(Lines0, Ws, Lines1),
@@ -511,7 +512,7 @@ rtl_api_post_query(QueryIdText, GoalText, At, Timeout0, Output) :-
     rtl_output_to(buffer),
     rtl_sync_query(GoalText, At, Timeout, QueryId, Error),
     (   var(Error)
-    ->  rtl_take_output(Lines),
+    ->  rtl_take_output_data(Lines),
         lines_output(Lines, Output)
     ;   Error =.. [Kind, Message],
         format(string(Output), "!~w\t~w", [Kind, Message])
@@ -680,55 +681,6 @@ rtl_api_use_tracing("") :-
 
 rtl_api_ground_canonical(Text, Canonical) :-
     rtl_ground_canonical(Text, Canonical).
-
-%!  rtl_api_term_data(+Text:string, -Json:string) is det.
-%
-%   The term written in Text (an output event, as writeq/1 wrote it) as JSON data, read by
-%   SWI-Prolog itself so that whatever writeq/1 writes reads back: an integer or a finite
-%   float is a number; an atom is `["a", Name]`, a string `["s", Text]`, a list `["l",
-%   Items]`, a compound `["c", Name, Args]`, a variable `["v", Name]`, and a float that is not
-%   finite `["f", Text]`. Read as data: nothing in Text runs.
-
-rtl_api_term_data(Text, Json) :-
-    must_be(text, Text),
-    term_string(Term, Text, [variable_names(Names)]),
-    maplist(name_variable, Names),
-    with_output_to(string(Json), term_json(Term)).
-
-name_variable(Name = '$rtl_var'(Name)).
-
-term_json(T) :-
-    (   T = '$rtl_var'(Name)
-    ->  json_tagged(v, Name)
-    ;   integer(T)
-    ->  format("~d", [T])
-    ;   float(T)
-    ->  (   T =:= T, abs(T) =\= inf
-        ->  format("~w", [T])
-        ;   format(string(F), "~w", [T]), json_tagged(f, F)
-        )
-    ;   string(T)
-    ->  json_tagged(s, T)
-    ;   atom(T)
-    ->  json_tagged(a, T)
-    ;   is_list(T)
-    ->  write("[\"l\", ["), json_items(T), write("]]")
-    ;   compound_name_arguments(T, Name, Args),
-        write("[\"c\", "), json_text(Name), write(", ["), json_items(Args), write("]]")
-    ).
-
-json_items([]).
-json_items([X|Xs]) :-
-    term_json(X),
-    forall(member(Y, Xs), ( write(", "), term_json(Y) )).
-
-json_tagged(Tag, Text) :-
-    format("[\"~w\", ", [Tag]), json_text(Text), write("]").
-
-json_text(Text) :-
-    format(string(S), "~w", [Text]),
-    rtl_json_string_escape(S, Escaped),
-    format("\"~s\"", [Escaped]).
 
 rtl_error_text:runtime_error_text(invalid_time(Reason), Text) :-
     string(Reason),

@@ -18,6 +18,8 @@
             rtl_close_action_output/0,
             rtl_output_to/1,            % +Sink
             rtl_take_output/1,          % -Lines
+            rtl_take_output_records/1,  % -Records
+            rtl_take_output_data/1,     % -Lines
             rtl_output_pending/0,
             rtl_emit/5,                 % +Event, +Start, +End, +Consumer, +Op
             rtl_emit_line/1,            % +Line
@@ -67,7 +69,7 @@ deletion is too late).
 :- use_module(rtl_timers).
 :- use_module(rtl_time, [rtl_beyond_bound/3]).
 
-:- dynamic rtl_output_line/1.
+:- dynamic rtl_output_record/1.        % event(Event, Start, End, Consumer, Op) or json(Line)
 :- dynamic output_hook/1.
 :- dynamic type_output_hook/2.              % type_output_hook(Skeleton, Hook)
 :- dynamic counter_key_of/2.                % counter_key_of(Rule, GlobalKey)
@@ -106,7 +108,7 @@ rtl_reset :-
     forget_detections,
     forget_blocker_sweeps,
     rtl_horizon_reset,
-    retractall(rtl_output_line(_)),
+    retractall(rtl_output_record(_)),
     rtl_take_warnings(_),
     (   nb_current(rtl_output_sink, _) -> true ; nb_setval(rtl_output_sink, print) ),
     schedule_sweep.
@@ -449,7 +451,7 @@ rtl_remove_type_output_hook(Pattern, Hook) :-
 %   taken back and derived.
 %
 %   Nothing on the path of ordinary events checks for a dry run: the output goes to the
-%   buffer (rtl_ele keeps buffered lines as clauses, undone), the output hooks are removed
+%   buffer (rtl_ele keeps buffered outputs as clauses, undone), the output hooks are removed
 %   inside the snapshot (undone) and switched off, and the counters of rtl_ele are put back;
 %   only rtl_action/1 checks rtl_dry_running/0.
 
@@ -505,7 +507,8 @@ run_hooks_of_every_type(Event, Start, End, Op) :-
 %!  rtl_output_to(+Sink) is det.
 %
 %   Sink is `print` (write each line to current output as it is produced) or `buffer`
-%   (keep lines until rtl_take_output/1).
+%   (keep the outputs, as data, until rtl_take_output_data/1, rtl_take_output_records/1 or
+%   rtl_take_output/1).
 
 rtl_output_to(Sink) :-
     must_be(oneof([print, buffer]), Sink),
@@ -513,43 +516,70 @@ rtl_output_to(Sink) :-
 
 %!  rtl_emit(+Event, +Start, +End, +Consumer, +Op) is det.
 %
-%   Deliver one output line (the JSON Lines format of docs/runtime.md, "Output").
+%   Deliver one output: with sink `print` its line (the JSON Lines format of
+%   docs/runtime.md, "Output"), with sink `buffer` the record
+%   `event(Event, Start, End, Consumer, Op)`: data, written when it is taken.
 
 rtl_emit(Event, Start, End, Consumer, Op) :-
-    Consumer == (-), Op \== retract,
-    nb_getval(rtl_output_sink, print),
-    rtl_write_event_line(user_output, Event, Start, End),     % the common case, in C
-    !.
-rtl_emit(Event, Start, End, Consumer, Op) :-
-    rtl_event_json(Event, Start, End, Consumer, Op, Line),
-    rtl_emit_line(Line).
+    nb_getval(rtl_output_sink, Sink),
+    (   Sink == buffer
+    ->  assertz(rtl_output_record(event(Event, Start, End, Consumer, Op)))
+    ;   Consumer == (-), Op \== retract,
+        rtl_write_event_line(user_output, Event, Start, End)      % the common case, in C
+    ->  true
+    ;   rtl_event_json(Event, Start, End, Consumer, Op, Line),
+        format(user_output, "~s~n", [Line])     % one call: the step limit cannot split a line
+    ).
 
 %!  rtl_emit_line(+Line:string) is det.
 %
 %   Deliver one output line given as JSON text (answers of synchronized queries). With
 %   sink `print` the line goes to `user_output`, whatever the current output is (the
-%   entry points send the text program code prints elsewhere).
+%   entry points send the text program code prints elsewhere); with `buffer` it is kept as
+%   the record `json(Line)`.
 
 rtl_emit_line(Line) :-
     nb_getval(rtl_output_sink, Sink),
     (   Sink == print
-    ->  format(user_output, "~s~n", [Line])     % one call: the step limit cannot split a line
-    ;   assertz(rtl_output_line(Line))
+    ->  format(user_output, "~s~n", [Line])
+    ;   assertz(rtl_output_record(json(Line)))
+    ).
+
+%!  rtl_take_output_records(-Records:list) is det.
+%
+%   The buffered outputs in order, as records (rtl_emit/5, rtl_emit_line/1); the buffer is
+%   emptied.
+
+rtl_take_output_records(Records) :-
+    findall(R, retract(rtl_output_record(R)), Records).
+
+%!  rtl_take_output_data(-Lines:list(string)) is det.
+%
+%   The buffered outputs as one JSON array (rtl_output_data/2, the form in which they cross
+%   to Python): `[Json]`, or `[]` when there are none; the buffer is emptied.
+
+rtl_take_output_data(Lines) :-
+    rtl_take_output_records(Records),
+    (   Records == []
+    ->  Lines = []
+    ;   rtl_output_data(Records, Json),
+        Lines = [Json]
     ).
 
 %!  rtl_take_output(-Lines:list(string)) is det.
 %
-%   The buffered output lines in order; the buffer is emptied.
+%   The buffered outputs in order as their output lines; the buffer is emptied.
 
 rtl_take_output(Lines) :-
-    findall(L, retract(rtl_output_line(L)), Lines).
+    rtl_take_output_records(Records),
+    maplist(rtl_output_record_line, Records, Lines).
 
 %!  rtl_output_pending is semidet.
 %
-%   Some buffered output line waits to be taken (rtl_take_output/1).
+%   Some buffered output waits to be taken.
 
 rtl_output_pending :-
-    rtl_output_line(_),
+    rtl_output_record(_),
     !.
 
 %!  rtl_detected(+Rule:atom) is det.

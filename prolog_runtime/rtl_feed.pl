@@ -501,8 +501,9 @@ end_of_input(Mode, Report) :-
 %!  rtl_feed_lines(+Text:string, +FirstLineNo:integer, -Output:string) is det.
 %!  rtl_feed_lines(+Text:string, +FirstLineNo:integer, +Options:list, -Output:string) is det.
 %
-%   Process a batch of input JSON Lines. Output holds the output lines, each ended by a
-%   newline; a line that is not processed shows up as `!N<TAB>Kind<TAB>Reason` with its
+%   Process a batch of input JSON Lines. Output is a string of lines, each ended by a
+%   newline: first, when there is output, the outputs as one JSON array (rtl_output_data/2,
+%   the form in which outputs cross to Python), then the others; a line that is not processed shows up as `!N<TAB>Kind<TAB>Reason` with its
 %   line number N and Kind `rejected`, `error` or `halt`. Options: `allow_control(Bool)`
 %   (obey control lines; default false), `strict(Bool)` (stop at the first line that is
 %   not processed), `bytes(true)` (Text holds the bytes of the lines, codes 0..255, each
@@ -528,7 +529,7 @@ rtl_feed_lines(Text, First, Options, Output) :-
     ;   Lines = Lines1
     ),
     with_action_output(feed_lines(Lines, First, Options, Rejections)),
-    rtl_take_output(Out),
+    rtl_take_output_data(Out),
     append(Out, Rejections, All0),
     exclude(==(""), All0, All),
     atomic_list_concat(All, "\n", Joined),
@@ -580,7 +581,7 @@ rtl_end_of_input(Mode, Output) :-
     nb_setval(rtl_end_stopped, false),          % a halt in a postponed match: the caller asks
     with_action_output(catch(end_of_input(Mode, print_outcome(-)), rtl_stop(_),
                              nb_setval(rtl_end_stopped, true))),
-    rtl_take_output(Lines),
+    rtl_take_output_data(Lines),
     (   Lines == []
     ->  Output = ""
     ;   atomic_list_concat(Lines, "\n", Joined),
@@ -596,7 +597,7 @@ rtl_end_of_input(Mode, Output) :-
 rtl_heartbeat(Time, Output) :-
     rtl_output_to(buffer),
     with_action_output(catch(heartbeat(Time, print_outcome(-)), rtl_stop(_), true)),
-    rtl_take_output(Lines),
+    rtl_take_output_data(Lines),
     (   Lines == []
     ->  Output = ""
     ;   atomic_list_concat(Lines, "\n", Joined),

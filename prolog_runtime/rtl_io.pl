@@ -5,6 +5,8 @@
             rtl_buffered_lines/3,        % +Stream, +MaxDepth, -Items
             rtl_event_json/6,            % +Event, +Start, +End, +Consumer, +Op, -JsonString
             rtl_write_event_line/4,      % +Stream, +Event, +Start, +End
+            rtl_output_data/2,           % +Records, -JsonString
+            rtl_output_record_line/2,    % +Record, -JsonString
             rtl_json_string_escape/2,    % +Text, -Escaped
             rtl_use_fast_reader/1,       % +Bool
             rtl_fast_reader_used/0,
@@ -35,7 +37,7 @@ also names the reason of a rejection. Without the C reader, every line takes the
 :- use_module(rtl_foreign).
 :- use_module(rtl_flags, [rtl_flag/2]).
 
-:- dynamic fast_reader/0, fast_writer/0.
+:- dynamic fast_reader/0, fast_writer/0, fast_data_writer/0.
 
 % The C reader is optional: a runtime without it (not built, another platform) reads
 % every line in Prolog.
@@ -47,11 +49,17 @@ load_fast_reader :-
     ;   true
     ).
 
-% The C helper for output lines (rtl_event_json/6) comes with the reader.
+% The C helpers for output lines (rtl_event_json/6) and output data (rtl_output_data/2)
+% come with the reader.
 fast_writer_present :-
     retractall(fast_writer),
     (   current_predicate(rtl_fast_event_json/4)
     ->  assertz(fast_writer)
+    ;   true
+    ),
+    retractall(fast_data_writer),
+    (   current_predicate(rtl_fast_output_data/2)
+    ->  assertz(fast_data_writer)
     ;   true
     ).
 
@@ -72,7 +80,8 @@ rtl_use_fast_reader(true) :-
     ).
 rtl_use_fast_reader(false) :-
     retractall(fast_reader),
-    retractall(fast_writer).
+    retractall(fast_writer),
+    retractall(fast_data_writer).
 
 % While the cap on event types is set, lines are read in Prolog (rtl_event_types.pl: the C
 % reader makes the event's term before its type could be checked); the C reader is back
@@ -610,6 +619,117 @@ rtl_event_json(Event, Start, End, Consumer, Op, Json) :-
         format(string(Json), "{\"event\": \"~s\", \"start\": ~w, \"end\": ~w~s~s}",
                [Escaped, S, E, ConsumerPart, OpPart])
     ).
+
+%!  rtl_output_record_line(+Record, -Json:string) is det.
+%
+%   The output line of a buffered output record (rtl_ele.pl): `event(Event, Start, End,
+%   Consumer, Op)` is written by rtl_event_json/6, `json(Line)` (the result of a
+%   synchronized query) is its line.
+
+rtl_output_record_line(event(Event, Start, End, Consumer, Op), Line) :- !,
+    rtl_event_json(Event, Start, End, Consumer, Op, Line).
+rtl_output_record_line(json(Line), Line).
+
+%!  rtl_output_data(+Records:list, -Json:string) is det.
+%
+%   Buffered output records (rtl_output_record_line/2) as one JSON array, the form in which
+%   outputs cross to Python (docs/architecture.md, "The Python/Prolog boundary"; read by
+%   `OutputEvent.from_data` in retalisc/driver/engine.py). One element per record, in order:
+%
+%     - an event with no consumer and Op `add` (the common case): `[Text, Start, End, Term]`;
+%     - any other event: `{"event": Text, "start": Start, "end": End, "term": Term}` with
+%       the keys of its output line after these (`"input": true`, `"consumer": Name`,
+%       `"op": "retract"`);
+%     - the result of a synchronized query: its JSON object (`{"query": ...}`), as its line.
+%
+%   Text is the term as writeq/1 writes it (the `"event"` of its output line); Start and End
+%   as the line writes them. Term is the same term as data: an integer or a finite float is
+%   a number, an atom a string, `[]` and a proper list `["l", Item...]`, a compound
+%   `["c", Name, Arg...]`, a string `["s", Text]`, a float that is not finite `["f", "inf"]`
+%   (`"-inf"`, `"nan"`), an unbound variable `["v", Name]` (Name as write/1 writes it), and
+%   any other term (a blob) its writeq text as an atom. The C writer
+%   (`rtl_fast_output_data/2`, c/rtl_fastread.c) writes the same bytes (tests/test_output_data_c.py).
+
+rtl_output_data(Records, Json) :-
+    fast_data_writer,
+    rtl_fast_output_data(Records, Json0),
+    !,
+    Json = Json0.
+rtl_output_data(Records, Json) :-
+    with_output_to(string(Json),
+                   ( write("["), output_elements(Records), write("]") )).
+
+output_elements([]).
+output_elements([R|Rs]) :-
+    output_element(R),
+    (   Rs == []
+    ->  true
+    ;   write(","),
+        output_elements(Rs)
+    ).
+
+output_element(event(Event, Start, End, Consumer, Op)) :- !,
+    format(string(Text), "~q", [Event]),
+    json_number(Start, S),
+    json_number(End, E),
+    (   Consumer == (-), Op \== retract
+    ->  write("["), json_string_out(Text), format(",~w,~w,", [S, E]),
+        term_data(Event), write("]")
+    ;   write("{\"event\": "), json_string_out(Text),
+        format(", \"start\": ~w, \"end\": ~w, \"term\": ", [S, E]),
+        term_data(Event),
+        (   Consumer == (-)
+        ->  true
+        ;   Consumer == echo(input)
+        ->  write(", \"input\": true")
+        ;   format(string(ConsumerText), "~w", [Consumer]),
+            write(", \"consumer\": "), json_string_out(ConsumerText)
+        ),
+        (   Op == retract -> write(", \"op\": \"retract\"") ; true ),
+        write("}")
+    ).
+output_element(json(Line)) :-
+    write(Line).
+
+json_string_out(Text) :-
+    rtl_json_string_escape(Text, Escaped),
+    format("\"~s\"", [Escaped]).
+
+term_data(T) :-
+    (   var(T)
+    ->  format(string(Name), "~w", [T]),
+        write("[\"v\","), json_string_out(Name), write("]")
+    ;   integer(T)
+    ->  write(T)
+    ;   float(T)
+    ->  (   T =\= T
+        ->  write("[\"f\",\"nan\"]")
+        ;   T =:= inf
+        ->  write("[\"f\",\"inf\"]")
+        ;   T =:= -inf
+        ->  write("[\"f\",\"-inf\"]")
+        ;   write(T)
+        )
+    ;   T == []
+    ->  write("[\"l\"]")
+    ;   atom(T)
+    ->  json_string_out(T)
+    ;   string(T)
+    ->  write("[\"s\","), json_string_out(T), write("]")
+    ;   is_list(T)
+    ->  write("[\"l\""), data_items(T), write("]")
+    ;   compound(T)
+    ->  compound_name_arguments(T, Name, Args),
+        write("[\"c\","), json_string_out(Name), data_items(Args), write("]")
+    ;   format(string(Text), "~q", [T]),
+        json_string_out(Text)
+    ).
+
+data_items([]).
+data_items([X|Xs]) :-
+    write(","),
+    term_data(X),
+    data_items(Xs).
 
 %!  rtl_write_event_line(+Stream, +Event, +Start, +End) is semidet.
 %

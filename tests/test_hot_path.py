@@ -1,56 +1,11 @@
-"""The fast paths of event processing give what the general paths give: output
-lines read by the Python driver without the JSON decoder, and batches of input lines."""
+"""The fast paths of event processing give what the general paths give: batches of input
+lines. (Outputs reach Python as data, one JSON decoding a call: tests/test_output_data_c.py.)"""
 import io
-import json
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from retalisc.driver.engine import OutputEvent
 from retalisc.driver.run import _batches
-
-
-def decoded(line):
-    """OutputEvent as the JSON decoder gives it (the general path of from_line)."""
-    data = json.loads(line)
-    return OutputEvent(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"),
-                       line)
-
-
-TEXTS = st.text(alphabet=st.sampled_from(list("ab(1,)' \"\\é\n\t\x01") + ["中"]), max_size=12)
-TIMES = st.one_of(st.integers(-10**20, 10**20), st.floats(allow_nan=False, allow_infinity=False),
-                  st.sampled_from(["007", "-0", "1e5", "1.0", "- 1"]))
-
-
-@st.composite
-def output_lines(draw):
-    event = json.dumps(draw(TEXTS), ensure_ascii=draw(st.booleans()))
-    start, end = (t if isinstance(t, str) else json.dumps(t) for t in (draw(TIMES), draw(TIMES)))
-    line = f'{{"event": {event}, "start": {start}, "end": {end}}}'
-    if draw(st.integers(0, 4)) == 0:
-        line = line[:-1] + draw(st.sampled_from([', "consumer": "c"}', ', "op": "retract"}', '} ', '}}']))
-    return line
-
-
-@settings(max_examples=300, deadline=None)
-@given(output_lines())
-def test_output_lines_read_without_the_decoder_are_those_it_gives(line):
-    try:
-        expected = decoded(line)
-    except (ValueError, KeyError):
-        expected = None
-    try:
-        got = OutputEvent.from_line(line)
-    except (ValueError, KeyError):
-        got = None
-    assert got == expected
-    if got is not None:
-        assert type(got.start) is type(expected.start) and type(got.end) is type(expected.end)
-
-
-def test_the_common_line_is_taken_by_the_fast_path():
-    line = '{"event": "p(1,\'A b\')", "start": 12, "end": -3}'
-    assert OutputEvent.from_line(line) == OutputEvent("p(1,'A b')", 12, -3, None, "add", line)
 
 
 @settings(max_examples=100, deadline=None)

@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from retalisc.driver.engine import Engine, OutputEvent, QueryAnswer, Term, Variable
-from retalisc.driver.values import parse_term
+from retalisc.driver.values import String, read_term
 
 ECHO = "out(X) <- echo(X).\nnull do true <- tick.\n"
 
@@ -35,6 +35,7 @@ def test_output_term_as_data():
     assert out.text == out.event == "seen(anna,[1,2],at(kitchen,-2.5),'Big Door',\"s\")"
     assert (out.start, out.end, out.op, out.consumer) == (1, 1, "add", None)
     assert out.term.arity == 5 and out.term[2].name == "at"
+    assert type(out.args[3]) is str and type(out.args[4]) is String       # an atom, a Prolog string
 
 
 def test_atom_event_and_unbound_variable():
@@ -102,14 +103,25 @@ def test_symbol_characters_writeq_leaves_unquoted(engine):
     engine.feed("echo('¡')", 1, op="retract")
 
 
-def test_parse_term_deep_and_bad():
+def test_read_term_deep_and_bad():
     deep = "f(" * 1000 + "a" + ")" * 1000            # the deepest term an input line may carry
-    value = parse_term(deep)
+    value = read_term(deep)
     for _ in range(1000):
         value = value.args[0]
     assert value == "a"
     with pytest.raises(ValueError):
-        parse_term("f(")
+        read_term("f(")
+    assert read_term("p(a - b, \"s\", 'A b', [1, 2.5])") == Term("p", (Term("-", ("a", "b")), String("s"), "A b",
+                                                                     [1, 2.5]))
+
+
+def test_a_deep_output_term_comes_as_data(engine):
+    deep = "f(" * 998 + "'A'" + ")" * 998
+    [out] = [o for o in engine.feed(f"echo({deep})", 1) if o.consumer is None]
+    value = out.args[0]
+    for _ in range(998):
+        value = value.args[0]
+    assert value == "A" and type(value) is str
 
 
 # ---- times: the check of the file reader -------------------------------------------------

@@ -34,6 +34,14 @@
     the way rtl_json_string_escape/2 escapes; it fails when Start or End is not a finite
     number (rtl_io.pl writes those). rtl_fast_write_event(+Stream, +Event, +Start, +End)
     writes that line and a newline to a UTF-8 stream.
+
+    rtl_fast_output_data(+Records, -Json) writes buffered output records as the JSON array
+    rtl_io:rtl_output_data/2 writes (the form in which outputs cross to Python), byte for
+    byte: `[Text, Start, End, Term]` for event(E, S, T, -, add), the object form for any other
+    event, a json(Line) record's line as it is; each term also as data (numbers, atoms as
+    JSON strings, ["c", Name, Arg...], ["l", Item...], ["s", Text], ["f", "inf"]). It fails,
+    writing nothing, for what it leaves to the Prolog writer: times that are not finite or
+    integers beyond 64 bits, variables, terms nested deeper than 200 levels, dicts and blobs.
 */
 
 #include <SWI-Stream.h>
@@ -729,6 +737,152 @@ pl_fast_write_event(term_t stream, term_t event, term_t start, term_t end)
   return ok;
 }
 
+/* ---- output data (rtl_io:rtl_output_data/2) ---------------------------------------- */
+
+static atom_t atom_minus, atom_echo;
+static functor_t functor_event5, functor_json1, functor_echo1;
+
+/* A text (atom or string) as a JSON string, escaped as json_escaped() escapes. */
+static int json_string_of(buffer *b, term_t t, int flags)
+{ char *s;
+  size_t len;
+  if ( !PL_get_nchars(t, &len, &s, flags|REP_UTF8|BUF_STACK) ) return FALSE;
+  return buf_add(b, "\"", 1) && json_escaped(b, s, len) && buf_add(b, "\"", 1);
+}
+
+static int term_data(buffer *b, term_t t, int depth);
+
+static int data_items(buffer *b, term_t list, int depth)
+{ term_t head = PL_new_term_ref(), tail = PL_copy_term_ref(list);
+  while ( PL_get_list(tail, head, tail) )
+  { if ( !buf_add(b, ",", 1) || !term_data(b, head, depth + 1) ) return FALSE;
+  }
+  return TRUE;
+}
+
+/* A term as data, as term_data//1 of rtl_io.pl writes it. */
+static int term_data(buffer *b, term_t t, int depth)
+{ int64_t i;
+  atom_t name;
+  size_t arity;
+
+  if ( depth > MAX_NESTING ) return FALSE;
+  switch ( PL_term_type(t) )
+  { case PL_INTEGER:
+      if ( !PL_get_int64(t, &i) ) return FALSE;     /* a big integer: rtl_io.pl */
+      return buf_int64(b, i);
+    case PL_FLOAT:
+    { double d;
+      if ( !PL_get_float(t, &d) ) return FALSE;
+      if ( isnan(d) ) return buf_text(b, "[\"f\",\"nan\"]");
+      if ( isinf(d) ) return buf_text(b, d > 0 ? "[\"f\",\"inf\"]" : "[\"f\",\"-inf\"]");
+      return json_time_text(b, t);
+    }
+    case PL_ATOM:
+      return json_string_of(b, t, CVT_ATOM);
+    case PL_NIL:
+      return buf_text(b, "[\"l\"]");
+    case PL_STRING:
+      return buf_text(b, "[\"s\",") && json_string_of(b, t, CVT_STRING) && buf_add(b, "]", 1);
+    case PL_LIST_PAIR:
+    { size_t cells;
+      if ( PL_skip_list(t, 0, &cells) == PL_LIST )
+        return buf_text(b, "[\"l\"") && data_items(b, t, depth) && buf_add(b, "]", 1);
+      term_t head = PL_new_term_ref(), tail = PL_new_term_ref();    /* a partial list: '[|]'(H, T) */
+      return PL_get_list(t, head, tail) && buf_text(b, "[\"c\",\"[|]\",") && term_data(b, head, depth + 1) &&
+             buf_add(b, ",", 1) && term_data(b, tail, depth + 1) && buf_add(b, "]", 1);
+    }
+    case PL_TERM:
+    { if ( !PL_get_name_arity(t, &name, &arity) ) return FALSE;
+      term_t name_term = PL_new_term_ref(), arg = PL_new_term_ref();
+      if ( !PL_put_atom(name_term, name) || !buf_text(b, "[\"c\",") || !json_string_of(b, name_term, CVT_ATOM) )
+        return FALSE;
+      for (size_t k = 1; k <= arity; k++)
+      { if ( !PL_get_arg(k, t, arg) || !buf_add(b, ",", 1) || !term_data(b, arg, depth + 1) ) return FALSE;
+      }
+      return buf_add(b, "]", 1);
+    }
+    default:                                        /* variables, dicts, blobs: rtl_io.pl */
+      return FALSE;
+  }
+}
+
+/* The writeq text of an event as a JSON string. */
+static int event_text(buffer *b, term_t event)
+{ char *text;
+  size_t len;
+  if ( !buf_add(b, "\"", 1) ) return FALSE;
+  size_t mark = b->len;
+  fid_t fid = PL_open_foreign_frame();
+  int plain = plain_term(b, event, 0);
+  PL_discard_foreign_frame(fid);
+  if ( !plain )
+  { b->len = mark;
+    if ( !written(event, PL_WRT_QUOTED|PL_WRT_NUMBERVARS|PL_WRT_CHARESCAPES, &text, &len) ) return FALSE;
+    int ok = json_escaped(b, text, len);
+    free(text);
+    if ( !ok ) return FALSE;
+  }
+  return buf_add(b, "\"", 1);
+}
+
+static int output_record(buffer *b, term_t record)
+{ term_t a = PL_new_term_ref();
+  if ( PL_is_functor(record, functor_json1) )
+  { char *s;
+    size_t len;
+    return PL_get_arg(1, record, a) && PL_get_nchars(a, &len, &s, CVT_STRING|CVT_ATOM|REP_UTF8|BUF_STACK) &&
+           buf_add(b, s, len);
+  }
+  if ( !PL_is_functor(record, functor_event5) ) return FALSE;
+  term_t event = PL_new_term_ref(), start = PL_new_term_ref(), end = PL_new_term_ref(),
+         consumer = PL_new_term_ref(), op = PL_new_term_ref();
+  atom_t c, o;
+  if ( !PL_get_arg(1, record, event) || !PL_get_arg(2, record, start) || !PL_get_arg(3, record, end) ||
+       !PL_get_arg(4, record, consumer) || !PL_get_arg(5, record, op) )
+    return FALSE;
+  if ( !PL_get_atom(op, &o) || (o != atom_add && o != atom_retract) ) return FALSE;
+  int no_consumer = PL_get_atom(consumer, &c) && c == atom_minus;
+  if ( no_consumer && o == atom_add )
+    return buf_add(b, "[", 1) && event_text(b, event) && buf_add(b, ",", 1) && json_time_text(b, start) &&
+           buf_add(b, ",", 1) && json_time_text(b, end) && buf_add(b, ",", 1) && term_data(b, event, 0) &&
+           buf_add(b, "]", 1);
+  if ( !buf_text(b, "{\"event\": ") || !event_text(b, event) || !buf_text(b, ", \"start\": ") ||
+       !json_time_text(b, start) || !buf_text(b, ", \"end\": ") || !json_time_text(b, end) ||
+       !buf_text(b, ", \"term\": ") || !term_data(b, event, 0) )
+    return FALSE;
+  if ( !no_consumer )
+  { if ( PL_is_functor(consumer, functor_echo1) )
+    { term_t what = PL_new_term_ref();
+      atom_t w;
+      if ( !PL_get_arg(1, consumer, what) || !PL_get_atom(what, &w) || w != atom_echo ) return FALSE;
+      if ( !buf_text(b, ", \"input\": true") ) return FALSE;
+    } else if ( PL_is_atom(consumer) )              /* (a consumer is an atom: ~w writes its text) */
+    { if ( !buf_text(b, ", \"consumer\": ") || !json_string_of(b, consumer, CVT_ATOM) ) return FALSE;
+    } else
+      return FALSE;
+  }
+  if ( o == atom_retract && !buf_text(b, ", \"op\": \"retract\"") ) return FALSE;
+  return buf_add(b, "}", 1);
+}
+
+static foreign_t
+pl_fast_output_data(term_t records, term_t json)
+{ char stack[4096];
+  buffer b = BUFFER_ON(stack);
+  term_t head = PL_new_term_ref(), tail = PL_copy_term_ref(records);
+  int ok = buf_add(&b, "[", 1);
+  for (int first = TRUE; ok && PL_get_list(tail, head, tail); first = FALSE)
+  { fid_t fid = PL_open_foreign_frame();
+    ok = (first || buf_add(&b, ",", 1)) && output_record(&b, head);
+    PL_close_foreign_frame(fid);
+  }
+  ok = ok && PL_get_nil(tail) && buf_add(&b, "]", 1) &&
+       PL_unify_chars(json, PL_STRING|REP_UTF8, b.len, b.data);
+  buf_free(&b);
+  return ok;
+}
+
 /* rtl_fast_plain_text(+Term, -Text): Term as plain_term() writes it; fails for a term that is
    not plain (the writers above hand it to PL_write_term()). For tests. */
 static foreign_t
@@ -747,9 +901,15 @@ install_t
 install_rtl_fastread(void)
 { atom_add = PL_new_atom("add");                  /* registered: never garbage collected */
   atom_retract = PL_new_atom("retract");
+  atom_minus = PL_new_atom("-");
+  atom_echo = PL_new_atom("input");
+  functor_event5 = PL_new_functor(PL_new_atom("event"), 5);
+  functor_json1 = PL_new_functor(PL_new_atom("json"), 1);
+  functor_echo1 = PL_new_functor(PL_new_atom("echo"), 1);
   PL_register_foreign("rtl_fast_read_lines", 6, pl_fast_read_lines, 0);
   PL_register_foreign("rtl_fast_event_line", 8, pl_fast_event_line, 0);
   PL_register_foreign("rtl_fast_event_json", 4, pl_fast_event_json, 0);
   PL_register_foreign("rtl_fast_write_event", 4, pl_fast_write_event, 0);
   PL_register_foreign("rtl_fast_plain_text", 2, pl_fast_plain_text, 0);
+  PL_register_foreign("rtl_fast_output_data", 2, pl_fast_output_data, 0);
 }

@@ -21,7 +21,6 @@ from __future__ import annotations
 import itertools
 import json
 import math
-import re
 import shutil
 import tempfile
 import threading
@@ -36,10 +35,11 @@ from ..compiler import CompileResult, compile_file, compile_source, unique_modul
 from ..runtime_rules import RulesRefused, compile_rules, compile_rules_for_the_runtime
 from . import snapshot
 from .bridge import Bridge, PrologError, ServedCallError
-from .values import QueryAnswer, Term, Time, Value, Variable, parse_term, time_value
+from ..frontend.depth import with_room_for_depth
+from .values import QueryAnswer, String, Term, Time, Value, Variable, read_term, term_value, time_value
 
 __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", "PrologError", "Term",
-           "Variable", "Value", "QueryAnswer", "Time"]
+           "String", "Variable", "Value", "QueryAnswer", "Time"]
 
 Number = Union[int, float]
 
@@ -51,40 +51,81 @@ _TRACE_REQUESTS = ("start", "stop", "feed_line", "feed_byte_line", "explain", "w
                    "report", "end")
 
 
-@dataclass(frozen=True)
 class OutputEvent:
-    """One output line: `event` is the term text (writeq), `consumer` is set for subscription
-    deliveries, `input` is True for the echo of an input event (`echo_input`), `op` is "add"
-    or "retract"; or, with `op` "answer", the result of a synchronized
-    query: `answer` is then a `QueryAnswer` (query id, at, status, answers, message; `query`
-    holds the same as its JSON object) and `event` is empty.
+    """One output: `event` is the term text (writeq), `start` and `end` its times,
+    `consumer` is set for subscription deliveries, `input` is True for the echo of an input
+    event (`echo_input`), `op` is "add" or "retract"; or, with `op` "answer", the result of a
+    synchronized query: `answer` is then a `QueryAnswer` (query id, at, status, answers,
+    message; `query` holds the same as its JSON object) and `event` is empty. `line` is its
+    output line, as the runtime writes it (docs/runtime.md, "Output").
 
     The term is also there as data: `term` is its Python value (`Term(name, args)`, or a `str`
-    for an atom), `name` and `args` its name and arguments (atoms as `str`, numbers, lists,
-    nested `Term`s), read from `event` the first time one of them is asked for. For an answer,
-    `term` and `answer` are the QueryAnswer, `name` is "answer" and `args` is `()`."""
+    for an atom; see `retalisc.driver.values`), `name` and `args` its name and arguments. The
+    runtime sends the term as data with the text (`from_data`): nothing is read again. For
+    an answer, `term` and `answer` are the QueryAnswer, `name` is "answer" and `args` is `()`."""
 
-    event: str
-    start: Number
-    end: Number
-    consumer: Optional[str] = None
-    op: str = "add"
-    line: str = ""
-    query: Optional[dict] = None     # op "answer": the result line of a synchronized query
-    input: bool = False              # the echo of an input event (`echo_input`, `--echo-input`)
+    __slots__ = ("event", "start", "end", "consumer", "op", "query", "input", "_line", "_data", "_term", "_answer")
 
-    @cached_property
+    def __init__(self, event: str, start: Number, end: Number, consumer: Optional[str] = None, op: str = "add",
+                 line: str = "", query: Optional[dict] = None, input: bool = False):
+        self.event = event
+        self.start = start
+        self.end = end
+        self.consumer = consumer
+        self.op = op
+        self.query = query          # op "answer": the result object of a synchronized query
+        self.input = input          # the echo of an input event (`echo_input`, `--echo-input`)
+        self._line = line or None
+        self._data = _NO_DATA       # the term as the runtime's data (from_data), read when asked for
+        self._term = _NO_DATA
+        self._answer = _NO_DATA
+
+    @classmethod
+    def from_data(cls, data: Union[list, dict]) -> "OutputEvent":
+        """The output from one element of the runtime's output data (rtl_output_data/2 in
+        prolog_runtime/rtl_io.pl): `[Text, Start, End, Term]` for an event with no consumer
+        and op add, an object with the keys of the output line and `"term"` for any other,
+        the result object of a synchronized query for an answer."""
+        new = _new_output(cls)
+        if type(data) is list:
+            new.event, new.start, new.end, new._data = data
+            new.consumer, new.op, new.query, new.input = None, "add", None, False
+        elif "query" in data:
+            new.event, new.start, new.end, new._data = "", data["at"], data["at"], _NO_DATA
+            new.consumer, new.op, new.query, new.input = None, "answer", data, False
+        else:
+            new.event, new.start, new.end, new._data = data["event"], data["start"], data["end"], data["term"]
+            new.consumer, new.op = data.get("consumer"), data.get("op", "add")
+            new.query, new.input = None, data.get("input") is True
+        new._line = None
+        new._term = new._answer = _NO_DATA
+        return new
+
+    @property
+    def line(self) -> str:
+        """The output line (docs/runtime.md, "Output"), byte for byte as the runtime writes it."""
+        line = self._line
+        if line is None:
+            line = self._line = _answer_line(self.query) if self.op == "answer" else _event_line(self)
+        return line
+
+    @property
     def answer(self) -> Optional[QueryAnswer]:
         """The result of a synchronized query (op "answer"); None for an event."""
-        return QueryAnswer.from_json(self.query) if self.op == "answer" and self.query is not None else None
+        if self._answer is _NO_DATA:
+            self._answer = QueryAnswer.from_json(self.query) if self.op == "answer" and self.query is not None else None
+        return self._answer
 
-    @cached_property
+    @property
     def term(self) -> Union[Value, QueryAnswer]:
         """The event term as a Python value (see `retalisc.driver.values`); the QueryAnswer
         for an answer."""
         if self.op == "answer":
             return self.answer
-        return parse_term(self.event)
+        term = self._term
+        if term is _NO_DATA:
+            term = self._term = term_value(self._data) if self._data is not _NO_DATA else read_term(self.event)
+        return term
 
     @property
     def name(self) -> str:
@@ -106,35 +147,102 @@ class OutputEvent:
         """The event term as Prolog text (the same as `event`)."""
         return self.event
 
-    @classmethod
-    def from_line(cls, line: str) -> "OutputEvent":
-        common = _COMMON_LINE.match(line)
-        if common is not None:              # the runtime's common line: no JSON decoder needed
-            event, start, end = common.groups()
-            return cls(event, int(start), int(end), None, "add", line)
-        data = json.loads(line)
-        if "query" in data:
-            return cls("", data["at"], data["at"], None, "answer", line, data)
-        return cls(data["event"], data["start"], data["end"], data.get("consumer"), data.get("op", "add"), line,
-                   input=data.get("input") is True)
+    def _fields(self) -> tuple:
+        return (self.event, self.start, self.end, self.consumer, self.op, self.query, self.input)
+
+    def __eq__(self, other) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self._fields() == other._fields()
+
+    def __hash__(self) -> int:
+        return hash((self.event, self.start, self.end, self.consumer, self.op, self.input))
+
+    def __repr__(self) -> str:
+        return (f"OutputEvent(event={self.event!r}, start={self.start!r}, end={self.end!r}, "
+                f"consumer={self.consumer!r}, op={self.op!r}, query={self.query!r}, input={self.input!r})")
 
 
-# An output line as the runtime writes it for an event with integer times, no consumer and no
-# op, its event text without JSON escapes (docs/runtime.md, "Output").
-_COMMON_LINE = re.compile(r'\{"event": "([^"\\\x00-\x1f]*)", "start": (-?(?:0|[1-9][0-9]*)), '
-                          r'"end": (-?(?:0|[1-9][0-9]*))\}\Z')
+_NO_DATA = object()
+_new_output = object.__new__
+
+_encode_json_string = json.encoder.encode_basestring        # C; escapes as the runtime does but for 3 controls
+_RUNTIME_ESCAPES = {code: f"\\u{code:04x}" for code in range(0x20)}
+_RUNTIME_ESCAPES.update({ord('"'): '\\"', ord("\\"): "\\\\", ord("\n"): "\\n", ord("\t"): "\\t"})
+
+
+def _json_text(text: str) -> str:
+    """`text` as a JSON string, escaped as the runtime escapes it (rtl_json_string_escape/2:
+    `"`, `\\`, `\\n`, `\\t`, other control characters as `\\u00xx`)."""
+    if "\r" in text or "\b" in text or "\f" in text:      # the C encoder writes these as \r, \b, \f
+        return '"' + text.translate(_RUNTIME_ESCAPES) + '"'
+    return _encode_json_string(text)
+
+
+def _float_text(value: float) -> str:
+    """A finite float as SWI-Prolog's write/1 writes it (the shortest digits that read back,
+    as Python's repr; exponents written `e+22`, `e-5`, and from 1.0e15 on for an integral
+    value)."""
+    text = repr(value)
+    if "e" in text:
+        mantissa, _, exponent = text.partition("e")
+        if "." not in mantissa:
+            mantissa += ".0"
+        power = int(exponent)
+        return f"{mantissa}e{power}" if power < 0 else f"{mantissa}e+{power}"
+    if text.endswith(".0") and abs(value) >= 1e15:
+        sign = "-" if text[0] == "-" else ""
+        whole = text[len(sign):-2]
+        digits = whole.rstrip("0")
+        return f"{sign}{digits[0]}.{digits[1:] or '0'}e+{len(whole) - 1}"
+    return text
+
+
+def _number_text(value) -> str:
+    """A time or number of an output line as the runtime writes it (a time that is not finite
+    comes as the text the runtime quotes)."""
+    kind = type(value)
+    if kind is int:
+        return str(value)
+    if kind is float:
+        return _float_text(value)
+    if kind is str:
+        return _json_text(value)
+    raise TypeError(f"not a time of an output line: {value!r}")
+
+
+def _event_line(event: "OutputEvent") -> str:
+    """The output line of an event, byte for byte as rtl_event_json/6 (rtl_io.pl) writes it."""
+    line = (f'{{"event": {_json_text(event.event)}, "start": {_number_text(event.start)}, '
+            f'"end": {_number_text(event.end)}')
+    if event.input:
+        line += ', "input": true'
+    elif event.consumer is not None:
+        line += f', "consumer": {_json_text(event.consumer)}'
+    if event.op == "retract":
+        line += ', "op": "retract"'
+    return line + "}"
+
+
+def _answer_line(query: dict) -> str:
+    """The output line of a synchronized query's result, as rtl_query.pl writes it."""
+    answers = ", ".join("{" + ", ".join(f"{_json_text(name)}: {_json_text(value)}" for name, value in answer.items())
+                        + "}" for answer in query["answers"])
+    return (f'{{"query": {_json_text(query["query"])}, "at": {_number_text(query["at"])}, '
+            f'"status": {_json_text(query["status"])}, "answers": [{answers}], '
+            f'"message": {_json_text(query["message"])}}}')
 
 
 @dataclass
 class Answer:
     """What a feeding predicate of prolog_runtime/rtl_api.pl answered, read once by
     `read_answer` (the protocol: docs/architecture.md, "The Python/Prolog boundary"):
-    `outputs` the output lines (JSON objects, docs/runtime.md "Output"), `warnings` and
+    `outputs` the outputs (`OutputEvent`s, from the runtime's output data), `warnings` and
     `rejections` in order, and `stop` the batch's last line when it ended early: "error"
     (`index` the event that raised, `message` why), "undecodable" (`index`), "paced"
     (`index` the items processed); "" when it did not."""
 
-    outputs: List[str]
+    outputs: List["OutputEvent"]
     warnings: List["EngineWarning"]
     rejections: List["Rejection"]
     stop: str = ""
@@ -143,11 +251,17 @@ class Answer:
 
 
 def read_answer(text: str) -> Answer:
-    """The `Answer` of an output string of rtl_api.pl: lines `{...}` (an output), `?LINE<TAB>TEXT`
-    (a warning; LINE empty outside a batch of lines), `!LINE<TAB>KIND<TAB>REASON` (a line not
-    processed), and as the last line `!error<TAB>INDEX<TAB>MESSAGE`, `!undecodable<TAB>INDEX`
-    or `!paced<TAB>N`."""
+    """The `Answer` of an output string of rtl_api.pl: first, when there are outputs, one line
+    `[...]` (every output, as the JSON array of rtl_output_data/2: one decoding), then lines
+    `?LINE<TAB>TEXT` (a warning; LINE empty outside a batch of lines), `!LINE<TAB>KIND<TAB>REASON`
+    (a line not processed), and as the last line `!error<TAB>INDEX<TAB>MESSAGE`,
+    `!undecodable<TAB>INDEX` or `!paced<TAB>N`."""
     answer = Answer([], [], [])
+    if not text:
+        return answer
+    if text[0] == "[":
+        data, _, text = text.partition("\n")
+        answer.outputs = _output_events(data)
     for line in text.splitlines():
         if not line:
             continue
@@ -164,8 +278,17 @@ def read_answer(text: str) -> Answer:
                 index, _, message = rest.partition("\t")
                 answer.stop, answer.index, answer.message = head, int(index), message
         else:
-            answer.outputs.append(line)
+            raise ValueError(f"not a line of the runtime's answer: {line[:80]!r}")
     return answer
+
+
+def _output_events(data: str) -> List["OutputEvent"]:
+    try:
+        items = json.loads(data)
+    except RecursionError:                  # a deep term (input terms nest up to 1,000 levels)
+        items = with_room_for_depth(lambda: json.loads(data))
+    from_data = OutputEvent.from_data
+    return [from_data(item) for item in items]
 
 
 def _bad_item_index(error: PrologError) -> Optional[int]:
@@ -582,7 +705,7 @@ class Engine:
 
     def _deliver_answer(self, answer: "Answer") -> List[OutputEvent]:
         self._warnings.extend(answer.warnings)
-        events = [OutputEvent.from_line(line) for line in answer.outputs]
+        events = answer.outputs
         for event in events:
             if event.query is not None:
                 self._resolve(event.query)

@@ -156,7 +156,7 @@ class TraceSource(EngineSource):
         for rejection in answer.rejections:
             self.explainer.rejections.append((where, rejection))
             problems.append(Problem(where, rejection_kind(rejection.kind), rejection.reason))
-        write([OutputEvent.from_line(text) for text in answer.outputs])
+        write(answer.outputs)
         return problems, False
 
     def at_start(self, engine) -> str:

@@ -1,11 +1,19 @@
 """Prolog terms as Python values, and the time forms an Engine accepts.
 
-An output event's term becomes plain Python data: an atom is a `str`, a number an `int` or
-`float`, a string a `str`, a list a `list`, and a compound term a `Term` with a `name` and
-a tuple of `args` in the same form (`fire_alarm(smoke_1, [1, 2.5])` is
-`Term("fire_alarm", ("smoke_1", [1, 2.5]))`). A variable, which a derived event can only
-carry when a rule leaves one unbound, is a `Variable`. The result of a synchronized query,
-which comes among the outputs, is a `QueryAnswer`.
+One value model for the terms that come out of the runtime (output events, ROS message
+terms, memory ids): an atom is a `str`, a number an `int` or `float`, a Prolog string a
+`String` (a `str` too: tell it from an atom by its type), a proper list a `list`, and a
+compound term a `Term` with a `name` and a tuple of `args` in the same form
+(`fire_alarm(smoke_1, [1, 2.5])` is `Term("fire_alarm", ("smoke_1", [1, 2.5]))`). A variable,
+which a derived event can only carry when a rule leaves one unbound, is a `Variable`. The
+result of a synchronized query, which comes among the outputs, is a `QueryAnswer`.
+
+The runtime sends an output's term as data (`term_value` reads that form: rtl_output_data/2 in
+prolog_runtime/rtl_io.pl), so an output's term is never read again from its text.
+`read_term` is the one reader of term text as data (the text of an event, of a memory id):
+a small tokenizer for the syntax writeq writes without operators, and for the rest (operator
+terms such as `a-b`) SWI-Prolog's own reader (`ground_canonical`); `write_term` writes a
+value back as Prolog text.
 
 Times are given as event files give them: a number of seconds or a ROS stamp
 `[secs, nsecs]`; from Python also a `datetime.datetime` (read as UTC when it has no time
@@ -17,16 +25,18 @@ prolog_runtime/rtl_time.pl), the one the file reader uses.
 from __future__ import annotations
 
 import datetime as _dt
-import json
+import math
+import re
 from dataclasses import dataclass
 from typing import Any, Dict, List, Sequence, Tuple, Union
 
 from ..frontend.depth import with_room_for_depth
+from ..frontend.parser import _number, _unescape
 from .bridge import Bridge, PrologError
 from ..runtime_location import runtime_dir
 
-__all__ = ["Term", "Variable", "Value", "QueryAnswer", "Time", "data_value", "ground_canonical", "parse_term",
-           "time_value"]
+__all__ = ["Term", "String", "Variable", "Value", "QueryAnswer", "Time", "term_value", "read_term", "write_term",
+           "ground_canonical", "time_value", "is_atom", "quote_atom", "atom_text", "float_text"]
 
 
 @dataclass(frozen=True)
@@ -51,7 +61,21 @@ class Term:
         return self.args[index]
 
 
-Value = Union[str, int, float, list, Term, Variable]
+class String(str):
+    """A Prolog string (`"text"`): a `str` whose type tells it from an atom."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return f"String({str.__repr__(self)})"
+
+
+Value = Union[str, String, int, float, list, Term, Variable]
+
+
+def is_atom(value) -> bool:
+    """Whether `value` is an atom (a `str` that is not a `String`)."""
+    return type(value) is str
 
 
 @dataclass(frozen=True)
@@ -78,30 +102,6 @@ class QueryAnswer:
 Time = Union[int, float, Sequence[int], _dt.datetime, Any]
 
 
-_runtime_loaded = False
-
-
-def parse_term(text: str) -> Value:
-    """The Python value of a term written as Prolog text (as output lines carry it). The text
-    is read by SWI-Prolog (`rtl_api_term_data/2`), so whatever the runtime writes reads back."""
-    global _runtime_loaded
-    bridge = Bridge()
-    if not _runtime_loaded:
-        if not bridge.once("current_predicate(rtl_api:rtl_api_term_data/2)"):    # constant text
-            bridge.consult(str(runtime_dir() / "retalis.pl"))
-        _runtime_loaded = True
-    try:
-        data = bridge.apply("rtl_api", "rtl_api_term_data", text)
-    except PrologError as error:
-        shown = text if len(text) <= 80 else text[:77] + "..."
-        message = " ".join(str(error).split())
-        raise ValueError(f"not a Prolog term: {shown!r} ({message})") from None
-    try:
-        return data_value(json.loads(data))
-    except RecursionError:                  # a deep term (input terms nest up to 1,000 levels)
-        return with_room_for_depth(lambda: data_value(json.loads(data)))
-
-
 _text_reader_loaded = False
 
 
@@ -123,24 +123,230 @@ def ground_canonical(text: str) -> str:
     return out
 
 
-def data_value(data) -> Value:
-    """The Python value of the JSON form of a term (see `rtl_api_term_data/2`)."""
-    if not isinstance(data, list):
-        return data                                     # a number
+def term_value(data) -> Value:
+    """The Python value of a term in the runtime's data form (rtl_output_data/2): a number, an
+    atom as a string, and tagged arrays `["c", Name, Arg...]` (a compound), `["l", Item...]` (a
+    list), `["s", Text]` (a string), `["f", "inf"]` (a float that is not finite), `["v", Name]`
+    (a variable)."""
+    try:
+        return _term_value(data)
+    except RecursionError:                  # a deep term (input terms nest up to 1,000 levels)
+        return with_room_for_depth(lambda: _term_value(data))
+
+
+def _term_value(data) -> Value:
+    if type(data) is not list:
+        return data                                     # an atom or a number
     tag = data[0]
-    if tag == "a":
-        return [] if data[1] == "[]" else data[1]
-    if tag == "s":
-        return data[1]
-    if tag == "l":
-        return [data_value(item) for item in data[1]]
     if tag == "c":
-        return Term(data[1], tuple(data_value(arg) for arg in data[2]))
+        return Term(data[1], tuple([_term_value(arg) for arg in data[2:]]))
+    if tag == "l":
+        return [_term_value(item) for item in data[1:]]
+    if tag == "s":
+        return String(data[1])
+    if tag == "f":
+        return float(data[1])
     if tag == "v":
         return Variable(data[1])
-    if tag == "f":
-        return float(data[1].replace("1.0Inf", "inf").replace("1.5NaN", "nan"))
     raise ValueError(f"unknown term data {data!r}")
+
+
+# ---- reading term text ---------------------------------------------------------------------
+
+_TOKEN = re.compile(r"""
+    \s*(?:
+      (?P<num>-?(?:0'(?:\\.|[^\\])|0x[0-9a-fA-F]+|0o[0-7]+|0b[01]+
+          |\d[\d_]*(?:\.\d+(?:[eE][+-]?\d+)?(?:Inf|NaN)?|[eE][+-]?\d+)?))
+     |(?P<name>[^\W\d_]\w*)
+     |'(?P<qatom>(?:[^'\\]|\\x[0-9a-fA-F]+\\|\\[0-7]+\\|\\.|'')*)'
+     |"(?P<str>(?:[^"\\]|\\x[0-9a-fA-F]+\\|\\[0-7]+\\|\\.|"")*)"
+     |(?P<punct>\[\]|\{\}|[()\[\],|])
+     |(?P<solo>[!;])
+     |(?P<sym>(?:[-+*/\\^<>=~:.?@#&$]|[^\x00-\x7f\w\s])+)
+    )""", re.VERBOSE | re.DOTALL)
+
+
+class _Unsupported(Exception):
+    """The tokenizer does not handle this text; SWI-Prolog's reader will."""
+
+
+def read_term(text: str) -> Value:
+    """Read one ground term from `text` (no final full stop needed) into the value model.
+    The syntax writeq writes for data (compounds, lists, quoted and plain atoms, strings,
+    numbers) is read here; anything else (operators such as `a-b` or `0:'|'`, character
+    codes) by SWI-Prolog's reader (`ground_canonical`: read_term from a string, never pasted
+    into a goal), whose write_canonical text is then read here. Raises ValueError when `text`
+    is not one ground term."""
+    try:
+        return _read_tokens(text)
+    except _Unsupported:
+        pass
+    except RecursionError:                  # a deep term (input terms nest up to 1,000 levels)
+        return with_room_for_depth(lambda: read_term(text))
+    canonical = ground_canonical(text)
+    try:
+        return _read_tokens(canonical)
+    except _Unsupported as error:
+        raise ValueError(str(error) or f"not a data term: {text[:60]}") from None
+
+
+def _read_tokens(text: str) -> Value:
+    tokens = _tokens(text)
+    value, position = _parse(tokens, 0)
+    if position != len(tokens):
+        raise _Unsupported
+    return value
+
+
+def _tokens(text: str) -> list:
+    tokens = []
+    position, end = 0, len(text)
+    match = _TOKEN.match
+    while True:
+        m = match(text, position)
+        if m is None or m.end() == position:
+            if text[position:].strip():
+                raise _Unsupported
+            return tokens
+        position = m.end()
+        kind = m.lastgroup
+        value = m.group(kind)
+        if kind == "num":
+            if value.startswith("0'") or value.startswith("-0'"):
+                raise _Unsupported       # character codes: rare, the full reader knows them
+            tokens.append(("num", _number_value(value)))
+        elif kind == "name":
+            if value[0].isupper() or value[0].istitle():
+                raise _Unsupported          # a variable
+            tokens.append(("atom", value))
+        elif kind == "qatom":
+            tokens.append(("atom", _unescape(value, "'") if ("\\" in value or "''" in value) else value))
+        elif kind == "str":
+            tokens.append(("str", _unescape(value, '"') if ("\\" in value or '""' in value) else value))
+        elif kind == "sym" or kind == "solo":
+            tokens.append(("atom", value))
+        else:
+            tokens.append((value, None))
+        if position >= end:
+            return tokens
+
+
+def _number_value(text: str):
+    negative = text.startswith("-")
+    value = _number(text[1:] if negative else text)
+    return -value if negative else value
+
+
+def _parse(tokens: list, i: int):
+    if i >= len(tokens):
+        raise _Unsupported
+    kind, value = tokens[i]
+    if kind == "num" or kind == "str":
+        result = value if kind == "num" else String(value)
+        return result, i + 1
+    if kind == "atom":
+        if i + 1 < len(tokens) and tokens[i + 1][0] == "(":
+            args = []
+            i += 2
+            while True:
+                arg, i = _parse(tokens, i)
+                args.append(arg)
+                if i >= len(tokens):
+                    raise _Unsupported
+                if tokens[i][0] == ",":
+                    i += 1
+                elif tokens[i][0] == ")":
+                    return Term(value, tuple(args)), i + 1
+                else:
+                    raise _Unsupported
+        if i + 1 < len(tokens) and tokens[i + 1][0] not in (",", ")", "]", "|"):
+            raise _Unsupported            # an operator term such as a-b or - 1
+        return value, i + 1
+    if kind == "[]":
+        return [], i + 1
+    if kind == "{}":
+        if i + 1 < len(tokens) and tokens[i + 1][0] == "(":   # {}(Args): a curly term, written canonically
+            tokens[i] = ("atom", "{}")
+            return _parse(tokens, i)
+        return "{}", i + 1
+    if kind == "[":
+        items = []
+        i += 1
+        while True:
+            item, i = _parse(tokens, i)
+            items.append(item)
+            if i >= len(tokens):
+                raise _Unsupported
+            if tokens[i][0] == ",":
+                i += 1
+            elif tokens[i][0] == "]":
+                return items, i + 1
+            elif tokens[i][0] == "|":
+                raise _Unsupported("not a proper list")
+            else:
+                raise _Unsupported
+    raise _Unsupported
+
+
+# ---- writing term text ---------------------------------------------------------------------
+
+_SOLO = re.compile(r"[a-z][A-Za-z0-9_]*\Z")
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f'\\]")
+_STRING_CONTROL = re.compile(r'[\x00-\x1f\x7f-\x9f"\\]')
+
+
+def quote_atom(text: str) -> str:
+    """`text` as a quoted Prolog atom that reads back as exactly `text`: quotes, backslashes
+    and control characters escaped, every other character as it is (SWI-Prolog does not read
+    back the \\x escapes it writes for some unassigned code points)."""
+    if _CONTROL.search(text) is None:
+        return "'" + text + "'"
+    return "'" + _CONTROL.sub(_escape, text) + "'"
+
+
+def _escape(match) -> str:
+    c = match.group()
+    if c in "'\"\\":
+        return "\\" + c
+    if c == "\n":
+        return "\\n"
+    if c == "\t":
+        return "\\t"
+    return f"\\x{ord(c):x}\\"
+
+
+def atom_text(name: str) -> str:
+    """An atom as writeq writes it: unquoted when it may be."""
+    return name if _SOLO.match(name) else quote_atom(name)
+
+
+def float_text(value: float) -> str:
+    """A float as Prolog text that reads back as the same float (1.0Inf, 1.5NaN)."""
+    if math.isfinite(value):
+        return repr(value)
+    if math.isnan(value):
+        return "1.5NaN"
+    return "1.0Inf" if value > 0 else "-1.0Inf"
+
+
+def write_term(value: Value) -> str:
+    """Prolog text of a ground value (the inverse of read_term; `True`/`False` are written as
+    the atoms true and false)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return float_text(value)
+    if isinstance(value, String):
+        return '"' + _STRING_CONTROL.sub(_escape, value) + '"'
+    if isinstance(value, str):
+        return atom_text(value)
+    if isinstance(value, list):
+        return "[" + ",".join(write_term(item) for item in value) + "]"
+    if isinstance(value, Term):
+        return atom_text(value.name) + "(" + ",".join(write_term(arg) for arg in value.args) + ")"
+    raise TypeError(f"not a ground term value: {value!r}")
 
 
 _EPOCH = _dt.datetime(1970, 1, 1, tzinfo=_dt.timezone.utc)
