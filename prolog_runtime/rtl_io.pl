@@ -755,7 +755,8 @@ json_number(N, N).
 
 rtl_json_string_escape(Text, Escaped) :-
     json_special(Special),
-    (   split_string(Text, Special, "", [_])       % one scan: nothing to escape
+    (   split_string(Text, Special, "", [_]),      % one scan: nothing to escape
+        \+ sub_string(Text, _, _, _, "\u0000")     % (split_string/4 misses a NUL at either end)
     ->  Escaped = Text
     ;   string_codes(Text, Codes),
         phrase(escaped(Codes), Out),

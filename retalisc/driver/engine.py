@@ -262,7 +262,7 @@ def read_answer(text: str) -> Answer:
     if text[0] == "[":
         data, _, text = text.partition("\n")
         answer.outputs = _output_events(data)
-    for line in text.splitlines():
+    for line in text.split("\n"):             # (not splitlines: a reason may hold U+2028, U+0085)
         if not line:
             continue
         first = line[0]

@@ -173,7 +173,8 @@ class _Unsupported(Exception):
 def read_term(text: str) -> Value:
     """Read one ground term from `text` (no final full stop needed) into the value model.
     The syntax writeq writes for data (compounds, lists, quoted and plain atoms, strings,
-    numbers) is read here; anything else (operators such as `a-b` or `0:'|'`, character
+    numbers; a partial list `[a|t]` as the cells `Term("[|]", ("a", "t"))`, as the runtime's
+    data gives it) is read here; anything else (operators such as `a-b` or `0:'|'`, character
     codes) by SWI-Prolog's reader (`ground_canonical`: read_term from a string, never pasted
     into a goal), whose write_canonical text is then read here. Raises ValueError when `text`
     is not one ground term."""
@@ -281,8 +282,15 @@ def _parse(tokens: list, i: int):
                 i += 1
             elif tokens[i][0] == "]":
                 return items, i + 1
-            elif tokens[i][0] == "|":
-                raise _Unsupported("not a proper list")
+            elif tokens[i][0] == "|":              # a partial list: '[|]'(Head, Tail) cells
+                tail, i = _parse(tokens, i + 1)
+                if i >= len(tokens) or tokens[i][0] != "]":
+                    raise _Unsupported
+                if isinstance(tail, list):
+                    return items + tail, i + 1
+                for item in reversed(items):
+                    tail = Term("[|]", (item, tail))
+                return tail, i + 1
             else:
                 raise _Unsupported
     raise _Unsupported
