@@ -338,8 +338,8 @@ def float_text(value: float) -> str:
 
 
 def write_term(value: Value) -> str:
-    """Prolog text of a ground value (the inverse of read_term; `True`/`False` are written as
-    the atoms true and false)."""
+    """Prolog text of a value (the inverse of read_term; `True`/`False` are written as the
+    atoms true and false, a `Variable` as its name)."""
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):
@@ -354,7 +354,9 @@ def write_term(value: Value) -> str:
         return "[" + ",".join(write_term(item) for item in value) + "]"
     if isinstance(value, Term):
         return atom_text(value.name) + "(" + ",".join(write_term(arg) for arg in value.args) + ")"
-    raise TypeError(f"not a ground term value: {value!r}")
+    if isinstance(value, Variable):
+        return value.name
+    raise TypeError(f"not a term value: {value!r}")
 
 
 _EPOCH = _dt.datetime(1970, 1, 1, tzinfo=_dt.timezone.utc)
