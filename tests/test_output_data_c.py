@@ -18,8 +18,8 @@ from retalisc.driver.values import String, Term, read_term, write_term
 ROOT = Path(__file__).resolve().parent.parent
 
 # For each term text: the records of the term with each time pair, consumer and op; printed:
-# `C<TAB>array` (or `C<TAB>-` when the C writer leaves it to Prolog), `P<TAB>array` (Prolog),
-# then `L<TAB>line` for each record.
+# `C<TAB>outputs<TAB>terms` (the two arrays; `C<TAB>-` when the C writer leaves them to Prolog),
+# `P<TAB>outputs<TAB>terms` (Prolog), then `L<TAB>line` for each record.
 CHECK = r"""
 :- use_module(library(readutil)).
 main :-
@@ -39,9 +39,10 @@ check(Line) :-
             Records0),
     Records = [json("{\"query\": \"q\\\"1\", \"at\": 2.5, \"status\": \"answered\", \"answers\": [{\"X\": \"a\"}, {\"X\": \"'\\\\n'\"}], \"message\": \"\"}")|Records0],
     rtl_use_fast_reader(true),
-    (   rtl_io:rtl_fast_output_data(Records, C) -> true ; C = "-" ),
+    (   rtl_io:rtl_fast_output_data(Records, C0) -> tabbed(C0, C) ; C = "-" ),
     rtl_use_fast_reader(false),
-    rtl_output_data(Records, P),
+    rtl_output_data(Records, P0),
+    tabbed(P0, P),
     format("C\t~s~nP\t~s~n", [C, P]),
     forall(member(R, Records), ( rtl_output_record_line(R, L), format("L\t~s~n", [L]) )),
     % the records one by one: the C writer takes each one it can
@@ -49,9 +50,15 @@ check(Line) :-
     forall(member(R, Records),
            (   rtl_io:rtl_fast_output_data([R], C1)
            ->  rtl_use_fast_reader(false), rtl_output_data([R], P1), rtl_use_fast_reader(true),
-               format("1\t~s\t~s~n", [C1, P1])
+               tabbed(C1, C2), tabbed(P1, P2),
+               format("1\t~s\t~s~n", [C2, P2])
            ;   true
            )).
+
+% The two lines of the data, on one line (JSON text holds no tab).
+tabbed(Data, Tabbed) :-
+    split_string(Data, "\n", "", [Outputs, Terms]),
+    atomics_to_string([Outputs, "\t", Terms], Tabbed).
 """
 
 
@@ -74,12 +81,13 @@ def run_check(tmp_path, swipl, texts):
             if c_array != "-":
                 assert c_array == rest
                 taken += 1
-            results.append((json.loads(rest), []))
+            outputs, terms = rest.split("\t")
+            results.append((json.loads(outputs), json.loads(terms), []))
         elif kind == "L":
-            results[-1][1].append(rest)
+            results[-1][2].append(rest)
         else:
-            single_c, _, single_prolog = rest.partition("\t")
-            assert single_c == single_prolog
+            c_outputs, c_terms, prolog_outputs, prolog_terms = rest.split("\t")
+            assert (c_outputs, c_terms) == (prolog_outputs, prolog_terms)
             singles += 1
     assert len(results) == len(texts)
     return results, taken, singles
@@ -87,9 +95,9 @@ def run_check(tmp_path, swipl, texts):
 
 def check_python_side(results, values=None):
     """Each element read by OutputEvent.from_data gives the runtime's line and the term's value."""
-    for index, (array, lines) in enumerate(results):
-        assert len(array) == len(lines)
-        outputs = [OutputEvent.from_data(item) for item in array]
+    for index, (array, terms, lines) in enumerate(results):
+        assert len(array) == len(terms) == len(lines)
+        outputs = [OutputEvent.from_data(item, term) for item, term in zip(array, terms)]
         assert [out.line for out in outputs] == lines
         answer = outputs[0]
         assert answer.op == "answer" and answer.answer.answers == ({"X": "a"}, {"X": "'\\n'"})
