@@ -52,8 +52,8 @@ two ways:
   - as a script, `swipl P.pl EVENTS.jsonl [...]`: rtl_main/0 reads the event files (or
     standard input for `-`) and writes the output JSON Lines to standard output, with
     rejected lines and a summary on standard error;
-  - embedded (the Python driver): rtl_feed_lines/3 takes a batch and returns the output
-    lines as one string.
+  - embedded (the Python driver): rtl_feed_lines/3 takes a batch and returns its outputs as
+    data (rtl_output_data/2) and the lines not processed, as one string.
 */
 
 :- meta_predicate rtl_action(0).

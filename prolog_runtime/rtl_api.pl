@@ -57,9 +57,10 @@ The bridge calls these through retalisc_bridge:bridge_apply/6 (rtl_bridge.pl): S
 2 (an error, never raised into the C interface). The output of the feeding predicates is a
 string of lines, read once on the Python side (`retalisc.driver.engine.read_answer`):
 
-  - first, when there are outputs, `[...]`: every output of the call, in order, as one
-    JSON array of data (rtl_output_data/2 in rtl_io.pl: each event's writeq text, times and
-    term as data; a synchronized query's result object), read with one JSON decoding;
+  - first, when there are outputs, two lines `[...]`: every output of the call, in order,
+    as data (rtl_output_data/2 in rtl_io.pl): a JSON array of the outputs (each event's
+    writeq text and times, consumer, op; a synchronized query's result object), then a JSON
+    array of their terms as data, each decoded once on the Python side;
   - `?LINE<TAB>TEXT`: a warning (LINE empty outside rtl_api_feed_lines/5);
   - `!LINE<TAB>KIND<TAB>REASON`: an input line not processed (rtl_api_feed_lines/5);
   - as the last line only: `!error<TAB>Index<TAB>Message` (feeding stopped at the event Index
@@ -150,7 +151,7 @@ rtl_api_feed_events(Items, Output) :-
 
 %   batch_output(:Goal, ?Last, -Output): run Goal, which processes events, with what program
 %   code prints going to the action output, not into the output; Output holds the output
-%   as one JSON array line (rtl_take_output_data/1), the warnings (deletions outside the
+%   as data (rtl_take_output_data/1), the warnings (deletions outside the
 %   retraction horizon) and, when Goal bound it, the line Last.
 
 batch_output(Goal, Last, Output) :-

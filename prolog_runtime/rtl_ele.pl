@@ -555,8 +555,8 @@ rtl_take_output_records(Records) :-
 
 %!  rtl_take_output_data(-Lines:list(string)) is det.
 %
-%   The buffered outputs as one JSON array (rtl_output_data/2, the form in which they cross
-%   to Python): `[Json]`, or `[]` when there are none; the buffer is emptied.
+%   The buffered outputs as data (rtl_output_data/2, the form in which they cross to
+%   Python): `[Data]`, or `[]` when there are none; the buffer is emptied.
 
 rtl_take_output_data(Lines) :-
     rtl_take_output_records(Records),

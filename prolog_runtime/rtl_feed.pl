@@ -502,8 +502,8 @@ end_of_input(Mode, Report) :-
 %!  rtl_feed_lines(+Text:string, +FirstLineNo:integer, +Options:list, -Output:string) is det.
 %
 %   Process a batch of input JSON Lines. Output is a string of lines, each ended by a
-%   newline: first, when there is output, the outputs as one JSON array (rtl_output_data/2,
-%   the form in which outputs cross to Python), then the others; a line that is not processed shows up as `!N<TAB>Kind<TAB>Reason` with its
+%   newline: first, when there is output, the outputs as data (the two lines of
+%   rtl_output_data/2, the form in which outputs cross to Python), then the others; a line that is not processed shows up as `!N<TAB>Kind<TAB>Reason` with its
 %   line number N and Kind `rejected`, `error` or `halt`. Options: `allow_control(Bool)`
 %   (obey control lines; default false), `strict(Bool)` (stop at the first line that is
 %   not processed), `bytes(true)` (Text holds the bytes of the lines, codes 0..255, each

@@ -632,19 +632,20 @@ rtl_output_record_line(json(Line), Line).
 
 %!  rtl_output_data(+Records:list, -Json:string) is det.
 %
-%   Buffered output records (rtl_output_record_line/2) as one JSON array, the form in which
-%   outputs cross to Python (docs/architecture.md, "The Python/Prolog boundary"; read by
-%   `OutputEvent.from_data` in retalisc/driver/engine.py). One element per record, in order:
+%   Buffered output records (rtl_output_record_line/2) in the form in which outputs cross to
+%   Python (docs/architecture.md, "The Python/Prolog boundary"; read by `read_answer` in
+%   retalisc/driver/engine.py): two lines, each one JSON array with one element per record,
+%   in order. The first holds the outputs:
 %
-%     - an event with no consumer and Op `add` (the common case): `[Text, Start, End, Term]`;
-%     - any other event: `{"event": Text, "start": Start, "end": End, "term": Term}` with
-%       the keys of its output line after these (`"input": true`, `"consumer": Name`,
-%       `"op": "retract"`);
+%     - an event with no consumer and Op `add` (the common case): `[Text, Start, End]`;
+%     - any other event: the object of its output line (`{"event": Text, "start": Start,
+%       "end": End}` and `"input": true`, `"consumer": Name`, `"op": "retract"`);
 %     - the result of a synchronized query: its JSON object (`{"query": ...}`), as its line.
 %
 %   Text is the term as writeq/1 writes it (the `"event"` of its output line); Start and End
-%   as the line writes them. Term is the same term as data: an integer or a finite float is
-%   a number, an atom a string, `[]` and a proper list `["l", Item...]`, a compound
+%   as the line writes them. The second line holds each event's term as data (`null` for a
+%   query's result), decoded by Python only when a term is asked for: an integer or a finite
+%   float is a number, an atom a string, `[]` and a proper list `["l", Item...]`, a compound
 %   `["c", Name, Arg...]`, a string `["s", Text]`, a float that is not finite `["f", "inf"]`
 %   (`"-inf"`, `"nan"`), an unbound variable `["v", Name]` (Name as write/1 writes it), and
 %   any other term (a blob) its writeq text as an atom. The C writer
@@ -656,16 +657,20 @@ rtl_output_data(Records, Json) :-
     !,
     Json = Json0.
 rtl_output_data(Records, Json) :-
-    with_output_to(string(Json),
-                   ( write("["), output_elements(Records), write("]") )).
+    with_output_to(string(Outputs),
+                   ( write("["), separated(Records, output_element), write("]") )),
+    with_output_to(string(Terms),
+                   ( write("["), separated(Records, record_term), write("]") )),
+    string_concat(Outputs, "\n", Json0),
+    string_concat(Json0, Terms, Json).
 
-output_elements([]).
-output_elements([R|Rs]) :-
-    output_element(R),
-    (   Rs == []
+separated([], _).
+separated([X|Xs], Writer) :-
+    call(Writer, X),
+    (   Xs == []
     ->  true
     ;   write(","),
-        output_elements(Rs)
+        separated(Xs, Writer)
     ).
 
 output_element(event(Event, Start, End, Consumer, Op)) :- !,
@@ -673,11 +678,9 @@ output_element(event(Event, Start, End, Consumer, Op)) :- !,
     json_number(Start, S),
     json_number(End, E),
     (   Consumer == (-), Op \== retract
-    ->  write("["), json_string_out(Text), format(",~w,~w,", [S, E]),
-        term_data(Event), write("]")
+    ->  write("["), json_string_out(Text), format(",~w,~w]", [S, E])
     ;   write("{\"event\": "), json_string_out(Text),
-        format(", \"start\": ~w, \"end\": ~w, \"term\": ", [S, E]),
-        term_data(Event),
+        format(", \"start\": ~w, \"end\": ~w", [S, E]),
         (   Consumer == (-)
         ->  true
         ;   Consumer == echo(input)
@@ -690,6 +693,11 @@ output_element(event(Event, Start, End, Consumer, Op)) :- !,
     ).
 output_element(json(Line)) :-
     write(Line).
+
+record_term(event(Event, _, _, _, _)) :- !,
+    term_data(Event).
+record_term(json(_)) :-
+    write(null).
 
 json_string_out(Text) :-
     rtl_json_string_escape(Text, Escaped),
@@ -755,7 +763,8 @@ json_number(N, N).
 
 rtl_json_string_escape(Text, Escaped) :-
     json_special(Special),
-    (   split_string(Text, Special, "", [_])       % one scan: nothing to escape
+    (   split_string(Text, Special, "", [_]),      % one scan: nothing to escape
+        \+ sub_string(Text, _, _, _, "\u0000")     % (split_string/4 misses a NUL at either end)
     ->  Escaped = Text
     ;   string_codes(Text, Codes),
         phrase(escaped(Codes), Out),

@@ -11,8 +11,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 rosbags = pytest.importorskip("rosbags", reason="the robot I/O tests need the 'ros' extra (rosbags)")
 
-from retalisc.frontend.terms import Compound  # noqa: E402
-from retalisc.robot_io.data_terms import read_data_term  # noqa: E402
+from retalisc.driver.values import Term, read_term  # noqa: E402
 from retalisc.robot_io.samples import shared_bags_dir  # noqa: E402
 
 SHARED_BAGS = shared_bags_dir(ROOT)
@@ -55,10 +54,10 @@ def without_seq(text: str):
     def walk(value):
         if isinstance(value, list):
             return [walk(v) for v in value]
-        if isinstance(value, Compound):
+        if isinstance(value, Term):
             args = value.args
             if value.name == "std_msgs__0__Header" and len(args) == 3:
                 args = args[1:]
-            return Compound(re.sub(r"^.*__0__", "", value.name), tuple(walk(a) for a in args))
+            return Term(re.sub(r"^.*__0__", "", value.name), tuple(walk(a) for a in args))
         return value
-    return walk(read_data_term(text))
+    return walk(read_term(text))

@@ -1,4 +1,4 @@
-"""ROS message <-> event term conversion (retalisc/robot_io/messages.py, data_terms.py):
+"""ROS message <-> event term conversion (retalisc/robot_io/messages.py; term text: retalisc/driver/values.py):
 the Retalis release's convention, generated converters against the generic reference,
 SWI-Prolog reading what we write, and round trips message -> term -> message on every
 message type of the sample recordings."""
@@ -23,9 +23,8 @@ def prolog_string(text: str) -> str:
     escaped = text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n").replace("\r", "\\r")
     return '"' + escaped + '"'
 
-from retalisc.frontend.terms import Atom, Compound, String  # noqa: E402
 from retalisc.robot_io.bags import Recording, typestore  # noqa: E402
-from retalisc.robot_io.data_terms import read_data_term, write_data_term  # noqa: E402
+from retalisc.driver.values import String, Term, is_atom, read_term, write_term  # noqa: E402
 from retalisc.robot_io.messages import (  # noqa: E402
     ConversionError, Convention, MessageConverter, topic_functor, type_functor)
 from retalisc.robot_io.samples import nao_records, sample_store  # noqa: E402
@@ -127,7 +126,7 @@ def _prolog_leaves(text: str):
             "findall(L, (sub_term(X, T), (atom(X) -> atom_codes(X, Cs), L = a(Cs) ; number(X) -> L = n(X))), Ls), "
             "format(string(Out), '~q', [Ls])")
     leaves = []
-    for item in read_data_term(bridge.call_text(goal)):
+    for item in read_term(bridge.call_text(goal)):
         if item.name == "a":
             leaves.append("".join(map(chr, item.args[0])))
         else:
@@ -136,14 +135,14 @@ def _prolog_leaves(text: str):
 
 
 def _python_leaves(value, out):
-    if isinstance(value, Compound):
+    if isinstance(value, Term):
         for arg in value.args:
             _python_leaves(arg, out)
     elif isinstance(value, list):
         for item in value:
             _python_leaves(item, out)
-    elif isinstance(value, Atom):
-        out.append(value.name)
+    elif is_atom(value):
+        out.append(value)
     elif isinstance(value, (int, float)):
         out.append(value)
     return out
@@ -159,7 +158,7 @@ def test_swi_prolog_reads_strings_and_floats_as_written(plain):
     prolog = _prolog_leaves(text)
     assert [x for x in prolog if isinstance(x, str)] == [wrap("a'b")] + [wrap(s) for s in TRICKY]
     assert [x for x in prolog if not isinstance(x, str)] == [1, 2, 1e-05, -2.5e300, math.inf, 5e-324]
-    assert _python_leaves(read_data_term(text), []) == prolog
+    assert _python_leaves(read_term(text), []) == prolog
 
 
 # ---- terms back to messages ------------------------------------------------------------------
@@ -186,7 +185,8 @@ def test_back_from_terms_with_either_header():
     ("std_msgs__0__Header([1,2000000000],'\"x\"')", "nanoseconds 2000000000 outside [0, 1e9)"),
     ("unknown__0__Type(1)", "unknown__0__Type(1) is not a message of a known type"),
     ("geometry_msgs__0__PoseStamped(X, Y)", "not ground: variable X"),
-    ("sensor_msgs__0__JointState(std_msgs__0__Header([1,2],'\"\"'),[a|b],[],[],[])", "not a proper list"),
+    ("sensor_msgs__0__JointState(std_msgs__0__Header([1,2],'\"\"'),[a|b],[],[],[])",
+     "sensor_msgs__0__JointState.name: expected a list, not '[|]'(a,b)"),
 ])
 def test_terms_that_are_not_messages_say_why(text, message):
     with pytest.raises(ConversionError) as error:
@@ -215,22 +215,33 @@ def test_generated_source_is_cached_and_readable():
 
 # ---- data terms -----------------------------------------------------------------------------
 
-_atoms = st.builds(Atom, st.text(max_size=8))
+_atoms = st.text(max_size=8)
 _leaves = st.one_of(st.integers(-2**70, 2**70), st.floats(allow_nan=False), _atoms,
                     st.builds(String, st.text(max_size=8)))
 _data = st.recursive(_leaves, lambda inner: st.one_of(
     st.lists(inner, max_size=4),
-    st.builds(Compound, st.text(min_size=1, max_size=6), st.lists(inner, min_size=1, max_size=4).map(tuple))),
+    st.builds(Term, st.text(min_size=1, max_size=6), st.lists(inner, min_size=1, max_size=4).map(tuple))),
     max_leaves=12)
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_data)
 def test_data_terms_read_back_what_swi_prolog_writes(value):
-    text = write_data_term(value)
-    assert read_data_term(text) == value
+    text = write_term(value)
+    assert same_kinds(read_term(text), value)
     written = Bridge().call_text(f"term_string(T, {prolog_string(text)}), format(string(Out), '~q', [T])")
-    assert read_data_term(written) == value
+    assert same_kinds(read_term(written), value)
+
+
+def same_kinds(a, b) -> bool:
+    """Equal values of the same kinds (an atom is not a string)."""
+    if type(a) is not type(b):
+        return False
+    if isinstance(a, list):
+        return len(a) == len(b) and all(map(same_kinds, a, b))
+    if isinstance(a, Term):
+        return a.name == b.name and len(a.args) == len(b.args) and all(map(same_kinds, a.args, b.args))
+    return a == b
 
 
 # ---- random messages: generated = generic, exact round trips -------------------------------------

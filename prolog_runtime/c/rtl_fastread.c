@@ -35,11 +35,12 @@
     number (rtl_io.pl writes those). rtl_fast_write_event(+Stream, +Event, +Start, +End)
     writes that line and a newline to a UTF-8 stream.
 
-    rtl_fast_output_data(+Records, -Json) writes buffered output records as the JSON array
-    rtl_io:rtl_output_data/2 writes (the form in which outputs cross to Python), byte for
-    byte: `[Text, Start, End, Term]` for event(E, S, T, -, add), the object form for any other
-    event, a json(Line) record's line as it is; each term also as data (numbers, atoms as
-    JSON strings, ["c", Name, Arg...], ["l", Item...], ["s", Text], ["f", "inf"]). It fails,
+    rtl_fast_output_data(+Records, -Json) writes buffered output records as the two JSON
+    arrays rtl_io:rtl_output_data/2 writes (the form in which outputs cross to Python), byte
+    for byte: the outputs (`[Text, Start, End]` for event(E, S, T, -, add), the object of its
+    line for any other event, a json(Line) record's line as it is), a newline, and the terms
+    as data (numbers, atoms as JSON strings, ["c", Name, Arg...], ["l", Item...], ["s", Text],
+    ["f", "inf"]; null for a json(Line) record). It fails,
     writing nothing, for what it leaves to the Prolog writer: times that are not finite or
     integers beyond 64 bits, variables, terms nested deeper than 200 levels, dicts and blobs.
 */
@@ -602,10 +603,24 @@ static int json_time_text(buffer *b, term_t t)
   if ( !PL_is_float(t) || !PL_get_float(t, &d) || !isfinite(d) ) return FALSE;
   char *text;
   size_t len;
-  if ( !written(t, 0, &text, &len) ) return FALSE;
-  int ok = buf_add(b, text, len);
-  free(text);
-  return ok;
+  /* the text write/1 writes (float_format), without a stream */
+  if ( !PL_get_nchars(t, &len, &text, CVT_FLOAT|BUF_STACK) ) return FALSE;
+  return buf_add(b, text, len);
+}
+
+/* An atom as a JSON string: an ASCII atom from its characters, any other as UTF-8. */
+static int json_atom(buffer *b, atom_t a)
+{ size_t len;
+  const char *s = PL_atom_nchars(a, &len);
+  if ( s )
+  { size_t i = 0;
+    while ( i < len && (unsigned char)s[i] < 0x80 ) i++;
+    if ( i == len ) return buf_add(b, "\"", 1) && json_escaped(b, s, len) && buf_add(b, "\"", 1);
+  }
+  term_t t = PL_new_term_ref();
+  char *text;
+  return PL_put_atom(t, a) && PL_get_nchars(t, &len, &text, CVT_ATOM|REP_UTF8|BUF_STACK) &&
+         buf_add(b, "\"", 1) && json_escaped(b, text, len) && buf_add(b, "\"", 1);
 }
 
 /* A plain term, written here as writeq/1 writes it, without a stream: integers that fit 64
@@ -779,7 +794,7 @@ static int term_data(buffer *b, term_t t, int depth)
       return json_time_text(b, t);
     }
     case PL_ATOM:
-      return json_string_of(b, t, CVT_ATOM);
+      return PL_get_atom(t, &name) && json_atom(b, name);
     case PL_NIL:
       return buf_text(b, "[\"l\"]");
     case PL_STRING:
@@ -794,9 +809,8 @@ static int term_data(buffer *b, term_t t, int depth)
     }
     case PL_TERM:
     { if ( !PL_get_name_arity(t, &name, &arity) ) return FALSE;
-      term_t name_term = PL_new_term_ref(), arg = PL_new_term_ref();
-      if ( !PL_put_atom(name_term, name) || !buf_text(b, "[\"c\",") || !json_string_of(b, name_term, CVT_ATOM) )
-        return FALSE;
+      term_t arg = PL_new_term_ref();
+      if ( !buf_text(b, "[\"c\",") || !json_atom(b, name) ) return FALSE;
       for (size_t k = 1; k <= arity; k++)
       { if ( !PL_get_arg(k, t, arg) || !buf_add(b, ",", 1) || !term_data(b, arg, depth + 1) ) return FALSE;
       }
@@ -826,13 +840,14 @@ static int event_text(buffer *b, term_t event)
   return buf_add(b, "\"", 1);
 }
 
-static int output_record(buffer *b, term_t record)
+/* One record: its output into b, its term as data into d. */
+static int output_record(buffer *b, buffer *d, term_t record)
 { term_t a = PL_new_term_ref();
   if ( PL_is_functor(record, functor_json1) )
   { char *s;
     size_t len;
     return PL_get_arg(1, record, a) && PL_get_nchars(a, &len, &s, CVT_STRING|CVT_ATOM|REP_UTF8|BUF_STACK) &&
-           buf_add(b, s, len);
+           buf_add(b, s, len) && buf_text(d, "null");
   }
   if ( !PL_is_functor(record, functor_event5) ) return FALSE;
   term_t event = PL_new_term_ref(), start = PL_new_term_ref(), end = PL_new_term_ref(),
@@ -842,14 +857,13 @@ static int output_record(buffer *b, term_t record)
        !PL_get_arg(4, record, consumer) || !PL_get_arg(5, record, op) )
     return FALSE;
   if ( !PL_get_atom(op, &o) || (o != atom_add && o != atom_retract) ) return FALSE;
+  if ( !term_data(d, event, 0) ) return FALSE;
   int no_consumer = PL_get_atom(consumer, &c) && c == atom_minus;
   if ( no_consumer && o == atom_add )
     return buf_add(b, "[", 1) && event_text(b, event) && buf_add(b, ",", 1) && json_time_text(b, start) &&
-           buf_add(b, ",", 1) && json_time_text(b, end) && buf_add(b, ",", 1) && term_data(b, event, 0) &&
-           buf_add(b, "]", 1);
+           buf_add(b, ",", 1) && json_time_text(b, end) && buf_add(b, "]", 1);
   if ( !buf_text(b, "{\"event\": ") || !event_text(b, event) || !buf_text(b, ", \"start\": ") ||
-       !json_time_text(b, start) || !buf_text(b, ", \"end\": ") || !json_time_text(b, end) ||
-       !buf_text(b, ", \"term\": ") || !term_data(b, event, 0) )
+       !json_time_text(b, start) || !buf_text(b, ", \"end\": ") || !json_time_text(b, end) )
     return FALSE;
   if ( !no_consumer )
   { if ( PL_is_functor(consumer, functor_echo1) )
@@ -866,20 +880,22 @@ static int output_record(buffer *b, term_t record)
   return buf_add(b, "}", 1);
 }
 
+/* rtl_fast_output_data(+Records, -Json): the outputs line, a newline, the terms line. */
 static foreign_t
 pl_fast_output_data(term_t records, term_t json)
-{ char stack[4096];
-  buffer b = BUFFER_ON(stack);
+{ char stack[4096], data_stack[4096];
+  buffer b = BUFFER_ON(stack), d = BUFFER_ON(data_stack);
   term_t head = PL_new_term_ref(), tail = PL_copy_term_ref(records);
-  int ok = buf_add(&b, "[", 1);
+  int ok = buf_add(&b, "[", 1) && buf_add(&d, "[", 1);
   for (int first = TRUE; ok && PL_get_list(tail, head, tail); first = FALSE)
   { fid_t fid = PL_open_foreign_frame();
-    ok = (first || buf_add(&b, ",", 1)) && output_record(&b, head);
+    ok = (first || (buf_add(&b, ",", 1) && buf_add(&d, ",", 1))) && output_record(&b, &d, head);
     PL_close_foreign_frame(fid);
   }
-  ok = ok && PL_get_nil(tail) && buf_add(&b, "]", 1) &&
+  ok = ok && PL_get_nil(tail) && buf_text(&b, "]\n") && buf_add(&d, "]", 1) && buf_add(&b, d.data, d.len) &&
        PL_unify_chars(json, PL_STRING|REP_UTF8, b.len, b.data);
   buf_free(&b);
+  buf_free(&d);
   return ok;
 }
 

@@ -51,6 +51,27 @@ _TRACE_REQUESTS = ("start", "stop", "feed_line", "feed_byte_line", "explain", "w
                    "report", "end")
 
 
+_NO_DATA = object()
+
+
+class _BatchTerms:
+    """The terms of one call's outputs, as the runtime's data (the second line of
+    rtl_output_data/2), decoded once, when a term is first asked for."""
+
+    __slots__ = ("text", "items")
+
+    def __init__(self, text: str):
+        self.text = text
+        self.items: Optional[list] = None
+
+    def item(self, index: int):
+        items = self.items
+        if items is None:
+            items = self.items = _decode_json(self.text)
+            self.text = ""
+        return items[index]
+
+
 class OutputEvent:
     """One output: `event` is the term text (writeq), `start` and `end` its times,
     `consumer` is set for subscription deliveries, `input` is True for the echo of an input
@@ -64,7 +85,8 @@ class OutputEvent:
     runtime sends the term as data with the text (`from_data`): nothing is read again. For
     an answer, `term` and `answer` are the QueryAnswer, `name` is "answer" and `args` is `()`."""
 
-    __slots__ = ("event", "start", "end", "consumer", "op", "query", "input", "_line", "_data", "_term", "_answer")
+    __slots__ = ("event", "start", "end", "consumer", "op", "query", "input", "_line", "_data", "_batch", "_index",
+                 "_term", "_answer")
 
     def __init__(self, event: str, start: Number, end: Number, consumer: Optional[str] = None, op: str = "add",
                  line: str = "", query: Optional[dict] = None, input: bool = False):
@@ -77,26 +99,29 @@ class OutputEvent:
         self.input = input          # the echo of an input event (`echo_input`, `--echo-input`)
         self._line = line or None
         self._data = _NO_DATA       # the term as the runtime's data (from_data), read when asked for
+        self._batch = None          # or the terms of the call that produced it, with its index there
+        self._index = 0
         self._term = _NO_DATA
         self._answer = _NO_DATA
 
     @classmethod
-    def from_data(cls, data: Union[list, dict]) -> "OutputEvent":
+    def from_data(cls, data: Union[list, dict], term=_NO_DATA) -> "OutputEvent":
         """The output from one element of the runtime's output data (rtl_output_data/2 in
-        prolog_runtime/rtl_io.pl): `[Text, Start, End, Term]` for an event with no consumer
-        and op add, an object with the keys of the output line and `"term"` for any other,
-        the result object of a synchronized query for an answer."""
+        prolog_runtime/rtl_io.pl): `[Text, Start, End]` for an event with no consumer and op
+        add, the object of its output line for any other, the result object of a synchronized
+        query for an answer; `term` the element of the terms' array, the event's term as data."""
         new = _new_output(cls)
         if type(data) is list:
-            new.event, new.start, new.end, new._data = data
+            new.event, new.start, new.end = data
             new.consumer, new.op, new.query, new.input = None, "add", None, False
         elif "query" in data:
-            new.event, new.start, new.end, new._data = "", data["at"], data["at"], _NO_DATA
+            new.event, new.start, new.end = "", data["at"], data["at"]
             new.consumer, new.op, new.query, new.input = None, "answer", data, False
         else:
-            new.event, new.start, new.end, new._data = data["event"], data["start"], data["end"], data["term"]
+            new.event, new.start, new.end = data["event"], data["start"], data["end"]
             new.consumer, new.op = data.get("consumer"), data.get("op", "add")
             new.query, new.input = None, data.get("input") is True
+        new._data, new._batch, new._index = term, None, 0
         new._line = None
         new._term = new._answer = _NO_DATA
         return new
@@ -124,7 +149,8 @@ class OutputEvent:
             return self.answer
         term = self._term
         if term is _NO_DATA:
-            term = self._term = term_value(self._data) if self._data is not _NO_DATA else read_term(self.event)
+            data = self._batch.item(self._index) if self._batch is not None else self._data
+            term = self._term = term_value(data) if data is not _NO_DATA else read_term(self.event)
         return term
 
     @property
@@ -163,8 +189,8 @@ class OutputEvent:
                 f"consumer={self.consumer!r}, op={self.op!r}, query={self.query!r}, input={self.input!r})")
 
 
-_NO_DATA = object()
 _new_output = object.__new__
+_from_data = OutputEvent.from_data
 
 _encode_json_string = json.encoder.encode_basestring        # C; escapes as the runtime does but for 3 controls
 _RUNTIME_ESCAPES = {code: f"\\u{code:04x}" for code in range(0x20)}
@@ -213,12 +239,17 @@ def _number_text(value) -> str:
 
 def _event_line(event: "OutputEvent") -> str:
     """The output line of an event, byte for byte as rtl_event_json/6 (rtl_io.pl) writes it."""
-    line = (f'{{"event": {_json_text(event.event)}, "start": {_number_text(event.start)}, '
-            f'"end": {_number_text(event.end)}')
+    text, start, end = event.event, event.start, event.end
+    line = ('{"event": ' + (_json_text(text) if "\r" in text or "\b" in text or "\f" in text else
+                            _encode_json_string(text))
+            + ', "start": ' + (str(start) if type(start) is int else _number_text(start))
+            + ', "end": ' + (str(end) if type(end) is int else _number_text(end)))
+    if event.consumer is None and not event.input:
+        return line + ("}" if event.op != "retract" else ', "op": "retract"}')
     if event.input:
         line += ', "input": true'
-    elif event.consumer is not None:
-        line += f', "consumer": {_json_text(event.consumer)}'
+    else:
+        line += ', "consumer": ' + _json_text(event.consumer)
     if event.op == "retract":
         line += ', "op": "retract"'
     return line + "}"
@@ -260,9 +291,10 @@ def read_answer(text: str) -> Answer:
     if not text:
         return answer
     if text[0] == "[":
-        data, _, text = text.partition("\n")
-        answer.outputs = _output_events(data)
-    for line in text.splitlines():
+        outputs, _, text = text.partition("\n")
+        terms, _, text = text.partition("\n")
+        answer.outputs = _output_events(outputs, terms)
+    for line in text.split("\n"):             # (not splitlines: a reason may hold U+2028, U+0085)
         if not line:
             continue
         first = line[0]
@@ -282,13 +314,21 @@ def read_answer(text: str) -> Answer:
     return answer
 
 
-def _output_events(data: str) -> List["OutputEvent"]:
+def _output_events(outputs: str, terms: str) -> List["OutputEvent"]:
+    """The OutputEvents of the two lines of rtl_output_data/2: the outputs, decoded now, and
+    their terms, decoded when one is asked for (`OutputEvent.term`)."""
+    batch = _BatchTerms(terms)
+    events = [_from_data(item) for item in _decode_json(outputs)]
+    for index, event in enumerate(events):
+        event._batch, event._index = batch, index
+    return events
+
+
+def _decode_json(text: str):
     try:
-        items = json.loads(data)
+        return json.loads(text)
     except RecursionError:                  # a deep term (input terms nest up to 1,000 levels)
-        items = with_room_for_depth(lambda: json.loads(data))
-    from_data = OutputEvent.from_data
-    return [from_data(item) for item in items]
+        return with_room_for_depth(lambda: json.loads(text))
 
 
 def _bad_item_index(error: PrologError) -> Optional[int]:

@@ -173,7 +173,8 @@ class _Unsupported(Exception):
 def read_term(text: str) -> Value:
     """Read one ground term from `text` (no final full stop needed) into the value model.
     The syntax writeq writes for data (compounds, lists, quoted and plain atoms, strings,
-    numbers) is read here; anything else (operators such as `a-b` or `0:'|'`, character
+    numbers; a partial list `[a|t]` as the cells `Term("[|]", ("a", "t"))`, as the runtime's
+    data gives it) is read here; anything else (operators such as `a-b` or `0:'|'`, character
     codes) by SWI-Prolog's reader (`ground_canonical`: read_term from a string, never pasted
     into a goal), whose write_canonical text is then read here. Raises ValueError when `text`
     is not one ground term."""
@@ -281,8 +282,15 @@ def _parse(tokens: list, i: int):
                 i += 1
             elif tokens[i][0] == "]":
                 return items, i + 1
-            elif tokens[i][0] == "|":
-                raise _Unsupported("not a proper list")
+            elif tokens[i][0] == "|":              # a partial list: '[|]'(Head, Tail) cells
+                tail, i = _parse(tokens, i + 1)
+                if i >= len(tokens) or tokens[i][0] != "]":
+                    raise _Unsupported
+                if isinstance(tail, list):
+                    return items + tail, i + 1
+                for item in reversed(items):
+                    tail = Term("[|]", (item, tail))
+                return tail, i + 1
             else:
                 raise _Unsupported
     raise _Unsupported
@@ -330,8 +338,8 @@ def float_text(value: float) -> str:
 
 
 def write_term(value: Value) -> str:
-    """Prolog text of a ground value (the inverse of read_term; `True`/`False` are written as
-    the atoms true and false)."""
+    """Prolog text of a value (the inverse of read_term; `True`/`False` are written as the
+    atoms true and false, a `Variable` as its name)."""
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):
@@ -346,7 +354,9 @@ def write_term(value: Value) -> str:
         return "[" + ",".join(write_term(item) for item in value) + "]"
     if isinstance(value, Term):
         return atom_text(value.name) + "(" + ",".join(write_term(arg) for arg in value.args) + ")"
-    raise TypeError(f"not a ground term value: {value!r}")
+    if isinstance(value, Variable):
+        return value.name
+    raise TypeError(f"not a term value: {value!r}")
 
 
 _EPOCH = _dt.datetime(1970, 1, 1, tzinfo=_dt.timezone.utc)

@@ -64,7 +64,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import IO, Any, Callable, Dict, List, Optional, Tuple
 
-from ..robot_io.data_terms import read_data_term, write_data_term
+from ..driver.values import read_term, write_term
 from ..robot_io.messages import CLOCK_JUMP, CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from ..robot_io.ros1_terms import Ros1Terms
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
@@ -544,7 +544,7 @@ class LiveNode:
     def _publish(self, topic: str, event) -> None:
         msgtype = self.output_types.get(topic) or self.config.publish_type(topic)
         try:
-            term = read_data_term(event.event)
+            term = event.term                   # the runtime's data: nothing is read again
             if msgtype is None:
                 found = self.converter.message_type(term)
                 if found is None:
@@ -639,10 +639,10 @@ class LiveNode:
 
     def _delete_memory(self, memory_id: str) -> Reply:
         try:
-            term = read_data_term(memory_id.strip())
+            term = read_term(memory_id.strip())
         except ValueError as error:
             return Reply(False, f"a memory id is a ground term: {error}")
-        self.engine.memory(f"d_mem({write_data_term(term)})")    # re-written from the parsed term
+        self.engine.memory(f"d_mem({write_term(term)})")    # re-written from the parsed term
         return Reply(True)
 
     def _add_input(self, topic: str, msg_type: str) -> Reply:

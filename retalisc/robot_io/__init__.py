@@ -3,8 +3,8 @@ into the robot's tools, and timeline pictures (docs/robot_io.md).
 
 - `messages`: message <-> event term conversion, generic over the message types of a rosbags
   type store (the definitions embedded in a bag included), with a converter generated per
-  type on first use.
-- `data_terms`: a fast reader of ground term text (the output of writeq) into Python values.
+  type on first use; terms are the values of `retalisc.driver.values` (outputs come with their
+  term as data, `OutputEvent.term`; text is read by `values.read_term`).
 - `bags`: opening ROS 1 `.bag` files, ROS 2 sqlite3 folders and MCAP files; writing small
   bags (tests, examples).
 - `replay`: `retalisc run PROGRAM --bag FILE`: feeding a recording to an Engine.

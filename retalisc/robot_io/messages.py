@@ -47,9 +47,7 @@ import re
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
-from ..frontend.terms import Atom, Compound, String
-from .data_terms import DataTerm, atom_text, float_text, quote_atom, read_data_term
-from .data_terms import write_data_term
+from ..driver.values import String, Term, Value, atom_text, float_text, is_atom, quote_atom, read_term, write_term
 
 # rosbags' Nodetype values (rosbags.typesys.base.Nodetype), fixed by its message model.
 BASE, NAME, ARRAY, SEQUENCE = 1, 2, 3, 4
@@ -263,12 +261,14 @@ class MessageConverter:
     # -- terms to messages --
 
     def message(self, term, msgtype: Optional[str] = None) -> Tuple[str, Any]:
-        """(msgtype, msg) of an event term (text or data term). Without `msgtype`, the type is
+        """(msgtype, msg) of an event term: its value (retalisc.driver.values, as `OutputEvent.term`
+        gives it) or its text (a `str` that is not a `String` is read as text: a message type's
+        atom, an identifier, is its own text). Without `msgtype`, the type is
         found from the functor (`pkg__0__Type`), unwrapping a topic wrapper first when the
         convention wraps topics. Raises ConversionError saying which field is wrong."""
-        if isinstance(term, str):
+        if is_atom(term):
             try:
-                term = read_data_term(term)
+                term = read_term(term)
             except ValueError as error:
                 raise ConversionError(str(error)) from None
         if msgtype is None:
@@ -282,16 +282,16 @@ class MessageConverter:
                 term = term.args[0]
         return msgtype, self._message(term, msgtype, type_functor(msgtype))
 
-    def message_type(self, term: DataTerm) -> Optional[str]:
+    def message_type(self, term: Value) -> Optional[str]:
         """The message type whose terms look like `term` (functor and number of fields), or
         that of the term a topic wrapper holds when the convention wraps topics; None when
         there is none."""
         found = self._type_of(term)
-        if found is None and self.convention.wrap_topic and isinstance(term, Compound) and len(term.args) == 1:
+        if found is None and self.convention.wrap_topic and isinstance(term, Term) and len(term.args) == 1:
             found = self._type_of(term.args[0])
         return found
 
-    def _type_of(self, term: DataTerm, by_name_only: bool = False) -> Optional[str]:
+    def _type_of(self, term: Value, by_name_only: bool = False) -> Optional[str]:
         if self._functor_types is None:
             index: Dict[str, List[str]] = {}
             for name in sorted(self.typestore.fielddefs):
@@ -300,7 +300,7 @@ class MessageConverter:
         functor = _functor(term)
         if functor is None:
             return None
-        arity = len(term.args) if isinstance(term, Compound) else 0
+        arity = len(term.args) if isinstance(term, Term) else 0
         for msgtype in self._functor_types.get(functor, []):
             if msgtype in TIME_TYPES:
                 continue
@@ -309,16 +309,16 @@ class MessageConverter:
                 return msgtype
         return None
 
-    def _message(self, term: DataTerm, msgtype: str, path: str):
+    def _message(self, term: Value, msgtype: str, path: str):
         fields = _fields(self.typestore, msgtype)
         functor = type_functor(msgtype)
         cls = self.typestore.types[msgtype]
         if not fields:
-            if not (term == Atom(functor) or (isinstance(term, Compound) and term.name == functor
+            if not ((is_atom(term) and term == functor) or (isinstance(term, Term) and term.name == functor
                                               and not term.args)):
                 raise ConversionError(f"{path}: expected {functor}, not {_describe(term)}")
             return cls(**{name: 0 for name, _ in self.typestore.fielddefs[msgtype][1]})
-        if not isinstance(term, Compound) or term.name != functor:
+        if not isinstance(term, Term) or term.name != functor:
             raise ConversionError(f"{path}: expected a {functor}(...) term, not {_describe(term)}")
         args = list(term.args)
         if msgtype == HEADER_TYPE:
@@ -334,7 +334,7 @@ class MessageConverter:
                   for (name, desc), arg in zip(fields, args)}
         return cls(**values)
 
-    def _value(self, term: DataTerm, desc, path: str):
+    def _value(self, term: Value, desc, path: str):
         kind, detail = desc
         if kind == BASE:
             return self._base_value(term, detail[0], path)
@@ -353,12 +353,12 @@ class MessageConverter:
             return numpy.array(items, dtype=_numpy_type(sub[1][0]))
         return items
 
-    def _base_value(self, term: DataTerm, base: str, path: str):
+    def _base_value(self, term: Value, base: str, path: str):
         if base in _STRINGS:
             if isinstance(term, String):
-                return term.text
-            if isinstance(term, Atom):
-                name = term.name
+                return str(term)
+            if is_atom(term):
+                name = term
                 if not self.convention.plain_strings and len(name) >= 2 and name[0] == '"' and name[-1] == '"':
                     return name[1:-1]
                 return name
@@ -366,9 +366,9 @@ class MessageConverter:
                 return ""                           # the atom '[]' printed by a program as []
             raise ConversionError(f"{path}: expected a string (atom), not {_describe(term)}")
         if base == "bool":
-            if term in (Atom("true"), 1):
+            if (is_atom(term) and term == "true") or (not isinstance(term, str) and term == 1):
                 return True
-            if term in (Atom("false"), 0):
+            if (is_atom(term) and term == "false") or (not isinstance(term, str) and term == 0):
                 return False
             raise ConversionError(f"{path}: expected true or false, not {_describe(term)}")
         if base in _FLOATS:
@@ -382,7 +382,7 @@ class MessageConverter:
             return term
         raise ConversionError(f"{path}: expected an integer ({base}), not {_describe(term)}")
 
-    def _time(self, term: DataTerm, msgtype: str, path: str):
+    def _time(self, term: Value, msgtype: str, path: str):
         cls = self.typestore.types[msgtype]
         if isinstance(term, list) and len(term) == 2 and all(isinstance(v, int) for v in term):
             sec, nanosec = term
@@ -505,16 +505,16 @@ class EventClock:
         return time
 
 
-def _functor(term: DataTerm) -> Optional[str]:
-    if isinstance(term, Compound):
+def _functor(term: Value) -> Optional[str]:
+    if isinstance(term, Term):
         return term.name
-    if isinstance(term, Atom):
-        return term.name
+    if is_atom(term):
+        return term
     return None
 
 
-def _describe(term: DataTerm) -> str:
-    text = write_data_term(term)
+def _describe(term: Value) -> str:
+    text = write_term(term)
     return text if len(text) <= 60 else text[:57] + "..."
 
 

@@ -34,9 +34,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Tuple
 
-from ..frontend.terms import Atom, Compound, String
 from . import require
-from .data_terms import DataTerm, read_data_term, write_data_term
+from ..driver.values import String, Term, Value, is_atom, read_term, write_term
 from .messages import ConversionError, Convention, MessageConverter, type_functor
 
 EVENTS_TOPIC = "/retalis/events"
@@ -106,10 +105,7 @@ class Publisher:
         if event.op == "answer":
             return self._json({"event": "", "start": event.start, "end": event.end, "query": event.query},
                               event.end)
-        try:
-            term = read_data_term(event.event)
-        except ValueError:
-            term = None
+        term = event.term                   # the runtime's data: nothing is read again
         if event.op == "add" and event.consumer is None and self._is_echo(event, term):
             return None
         if event.op == "add" and term is not None:
@@ -126,11 +122,11 @@ class Publisher:
                 return Message(topic, msgtype, "ros2msg", self._schema(index, msgtype), "cdr",
                                bytes(self.stores[index].serialize_cdr(msg, msgtype)), _ns(event.end))
         payload = {"event": event.event, "start": event.start, "end": event.end}
-        if isinstance(term, Compound):
+        if isinstance(term, Term):
             payload["name"] = term.name
             payload["args"] = [_json_value(arg, self.convention) for arg in term.args]
-        elif isinstance(term, Atom):
-            payload["name"], payload["args"] = term.name, []
+        elif is_atom(term):
+            payload["name"], payload["args"] = term, []
         if event.consumer is not None:
             payload["consumer"] = event.consumer
         if event.op != "add":
@@ -145,7 +141,7 @@ class Publisher:
             return False
         for i, (text, parsed) in enumerate(candidates):
             if parsed is None:
-                parsed = read_data_term(text)
+                parsed = read_term(text)
                 candidates[i] = (text, parsed)
             if parsed == term:
                 del candidates[i]
@@ -175,25 +171,25 @@ def _ns(seconds) -> int:
     return max(0, round(seconds * 1e9))
 
 
-def _json_value(term: DataTerm, convention: Convention):
+def _json_value(term: Value, convention: Convention):
     if isinstance(term, bool):
         return term
     if isinstance(term, int):
         return term
     if isinstance(term, float):
         return term if math.isfinite(term) else str(term)
-    if isinstance(term, Atom):
-        name = term.name
+    if isinstance(term, String):
+        return str(term)
+    if is_atom(term):
+        name = term
         if not convention.plain_strings and len(name) >= 2 and name[0] == '"' and name[-1] == '"':
             return name[1:-1]
         return name
-    if isinstance(term, String):
-        return term.text
     if isinstance(term, list):
         return [_json_value(item, convention) for item in term]
-    if isinstance(term, Compound):
+    if isinstance(term, Term):
         return {"name": term.name, "args": [_json_value(arg, convention) for arg in term.args]}
-    return write_data_term(term)
+    return write_term(term)
 
 
 # ---- sinks ---------------------------------------------------------------------------------

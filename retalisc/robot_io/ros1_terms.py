@@ -25,7 +25,7 @@ from __future__ import annotations
 import struct
 from typing import Callable, Dict, List, Optional, Tuple
 
-from .data_terms import atom_text
+from ..driver.values import atom_text
 from .messages import (ARRAY, BASE, HEADER_TYPE, NAME, SEQUENCE, TIME_TYPES, Convention, _fields, has_header,
                        stamped_list, static_tf_wrapper, topic_functor, type_functor)
 from ..driver.engine import Ros1Bytes
