@@ -37,14 +37,35 @@ class ConditionSource(Protocol):
         """The bindings under which condition `name` (its query `query`) of `node` holds."""
 
 
+def _event_keys(query: Query) -> tuple:
+    """The functor/arity of the event each positive `event(P)` literal of `query` needs (P not a variable)."""
+    keys = []
+    for literal in query:
+        term = literal.term
+        if literal.kind == "positive" and isinstance(term, Compound) and term.functor == "event" \
+                and len(term.args) == 1 and isinstance(term.args[0], (Atom, Compound)):
+            keys.append(BeliefBase.key(term.args[0]))
+    return tuple(keys)
+
+
 class BeliefConditions:
     """Conditions answered on the belief base by resolution, with the built-ins of BUILTINS."""
 
     def __init__(self, beliefs: BeliefBase, view: NodeView):
         self.beliefs = beliefs
         self.view = view
+        self._event_keys: dict = {}
 
     def answers(self, node, name: str, query: Query, bindings: Bindings) -> Iterator[Bindings]:
+        # A query with a positive `event(P)` literal can hold only in a macro step whose event has
+        # P's functor and arity: checked before any resolution (the event index of the conditions).
+        keys = self._event_keys.get(id(query))
+        if keys is None:
+            keys = self._event_keys[id(query)] = (query, _event_keys(query))
+        if keys[1]:
+            event = self.view.current_event()
+            if event is None or any(BeliefBase.key(event) != key for key in keys[1]):
+                return iter(())
         return self.beliefs.solve(query, bindings, self._builtin_for(node))
 
     def first(self, node, name: str, query: Query, bindings: Bindings) -> Optional[Bindings]:
