@@ -9,7 +9,8 @@ import pytest
 
 from golden_cases import check_expected
 from retalisc.robapl.executor import TRANSITIONS
-from retalisc.robapl.runner import load_actions, read_event_lines, run_agent, trace_lines
+from retalisc.robapl.iec import derived_events
+from retalisc.robapl.runner import load_actions, merge_derived, read_event_lines, run_agent, trace_lines
 from retalisc.robapl.syntax import load_agent
 
 GOLDEN = Path(__file__).resolve().parent / "golden_robapl"
@@ -19,7 +20,12 @@ CASES = sorted(p for p in GOLDEN.iterdir() if (p / "agent.apl").exists())
 def run_case(folder: Path):
     read = read_event_lines((folder / "events.jsonl").read_text(), str(folder / "events.jsonl"))
     assert not read.bad
-    return run_agent(load_agent(folder / "agent.apl"), read.events, load_actions(str(GOLDEN / "actions.py")))
+    events = read.events
+    if (folder / "iec.rtl").exists():          # an IEC: its derived events join the event base
+        derived, messages = derived_events(folder / "iec.rtl", folder / "events.jsonl")
+        assert not [m for m in messages if "derived event" in m or ": rejected: " in m], messages
+        events = merge_derived(events, derived)
+    return run_agent(load_agent(folder / "agent.apl"), events, load_actions(str(GOLDEN / "actions.py")))
 
 
 @pytest.mark.parametrize("folder", CASES, ids=lambda p: p.name)
@@ -36,6 +42,16 @@ def test_every_transition_has_a_golden_case():
                 made.add((record["from"], record["to"], record["why"]))
     assert made <= set(TRANSITIONS), f"transitions outside the table: {made - set(TRANSITIONS)}"
     assert set(TRANSITIONS) <= made, f"transitions no golden case makes: {set(TRANSITIONS) - made}"
+
+
+def test_a_condition_that_is_a_complex_event_of_the_iec():
+    trace = run_case(GOLDEN / "iec_condition")
+    assert [r["event"] for r in trace if "event" in r] == ["at_door(alice)", "bell", "visitor(alice)"]
+    assert [(r["t"], r["action"]) for r in trace if "action" in r] == [(4.0, "act(alice)")]
+    alone = read_event_lines('{"t": 4, "event": "bell"}')
+    trace = run_agent(load_agent(GOLDEN / "iec_condition" / "agent.apl"), alone.events,
+                      load_actions(str(GOLDEN / "actions.py")))
+    assert not [r for r in trace if "action" in r]      # no visitor derived: the greeting never starts
 
 
 def _records(trace, node):

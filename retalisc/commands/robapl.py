@@ -12,7 +12,7 @@ def robapl_group() -> None:
 
     \b
     retalisc robapl check AGENT.apl
-    retalisc robapl run AGENT.apl --events EVENTS.jsonl [--actions ACTIONS.py] [--trace-out T.jsonl] [--plot P.png]
+    retalisc robapl run AGENT.apl --events EVENTS.jsonl [--actions ACTIONS.py] [--iec IEC.rtl]\n                      [--trace-out T.jsonl] [--plot P.png]
     """
 
 
@@ -49,24 +49,37 @@ def check_command(agent_file: str) -> None:
               help='Event JSON Lines: {"t": SECONDS, "event": "TERM"}.')
 @click.option("--actions", "actions_file", type=click.Path(exists=True, dir_okay=False), default=None,
               help="A Python file defining register(actions): the external actions by name.")
+@click.option("--iec", "iec_file", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="A Retalis program (.rtl) run on the events: its derived events join the event base.")
 @click.option("--trace-out", type=click.Path(dir_okay=False), default=None,
               help="Write the trace here instead of standard output.")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False), default=None,
               help="Draw the plan nodes over time, coloured by state (PNG, SVG or PDF).")
-def run_command(agent_file: str, events_file: str, actions_file, trace_out, plot_file) -> None:
+def run_command(agent_file: str, events_file: str, actions_file, iec_file, trace_out, plot_file) -> None:
     """Run AGENT_FILE on the events of EVENTS: the trace (events, plans, transitions, actions)
     as JSON Lines."""
     from pathlib import Path
 
     from ..robapl.executor import ExecutionError
-    from ..robapl.runner import load_actions, read_event_lines, run_agent, trace_lines
+    from ..robapl.runner import load_actions, merge_derived, read_event_lines, run_agent, trace_lines
 
     agent = _load(agent_file)
     read = read_event_lines(Path(events_file).read_text(encoding="utf-8"), events_file)
     for message in read.bad:
         click.echo(message, err=True)
+    events = list(read.events)
+    if iec_file:
+        from ..robapl.iec import IECStopped, derived_events
+        try:
+            derived, messages = derived_events(Path(iec_file), Path(events_file))
+        except IECStopped as error:
+            click.echo(f"error: {error}", err=True)
+            sys.exit(1)
+        for message in messages:
+            click.echo(message, err=True)
+        events = merge_derived(events, derived)
     try:
-        trace = run_agent(agent, read.events, load_actions(actions_file))
+        trace = run_agent(agent, events, load_actions(actions_file))
     except ExecutionError as error:
         click.echo(f"error: {error}", err=True)
         sys.exit(1)

@@ -53,6 +53,12 @@ def load_actions(path: Optional[str]) -> Actions:
     return actions
 
 
+def merge_derived(events: List[Tuple[float, Term]], derived: List[Tuple[float, Term]]) -> List[Tuple[float, Term]]:
+    """The input events, then the IEC's derived events: the event base orders them by time, and
+    at one time the input events come first (they arrived before what was derived from them)."""
+    return list(events) + list(derived)
+
+
 def run_agent(agent: Agent, events: List[Tuple[float, Term]], actions: Actions) -> List[dict]:
     return Executor(agent, actions).run(events)
 
