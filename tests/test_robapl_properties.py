@@ -97,3 +97,69 @@ def test_preempted_plans_run_their_wind_down():
     order = [(r["action"] if "action" in r else r["node"], r.get("to")) for r in trace if "to" in r or "action" in r]
     assert order.index(("put_down(trash,floor)", None)) < order.index(("trash#1", "finished")) < \
         order.index(("help#1", "executing"))
+
+
+# ---- random agents: random plan trees, conditions, resources and priorities ------------------
+
+EVENTS = ["a", "b", "c", "d"]
+CONDITION_NAMES = ["start", "end", "invariant", "preempt", "pause", "resume", "pre"]
+
+
+@st.composite
+def random_nodes(draw, depth, names):
+    kind = draw(st.sampled_from(["external", "external", "belief_update", "list"] if depth < 3 else
+                                ["external", "belief_update"]))
+    name = f"n{next(names)}"
+    attributes = []
+    for condition in draw(st.lists(st.sampled_from(CONDITION_NAMES), max_size=2, unique=True)):
+        event = draw(st.sampled_from(EVENTS))
+        attributes.append(f"{condition}: {'not ' if condition == 'invariant' else ''}event({event})")
+    if draw(st.booleans()):
+        attributes.append(f"resources: <{draw(st.sampled_from(['r1', 'r2']))}, "
+                          f"{draw(st.sampled_from(['using', 'blocking']))}, 1>")
+    if kind == "belief_update":
+        attributes.append(f"post: done({name})")
+    text = f"{kind} {name}"
+    if kind == "external":
+        text += f": long({name}, {draw(st.integers(0, 5))})"
+    if attributes:
+        text += " [" + "; ".join(attributes) + "]"
+    if kind == "list":
+        children = draw(st.lists(random_nodes(depth + 1, names), min_size=1, max_size=3))
+        for wind in draw(st.lists(st.sampled_from(["on_abort", "on_preempt", "on_pause", "on_resume"]),
+                                  max_size=2, unique=True)):
+            children.append(f"{wind} w{next(names)} {{ external x{next(names)}: act(w) }}")
+        text += " { " + " ".join(children) + " }"
+    return text
+
+
+@st.composite
+def random_agents(draw):
+    import itertools
+    names = itertools.count()
+    rules = []
+    for index, event in enumerate(draw(st.lists(st.sampled_from(EVENTS), min_size=1, max_size=3, unique=True))):
+        priority = draw(st.integers(0, 3))
+        children = draw(st.lists(random_nodes(1, names), min_size=1, max_size=3))
+        rules.append(f"{event} <- true | list p{index} [priority: {priority}] {{ {' '.join(children)} }}")
+    agent = "resources { r1: 1. r2: 2. }\nrules {\n" + "\n".join(rules) + "\n}\n"
+    times = sorted(draw(st.lists(st.integers(0, 30), min_size=1, max_size=10)))
+    events = [(float(t), draw(st.sampled_from(EVENTS))) for t in times]
+    return agent, events
+
+
+@settings(max_examples=80, deadline=None)
+@given(random_agents())
+def test_properties_of_random_agents(tmp_path_factory, scenario):
+    from retalisc.robapl.syntax import parse_agent
+    from retalisc.robapl.terms import Atom
+
+    text, events = scenario
+    agent_file = tmp_path_factory.mktemp("agent") / "agent.apl"
+    agent_file.write_text(text)
+    parse_agent(text)
+    terms = [(t, Atom(e)) for t, e in events]
+    trace = run(agent_file, GOLDEN / "actions.py", terms, CheckedExecutor)
+    check_one_state_at_a_time(trace)
+    check_wind_down_before_parent(trace, agent_file)
+    assert run(agent_file, GOLDEN / "actions.py", terms) == trace
