@@ -66,9 +66,11 @@ def test_check_command(tmp_path):
     assert "agent demo: 3 beliefs, 1 goals, 1 resources, 1 rules, 5 plan nodes" in result.output
     bad = tmp_path / "bad.apl"
     bad.write_text("rules {\n  go <- true | list p { external x }\n}\n")
-    result = CliRunner().invoke(main, ["robapl", "check", str(bad)])
-    assert result.exit_code == 2
-    assert f"{bad}:2:25: error: external node x needs a term" in result.output
+    for command in (["robapl", "check"], ["check"]):      # `retalisc check` knows agent files too
+        result = CliRunner().invoke(main, command + [str(bad)])
+        assert result.exit_code == 2
+        assert f"{bad}:2:25: error: external node x needs a term" in result.output
+    assert CliRunner().invoke(main, ["check", str(good)]).exit_code == 0
 
 
 def test_bad_event_lines_are_reported_counted_and_skipped():

@@ -31,6 +31,11 @@ def _load(path: str):
 @click.argument("agent_file", type=click.Path(exists=True, dir_okay=False))
 def check_command(agent_file: str) -> None:
     """Report the errors of AGENT_FILE (file:line:col: message, exit 2), or a summary."""
+    check_agent(agent_file)
+
+
+def check_agent(agent_file: str) -> None:
+    """`retalisc robapl check` (and `retalisc check` of a `.apl` file)."""
     agent = _load(agent_file)
     nodes = 0
     for rule in agent.rules:
