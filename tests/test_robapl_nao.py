@@ -12,9 +12,9 @@ from retalisc.cli import main
 NAO = Path(__file__).resolve().parent.parent / "examples" / "robapl_nao"
 
 
-def run_example(tmp_path):
+def run_example(tmp_path, events="events.jsonl"):
     trace_file, picture = tmp_path / "trace.jsonl", tmp_path / "run.png"
-    result = CliRunner().invoke(main, ["robapl", "run", str(NAO / "nao.apl"), "--events", str(NAO / "events.jsonl"),
+    result = CliRunner().invoke(main, ["robapl", "run", str(NAO / "nao.apl"), "--events", str(NAO / events),
                                        "--actions", str(NAO / "environment.py"), "--trace-out", str(trace_file),
                                        "--plot", str(picture)])
     assert result.exit_code == 0, result.output
@@ -48,3 +48,17 @@ def test_what_nao_does(tmp_path):
     assert when("trash#2", "finished", "preempted") == 49.0 == when("help#1", "executing")
     assert (54.0, "press(red_button)") in actions
     assert any(r.get("belief_update") == "help#1/called" and r["post"] == "emergency_called(araz)" for r in trace)
+
+
+def test_no_answer_three_calls_then_emergency(tmp_path, update_golden):
+    """T1 without an answer: three calls 10 s apart (a timeout(10) end condition and a repeat
+    counted by iteration/2), then the emergency call of T7 through an abstract node."""
+    text, _ = run_example(tmp_path, "events_no_answer.jsonl")
+    check_expected(NAO / "expected_no_answer_trace.jsonl", text, update_golden)
+    trace = [json.loads(line) for line in text.splitlines()]
+    actions = [(r["t"], r["action"]) for r in trace if "action" in r]
+    say = 'say(mori,"Take drug A Mori")'
+    assert actions == [(36000.0, say), (36010.0, say), (36020.0, say), (36030.0, "move_to(red_button)"),
+                       (36035.0, "press(red_button)")]
+    assert any(r.get("belief_update") == "remind#1/emergency/help/called" and r["post"] == "emergency_called(mori)"
+               for r in trace)

@@ -3,12 +3,15 @@
 % pre-empts the trash plan (the trash is left on the floor first: the on_preempt wind-down), and
 % the bell waits for the trash to be dropped (a lower priority: Waiting-Resource).
 % Run: retalisc robapl run nao.apl --events events.jsonl --actions environment.py --plot run.png
+% (events_no_answer.jsonl: Mori does not answer the reminder).
 agent nao.
 
 beliefs {
   takes(mori, drug_a).
   friend(alice).
   known(Face) :- friend(Face).
+  call_ends(P) :- event(heard(P, "OK, I will take A")).
+  call_ends(P) :- timeout(10).
 }
 
 resources {
@@ -18,11 +21,16 @@ resources {
 }
 
 rules {
-  % T1: at 10 am NAO calls "Take drug A Mori"; the task ends when it hears the answer.
+  % T1: at 10 am NAO calls "Take drug A Mori"; the task ends when it hears the answer. A call
+  % without an answer ends after 10 s and is made again; after three, NAO calls for emergency
+  % assistance (T7's second case): the abstract node is replaced by the plan of the help rule.
   clock(10, 0) <- takes(P, D) | list remind [priority: 5] {
-    external call: say(P, "Take drug A Mori") [resources: <speaker, using, 1>;
-                                               end: event(heard(P, "OK, I will take A"))]
-    belief_update noted [start: finished(call); post: reminded(P, D)]
+    list ask [repeat: not reminded(P, D), iteration(ask, N), N < 3] {
+      external call: say(P, "Take drug A Mori") [resources: <speaker, using, 1>; end: call_ends(P);
+                                                 post: event(heard(P, "OK, I will take A"))]
+      belief_update noted [start: finished(call); pre: succeeded(call); post: reminded(P, D)]
+    }
+    abstract emergency: heard(P, "Help!") [start: finished(ask); pre: not reminded(P, D)]
   }
 
   % T7: on "Help!" NAO walks to the red button and presses it, with its legs and empty hands.

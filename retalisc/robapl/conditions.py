@@ -15,7 +15,7 @@ from .terms import Atom, BeliefBase, Bindings, Compound, Query, Term, unify, wal
 
 #: The built-in literals a condition may use, besides the beliefs (docs/robapl.md, "Conditions").
 BUILTINS = ("event/1", "state/2", "outcome/2", "finished/1", "succeeded/1", "failed/1", "start_time/2",
-            "end_time/2", "time/1", "done/0", "result/2", "goal/1", "resource_free/2")
+            "end_time/2", "time/1", "done/0", "result/2", "goal/1", "resource_free/2", "timeout/1", "iteration/2")
 
 
 class NodeView(Protocol):
@@ -30,6 +30,8 @@ class NodeView(Protocol):
     def goals(self) -> list: ...
 
     def resource_free(self, name: str) -> Optional[float]: ...
+
+    def wake_at(self, node, seconds: float) -> None: ...
 
 
 class ConditionSource(Protocol):
@@ -96,6 +98,18 @@ class BeliefConditions:
                 return one(unify(args[0], event, bindings) if event is not None else None)
             if key == ("time", 1):
                 return one(unify(args[0], view.now(), bindings))
+            if key == ("timeout", 1):
+                # true once the asking node has executed for that long; until then the executor
+                # is asked to wake up at that time (a timer event), as nothing else may happen
+                if node is None or node.start_time is None or not isinstance(args[0], (int, float)):
+                    return one(None)
+                if view.now() - node.start_time >= args[0]:
+                    return one(bindings)
+                view.wake_at(node, node.start_time + args[0])
+                return one(None)
+            if key == ("iteration", 2):
+                other = node_named(args[0])
+                return one(unify(args[1], other.iteration, bindings) if other is not None else None)
             if key == ("goal", 1):
                 return (b for b in (unify(args[0], g, bindings) for g in view.goals()) if b is not None)
             if key == ("resource_free", 2):

@@ -168,6 +168,7 @@ class Node:
     preempt_requested: bool = False
     held: Dict[str, float] = field(default_factory=dict)
     order: int = 0
+    iteration: int = 1
 
     @property
     def kind(self) -> str:
@@ -260,6 +261,7 @@ class Executor:
         self._handles = itertools.count(1)
         self._pending: Dict[str, Node] = {}
         self._plan_seq = itertools.count()
+        self._timers: set = set()
         self.conditions = conditions or BeliefConditions(self.beliefs, self)
         for goal in agent.goals:
             self.adopt(goal, 0.0)
@@ -276,6 +278,14 @@ class Executor:
 
     def resource_free(self, name: str) -> Optional[float]:
         return self.pool.free.get(name)
+
+    def wake_at(self, node: Node, time: float) -> None:
+        """A timer event `timer(NodeId, Time)` at `time` (once per node and time): a `timeout(S)`
+        condition must be evaluated again then, even if no other event comes."""
+        key = (node.path, node.start_time, time)
+        if key not in self._timers:
+            self._timers.add(key)
+            self.post(Compound("timer", (node.path, time)), time)
 
     def find_node(self, asking: Node, name: str) -> Optional[Node]:
         for node in asking.plan.root.walk():
@@ -583,6 +593,8 @@ class Executor:
     def _entered(self, node: Node, previous: str, transition: Transition) -> None:
         state = node.state
         if state == WAITING:
+            if previous == ITERATION_ENDED:
+                node.iteration += 1
             node.outcome, node.result, node.result_ready, node.action_failed = None, None, False, False
             node.preempt_requested = False
             # after a pause the finished children stay finished (thesis 7.2.3); a repeat resets them all
@@ -624,7 +636,7 @@ class Executor:
         for each in node.walk():
             if each.state != INACTIVE:
                 self._record({"node": each.path, "from": each.state, "to": INACTIVE, "outcome": None, "why": "reset"})
-            each.state, each.outcome, each.phase = INACTIVE, None, None
+            each.state, each.outcome, each.phase, each.iteration = INACTIVE, None, None, 1
             each.result, each.result_ready, each.action_failed, each.preempt_requested = None, False, False, False
         if node.kind == "abstract":
             node.children.clear()
