@@ -35,8 +35,15 @@ class NodeView(Protocol):
 
 
 class ConditionSource(Protocol):
+    """What the executor asks of whatever answers conditions (`Executor(conditions=...)`). `node`
+    is None for a rule's guard; `name` is the condition (`start`, ..., `guard`, `test`), so a
+    source can answer the monitored ones from an IEC and the checked-once ones by resolution."""
+
     def answers(self, node, name: str, query: Query, bindings: Bindings) -> Iterator[Bindings]:
         """The bindings under which condition `name` (its query `query`) of `node` holds."""
+
+    def first(self, node, name: str, query: Query, bindings: Bindings) -> Optional[Bindings]:
+        """The first of `answers`, or None when the condition does not hold."""
 
 
 def _event_keys(query: Query) -> tuple:

@@ -262,6 +262,7 @@ class Executor:
         self._pending: Dict[str, Node] = {}
         self._plan_seq = itertools.count()
         self._timers: set = set()
+        self._free_now: Dict[str, float] = dict(self.pool.free)   # the pool as a micro step takes from it
         self.conditions = conditions or BeliefConditions(self.beliefs, self)
         for goal in agent.goals:
             self.adopt(goal, 0.0)
