@@ -25,6 +25,7 @@ LAYERS: List[Tuple[str, Tuple[str, ...]]] = [
     ("robot_io", ("retalisc.robot_io",)),
     ("run loops", ("retalisc.driver.run", "retalisc.driver.recovery", "retalisc.driver.explain",
                    "retalisc.driver.active_queries", "retalisc.driver.swipl_handover")),
+    ("robapl", ("retalisc.robapl",)),
     ("live", ("retalisc.live",)),
     ("commands", ("retalisc.commands",)),
     ("entry points", ("retalisc.cli", "retalisc.__main__", "retalisc.live.roslaunch_node")),

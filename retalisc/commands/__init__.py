@@ -16,6 +16,7 @@ COMMAND_MODULES = {
     "retalisc.commands.plot": ("plot",),
     "retalisc.commands.explain": ("explain",),
     "retalisc.commands.live": ("ros", "ros2", "zenoh"),
+    "retalisc.commands.robapl": ("robapl",),
 }
 _COMMAND_MODULES = list(COMMAND_MODULES)
 

@@ -119,6 +119,10 @@ def check_command(program: str, werror: bool) -> None:
     It runs the whole compilation, as `retalisc compile` does, and discards the result: a
     program `check` accepts compiles, and its Prolog loads. Programs that compile but cannot
     mean what they say get warnings (`file:line:col: warning: ...` with a hint)."""
+    if program.endswith(".apl"):            # a RobAPL agent file (docs/robapl.md)
+        from .robapl import check_agent
+        check_agent(program)
+        return
     from ..load_check import load_error
 
     result = compile_or_exit(program, werror)
