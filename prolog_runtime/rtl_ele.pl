@@ -32,7 +32,8 @@
             rtl_remove_type_output_hook/2, % +Pattern, :Hook
             rtl_remove_type_output_hooks/0,
             rtl_dry_run/3,              % :Goal, -Retracted, -Derived
-            rtl_dry_running/0
+            rtl_dry_running/0,
+            rtl_dispatch_changed/0
           ]).
 
 /** <module> ELE runtime: event ingestion, derivation, output and forgetting
@@ -71,6 +72,7 @@ deletion is too late).
 :- dynamic output_hook/1.
 :- dynamic type_output_hook/2.              % type_output_hook(Skeleton, Hook)
 :- dynamic counter_key_of/2.                % counter_key_of(Rule, GlobalKey)
+:- dynamic dispatch_of/2.                   % dispatch_of(Skeleton, quiet | used)
 :- meta_predicate rtl_dry_run(0, -, -).
 :- meta_predicate rtl_add_output_hook(4), rtl_remove_output_hook(4),
                   rtl_add_type_output_hook(+, 4), rtl_remove_type_output_hook(+, 4).
@@ -102,6 +104,7 @@ rtl_reset :-
     nb_setval(rtl_next_sweep, inf),
     nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
     rtl_reset_counters,
+    rtl_dispatch_changed,
     nb_setval(rtl_late_sweep, 64),
     forget_detections,
     forget_blocker_sweeps,
@@ -190,12 +193,61 @@ rtl_clock(Clock) :-
 %   is duplicate_term/2 and nb_linkval/2, and the link survives backtracking as the copy does).
 
 rtl_event(Event, Start, End) :-
+    nb_getval(rtl_clock, Clock0),
+    (   End > Clock0,
+        quiet_event(Event, End)
+    ->  nb_linkval(rtl_clock, End),
+        nb_getval(rtl_stat_events, N0),
+        N is N0 + 1,
+        nb_linkval(rtl_stat_events, N)
+    ;   used_event(Event, Start, End, Clock0)
+    ).
+
+% An event in time order that nothing can use: no rule reacts to its type (the dispatch
+% lookup on ele_trigger/3's first-argument index, without running a trigger), no hook (a
+% memory, a subscription) takes it, input is not echoed, and the clock it moves to passes no
+% sweep, timer or memory expiry. It only moves the clock and counts. Its duration and start
+% matter only to the rules that take its type (note_duration/3, rtl_started_after/1).
+quiet_event(Event, End) :-
+    event_dispatch(Event, quiet),
+    nb_getval(rtl_next_sweep, Sweep),
+    End < Sweep,
+    \+ nb_current(rtl_output_hooks, true),
+    \+ nb_current(rtl_echo_input, true),
+    \+ ( nb_current(rtl_next_timer, Due), number(Due), Due =< End ),
+    \+ ( nb_current(rtl_slr_next_expiry, Expiry), Expiry < End ).
+
+% The dispatch of an event's type, `quiet` (no trigger, no hook of its type) or `used`, found
+% on the first event of the type and kept in dispatch_of/2 (looked up by first-argument
+% indexing on the event itself). Whatever adds triggers or hooks forgets it
+% (rtl_dispatch_changed/0).
+event_dispatch(Event, Dispatch) :-
+    (   dispatch_of(Event, Known)
+    ->  Dispatch = Known
+    ;   nb_getval(rtl_program, M),
+        (   ( \+ clause(M:ele_trigger(Event, _, _), _), \+ type_output_hook(Event, _) )
+        ->  Known = quiet
+        ;   Known = used
+        ),
+        type_skeleton(Event, Skeleton),
+        assertz(dispatch_of(Skeleton, Known)),
+        Dispatch = Known
+    ).
+
+%!  rtl_dispatch_changed is det.
+%
+%   Triggers or type hooks were added or removed (rules changed, a snapshot was restored):
+%   the dispatch of every type is found again (rtl_event/3).
+
+rtl_dispatch_changed :-
+    retractall(dispatch_of(_, _)).
+
+used_event(Event, Start, End, Clock0) :-
     (   End > Start -> note_duration(Event, Start, End) ; true ),
     (   nb_current(rtl_latest_start, Latest), Start > Latest     % note_start/1, inline
     ->  nb_linkval(rtl_latest_start, Start)
     ;   true
     ),
-    nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_linkval(rtl_clock, End),
         (   nb_current(rtl_slr_next_expiry, Expiry), Expiry < End   % a memory record to forget
@@ -436,7 +488,8 @@ rtl_remove_output_hook(Hook) :-
 
 rtl_add_type_output_hook(Pattern, Hook) :-
     type_skeleton(Pattern, Skeleton),
-    (   type_output_hook(Skeleton, Hook) -> true ; assertz(type_output_hook(Skeleton, Hook)) ).
+    (   type_output_hook(Skeleton, Hook) -> true ; assertz(type_output_hook(Skeleton, Hook)) ),
+    rtl_dispatch_changed.
 
 rtl_remove_type_output_hook(Pattern, Hook) :-
     type_skeleton(Pattern, Skeleton),
