@@ -145,6 +145,8 @@ rtl_clear :-
 rtl_flags:flag_changed_hook(Flag, _) :-
     memberchk(Flag, [max_delay, retraction_horizon]),
     schedule_sweep.
+rtl_flags:flag_changed_hook(echo_input, _) :-             % echoed input is used (event_dispatch/2)
+    rtl_dispatch_changed.
 
 %!  rtl_set_action_output(+Target) is det.
 %
@@ -186,7 +188,10 @@ rtl_clock(Clock) :-
 
 %!  rtl_event(+Event, +Start:number, +End:number) is det.
 %
-%   Process one input event: derive everything it completes, deliver the results.
+%   Process one input event: derive everything it completes, deliver the results. An
+%   event that nothing can use (quiet_event/2: no rule or hook takes its type, input is not
+%   echoed, and it passes no sweep, timer or memory expiry) costs one look-up of its type's
+%   dispatch: it moves the clock and counts, no more.
 %
 %   The clock, the counters and the other numbers kept in global variables on every event
 %   are set with nb_linkval/2: for a number it is nb_setval/2 without the copy (nb_setval/2
@@ -203,29 +208,38 @@ rtl_event(Event, Start, End) :-
     ;   used_event(Event, Start, End, Clock0)
     ).
 
-% An event in time order that nothing can use: no rule reacts to its type (the dispatch
-% lookup on ele_trigger/3's first-argument index, without running a trigger), no hook (a
-% memory, a subscription) takes it, input is not echoed, and the clock it moves to passes no
-% sweep, timer or memory expiry. It only moves the clock and counts. Its duration and start
+% An event in time order that nothing can use: its type is `quiet` (event_dispatch/2) and
+% the clock it moves to passes no sweep, timer or memory expiry. It only moves the clock and counts. Its duration and start
 % matter only to the rules that take its type (note_duration/3, rtl_started_after/1).
 quiet_event(Event, End) :-
     event_dispatch(Event, quiet),
-    nb_getval(rtl_next_sweep, Sweep),
-    End < Sweep,
-    \+ nb_current(rtl_output_hooks, true),
-    \+ nb_current(rtl_echo_input, true),
+    no_sweep_due(End),
     \+ ( nb_current(rtl_next_timer, Due), number(Due), Due =< End ),
     \+ ( nb_current(rtl_slr_next_expiry, Expiry), Expiry < End ).
 
-% The dispatch of an event's type, `quiet` (no trigger, no hook of its type) or `used`, found
-% on the first event of the type and kept in dispatch_of/2 (looked up by first-argument
-% indexing on the event itself). Whatever adds triggers or hooks forgets it
-% (rtl_dispatch_changed/0).
+% The clock moving to End with one more event starts no sweep (periodic_sweep/0).
+no_sweep_due(End) :-
+    nb_getval(rtl_next_sweep, Sweep),
+    (   End < Sweep
+    ->  true
+    ;   nb_getval(rtl_stat_events, Events),
+        nb_getval(rtl_sweep_after, After),
+        Events + 1 < After
+    ).
+
+% The dispatch of an event's type: `quiet` when no rule reacts to it (no ele_trigger/3
+% clause), no hook takes it (a memory, a subscription: hooks of its type or of every type)
+% and input is not echoed; else `used`. Found on the first event of the type and kept in
+% dispatch_of/2, looked up by first-argument indexing on the event itself. Whatever adds
+% triggers or hooks, or turns echo on, forgets it (rtl_dispatch_changed/0).
 event_dispatch(Event, Dispatch) :-
     (   dispatch_of(Event, Known)
     ->  Dispatch = Known
     ;   nb_getval(rtl_program, M),
-        (   ( \+ clause(M:ele_trigger(Event, _, _), _), \+ type_output_hook(Event, _) )
+        (   \+ clause(M:ele_trigger(Event, _, _), _),
+            \+ type_output_hook(Event, _),
+            \+ nb_current(rtl_output_hooks, true),
+            \+ nb_current(rtl_echo_input, true)
         ->  Known = quiet
         ;   Known = used
         ),
@@ -472,7 +486,8 @@ rtl_underived(Event, Start, End) :-
 
 rtl_add_output_hook(Hook) :-
     (   output_hook(Hook) -> true ; assertz(output_hook(Hook)) ),
-    nb_setval(rtl_output_hooks, true).
+    nb_setval(rtl_output_hooks, true),
+    rtl_dispatch_changed.
 
 rtl_remove_output_hook(Hook) :-
     retractall(output_hook(Hook)),
