@@ -118,13 +118,17 @@ read_file_to_terms('{events}', Terms, []),
 garbage_collect,
 statistics(cputime, T0),
 statistics(garbage_collection, [_, _, G0|_]),
+statistics(clause_garbage_collection, [_, _, C0|_]),
 forall(member(ev(E, S, T), Terms), retalis:rtl_event(E, S, T)),
 statistics(cputime, T1),
 statistics(garbage_collection, [_, _, G1|_]),
+statistics(clause_garbage_collection, [_, _, C1|_]),
 retalis:rtl_stat(derived, D),
+retalis:rtl_store_size(Stored),
 Elapsed is T1 - T0,
 GC is (G1 - G0) / 1000,
-format("~w ~w ~w~n", [Elapsed, D, GC]),
+CGC is (C1 - C0) / 1000,
+format("~w ~w ~w ~w ~w~n", [Elapsed, D, GC, CGC, Stored]),
 halt.
 """
 PROFILE_GOAL = """
@@ -206,8 +210,9 @@ def flink_peer(cache: Path, wheel: Path | None) -> tuple[list[str] | None, str]:
 
 def measure_engine(program: Path, terms: Path) -> dict:
     _, _, _, out = run_process(["swipl", "-g", ENGINE_GOAL.format(events=terms), str(program), "--no-such-file"])
-    seconds, derived, gc = out.split()
-    return {"seconds": float(seconds), "derived": int(derived), "gc_seconds": float(gc)}
+    seconds, derived, gc, clause_gc, stored = out.split()
+    return {"seconds": float(seconds), "derived": int(derived), "gc_seconds": float(gc),
+            "clause_gc_seconds": float(clause_gc), "stored": int(stored)}
 
 
 def measure_swipl(program: Path, jsonl: Path) -> dict:
@@ -427,14 +432,20 @@ def targets(results, sizes) -> None:
 
 
 def scaling(results, sizes, profile) -> None:
-    """The in-memory cost per event at each size, with garbage collection's share: where a long stream goes."""
-    print("\nscaling: retalisc in-memory cost per event (us), garbage collection's share")
+    """The in-memory cost per event at each size, with the shares of garbage collection (stacks) and of
+    clause garbage collection (the erased clauses of the stores), and the partial matches stored at the
+    end: where a long stream goes."""
+    print("\nscaling: retalisc in-memory cost per event (us), shares of garbage collection (stacks) and of"
+          " clause garbage collection (the stores' erased clauses), partial matches stored at the end")
     common = [k for k in PATTERNS if all(k in results[n] for n in sizes)]
     for k in common:
         cells = []
         for n in sizes:
             e = results[n][k]["engine"]
-            cells.append(f"{n:>9,}: {1e6 * e['seconds'] / n:6.2f} us (gc {100 * e['gc_seconds'] / max(e['seconds'], 1e-9):4.1f} %)")
+            busy = max(e["seconds"], 1e-9)
+            cells.append(f"{n:>9,}: {1e6 * e['seconds'] / n:6.2f} us (gc {100 * e['gc_seconds'] / busy:4.1f} %,"
+                         f" clause gc {100 * e.get('clause_gc_seconds', 0) / busy:4.1f} %,"
+                         f" {e.get('stored', 0):,} stored)")
         growth = ""
         if len(sizes) > 1:
             first, last = (results[n][k]["engine"]["seconds"] / n for n in (sizes[0], sizes[-1]))

@@ -34,7 +34,8 @@
             rtl_remove_type_output_hook/2, % +Pattern, :Hook
             rtl_remove_type_output_hooks/0,
             rtl_dry_run/3,              % :Goal, -Retracted, -Derived
-            rtl_dry_running/0
+            rtl_dry_running/0,
+            rtl_dispatch_changed/0
           ]).
 
 /** <module> ELE runtime: event ingestion, derivation, output and forgetting
@@ -73,6 +74,7 @@ deletion is too late).
 :- dynamic output_hook/1.
 :- dynamic type_output_hook/2.              % type_output_hook(Skeleton, Hook)
 :- dynamic counter_key_of/2.                % counter_key_of(Rule, GlobalKey)
+:- dynamic dispatch_of/2.                   % dispatch_of(Skeleton, quiet | used)
 :- meta_predicate rtl_dry_run(0, -, -).
 :- meta_predicate rtl_add_output_hook(4), rtl_remove_output_hook(4),
                   rtl_add_type_output_hook(+, 4), rtl_remove_type_output_hook(+, 4).
@@ -104,6 +106,7 @@ rtl_reset :-
     nb_setval(rtl_next_sweep, inf),
     nb_setval(rtl_replay_position, none),       % no policy step is being replayed (rtl_policy.pl)
     rtl_reset_counters,
+    rtl_dispatch_changed,
     nb_setval(rtl_late_sweep, 64),
     forget_detections,
     forget_blocker_sweeps,
@@ -144,6 +147,8 @@ rtl_clear :-
 rtl_flags:flag_changed_hook(Flag, _) :-
     memberchk(Flag, [max_delay, retraction_horizon]),
     schedule_sweep.
+rtl_flags:flag_changed_hook(echo_input, _) :-             % echoed input is used (event_dispatch/2)
+    rtl_dispatch_changed.
 
 %!  rtl_set_action_output(+Target) is det.
 %
@@ -185,19 +190,80 @@ rtl_clock(Clock) :-
 
 %!  rtl_event(+Event, +Start:number, +End:number) is det.
 %
-%   Process one input event: derive everything it completes, deliver the results.
+%   Process one input event: derive everything it completes, deliver the results. An
+%   event that nothing can use (quiet_event/2: no rule or hook takes its type, input is not
+%   echoed, and it passes no sweep, timer or memory expiry) costs one look-up of its type's
+%   dispatch: it moves the clock and counts, no more.
 %
 %   The clock, the counters and the other numbers kept in global variables on every event
 %   are set with nb_linkval/2: for a number it is nb_setval/2 without the copy (nb_setval/2
 %   is duplicate_term/2 and nb_linkval/2, and the link survives backtracking as the copy does).
 
 rtl_event(Event, Start, End) :-
+    nb_getval(rtl_clock, Clock0),
+    (   End > Clock0,
+        quiet_event(Event, End)
+    ->  nb_linkval(rtl_clock, End),
+        nb_getval(rtl_stat_events, N0),
+        N is N0 + 1,
+        nb_linkval(rtl_stat_events, N)
+    ;   used_event(Event, Start, End, Clock0)
+    ).
+
+% An event in time order that nothing can use: its type is `quiet` (event_dispatch/2) and
+% the clock it moves to passes no sweep, timer or memory expiry. It only moves the clock and counts. Its duration and start
+% matter only to the rules that take its type (note_duration/3, rtl_started_after/1).
+quiet_event(Event, End) :-
+    event_dispatch(Event, quiet),
+    no_sweep_due(End),
+    \+ ( nb_current(rtl_next_timer, Due), number(Due), Due =< End ),
+    \+ ( nb_current(rtl_slr_next_expiry, Expiry), Expiry < End ).
+
+% The clock moving to End with one more event starts no sweep (periodic_sweep/0).
+no_sweep_due(End) :-
+    nb_getval(rtl_next_sweep, Sweep),
+    (   End < Sweep
+    ->  true
+    ;   nb_getval(rtl_stat_events, Events),
+        nb_getval(rtl_sweep_after, After),
+        Events + 1 < After
+    ).
+
+% The dispatch of an event's type: `quiet` when no rule reacts to it (no ele_trigger/3
+% clause), no hook takes it (a memory, a subscription: hooks of its type or of every type)
+% and input is not echoed; else `used`. Found on the first event of the type and kept in
+% dispatch_of/2, looked up by first-argument indexing on the event itself. Whatever adds
+% triggers or hooks, or turns echo on, forgets it (rtl_dispatch_changed/0).
+event_dispatch(Event, Dispatch) :-
+    (   dispatch_of(Event, Known)
+    ->  Dispatch = Known
+    ;   nb_getval(rtl_program, M),
+        (   \+ clause(M:ele_trigger(Event, _, _), _),
+            \+ type_output_hook(Event, _),
+            \+ nb_current(rtl_output_hooks, true),
+            \+ nb_current(rtl_echo_input, true)
+        ->  Known = quiet
+        ;   Known = used
+        ),
+        type_skeleton(Event, Skeleton),
+        assertz(dispatch_of(Skeleton, Known)),
+        Dispatch = Known
+    ).
+
+%!  rtl_dispatch_changed is det.
+%
+%   Triggers or type hooks were added or removed (rules changed, a snapshot was restored):
+%   the dispatch of every type is found again (rtl_event/3).
+
+rtl_dispatch_changed :-
+    retractall(dispatch_of(_, _)).
+
+used_event(Event, Start, End, Clock0) :-
     (   End > Start -> note_duration(Event, Start, End) ; true ),
     (   nb_current(rtl_latest_start, Latest), Start > Latest     % note_start/1, inline
     ->  nb_linkval(rtl_latest_start, Start)
     ;   true
     ),
-    nb_getval(rtl_clock, Clock0),
     (   End > Clock0
     ->  nb_linkval(rtl_clock, End),
         (   nb_current(rtl_slr_next_expiry, Expiry), Expiry < End   % a memory record to forget
@@ -422,7 +488,8 @@ rtl_underived(Event, Start, End) :-
 
 rtl_add_output_hook(Hook) :-
     (   output_hook(Hook) -> true ; assertz(output_hook(Hook)) ),
-    nb_setval(rtl_output_hooks, true).
+    nb_setval(rtl_output_hooks, true),
+    rtl_dispatch_changed.
 
 rtl_remove_output_hook(Hook) :-
     retractall(output_hook(Hook)),
@@ -438,7 +505,8 @@ rtl_remove_output_hook(Hook) :-
 
 rtl_add_type_output_hook(Pattern, Hook) :-
     type_skeleton(Pattern, Skeleton),
-    (   type_output_hook(Skeleton, Hook) -> true ; assertz(type_output_hook(Skeleton, Hook)) ).
+    (   type_output_hook(Skeleton, Hook) -> true ; assertz(type_output_hook(Skeleton, Hook)) ),
+    rtl_dispatch_changed.
 
 rtl_remove_type_output_hook(Pattern, Hook) :-
     type_skeleton(Pattern, Skeleton),

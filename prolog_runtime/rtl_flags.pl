@@ -79,6 +79,11 @@ rtl_set_flag(Flag, Value) :-
     forall(flag_changed_hook(Flag, Value), true).
 
 rtl_flag(Flag, Value) :-
+    atom(Flag),
+    flag_value(Flag, V),                        % a flag set (every one, after rtl_default_flags/0):
+    !,                                          % no search of the defaults (the sweeps ask often)
+    Value = V.
+rtl_flag(Flag, Value) :-
     flag_default(Flag, Default),
     (   flag_value(Flag, V) -> Value = V ; Value = Default ).
 

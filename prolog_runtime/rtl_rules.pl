@@ -136,7 +136,8 @@ install_rule(M, Id, Stores, Clauses) :-
            )),
     forall(member(Clause, Clauses), assertz(M:Clause)),
     assertz(added_rule(M, Id)),
-    assertz(added_rule_code(M, Id, Stores, Clauses)).
+    assertz(added_rule_code(M, Id, Stores, Clauses)),
+    rtl_dispatch_changed.
 
 read_rules(M, Text, Rules) :-
     setup_call_cleanup(open_string(Text, In),
@@ -199,6 +200,7 @@ rtl_remove_rule(M, Id) :-
              functor(Head, Name, Arity),
              \+ predicate_property(M:Head, imported_from(_)) ),
            remove_predicate(M, Name, Arity)),
+    rtl_dispatch_changed,
     rtl_timers_drop(M, rtl_rule_pred_name(Id)),
     (   retract(added_rule(M, Id))
     ->  retractall(added_rule_code(M, Id, _, _))

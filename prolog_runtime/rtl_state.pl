@@ -425,7 +425,8 @@ rtl_state_restore(File, Identity) :-
 rtl_state_restore(File, Identity, Program) :-
     read_snapshot(File, Terms),
     check_snapshot(Terms, Identity, Program, Plan),
-    apply_state(Plan).
+    apply_state(Plan),
+    rtl_dispatch_changed.
 
 read_snapshot(File, Terms) :-
     catch(setup_call_cleanup(open(File, read, In, [encoding(utf8)]),
