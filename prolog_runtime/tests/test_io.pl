@@ -1,8 +1,9 @@
 /*  plunit tests of rtl_io.pl: event JSON Lines in and out. Random events written as JSON by
     library(http/json) (the oracle writer, keys in any order, with escapes) are read back as
     the same term and times by the C reader and by the Prolog one alike; the output lines,
-    read by library(http/json), hold the event's writeq text and its times; bad lines are
-    rejected with a reason.
+    read by library(http/json), hold the event's writeq text and its times, and so does the
+    output data (rtl_output_data/2), with the term as data; bad lines are rejected with a
+    reason.
 
         swipl -g run_tests -t halt prolog_runtime/tests/test_io.pl
 */
@@ -76,6 +77,32 @@ test(output_lines_are_json_with_the_writeq_text) :-
              ;   assertion(Dict.consumer == Consumer)
              ) )).
 
+test(output_data_reads_back_as_the_records) :-
+    set_random(seed(11)),
+    findall(event(E, S, 2.5, Consumer, Op),
+            ( between(1, 200, S), random_event(0, E),
+              random_member(Consumer-Op, [(-)-add, (-)-retract, c1-add, echo(input)-add]) ),
+            Records),
+    with_each_reader(( rtl_output_data(Records, Data),
+                       split_string(Data, "\n", "", [OutputsText, TermsText]),
+                       atom_string(OutputsAtom, OutputsText), atom_string(TermsAtom, TermsText),
+                       atom_json_term(OutputsAtom, Outputs, [value_string_as(string)]),
+                       atom_json_term(TermsAtom, Terms, [value_string_as(string)]),
+                       maplist(output_reads_back, Records, Outputs, Terms) )).
+
+test(output_data_of_a_query_result) :-
+    Line = "{\"query\": \"q1\", \"at\": 5, \"status\": \"answered\", \"answers\": [], \"message\": \"\"}",
+    with_each_reader(( rtl_output_data([json(Line)], Data),
+                       assertion(Data == "[{\"query\": \"q1\", \"at\": 5, \"status\": \"answered\", \"answers\": [], \"message\": \"\"}]\n[null]") )).
+
+test(json_string_escapes_a_nul_at_either_end) :-
+    forall(member(Codes, [[0], [0, 0'a], [0'a, 0], [0'a, 0, 0'b]]),
+           ( string_codes(Text, Codes),
+             rtl_json_string_escape(Text, Escaped),
+             format(atom(Json), "\"~s\"", [Escaped]),
+             atom_json_term(Json, Back, [value_string_as(string)]),
+             assertion(Back == Text) )).
+
 test(json_string_escapes_read_back) :-
     forall(member(Text, ["plain", "quote \" back \\ slash", "tab\tnew\nline", "é ü \u2603", "\u0001"]),
            ( rtl_json_string_escape(Text, Escaped),
@@ -107,3 +134,32 @@ test(too_deep_events) :-
     rtl_parse_event_line(Line, 100, P2), assertion(P2 = event(add, Deep, 1, 1)).
 
 :- end_tests(rtl_io).
+
+% One element of each line of rtl_output_data/2 against its record: the writeq text and times,
+% and the term as data (an atom a string, ["c", Name, Args...], ["l", Items...], ["s", Text]).
+output_reads_back(event(E, S, T, Consumer, Op), Output, Data) :-
+    (   Consumer == (-), Op == add
+    ->  assertion(Output = [_, S, T]),
+        Output = [Text|_]
+    ;   assertion(Output = json(_)),
+        Output = json(Pairs),
+        memberchk(event=Text, Pairs), assertion(memberchk(start=S, Pairs)), assertion(memberchk(end=T, Pairs)),
+        ( Op == retract -> assertion(memberchk(op="retract", Pairs)) ; assertion(\+ memberchk(op=_, Pairs)) ),
+        (   Consumer == echo(input) -> assertion(memberchk(input= @(true), Pairs))
+        ;   Consumer == (-) -> true
+        ;   atom_string(Consumer, C), assertion(memberchk(consumer=C, Pairs))
+        )
+    ),
+    term_string(Back, Text),
+    assertion(Back =@= E),
+    data_term(Data, FromData),
+    assertion(FromData =@= E).
+
+data_term(Data, Term) :-
+    (   string(Data) -> atom_string(Term, Data)
+    ;   number(Data) -> Term = Data
+    ;   Data = ["l"|Items] -> maplist(data_term, Items, Term)
+    ;   Data = ["s", Text] -> Term = Text
+    ;   Data = ["c", Name|Args] -> maplist(data_term, Args, Ts), atom_string(N, Name), compound_name_arguments(Term, N, Ts)
+    ).
+
