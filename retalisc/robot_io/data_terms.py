@@ -21,7 +21,7 @@ import math
 import re
 from typing import Union
 
-from ..frontend.parser import _number, _unescape
+from ..frontend.lexemes import number as _number, unescape as _unescape
 from ..frontend.terms import Atom, Compound, String
 from ..driver.values import ground_canonical
 
