@@ -135,8 +135,11 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=20.0, help="the recording's length")
     parser.add_argument("--kinds", default="ros1,ros2", help="ros1, ros2 (comma-separated)")
     parser.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
+    parser.add_argument("--code", type=Path, default=ROOT,
+                        help="the retalisc checkout (built) the component and the replay run: another one's "
+                             "figures beside this one's")
     args = parser.parse_args()
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = dict(os.environ, PYTHONPATH=str(args.code) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     results = {"seconds": args.seconds}
     with tempfile.TemporaryDirectory(prefix="nao_live_") as name:
         folder = Path(name)
