@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import errno
+import gc
 import os
 import sys
 
@@ -83,4 +84,9 @@ def main() -> None:
 def entry() -> None:
     """The `retalisc` program (its console script and `python -m retalisc`)."""
     commands.COMMAND_LINE_PROCESS = True
-    main()
+    try:
+        main()
+    finally:
+        # the interpreter's last collection at exit walks every object of the run (the
+        # compiler's, the program's, lark's): frozen, it has nothing to walk (a run's CPU)
+        gc.freeze()

@@ -319,3 +319,38 @@ def test_heartbeat_does_not_go_with_a_state_directory(tmp_path):
     with pytest.raises(ValueError, match="heartbeat"):
         LiveNode(Engine.from_source(HEARTBEAT_PROGRAM, "beat.rtl"), MemoryTransport(), log=lambda text: None,
                  heartbeat=0.1, state=object())
+
+
+def test_the_starting_thread_as_the_consumer():
+    """`start(here=True)`: the thread that started the node feeds what arrives in `run` (as
+    the `retalisc` program's main thread does, the Prolog thread itself): messages from other
+    threads in their order, a service request from another thread answered between them,
+    `stop` from any thread ending `run`, and `close` feeding what is still queued."""
+    engine = Engine.from_source(PROGRAM, "live.rtl")
+    transport = MemoryTransport()
+    node = LiveNode(engine, transport, parse_config("<publish_subscribe><subscribe_to name='/v' "
+                                                    "msg_type='geometry_msgs/Vector3'/></publish_subscribe>"),
+                    log=lambda text: None)
+    node.start(here=True)
+    assert transport.subscribed == {"/v": "geometry_msgs/Vector3"}     # the set-up ran at once, here
+    seen, replies = [], []
+    node._deliveries.append(lambda event: seen.append((threading.current_thread(), event.event)))
+
+    def client():
+        for x in range(5):
+            node.arrived("/v", vector(float(x)))
+        replies.append(node.query("mem(points, p(X, _, _))", "", all_answers=True))
+        node.arrived("/v", vector(5.0))
+        node.stop()
+        node.arrived("/v", vector(6.0))          # after the stop: fed by close
+
+    thread = threading.Thread(target=client)
+    thread.start()
+    node.run(duration=30)
+    thread.join()
+    fed_in_run = [event for _, event in seen if event.startswith("pos(")]
+    node.close()
+    assert [a["X"] for a in replies[0].value] == ["0.0", "1.0", "2.0", "3.0", "4.0"]
+    assert fed_in_run == [f"pos({float(x)!r})" for x in range(6)]
+    assert [event for _, event in seen if event.startswith("pos(")] == [f"pos({float(x)!r})" for x in range(7)]
+    assert {owner for owner, _ in seen} == {threading.current_thread()}

@@ -81,7 +81,15 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
     except MissingDependency as error:
         click.echo(f"error: {error}", err=True)
         return 2
-    engine = Engine.from_compiled(compile_or_exit(program))
+    from ..compile_cache import cached_compile
+    from ..compiler import unique_module_name
+    from .compile import _calls_in_this_thread, _print_warnings
+
+    module = unique_module_name(program)
+    compiled = cached_compile(program, module, lambda: compile_or_exit(program, module=module),
+                              found=_print_warnings)              # as `retalisc run` takes it
+    here = _calls_in_this_thread()       # this thread feeds the Engine: no handoff per call
+    engine = Engine.from_prolog(compiled.prolog, compiled.module, compiled.rules)
     for flag, value in engine_flags({"max_delay": max_delay}):      # retalisc/run_options.py
         engine.set_flag(flag, value)
     state = None
@@ -99,12 +107,17 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
     node = LiveNode(engine, transport, config, Convention.of_program(engine, plain_strings, wrap_topic),
                     out=sink, linger=linger, state=state, heartbeat=heartbeat)
     stop = threading.Event()
-    previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in (signal.SIGINT, signal.SIGTERM)}
+
+    def stopped(*_) -> None:
+        stop.set()
+        node.stop()
+
+    previous = {sig: signal.signal(sig, stopped) for sig in (signal.SIGINT, signal.SIGTERM)}
     status = 0
     started = time.perf_counter()
     try:
         try:
-            node.start()
+            node.start(here=here)
         except RecoveryError as error:
             click.echo(f"error: --state {recovery['state']}: {error}", err=True)
             status = 2
@@ -114,7 +127,9 @@ def serve(program: str, config_path: Optional[str], make_transport: Callable, ou
         else:
             click.echo(describe(node), err=True)
             deadline = None if duration is None else time.monotonic() + duration
-            while not stop.is_set():
+            if here and not stop.is_set():
+                node.run(duration)          # until a stop signal (or the duration)
+            while not here and not stop.is_set():
                 left = 0.5 if deadline is None else min(0.5, deadline - time.monotonic())
                 if left <= 0:
                     break

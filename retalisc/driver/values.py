@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import Any, Dict, List, Sequence, Tuple, Union
 
 from ..frontend.depth import with_room_for_depth
-from ..frontend.parser import _number, _unescape
+from ..frontend.lexemes import number as _number, unescape as _unescape
 from .bridge import Bridge, PrologError
 from ..runtime_location import runtime_dir
 

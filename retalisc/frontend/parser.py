@@ -18,6 +18,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from .depth import MAX_TERM_DEPTH, deepest_tree, term_depth
 from .errors import RetalisSyntaxError
+from .lexemes import EscapeError as _EscapeError, number as _number, unescape as _unescape
 from .operators import (ARGUMENT_PRIORITY, CLAUSE_PRIORITY, ETALIS_ALIASES, EVENT_OPERATORS, OP_TYPES,
                         STANDARD_OPERATORS, OperatorTable)
 from .terms import Atom, Compound, Number, Span, String, Term, Var, list_items, make_list
@@ -199,89 +200,6 @@ class _Source:
         line = bisect.bisect_right(self.line_starts, offset)
         column = offset - self.line_starts[line - 1] + 1
         return Span(self.file, line, column)
-
-
-_ESCAPES = {"a": "\a", "b": "\b", "f": "\f", "n": "\n", "r": "\r", "t": "\t", "v": "\v",
-            "\\": "\\", "'": "'", '"': '"', "`": "`", "e": "\x1b", "s": " ", "\n": ""}
-
-
-class _EscapeError(Exception):
-    """A bad escape sequence at `offset` in the text between the quotes."""
-
-    def __init__(self, message: str, offset: int):
-        super().__init__(message)
-        self.message = message
-        self.offset = offset
-
-
-def _code_point(value: int, offset: int) -> str:
-    if value > 0x10FFFF or 0xD800 <= value <= 0xDFFF:
-        raise _EscapeError(f"illegal character code {value:#x} in an escape sequence", offset)
-    return chr(value)
-
-
-def _unescape(body: str, quote: str) -> str:
-    """The text of a quoted item with its escape sequences replaced, as SWI-Prolog reads it.
-    Raises _EscapeError for an escape SWI-Prolog rejects (`\\q`, `\\u12`, ...)."""
-    out = []
-    i = 0
-    while i < len(body):
-        c = body[i]
-        if c == quote and i + 1 < len(body) and body[i + 1] == quote:
-            out.append(quote)
-            i += 2
-            continue
-        if c == "\\":
-            if i + 1 >= len(body):
-                raise _EscapeError("a quoted item cannot end with a single backslash", i)
-            d = body[i + 1]
-            if d in _ESCAPES:
-                out.append(_ESCAPES[d])
-                i += 2
-                continue
-            if d == "c":              # \c skips the layout that follows it
-                i += 2
-                while i < len(body) and body[i] in " \t\n\r":
-                    i += 1
-                continue
-            if d == "x":
-                m = re.match(r"x([0-9a-fA-F]+)\\?", body[i + 1:])
-                if not m:
-                    raise _EscapeError("\\x must be followed by hexadecimal digits (\\xHH\\)", i)
-                out.append(_code_point(int(m.group(1), 16), i))
-                i += 1 + m.end()
-                continue
-            if d in "uU":
-                width = 4 if d == "u" else 8
-                digits = body[i + 2:i + 2 + width]
-                if not re.fullmatch(f"[0-9a-fA-F]{{{width}}}", digits):
-                    raise _EscapeError(f"\\{d} must be followed by {width} hexadecimal digits", i)
-                out.append(_code_point(int(digits, 16), i))
-                i += 2 + width
-                continue
-            if d in "01234567":
-                m = re.match(r"([0-7]+)\\?", body[i + 1:])
-                out.append(_code_point(int(m.group(1), 8), i))
-                i += 1 + m.end()
-                continue
-            raise _EscapeError(f"unknown escape sequence '\\{d}' in a quoted item (write '\\\\' for a backslash)",
-                               i)
-        out.append(c)
-        i += 1
-    return "".join(out)
-
-
-def _number(text: str):
-    text = text.replace("_", "")
-    if text.startswith(("0x", "0o", "0b")):
-        return int(text[2:], {"x": 16, "o": 8, "b": 2}[text[1]])
-    if text.endswith("Inf"):
-        return float("inf")
-    if text.endswith("NaN"):
-        return float("nan")
-    if "." in text or "e" in text or "E" in text:
-        return float(text)
-    return int(text)
 
 
 class _Builder:

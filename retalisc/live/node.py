@@ -200,6 +200,8 @@ class LiveNode:
         self.output_types: Dict[str, str] = {}     # topic -> type given at runtime
         self._queue: "queue.SimpleQueue" = queue.SimpleQueue()
         self._thread = threading.Thread(target=self._consume, name="retalis-consumer", daemon=True)
+        self._owner: Optional[threading.Thread] = self._thread     # the thread that feeds the Engine
+        self._here = False                 # start(here=True): the owner is the thread that started
         self._deliveries: List[Callable] = []      # extra observers of outputs (tests, benchmark)
         self.fed = 0
         self.linger = linger       # seconds to wait for more messages before feeding a batch
@@ -224,11 +226,17 @@ class LiveNode:
 
     # ---- life cycle ------------------------------------------------------------------------
 
-    def start(self) -> None:
+    def start(self, here: bool = False) -> None:
+        """Start taking messages. `here`: the calling thread is the consumer (and, with
+        `Bridge.run_in_calling_thread`, the Prolog thread: no handoff per call); it then feeds
+        what arrives in `run` and `close`. Otherwise a consumer thread of the node's own."""
         self.transport.start(self)
+        if here:
+            self._here, self._owner = True, threading.current_thread()
         if self.state is not None:     # restore and replay before the live input queued meanwhile
             self.state.recover(self)
-        self._thread.start()
+        if not here:
+            self._thread.start()
         for spec in self.config.subscribe:          # the node's own set-up: not service calls
             reply = self.call(self._add_input, spec.name, spec.msgtype, request=False)
             if not reply.ok:
@@ -289,18 +297,31 @@ class LiveNode:
             self._numbering[name] = how
         return how
 
+    def run(self, duration: Optional[float] = None) -> None:
+        """Feed what arrives, in the thread that called `start(here=True)`, until `stop` (or
+        `duration` seconds)."""
+        self._consume(None if duration is None else time.monotonic() + duration)
+
+    def stop(self) -> None:
+        """End `run` (any thread, a signal handler too: SimpleQueue.put is reentrant)."""
+        self._queue.put(_STOP)
+
     def close(self, timeout: float = 10.0) -> None:
         """Stop taking messages, process what is queued, close the transport."""
         self._closed.set()
-        if self._thread.is_alive():
+        if self._here:
+            self._queue.put(_STOP)
+            self._consume()                 # what is queued, up to the stop
+        elif self._thread.is_alive():
             self._queue.put(_STOP)
             self._thread.join(timeout)
         if self.out is not None:
             self.out.flush()
-        if not self._thread.is_alive():
+        done = self._here or not self._thread.is_alive()
+        if done:
             self._check_late()
         if self.state is not None:      # no last snapshot while the consumer is still feeding
-            self.state.close(self, snapshot=not self._thread.is_alive())     # (with its subscriber counts)
+            self.state.close(self, snapshot=done)     # (with its subscriber counts)
         self.transport.close()
 
     # ---- recovery: what the state journal (live/state.py) restores and replays --------------
@@ -357,7 +378,7 @@ class LiveNode:
         """Run `function(*args)` in the consumer thread, after what arrived before; its Reply.
         Called from the consumer thread itself, it runs at once. `request`: a service request
         (counted in `stats.calls`), not the node's own set-up."""
-        if threading.current_thread() is self._thread:
+        if threading.current_thread() is self._owner:
             return self._run_call(function, args, request)
         future: Future = Future()
         self._queue.put((function, args, future, request))
@@ -368,14 +389,21 @@ class LiveNode:
 
     # ---- the consumer thread ------------------------------------------------------------------
 
-    def _consume(self) -> None:
+    def _consume(self, until: Optional[float] = None) -> None:
+        """Take what arrives and feed it, until a stop (or the time.monotonic() `until`)."""
         pending: List[tuple] = []           # (event, time, the arrival: for the text road)
         while True:
             idle = self.state.idle_timeout() if self.state is not None else None
+            if until is not None:
+                left = until - time.monotonic()
+                if left <= 0:
+                    return
+                idle = left if idle is None else min(idle, left)
             try:
                 item = self._queue.get() if idle is None else self._queue.get(timeout=idle)
             except queue.Empty:          # an idle node with --state: the time-based snapshot
-                self.state.idle(self)
+                if self.state is not None:
+                    self.state.idle(self)
                 continue
             deadline = time.monotonic() + self.linger if self.linger else None
             stop = False
