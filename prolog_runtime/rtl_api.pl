@@ -21,6 +21,7 @@
             rtl_api_post_query/5,       % +QueryId, +GoalText, +At, +Timeout, -Output
             rtl_api_query/4,            % +GoalText, +At, +Limit, -Output
             rtl_api_memory/2,           % +RequestText, -Output
+            rtl_api_tf_lookup/4,        % +Target, +Source, +Time, -Output
             rtl_api_stats/1,            % -Text
             rtl_api_summary/1,          % -Text
             rtl_api_detections/1,       % -Text
@@ -78,6 +79,7 @@ and memory requests answer `!KIND<TAB>MESSAGE` when refused.
 :- use_module(rtl_raise, [rtl_input/4]).
 :- use_module(rtl_rules).
 :- use_module(rtl_query).
+:- use_module(rtl_tf, [tf_lookup/6]).
 :- use_module(rtl_subscriptions).
 :- use_module(rtl_sandbox).
 :- use_module(rtl_error_text).
@@ -528,6 +530,32 @@ rtl_api_query(GoalText, At0, LimitText, Output) :-
     (   At0 == "inf" -> At = inf ; must_be(number, At0), At = At0 ),
     atom_string(Limit, LimitText),
     rtl_query_lines(GoalText, At, Limit, Output).
+
+%!  rtl_api_tf_lookup(+Target:text, +Source:text, +Time, -Output:string) is det.
+%
+%   tf_lookup/6 of rtl_tf.pl with its arguments as data (Engine.tf_lookup): Target and Source
+%   frame ids (strings), Time `"latest"`, a number of seconds, `[Secs, NSecs]` or
+%   `["ns", Nanoseconds]`. No goal text is read, so nothing passes the sandbox: the goal is
+%   this fixed, read-only call. Output is `ok<TAB>X<TAB>Y<TAB>Z<TAB>QX<TAB>QY<TAB>QZ<TAB>QW<TAB>Secs<TAB>NSecs`,
+%   or `!<TAB>Reason` with Reason the writeq text of tf_lookup/6's reason term.
+
+rtl_api_tf_lookup(Target, Source, Time0, Output) :-
+    atom_string(TargetAtom, Target),
+    atom_string(SourceAtom, Source),
+    api_tf_time(Time0, Time),
+    tf_lookup(TargetAtom, SourceAtom, Time, Pose, Stamp, Result),
+    (   Result == ok
+    ->  Pose = [[X, Y, Z], [QX, QY, QZ, QW]],
+        Stamp = [S, NS],
+        atomic_list_concat([ok, X, Y, Z, QX, QY, QZ, QW, S, NS], '\t', Output)     % format/2 costs 10x this
+    ;   format(string(Output), "!\t~q", [Result])
+    ).
+
+api_tf_time("latest", latest) :- !.
+api_tf_time(["ns", N], ns(N)) :- !, must_be(integer, N).
+api_tf_time([S, NS], [S, NS]) :- !, must_be(integer, S), must_be(integer, NS).
+api_tf_time(T, T) :- number(T), !.
+api_tf_time(T, _) :- type_error(tf_time, T).
 
 %!  rtl_api_memory(+RequestText:text, -Output:string) is det.
 %

@@ -39,7 +39,7 @@ from ..frontend.depth import with_room_for_depth
 from .values import QueryAnswer, String, Term, Time, Value, Variable, read_term, term_value, time_value
 
 __all__ = ["Engine", "OutputEvent", "Rejection", "EngineWarning", "QueryError", "PrologError", "Term",
-           "String", "Variable", "Value", "QueryAnswer", "Time"]
+           "String", "Variable", "Value", "QueryAnswer", "Time", "TfTransform", "TfLookupError"]
 
 Number = Union[int, float]
 
@@ -440,6 +440,44 @@ def _compile_rules_for_the_runtime(module: str, prefix: str, text: str) -> str:
         return compile_rules_for_the_runtime(module, prefix, text)
     except RulesRefused as refused:
         raise ServedCallError(str(refused)) from None
+
+
+@dataclass(frozen=True)
+class TfTransform:
+    """The answer of `Engine.tf_lookup`: the pose of the source frame's origin in the target
+    frame, `translation` (x, y, z) in metres and `rotation` (qx, qy, qz, qw), at `stamp`
+    (secs, nsecs): the time used, the latest common time for "latest" (docs/tf.md)."""
+
+    translation: Tuple[float, float, float]
+    rotation: Tuple[float, float, float, float]
+    stamp: Tuple[int, int]
+
+
+class TfLookupError(LookupError):
+    """`Engine.tf_lookup` found no transform: `reason` is tf_lookup/6's reason term as text
+    (`unknown_frame(base)`, `not_connected(a, b)`, `extrapolation(future, T, Earliest,
+    Latest)`, `loop`) and `kind` its name, tf2's failures (docs/tf.md)."""
+
+    def __init__(self, reason: str):
+        super().__init__(reason)
+        self.reason = reason
+        self.kind = reason.partition("(")[0]
+
+
+def _tf_time(value) -> Union[str, Number, List]:
+    """A tf lookup time as data: "latest" (or 0), seconds, (secs, nsecs), ("ns", nanoseconds)."""
+    if isinstance(value, str):
+        if value != "latest":
+            raise ValueError(f"a tf time is 'latest', seconds, (secs, nsecs) or ('ns', n), not {value!r}")
+        return value
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        first, second = value
+        if first == "ns" and isinstance(second, int) and not isinstance(second, bool):
+            return ["ns", second]
+        if all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+            return [first, second]
+        raise TypeError(f"a tf stamp is (secs, nsecs) integers or ('ns', nanoseconds), not {value!r}")
+    return _time(value, "a tf time")
 
 
 class InactiveEngineError(RuntimeError):
@@ -893,6 +931,23 @@ class Engine:
         with self._lock:
             output = self._call("rtl_api_query", _text(goal, "a goal"), at_value, limit)
         return [json.loads(line) for line in _raise_if_refused(output).splitlines() if line]
+
+    def tf_lookup(self, target: str, source: str, time: Union[str, Number, Sequence] = "latest") -> TfTransform:
+        """The pose of frame `source` in frame `target` at `time`, from the tf tree the program
+        learned from its tf messages (tf2's `lookupTransform(target, source, time)`; the
+        runtime's tf library, docs/tf.md). `time` is "latest" (or 0: the latest common time),
+        seconds, `(secs, nsecs)` or `("ns", nanoseconds)`. The frame ids and the time go to the
+        runtime as data (a fixed call of tf_lookup/6, no goal text to read or check): the cost
+        of the lookup plus one bridge call. Raises TfLookupError with tf2's reason when there is
+        no transform."""
+        args = (_text(target, "a frame id"), _text(source, "a frame id"), _tf_time(time))
+        with self._lock:
+            output = self._call("rtl_api_tf_lookup", *args)
+        if output[0] == "!":
+            raise TfLookupError(output[2:])
+        _, x, y, z, qx, qy, qz, qw, secs, nsecs = output.split("\t")
+        return TfTransform((float(x), float(y), float(z)), (float(qx), float(qy), float(qz), float(qw)),
+                           (int(secs), int(nsecs)))
 
     def memory(self, request: str) -> None:
         """Create or delete memory instances: `request` is the text of `c_mem(Id, Event-Conds, N, L)`,
