@@ -10,6 +10,7 @@ import pytest
 from golden_cases import check_expected
 from retalisc.robapl.executor import TRANSITIONS
 from retalisc.robapl.iec import SteppedIEC
+from retalisc.robapl.patterns import agent_iec, condition_rules
 from retalisc.robapl.runner import load_actions, read_event_lines, run_agent, trace_lines
 from retalisc.robapl.syntax import load_agent, parse_agent
 from retalisc.robapl.terms import Atom, Compound
@@ -21,10 +22,12 @@ CASES = sorted(p for p in GOLDEN.iterdir() if (p / "agent.apl").exists())
 def run_case(folder: Path):
     read = read_event_lines((folder / "events.jsonl").read_text(), str(folder / "events.jsonl"))
     assert not read.bad
-    iec = SteppedIEC.load(folder / "iec.rtl") if (folder / "iec.rtl").exists() else None
-    try:                                        # an IEC in step: its derived events join the event base
-        return run_agent(load_agent(folder / "agent.apl"), read.events, load_actions(str(GOLDEN / "actions.py")),
-                         iec=iec)
+    agent = load_agent(folder / "agent.apl")
+    program = folder / "iec.rtl"
+    # an IEC in step (its own program, the ELE rules of the pattern conditions): its derived events join the event base
+    iec = agent_iec(agent, program.read_text() if program.exists() else None, str(program))
+    try:
+        return run_agent(agent, read.events, load_actions(str(GOLDEN / "actions.py")), iec=iec)
     finally:
         if iec is not None:
             assert iec.problems == []
@@ -110,3 +113,18 @@ def test_the_stepped_iec_sees_node_status_and_the_events_actions_emit():
     assert "started(p#1)" in events and "started(p#1/say)" in events and "echo(hi)" in events
     assert events.index("echo(hi)") < events.index("heard(hi)")
     assert all(r["t"] == 1.0 for r in trace)
+
+
+def test_a_pattern_condition_is_an_ele_rule_of_the_iec_giving_the_hand_written_trace():
+    # the ELE road: the pattern condition compiled to a rule of the IEC gives the trace of the
+    # same rule written by hand in iec.rtl with an event(...) condition
+    agent = load_agent(GOLDEN / "pattern_condition" / "agent.apl")
+    assert [r.splitlines()[1] for r in condition_rules(agent)] == ["visitor(P) <- (at_door(P) seq bell).10."]
+    assert trace_lines(run_case(GOLDEN / "pattern_condition")) == trace_lines(run_case(GOLDEN / "iec_condition"))
+    alone = read_event_lines('{"t": 4, "event": "bell"}')
+    iec = agent_iec(agent)
+    try:
+        trace = run_agent(agent, alone.events, load_actions(str(GOLDEN / "actions.py")), iec=iec)
+    finally:
+        iec.close()
+    assert not [r for r in trace if "action" in r]      # no visitor derived: the greeting never starts

@@ -73,10 +73,9 @@ def run_command(agent_file: str, events_file: str, actions_file, iec_file, trace
     for message in read.bad:
         click.echo(message, err=True)
     events = list(read.events)
-    iec = None
-    if iec_file:
-        from ..robapl.iec import SteppedIEC
-        iec = SteppedIEC.load(Path(iec_file))
+    from ..robapl.patterns import agent_iec
+    iec = agent_iec(agent, Path(iec_file).read_text(encoding="utf-8") if iec_file else None,
+                    iec_file or "iec.rtl")
     try:
         trace = run_agent(agent, events, load_actions(actions_file), iec=iec)
     except ExecutionError as error:

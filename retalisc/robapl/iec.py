@@ -26,9 +26,9 @@ def event_text(term: Term) -> str:
     """`term` as the text of a Retalis event (atoms quoted when they need it): data on the
     event road, read by the runtime's event reader, never program text."""
     if isinstance(term, Atom):
-        return _atom_text(term.name)
+        return atom_text(term.name)
     if isinstance(term, Compound):
-        return f"{_atom_text(term.functor)}({','.join(event_text(a) for a in term.args)})"
+        return f"{atom_text(term.functor)}({','.join(event_text(a) for a in term.args)})"
     if isinstance(term, str):
         return '"' + term.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(term, bool) or not isinstance(term, (int, float)):
@@ -36,7 +36,7 @@ def event_text(term: Term) -> str:
     return repr(term)
 
 
-def _atom_text(name: str) -> str:
+def atom_text(name: str) -> str:
     if _PLAIN_ATOM.match(name):
         return name
     return "'" + name.replace("\\", "\\\\").replace("'", "\\'") + "'"
