@@ -36,7 +36,15 @@ def check_command(agent_file: str) -> None:
 
 def check_agent(agent_file: str) -> None:
     """`retalisc robapl check` (and `retalisc check` of a `.apl` file)."""
+    from ..frontend.errors import RetalisError
+    from ..robapl.patterns import check_patterns
+
     agent = _load(agent_file)
+    try:
+        patterns = check_patterns(agent)
+    except RetalisError as error:
+        click.echo(error.render(), err=True)
+        sys.exit(2)
     nodes = 0
     for rule in agent.rules:
         stack = [rule.plan]
@@ -45,7 +53,8 @@ def check_agent(agent_file: str) -> None:
             nodes += 1
             stack.extend(node.children)
     click.echo(f"{agent_file}: agent {agent.name}: {len(agent.beliefs)} beliefs, {len(agent.goals)} goals, "
-               f"{len(agent.pool)} resources, {len(agent.rules)} rules, {nodes} plan nodes", err=True)
+               f"{len(agent.pool)} resources, {len(agent.rules)} rules, {nodes} plan nodes, "
+               f"{patterns} pattern conditions", err=True)
 
 
 @robapl_group.command("run")

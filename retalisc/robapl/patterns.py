@@ -21,16 +21,37 @@ def _specs(spec: NodeSpec):
         yield from _specs(child)
 
 
+def _pattern_conditions(agent: Agent):
+    for rule in agent.rules:
+        for spec in _specs(rule.plan):
+            for name, (event, pattern, span) in spec.patterns.items():
+                yield spec, name, event, pattern, span
+
+
+def check_patterns(agent: Agent) -> int:
+    """Compile each pattern condition's rule alone (the compiler's road, nothing loaded); a bad
+    one raises RetalisSemanticError at the condition, with the compiler's message. The count."""
+    from ..compiler import compile_source
+    from ..frontend.errors import RetalisError, RetalisSemanticError
+
+    count = 0
+    for spec, name, event, pattern, span in _pattern_conditions(agent):
+        try:
+            compile_source(f"{_head_text(event)} <- {pattern}.\n", f"{agent.file}:{spec.name}:{name}")
+        except RetalisError as error:
+            raise RetalisSemanticError(f"node {spec.name}: the {name} pattern is not an ELE rule body: "
+                                       f"{error.message}", span) from None
+        count += 1
+    return count
+
+
 def condition_rules(agent: Agent) -> List[str]:
     """The ELE rules of the agent's pattern conditions, one per condition, in file order
     (a derived event written by two conditions gets one rule each: the union of their patterns)."""
     rules = []
-    for rule in agent.rules:
-        for spec in _specs(rule.plan):
-            for name, (event, pattern, span) in spec.patterns.items():
-                where = f"% {agent.file}:{span.line}: node {spec.name}, {name}" if span else \
-                    f"% node {spec.name}, {name}"
-                rules.append(f"{where}\n{_head_text(event)} <- {pattern}.\n")
+    for spec, name, event, pattern, span in _pattern_conditions(agent):
+        where = f"% {agent.file}:{span.line}: node {spec.name}, {name}" if span else f"% node {spec.name}, {name}"
+        rules.append(f"{where}\n{_head_text(event)} <- {pattern}.\n")
     return rules
 
 
