@@ -13,6 +13,13 @@ the application of node I's Waiting -> Executing transition. The peer is the sam
 node in every micro step in this slice; compiled to ELE rules of an IEC, a later slice, only the
 nodes whose events arrive would be evaluated).
 
+The "iec" series runs the monitored agent with an IEC in step (retalisc/robapl/iec.py): each
+macro step's event and node status changes are fed to a Retalis program, and node I's condition
+`event(fire(I))` is enabled by the ELE rule `fire(I) <- alarm(I).` of the IEC: its reaction is
+from the start of the macro step of `alarm(I)` to node I's transition, in the macro step of the
+derived `fire(I)` (the rule is written by hand: conditions are not compiled to ELE rules yet).
+Its peer is the "monitored" row of the same size, measured in the same run.
+
 Targets: at 1,000 monitored conditions a macro step <= 10 ms and the reaction <= 20 ms (a robot
 deliberating at 50 Hz or more).
 
@@ -32,6 +39,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from retalisc.robapl.executor import EXECUTING, Actions, Executor  # noqa: E402
+from retalisc.robapl.iec import SteppedIEC  # noqa: E402
 from retalisc.robapl.syntax import parse_agent  # noqa: E402
 from retalisc.robapl.terms import Atom, Compound  # noqa: E402
 
@@ -60,10 +68,23 @@ class TimedExecutor(Executor):
                 self.reacted = time.perf_counter()
 
 
-def measure(nodes: int, monitored: int, repeat: int) -> dict:
+IEC_PROGRAM = "fire(I) <- alarm(I).\n"
+
+
+def measure(nodes: int, monitored: int, repeat: int, iec: bool = False) -> dict:
     actions = Actions()
     actions.register("act", lambda *args, context: "done")
-    executor = TimedExecutor(parse_agent(agent_text(nodes, monitored)), actions)
+    stepped = SteppedIEC.from_source(IEC_PROGRAM, "bench_iec.rtl") if iec else None
+    try:
+        return _measure(nodes, monitored, repeat, actions, stepped)
+    finally:
+        if stepped is not None:
+            assert stepped.problems == [], stepped.problems
+            stepped.close()
+
+
+def _measure(nodes: int, monitored: int, repeat: int, actions: Actions, iec) -> dict:
+    executor = TimedExecutor(parse_agent(agent_text(nodes, monitored)), actions, iec=iec)
     executor.watch = None
     for plan in range(max(1, nodes // PLAN_SIZE)):
         executor.post(Compound("make", (plan,)), 0.0)
@@ -77,10 +98,12 @@ def measure(nodes: int, monitored: int, repeat: int) -> dict:
         macro.append(time.perf_counter() - began)
         target = monitored - 1 - step
         executor.watch = f"n{target}"
-        executor.post(Compound("fire", (target,)), 1.5 + step)
+        executor.post(Compound("alarm" if iec else "fire", (target,)), 1.5 + step)
         executor.reacted = None
         began = time.perf_counter()
         executor.macro_step()
+        if iec is not None:             # the derived fire(I): the next macro step
+            executor.macro_step()
         assert executor.reacted is not None, "the event did not enable its node"
         reaction.append(executor.reacted - began)
     return {"nodes": nodes, "monitored": monitored, "macro_ms": 1000 * min(macro), "reaction_ms": 1000 * min(reaction)}
@@ -89,6 +112,12 @@ def measure(nodes: int, monitored: int, repeat: int) -> dict:
 def report(series: dict) -> list:
     for name, rows in series.items():
         base = rows[0]
+        if name == "iec":
+            print("iec series (conditions through an IEC in step; x peer: the monitored row of the same size)")
+            for row, peer in zip(rows, series["monitored"]):
+                print(f"  {row['nodes']:7,} {row['monitored']:9,} {row['macro_ms']:9.2f} ms {row['reaction_ms']:7.2f} ms "
+                      f"{row['macro_ms'] / peer['macro_ms']:7.1f}x")
+            continue
         print(f"{name} series (peer: the same executor at {base['nodes']} nodes)")
         print(f"  {'nodes':>7} {'monitored':>9} {'macro step':>12} {'reaction':>10} {'x peer':>8}")
         for row in rows:
@@ -143,7 +172,8 @@ def main() -> int:
     if args.quick:
         sizes, args.repeat = [100, 1000], 2
     series = {"monitored": [measure(n, n, args.repeat) for n in sizes],
-              "idle": [measure(n, PLAN_SIZE, args.repeat) for n in sizes]}
+              "idle": [measure(n, PLAN_SIZE, args.repeat) for n in sizes],
+              "iec": [measure(n, n, args.repeat, iec=True) for n in sizes]}
     targets = report(series)
     args.out_dir.mkdir(parents=True, exist_ok=True)
     (args.out_dir / "robapl.json").write_text(json.dumps(

@@ -62,3 +62,26 @@ def test_no_answer_three_calls_then_emergency(tmp_path, update_golden):
                        (36035.0, "press(red_button)")]
     assert any(r.get("belief_update") == "remind#1/emergency/help/called" and r["post"] == "emergency_called(mori)"
                for r in trace)
+
+
+def test_the_stepped_iec_sees_every_node_status_change_of_the_run(tmp_path):
+    # an IEC in step derives started(N) from each node_status(N, executing): one for each
+    # Executing transition of the trace, at its time, and the agent does what it does without it
+    program = tmp_path / "iec.rtl"
+    program.write_text("started(N) <- node_status(N, executing).\n")
+    trace_file = tmp_path / "trace.jsonl"
+    result = CliRunner().invoke(main, ["robapl", "run", str(NAO / "nao.apl"), "--events", str(NAO / "events.jsonl"),
+                                       "--actions", str(NAO / "environment.py"), "--iec", str(program),
+                                       "--trace-out", str(trace_file)])
+    assert result.exit_code == 0, result.output
+    trace = [json.loads(line) for line in trace_file.read_text().splitlines()]
+    executing = [(r["t"], r["node"]) for r in trace if r.get("to") == "executing"]
+    started = [(r["t"], r["event"][len("started("):-1]) for r in trace if r.get("event", "").startswith("started(")]
+    assert started == executing and started
+
+    def behaviour(records):
+        return [{k: v for k, v in r.items() if k not in ("macro", "micro")} for r in records
+                if not r.get("event", "").startswith("started(")]
+
+    golden = [json.loads(line) for line in (NAO / "expected_trace.jsonl").read_text().splitlines()]
+    assert behaviour(trace) == behaviour(golden)

@@ -99,3 +99,20 @@ def test_run_command_writes_the_trace(tmp_path):
     assert "1 bad event lines skipped" in result.output
     records = [json.loads(line) for line in out.read_text().splitlines()]
     assert records[-1]["to"] == "deactivating" and records[-1]["outcome"] == "success"
+
+
+def test_a_pattern_condition_is_checked_as_an_ele_rule_at_its_place(tmp_path):
+    text = "rules {\n  bell <- true | list greet {\n    external hello: act(P) [start: visitor(P) <- {%s}]\n  }\n}\n"
+    good = tmp_path / "good.apl"
+    good.write_text(text % "(at_door(P) seq bell).10")
+    spec = parse_agent(good.read_text(), str(good)).rules[0].plan.children[0]
+    assert spec.conditions["start"] == (parse_agent("rules { e <- true | list p [end: event(visitor(P))] }")
+                                        .rules[0].plan.conditions["end"])
+    assert spec.patterns["start"][1] == "(at_door(P) seq bell).10"
+    result = CliRunner().invoke(main, ["robapl", "check", str(good)])
+    assert result.exit_code == 0 and "1 pattern conditions" in result.output, result.output
+    bad = tmp_path / "bad.apl"
+    bad.write_text(text % "(at_door(P) seq ).10")
+    result = CliRunner().invoke(main, ["robapl", "check", str(bad)])
+    assert result.exit_code == 2
+    assert f"{bad}:3:29: error: node hello: the start pattern is not an ELE rule body" in result.output, result.output

@@ -9,9 +9,11 @@ import pytest
 
 from golden_cases import check_expected
 from retalisc.robapl.executor import TRANSITIONS
-from retalisc.robapl.iec import derived_events
-from retalisc.robapl.runner import load_actions, merge_derived, read_event_lines, run_agent, trace_lines
-from retalisc.robapl.syntax import load_agent
+from retalisc.robapl.iec import SteppedIEC
+from retalisc.robapl.patterns import agent_iec, condition_rules
+from retalisc.robapl.runner import load_actions, read_event_lines, run_agent, trace_lines
+from retalisc.robapl.syntax import load_agent, parse_agent
+from retalisc.robapl.terms import Atom, Compound
 
 GOLDEN = Path(__file__).resolve().parent / "golden_robapl"
 CASES = sorted(p for p in GOLDEN.iterdir() if (p / "agent.apl").exists())
@@ -20,12 +22,16 @@ CASES = sorted(p for p in GOLDEN.iterdir() if (p / "agent.apl").exists())
 def run_case(folder: Path):
     read = read_event_lines((folder / "events.jsonl").read_text(), str(folder / "events.jsonl"))
     assert not read.bad
-    events = read.events
-    if (folder / "iec.rtl").exists():          # an IEC: its derived events join the event base
-        derived, messages = derived_events(folder / "iec.rtl", folder / "events.jsonl")
-        assert not [m for m in messages if "derived event" in m or ": rejected: " in m], messages
-        events = merge_derived(events, derived)
-    return run_agent(load_agent(folder / "agent.apl"), events, load_actions(str(GOLDEN / "actions.py")))
+    agent = load_agent(folder / "agent.apl")
+    program = folder / "iec.rtl"
+    # an IEC in step (its own program, the ELE rules of the pattern conditions): its derived events join the event base
+    iec = agent_iec(agent, program.read_text() if program.exists() else None, str(program))
+    try:
+        return run_agent(agent, read.events, load_actions(str(GOLDEN / "actions.py")), iec=iec)
+    finally:
+        if iec is not None:
+            assert iec.problems == []
+            iec.close()
 
 
 @pytest.mark.parametrize("folder", CASES, ids=lambda p: p.name)
@@ -80,3 +86,45 @@ def test_synchronous_micro_step_sees_one_snapshot():
     trace = run_case(GOLDEN / "repeat")
     ran = [r["belief_update"] for r in trace if "belief_update" in r]
     assert ran == ["plan#1/loop/r2", "plan#1/loop/r3"]
+
+
+def test_the_stepped_iec_sees_node_status_and_the_events_actions_emit():
+    # the IEC derives started(N) from node_status(N, executing) and heard(X) from an event the
+    # agent's own action emitted: both reach the agent as events of later macro steps
+    iec = SteppedIEC.from_source("started(N) <- node_status(N, executing).\n"
+                                 "heard(X) <- echo(X).\n", "stepped.rtl")
+    agent = parse_agent(
+        "rules {\n  go <- true | list p {\n    external say: shout(hi)\n  }\n}\n")
+    actions = load_actions(None)
+
+    def shout(word, context):
+        context.emit(Compound("echo", (Atom(word),)))
+        return "done"
+
+    actions.register("shout", shout)
+    try:
+        trace = run_agent(agent, [(1.0, Atom("go"))], actions, iec=iec)
+    finally:
+        problems = iec.problems
+        iec.close()
+    assert problems == []
+    events = [r["event"] for r in trace if "event" in r]
+    assert events[0] == "go"
+    assert "started(p#1)" in events and "started(p#1/say)" in events and "echo(hi)" in events
+    assert events.index("echo(hi)") < events.index("heard(hi)")
+    assert all(r["t"] == 1.0 for r in trace)
+
+
+def test_a_pattern_condition_is_an_ele_rule_of_the_iec_giving_the_hand_written_trace():
+    # the ELE road: the pattern condition compiled to a rule of the IEC gives the trace of the
+    # same rule written by hand in iec.rtl with an event(...) condition
+    agent = load_agent(GOLDEN / "pattern_condition" / "agent.apl")
+    assert [r.splitlines()[1] for r in condition_rules(agent)] == ["visitor(P) <- (at_door(P) seq bell).10."]
+    assert trace_lines(run_case(GOLDEN / "pattern_condition")) == trace_lines(run_case(GOLDEN / "iec_condition"))
+    alone = read_event_lines('{"t": 4, "event": "bell"}')
+    iec = agent_iec(agent)
+    try:
+        trace = run_agent(agent, alone.events, load_actions(str(GOLDEN / "actions.py")), iec=iec)
+    finally:
+        iec.close()
+    assert not [r for r in trace if "action" in r]      # no visitor derived: the greeting never starts

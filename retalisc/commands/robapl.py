@@ -36,7 +36,15 @@ def check_command(agent_file: str) -> None:
 
 def check_agent(agent_file: str) -> None:
     """`retalisc robapl check` (and `retalisc check` of a `.apl` file)."""
+    from ..frontend.errors import RetalisError
+    from ..robapl.patterns import check_patterns
+
     agent = _load(agent_file)
+    try:
+        patterns = check_patterns(agent)
+    except RetalisError as error:
+        click.echo(error.render(), err=True)
+        sys.exit(2)
     nodes = 0
     for rule in agent.rules:
         stack = [rule.plan]
@@ -45,7 +53,8 @@ def check_agent(agent_file: str) -> None:
             nodes += 1
             stack.extend(node.children)
     click.echo(f"{agent_file}: agent {agent.name}: {len(agent.beliefs)} beliefs, {len(agent.goals)} goals, "
-               f"{len(agent.pool)} resources, {len(agent.rules)} rules, {nodes} plan nodes", err=True)
+               f"{len(agent.pool)} resources, {len(agent.rules)} rules, {nodes} plan nodes, "
+               f"{patterns} pattern conditions", err=True)
 
 
 @robapl_group.command("run")
@@ -55,7 +64,7 @@ def check_agent(agent_file: str) -> None:
 @click.option("--actions", "actions_file", type=click.Path(exists=True, dir_okay=False), default=None,
               help="A Python file defining register(actions): the external actions by name.")
 @click.option("--iec", "iec_file", type=click.Path(exists=True, dir_okay=False), default=None,
-              help="A Retalis program (.rtl) run on the events: its derived events join the event base.")
+              help="A Retalis program (.rtl) run in step with the agent on its events and node status changes: its derived events join the event base.")
 @click.option("--trace-out", type=click.Path(dir_okay=False), default=None,
               help="Write the trace here instead of standard output.")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False), default=None,
@@ -66,28 +75,26 @@ def run_command(agent_file: str, events_file: str, actions_file, iec_file, trace
     from pathlib import Path
 
     from ..robapl.executor import ExecutionError
-    from ..robapl.runner import load_actions, merge_derived, read_event_lines, run_agent, trace_lines
+    from ..robapl.runner import load_actions, read_event_lines, run_agent, trace_lines
 
     agent = _load(agent_file)
     read = read_event_lines(Path(events_file).read_text(encoding="utf-8"), events_file)
     for message in read.bad:
         click.echo(message, err=True)
     events = list(read.events)
-    if iec_file:
-        from ..robapl.iec import IECStopped, derived_events
-        try:
-            derived, messages = derived_events(Path(iec_file), Path(events_file))
-        except IECStopped as error:
-            click.echo(f"error: {error}", err=True)
-            sys.exit(1)
-        for message in messages:
-            click.echo(message, err=True)
-        events = merge_derived(events, derived)
+    from ..robapl.patterns import agent_iec
+    iec = agent_iec(agent, Path(iec_file).read_text(encoding="utf-8") if iec_file else None,
+                    iec_file or "iec.rtl")
     try:
-        trace = run_agent(agent, events, load_actions(actions_file))
+        trace = run_agent(agent, events, load_actions(actions_file), iec=iec)
     except ExecutionError as error:
         click.echo(f"error: {error}", err=True)
         sys.exit(1)
+    finally:
+        if iec is not None:
+            for message in iec.problems:
+                click.echo(message, err=True)
+            iec.close()
     text = trace_lines(trace)
     if trace_out:
         Path(trace_out).write_text(text)

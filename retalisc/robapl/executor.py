@@ -243,7 +243,7 @@ class ResourcePool:
 class Executor:
     """One agent: its belief base, goal base, event base, plan base, resource pool and actions."""
 
-    def __init__(self, agent: Agent, actions: Optional[Actions] = None, conditions=None):
+    def __init__(self, agent: Agent, actions: Optional[Actions] = None, conditions=None, iec=None):
         self.agent = agent
         self.actions = actions or Actions()
         self.beliefs = BeliefBase(agent.beliefs)
@@ -264,6 +264,11 @@ class Executor:
         self._timers: set = set()
         self._free_now: Dict[str, float] = dict(self.pool.free)   # the pool as a micro step takes from it
         self.conditions = conditions or BeliefConditions(self.beliefs, self)
+        # an IEC driven in step (iec.SteppedIEC): each macro step's event and node status
+        # changes go to it, its derived events join the event base (not sent back to it)
+        self.iec = iec
+        self._from_iec: set = set()
+        self._status_changes: List[Tuple[str, str]] = []
         for goal in agent.goals:
             self.adopt(goal, 0.0)
 
@@ -295,8 +300,11 @@ class Executor:
         return None
 
     # ----- the event base
-    def post(self, event: Term, time: float) -> None:
-        heapq.heappush(self._queue, (time, next(self._arrivals), event))
+    def post(self, event: Term, time: float, from_iec: bool = False) -> None:
+        arrival = next(self._arrivals)
+        if from_iec:
+            self._from_iec.add(arrival)
+        heapq.heappush(self._queue, (time, arrival, event))
 
     def adopt(self, goal: Term, time: float) -> None:
         if goal not in self.goal_base:
@@ -311,7 +319,7 @@ class Executor:
         return self.trace
 
     def macro_step(self) -> None:
-        time, _, event = heapq.heappop(self._queue)
+        time, arrival, event = heapq.heappop(self._queue)
         self.time = max(self.time, time)
         self.event = event
         self.macro += 1
@@ -321,6 +329,12 @@ class Executor:
         self._plan_for(event)
         self.quiesce()
         self.event = None
+        if self.iec is not None:
+            fed = [] if arrival in self._from_iec else [event]
+            self._from_iec.discard(arrival)
+            changes, self._status_changes = self._status_changes, []
+            for at, derived in self.iec.step(self.time, fed, changes):
+                self.post(derived, max(at, self.time), from_iec=True)
 
     def _result_event(self, event: Term) -> None:
         if isinstance(event, Compound) and event.functor in ("action_result", "action_failed") and \
@@ -584,6 +598,8 @@ class Executor:
             self._record({"node": node.path, "from": node.state, "to": transition.to,
                           "outcome": transition.outcome, "why": transition.why})
             previous, node.state = node.state, transition.to
+            if self.iec is not None:
+                self._status_changes.append((node.path, node.state))
             if transition.outcome is not None:
                 node.outcome = transition.outcome
             self._entered(node, previous, transition)
@@ -637,6 +653,8 @@ class Executor:
         for each in node.walk():
             if each.state != INACTIVE:
                 self._record({"node": each.path, "from": each.state, "to": INACTIVE, "outcome": None, "why": "reset"})
+                if self.iec is not None:
+                    self._status_changes.append((each.path, INACTIVE))
             each.state, each.outcome, each.phase, each.iteration = INACTIVE, None, None, 1
             each.result, each.result_ready, each.action_failed, each.preempt_requested = None, False, False, False
         if node.kind == "abstract":

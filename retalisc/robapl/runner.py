@@ -53,14 +53,14 @@ def load_actions(path: Optional[str]) -> Actions:
     return actions
 
 
-def merge_derived(events: List[Tuple[float, Term]], derived: List[Tuple[float, Term]]) -> List[Tuple[float, Term]]:
-    """The input events, then the IEC's derived events: the event base orders them by time, and
-    at one time the input events come first (they arrived before what was derived from them)."""
-    return list(events) + list(derived)
-
-
-def run_agent(agent: Agent, events: List[Tuple[float, Term]], actions: Actions) -> List[dict]:
-    return Executor(agent, actions).run(events)
+def run_agent(agent: Agent, events: List[Tuple[float, Term]], actions: Actions, iec=None, conditions=None
+              ) -> List[dict]:
+    """The trace of `agent` on `events`; `iec` an `iec.SteppedIEC` driven in step with it,
+    `conditions` a `conditions.ConditionSource` (default: resolution on the belief base)."""
+    executor = Executor(agent, actions, iec=iec)
+    if conditions is not None:
+        executor.conditions = conditions(executor)
+    return executor.run(events)
 
 
 def trace_lines(trace: List[dict]) -> str:

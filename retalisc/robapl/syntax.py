@@ -46,6 +46,8 @@ class NodeSpec:
     name: str
     term: Optional[Term] = None
     conditions: Dict[str, Query] = field(default_factory=dict)
+    #: the conditions written as event patterns: name -> (derived event, ELE pattern text, span)
+    patterns: Dict[str, Tuple[Term, str, Optional[Span]]] = field(default_factory=dict)
     priority: Optional[int] = None
     resources: Tuple[ResourceUsage, ...] = ()
     result: Optional[str] = None
@@ -148,6 +150,13 @@ class _Build(Transformer):
     def condition(self, meta, items):
         return ("condition", str(items[0]), items[1], _span(meta, self.file))
 
+    @v_args(meta=True)
+    def pattern_condition(self, meta, items):
+        # `start: visitor(P) <- {PATTERN}`: the condition is the IEC's derived event(visitor(P))
+        name, event, pattern = str(items[0]), items[1], str(items[3])[1:-1].strip()
+        span = _span(meta, self.file)
+        return ("condition", name, (Literal("positive", Compound("event", (event,))),), span, (event, pattern, span))
+
     def priority(self, items):
         return ("priority", int(items[0]))
 
@@ -174,6 +183,8 @@ class _Build(Transformer):
                             raise RetalisSemanticError(f"node {node.name}: the {attribute[1]} condition is given twice",
                                                        attribute[3])
                         node.conditions[attribute[1]] = attribute[2]
+                        if len(attribute) > 4:
+                            node.patterns[attribute[1]] = attribute[4]
                     elif attribute[0] == "priority":
                         node.priority = attribute[1]
                     elif attribute[0] == "resources":

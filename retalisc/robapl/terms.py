@@ -147,7 +147,7 @@ def variables(term: Term) -> List[str]:
 
 
 _TOKEN = re.compile(r'\s*(?:(?P<num>-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?)|(?P<name>[a-z][A-Za-z0-9_]*)'
-                    r'|(?P<str>"(?:[^"\\]|\\.)*")|(?P<punct>[(),]))')
+                    r'|(?P<str>"(?:[^"\\]|\\.)*")|(?P<qname>\'(?:[^\'\\]|\\.)*\')|(?P<punct>[(),]))')
 
 
 class EventSyntaxError(ValueError):
@@ -180,6 +180,8 @@ def parse_event_term(text: str) -> Term:
             return float(value) if any(c in value for c in ".eE") else int(value)
         if kind == "str":
             return re.sub(r"\\(.)", r"\1", value[1:-1])
+        if kind == "qname":                    # a quoted atom ('greet#1/hello')
+            kind, value = "name", re.sub(r"\\(.)", r"\1", value[1:-1])
         if kind != "name":
             raise EventSyntaxError(f"unexpected {value!r} at column {column + 1} of the event term")
         if index < len(tokens) and tokens[index][1] == "(":
