@@ -163,3 +163,22 @@ def test_properties_of_random_agents(tmp_path_factory, scenario):
     check_one_state_at_a_time(trace)
     check_wind_down_before_parent(trace, agent_file)
     assert run(agent_file, GOLDEN / "actions.py", terms) == trace
+
+
+def test_one_event_does_not_pause_and_resume_a_node_for_ever(tmp_path):
+    """Found by test_properties_of_random_agents: pause and resume on the same event had made
+    Executing -> Pausing -> Paused -> Resuming -> Waiting -> Executing -> ... in one macro step."""
+    agent_file = tmp_path / "agent.apl"
+    agent_file.write_text("resources { r1: 1. }\nrules {\n"
+                          "c <- true | list p1 { external n1: long(n1, 0) [pause: event(c); resume: event(c)] }\n}\n")
+    from retalisc.robapl.terms import Atom
+
+    trace = run(agent_file, GOLDEN / "actions.py", [(0.0, Atom("c")), (1.0, Atom("c")), (2.0, Atom("c"))])
+    toggles = {}
+    for record in trace:
+        if record.get("to") in ("pausing", "resuming"):
+            toggles.setdefault(record["node"], []).append((record["macro"], record["to"]))
+    assert toggles["p1#1/n1"] == [(1, "pausing"), (3, "resuming")]
+    for moves in toggles.values():
+        macros = [macro for macro, _ in moves]
+        assert len(macros) == len(set(macros))              # at most one of the two a macro step

@@ -262,6 +262,9 @@ class Executor:
         self._pending: Dict[str, Node] = {}
         self._plan_seq = itertools.count()
         self._timers: set = set()
+        # the nodes that paused or resumed in this macro step: they do neither again before the
+        # next one, so one event cannot pause and resume a node for ever (no quiescence)
+        self._toggled: set = set()
         self._free_now: Dict[str, float] = dict(self.pool.free)   # the pool as a micro step takes from it
         self.conditions = conditions or BeliefConditions(self.beliefs, self)
         # an IEC driven in step (iec.SteppedIEC): each macro step's event and node status
@@ -324,6 +327,7 @@ class Executor:
         self.event = event
         self.macro += 1
         self.micro = 0
+        self._toggled.clear()
         self._record({"event": show(event)})
         self._result_event(event)
         self._plan_for(event)
@@ -502,7 +506,7 @@ class Executor:
                 return Transition(node, FAILING, from_above, "ancestor aborting")
             if node.preempt_requested or self._holds(node, "preempt", False):
                 return Transition(node, FAILING, "preempted", "pre-empted")
-            if self._holds(node, "pause", False):
+            if id(node) not in self._toggled and self._holds(node, "pause", False):
                 return Transition(node, PAUSING, why="pause")
             if not self._holds(node, "invariant", True):
                 return Transition(node, FAILING, "failure", "invariant false")
@@ -538,7 +542,7 @@ class Executor:
         if state == PAUSED:
             if from_above is not None:
                 return Transition(node, FINISHED, from_above, "ancestor aborting")
-            if self._holds(node, "resume", False):
+            if id(node) not in self._toggled and self._holds(node, "resume", False):
                 return Transition(node, RESUMING, why="resume")
             return None
         if state == RESUMING:
@@ -598,6 +602,8 @@ class Executor:
             self._record({"node": node.path, "from": node.state, "to": transition.to,
                           "outcome": transition.outcome, "why": transition.why})
             previous, node.state = node.state, transition.to
+            if transition.to in (PAUSING, RESUMING):
+                self._toggled.add(id(node))
             if self.iec is not None:
                 self._status_changes.append((node.path, node.state))
             if transition.outcome is not None:
