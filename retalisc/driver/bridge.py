@@ -42,7 +42,10 @@ one: benchmarks/call_cost.py); the bridge's lock serialises callers.
 (A Prolog *engine* shared by the threads would be cheaper, but SWI-Prolog 9.0
 ties an engine to the C stack of the thread that created it and aborts,
 ``stack_avail: Assertion failed``, when another thread runs it.)
-``run_in_calling_thread`` makes the calling thread the owner: no handoff.
+``run_in_calling_thread`` makes the calling thread the owner: no handoff, and
+(pyswip backend, C library built) ``apply`` calls the API predicate itself from C,
+resolved once, without building a goal (``apply_numbers`` also reads a numeric answer
+without text; docs/architecture.md, "The Python/Prolog boundary").
 
 Why not ``pyswip.Prolog``
 -------------------------
