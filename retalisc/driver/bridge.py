@@ -481,9 +481,7 @@ class _PyswipEngine:
         if not self._owned or nreals > 16 or nints > 16:
             return None
         self._ensure_thread()
-        parts: List[bytes] = []
-        _pack(list(args), parts)
-        data = b"".join(parts)
+        data = _packed(args)
         pred, module_bytes, name_bytes = self._predicate(module, name, len(args) + 1)
         status = self._fast_numbers(pred, module_bytes, name_bytes, data, len(data),
                                     self._reals, nreals, self._ints, nints, *self._fast_refs)
@@ -496,9 +494,7 @@ class _PyswipEngine:
     def apply(self, module: str, name: str, args: tuple) -> tuple[int, Any, str]:
         self._ensure_thread()
         if self._fast is not None:
-            parts: List[bytes] = []
-            _pack(list(args), parts)
-            data = b"".join(parts)
+            data = _packed(args)
             pred, module_bytes, name_bytes = self._predicate(module, name, len(args) + 1)
             return self._fast_outcome(self._fast(pred, module_bytes, name_bytes, data, len(data),
                                                  *self._fast_refs))
@@ -643,6 +639,23 @@ def _pack(value: Any, parts: List[bytes]) -> None:
         _pack(base(value), parts)
     else:
         raise TypeError(f"cannot pass a {type(value).__name__} to Prolog")
+
+
+def _packed(args: tuple) -> bytes:
+    """The encoding of the argument list `args` (_pack), strings and numbers on the spot."""
+    parts: List[bytes] = [_LIST(b"l", len(args))]
+    append = parts.append
+    for value in args:
+        kind = type(value)
+        if kind is str:
+            data = value.encode("utf-8")
+            append(_STRING(b"s", len(data)))
+            append(data)
+        elif kind is float:
+            append(_FLOAT(b"f", value))
+        else:
+            _pack(value, parts)
+    return b"".join(parts)
 
 
 def _check_value(value: Any) -> None:
