@@ -22,6 +22,7 @@
             rtl_api_query/4,            % +GoalText, +At, +Limit, -Output
             rtl_api_memory/2,           % +RequestText, -Output
             rtl_api_tf_lookup/4,        % +Target, +Source, +Time, -Output
+            rtl_api_tf_lookup_numbers/4, % +Target, +Source, +Time, -Answer
             rtl_api_stats/1,            % -Text
             rtl_api_summary/1,          % -Text
             rtl_api_detections/1,       % -Text
@@ -539,7 +540,21 @@ rtl_api_query(GoalText, At0, LimitText, Output) :-
 %   this fixed, read-only call. Output is `ok<TAB>X<TAB>Y<TAB>Z<TAB>QX<TAB>QY<TAB>QZ<TAB>QW<TAB>Secs<TAB>NSecs`,
 %   or `!<TAB>Reason` with Reason the writeq text of tf_lookup/6's reason term.
 
-rtl_api_tf_lookup(Target, Source, Time0, Output) :-
+rtl_api_tf_lookup(Target, Source, Time, Output) :-
+    rtl_api_tf_lookup_numbers(Target, Source, Time, Answer),
+    (   Answer = tf(X, Y, Z, QX, QY, QZ, QW, S, NS)
+    ->  atomic_list_concat([ok, X, Y, Z, QX, QY, QZ, QW, S, NS], '\t', Output)     % format/2 costs 10x this
+    ;   Output = Answer
+    ).
+
+%!  rtl_api_tf_lookup_numbers(+Target:text, +Source:text, +Time, -Answer) is det.
+%
+%   rtl_api_tf_lookup/4 answering with numbers, for the bridge's typed call
+%   (rtl_bridge_call_numbers in c/rtl_bridge_call.c reads them without text): Answer is
+%   `tf(X, Y, Z, QX, QY, QZ, QW, Secs, NSecs)`, or the string `!<TAB>Reason` as
+%   rtl_api_tf_lookup/4's.
+
+rtl_api_tf_lookup_numbers(Target, Source, Time0, Answer) :-
     atom_string(TargetAtom, Target),
     atom_string(SourceAtom, Source),
     api_tf_time(Time0, Time),
@@ -547,8 +562,8 @@ rtl_api_tf_lookup(Target, Source, Time0, Output) :-
     (   Result == ok
     ->  Pose = [[X, Y, Z], [QX, QY, QZ, QW]],
         Stamp = [S, NS],
-        atomic_list_concat([ok, X, Y, Z, QX, QY, QZ, QW, S, NS], '\t', Output)     % format/2 costs 10x this
-    ;   format(string(Output), "!\t~q", [Result])
+        Answer = tf(X, Y, Z, QX, QY, QZ, QW, S, NS)
+    ;   format(string(Answer), "!\t~q", [Result])
     ).
 
 api_tf_time("latest", latest) :- !.

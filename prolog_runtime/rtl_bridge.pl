@@ -1,6 +1,8 @@
 :- module(retalisc_bridge,
           [ bridge/6,                   % +Mode, +GoalText, +Aux, -Status, -Out, -ErrTerm
             bridge_apply/6,             % +Module, +Name, +Args, -Status, -Out, -ErrTerm
+            bridge_error/4,             % +Error, -Status, -Out, -ErrTerm
+            text_of/2,                  % +Value, -Text
             claim_caller/1,             % -Claimed
             set_flags/0,
             rtl_python_call/4           % +Name, +Args, -Status, -Result
@@ -22,6 +24,11 @@ PL_call_predicate/4) or through janus:
     from values): parse GoalText in module user and run it in one of five modes (0 true or
     false, 1 the writeq text of a template, 2 every solution's, 3 the text of a named
     variable, 4 consult a file, collecting the errors printed while loading).
+
+When the calling thread owns the state (claim_caller/1), c/rtl_bridge_call.c runs an API
+predicate itself, resolved once, with the values as its arguments (no goal built from names,
+no catch/3 frame here): it calls bridge_error/4 for an exception and text_of/2 for an answer
+that is neither an atom nor a string, so that both roads answer alike.
 
 Neither ever raises: errors come back as Status 2, so Prolog exceptions never reach the C
 interface or the debugger. Out and ErrTerm are always bound (janus cannot return unbound
@@ -204,6 +211,11 @@ share_vars([Name=V|T], VG) :-
 writeq_string(T, S) :-
     format(string(S), "~q", [T]).
 
+%!  text_of(+Value, -Text:string) is det.
+%
+%   The text of an answer: a string itself, an atom or number its text, a code or char
+%   list its string, any other term its write text. Raises on a variable.
+
 text_of(V, _) :-
     var(V), !,
     throw(error(instantiation_error, context(bridge/6, _))).
@@ -212,21 +224,31 @@ text_of(V, S) :- atomic(V), !, atom_string(V, S).
 text_of(V, S) :- catch(text_to_string(V, S), _, fail), !.
 text_of(V, S) :- format(string(S), "~w", [V]).
 
+%!  bridge_error(+Error, -Status:integer, -Out:string, -ErrTerm:string) is det.
+%
+%   Status 2, Out the message of Error, ErrTerm its writeq text (a request that raised).
+
+bridge_error(E, Status, Out, ErrTerm) :-
+    caught(E, Status, Out, ErrTerm).
+
 caught(bridge_load_errors(Msg), 2, Msg, "") :- !.
-caught(E, 2, Msg, Term) :-
+caught(E0, 2, Msg, Term) :-
+    own_error(E0, E),
     catch(message_text(E, Msg), _, Msg = ""),
     catch(writeq_string(E, Term), _, Term = "").
+
+%   An unknown procedure called directly by the request is reported with the bridge (this
+%   module, or the C call of c/rtl_bridge_call.c) as its caller; drop that so the message and
+%   the term read as for the user, alike on both roads.
+own_error(error(Formal, Context0), error(Formal, Context)) :- !,
+    own_context(Context0, Context).
+own_error(E, E).
 
 %   The error's text, by the runtime's one printer (rtl_error_text.pl), which never interprets
 %   the term: an error may come from untrusted goal text. The printer is loaded at the first
 %   error, so that a process that only loads the bridge loads none of the runtime.
 message_text(bridge_load_errors(Msg), Msg) :- !.
-message_text(E0, Msg) :-
-    (   E0 = error(Formal, Context0)
-    ->  own_context(Context0, Context),
-        E = error(Formal, Context)
-    ;   E = E0
-    ),
+message_text(E, Msg) :-
     error_printer,
     rtl_error_text:rtl_error_text(E, Msg).
 
@@ -239,13 +261,11 @@ error_printer :-
         use_module(File, [])
     ).
 
-%   An unknown procedure called directly by the goal is reported with our helper as its
-%   caller; drop that so the message reads as for the user.
-own_context(Context, _) :-
+own_context(Context, context(_, Message)) :-
     nonvar(Context),
-    Context = context(Caller, _),
+    Context = context(Caller, Message),
     nonvar(Caller),
-    Caller = retalisc_bridge:_, !.
+    ( Caller = retalisc_bridge:_ ; Caller = system:'$c_call_prolog'/_ ), !.
 own_context(Context, Context).
 
 lines_text(Lines, Text) :-

@@ -22,6 +22,16 @@
     or the message (error), err the writeq text of the error term; both stay valid until the
     next call from the same thread.
 
+    When the calling thread owns the runtime's state (rtl_bridge_claimed, after
+    retalisc_bridge:claim_caller/1 said so), rtl_bridge_call runs the API predicate itself,
+    resolved once (rtl_bridge_predicate), with the values put straight into its arguments:
+    no goal built from names, no handoff, no catch/3 frame in Prolog; an exception is turned
+    into Status 2 by retalisc_bridge:bridge_error/4 (the same printer), an answer that is not
+    an atom or a string into text by retalisc_bridge:text_of/2. rtl_bridge_call_numbers
+    reads an answer `F(R1, ..., Rm, I1, ..., Ik)` into m doubles and k integers (Status 1)
+    without text; any other answer is returned as text with Status 3. On any other thread
+    both do what rtl_bridge_apply does.
+
     Not a Prolog foreign library: Python loads it with ctypes, in a process that has loaded
     libswipl. The calling thread must have a Prolog engine (PL_thread_attach_engine).
 */
@@ -183,6 +193,149 @@ rtl_bridge_apply(const char *module, const char *name, const char *args, size_t 
     { keep_term(&err_buffer, ex, CVT_WRITEQ, err, err_len);
       PL_clear_exception();
     }
+  }
+  PL_STRINGS_RELEASE();
+  PL_discard_foreign_frame(fid);
+  return status;
+}
+
+/* The calling thread owns the state: the runtime's requests run in it (claim_caller/1). */
+static int owner_thread = -1;
+
+void
+rtl_bridge_claimed(void)
+{ owner_thread = PL_thread_self();
+}
+
+void *
+rtl_bridge_predicate(const char *module, const char *name, int arity)
+{ return (void *)PL_predicate(name, arity, module);
+}
+
+static predicate_t text_of_predicate, error_predicate;
+
+/* Status 2 (or -1) for the exception pending after a call, by bridge_error/4. */
+static int
+call_error(const char **out, size_t *out_len, const char **err, size_t *err_len)
+{ term_t ex = PL_exception(0), t;
+  int status = -1;
+
+  if ( !ex || !(t = PL_new_term_refs(4)) || !PL_put_term(t, ex) )
+    return -1;
+  PL_clear_exception();
+  if ( !error_predicate )
+    error_predicate = PL_predicate("bridge_error", 4, "retalisc_bridge");
+  if ( PL_call_predicate(NULL, PL_Q_NODEBUG|PL_Q_PASS_EXCEPTION, error_predicate, t) &&
+       keep_term(&out_buffer, t + 2, CVT_ATOM|CVT_STRING, out, out_len) &&
+       keep_term(&err_buffer, t + 3, CVT_ATOM|CVT_STRING, err, err_len) )
+    status = 2;
+  else if ( (ex = PL_exception(0)) )
+  { keep_term(&err_buffer, ex, CVT_WRITEQ, err, err_len);
+    PL_clear_exception();
+  }
+  return status;
+}
+
+/* The text of the answer in t, as bridge_apply/6's text_of/2 makes it. */
+static int
+answer_text(term_t t, const char **out, size_t *out_len, const char **err, size_t *err_len)
+{ term_t a;
+
+  if ( keep_term(&out_buffer, t, CVT_ATOM|CVT_STRING, out, out_len) )
+    return 1;
+  if ( !text_of_predicate )
+    text_of_predicate = PL_predicate("text_of", 2, "retalisc_bridge");
+  if ( !(a = PL_new_term_refs(2)) || !PL_put_term(a, t) )
+    return -1;
+  if ( !PL_call_predicate(NULL, PL_Q_NODEBUG|PL_Q_PASS_EXCEPTION, text_of_predicate, a) )
+    return call_error(out, out_len, err, err_len);
+  return keep_term(&out_buffer, a + 1, CVT_ATOM|CVT_STRING, out, out_len) ? 1 : -1;
+}
+
+/* Run pred with the values of args (a list of n values) and one more argument, the answer,
+   in the calling thread: Status as rtl_bridge_apply's; *answer the answer's term. */
+static int
+call_direct(predicate_t pred, reader *r, term_t *answer,
+            const char **out, size_t *out_len, const char **err, size_t *err_len)
+{ uint32_t n;
+  term_t t;
+  size_t arity;
+
+  if ( r->at >= r->end || *r->at++ != 'l' || !read_u32(r, &n) )
+    return -2;
+  if ( !PL_predicate_info(pred, NULL, &arity, NULL) )
+    return -1;
+  if ( arity != (size_t)n + 1 )
+    return -2;
+  if ( !(t = PL_new_term_refs(n + 1)) )
+    return -1;
+  for (uint32_t i = 0; i < n; i++)
+    if ( !put_value(r, t + i, 0) )
+      return -2;
+  if ( r->at != r->end )
+    return -2;
+  if ( !PL_call_predicate(NULL, PL_Q_NODEBUG|PL_Q_PASS_EXCEPTION, pred, t) )
+    return PL_exception(0) ? call_error(out, out_len, err, err_len) : 0;
+  *answer = t + n;
+  return 1;
+}
+
+int
+rtl_bridge_call(void *pred, const char *module, const char *name, const char *args, size_t args_len,
+                const char **out, size_t *out_len, const char **err, size_t *err_len)
+{ fid_t fid;
+  term_t answer;
+  reader r = { (const unsigned char *)args, (const unsigned char *)args + args_len };
+  int status;
+
+  if ( !pred || owner_thread < 0 || PL_thread_self() != owner_thread )
+    return rtl_bridge_apply(module, name, args, args_len, out, out_len, err, err_len);
+  *out = *err = "";
+  *out_len = *err_len = 0;
+  if ( !(fid = PL_open_foreign_frame()) )
+    return -1;
+  PL_STRINGS_MARK();
+  status = call_direct((predicate_t)pred, &r, &answer, out, out_len, err, err_len);
+  if ( status == 1 )
+    status = answer_text(answer, out, out_len, err, err_len);
+  PL_STRINGS_RELEASE();
+  PL_discard_foreign_frame(fid);
+  return status;
+}
+
+int
+rtl_bridge_call_numbers(void *pred, const char *module, const char *name, const char *args, size_t args_len,
+                        double *reals, int nreals, int64_t *ints, int nints,
+                        const char **out, size_t *out_len, const char **err, size_t *err_len)
+{ fid_t fid;
+  term_t answer, arg;
+  reader r = { (const unsigned char *)args, (const unsigned char *)args + args_len };
+  int status;
+  size_t arity;
+
+  if ( !pred || owner_thread < 0 || PL_thread_self() != owner_thread )
+  { status = rtl_bridge_apply(module, name, args, args_len, out, out_len, err, err_len);
+    return status == 1 ? 3 : status;
+  }
+  *out = *err = "";
+  *out_len = *err_len = 0;
+  if ( !(fid = PL_open_foreign_frame()) )
+    return -1;
+  PL_STRINGS_MARK();
+  status = call_direct((predicate_t)pred, &r, &answer, out, out_len, err, err_len);
+  if ( status == 1 )
+  { if ( PL_get_compound_name_arity_sz(answer, NULL, &arity) && arity == (size_t)(nreals + nints) &&
+         (arg = PL_new_term_ref()) )
+    { for (int i = 0; i < nreals && status == 1; i++)
+        if ( !PL_get_arg(i + 1, answer, arg) || !PL_get_float(arg, &reals[i]) )
+          status = -3;
+      for (int i = 0; i < nints && status == 1; i++)
+        if ( !PL_get_arg(nreals + i + 1, answer, arg) || !PL_get_int64(arg, &ints[i]) )
+          status = -3;
+      if ( status == -3 )
+        status = answer_text(answer, out, out_len, err, err_len) == 1 ? 3 : -1;
+    } else
+      status = answer_text(answer, out, out_len, err, err_len) == 1 ? 3 : -1;
   }
   PL_STRINGS_RELEASE();
   PL_discard_foreign_frame(fid);

@@ -42,7 +42,10 @@ one: benchmarks/call_cost.py); the bridge's lock serialises callers.
 (A Prolog *engine* shared by the threads would be cheaper, but SWI-Prolog 9.0
 ties an engine to the C stack of the thread that created it and aborts,
 ``stack_avail: Assertion failed``, when another thread runs it.)
-``run_in_calling_thread`` makes the calling thread the owner: no handoff.
+``run_in_calling_thread`` makes the calling thread the owner: no handoff, and
+(pyswip backend, C library built) ``apply`` calls the API predicate itself from C,
+resolved once, without building a goal (``apply_numbers`` also reads a numeric answer
+without text; docs/architecture.md, "The Python/Prolog boundary").
 
 Why not ``pyswip.Prolog``
 -------------------------
@@ -269,7 +272,11 @@ class _PyswipEngine:
             t = self._new_refs(1)
             if not self._call_pred(None, self._flags, self._claim_pred, t):
                 raise self._pending_error("bridge helper failed")
-            return self._text(t) == "true"
+            claimed = self._text(t) == "true"
+            if claimed and self._fast is not None:
+                self._claimed()         # the C library then calls the API predicates itself
+                self._owned = True
+            return claimed
         finally:
             self._discard_frame(fid)
             self._release_strings(mark)
@@ -412,6 +419,8 @@ class _PyswipEngine:
         from retalisc.runtime_location import runtime_dir
 
         self._fast = None
+        self._owned = False             # this thread owns the state and the C library is built
+        self._predicates: dict = {}
         for suffix in ("so", "dylib", "dll"):
             path = runtime_dir() / "foreign" / f"rtl_bridge_call.{suffix}"
             if path.exists():
@@ -419,33 +428,76 @@ class _PyswipEngine:
                     lib = ctypes.CDLL(str(path))
                 except OSError:
                     return
-                self._fast = _fn(lib, "rtl_bridge_apply", ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p,
-                                 ctypes.c_char_p, ctypes.c_size_t,
+                self._fast = _fn(lib, "rtl_bridge_call", ctypes.c_int, ctypes.c_void_p, ctypes.c_char_p,
+                                 ctypes.c_char_p, ctypes.c_char_p, ctypes.c_size_t,
                                  ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_size_t),
                                  ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_size_t))
+                self._fast_numbers = _fn(lib, "rtl_bridge_call_numbers", ctypes.c_int, ctypes.c_void_p,
+                                         ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_size_t,
+                                         ctypes.POINTER(ctypes.c_double), ctypes.c_int,
+                                         ctypes.POINTER(ctypes.c_int64), ctypes.c_int,
+                                         ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_size_t),
+                                         ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_size_t))
+                self._resolve = _fn(lib, "rtl_bridge_predicate", ctypes.c_void_p, ctypes.c_char_p,
+                                    ctypes.c_char_p, ctypes.c_int)
+                self._claimed = _fn(lib, "rtl_bridge_claimed", None)
                 self._out_ptr, self._out_len = ctypes.c_void_p(), ctypes.c_size_t()
                 self._err_ptr, self._err_len = ctypes.c_void_p(), ctypes.c_size_t()
                 self._fast_refs = (ctypes.byref(self._out_ptr), ctypes.byref(self._out_len),
                                    ctypes.byref(self._err_ptr), ctypes.byref(self._err_len))
+                self._reals = (ctypes.c_double * 16)()
+                self._ints = (ctypes.c_int64 * 16)()
                 return
+
+    def _predicate(self, module: str, name: str, arity: int) -> Tuple[Any, bytes, bytes]:
+        """(predicate handle, module, name) of module:name/arity, resolved once (the C library
+        calls it directly when this thread owns the state)."""
+        key = (module, name, arity)
+        entry = self._predicates.get(key)
+        if entry is None:
+            module_bytes, name_bytes = module.encode("utf-8"), name.encode("utf-8")
+            entry = (self._resolve(module_bytes, name_bytes, arity), module_bytes, name_bytes)
+            self._predicates[key] = entry
+        return entry
+
+    def _fast_outcome(self, status: int) -> tuple[int, Any, str]:
+        if status == _OK:
+            return status, ctypes.string_at(self._out_ptr.value or 0, self._out_len.value).decode("utf-8"), ""
+        if status == _FAILED:
+            return status, None, ""
+        err = ctypes.string_at(self._err_ptr.value or 0, self._err_len.value).decode("utf-8")
+        if status == _ERROR:
+            return status, ctypes.string_at(self._out_ptr.value or 0, self._out_len.value).decode("utf-8"), err
+        if status == -2:
+            raise PrologError("cannot build the arguments of a bridge call")
+        raise PrologError(err or "bridge helper failed", err or None)
+
+    def apply_numbers(self, module: str, name: str, nreals: int, nints: int,
+                      args: tuple) -> tuple[int, Any, str]:
+        """As apply, for a predicate whose answer is `F(R1..Rm, I1..Ik)`: Out is then
+        (reals, ints), read without text; another answer comes back as its text. None when
+        the C library is not built or requests are handed to the bridge's thread (the caller
+        uses the text road)."""
+        if not self._owned or nreals > 16 or nints > 16:
+            return None
+        self._ensure_thread()
+        data = _packed(args)
+        pred, module_bytes, name_bytes = self._predicate(module, name, len(args) + 1)
+        status = self._fast_numbers(pred, module_bytes, name_bytes, data, len(data),
+                                    self._reals, nreals, self._ints, nints, *self._fast_refs)
+        if status == _OK:
+            return status, (self._reals[:nreals], self._ints[:nints]), ""
+        if status == 3:
+            return _OK, ctypes.string_at(self._out_ptr.value or 0, self._out_len.value).decode("utf-8"), ""
+        return self._fast_outcome(status)
 
     def apply(self, module: str, name: str, args: tuple) -> tuple[int, Any, str]:
         self._ensure_thread()
         if self._fast is not None:
-            parts: List[bytes] = []
-            _pack(list(args), parts)
-            data = b"".join(parts)
-            status = self._fast(module.encode("utf-8"), name.encode("utf-8"), data, len(data), *self._fast_refs)
-            if status == _OK:
-                return status, ctypes.string_at(self._out_ptr.value or 0, self._out_len.value).decode("utf-8"), ""
-            if status == _FAILED:
-                return status, None, ""
-            err = ctypes.string_at(self._err_ptr.value or 0, self._err_len.value).decode("utf-8")
-            if status == _ERROR:
-                return status, ctypes.string_at(self._out_ptr.value or 0, self._out_len.value).decode("utf-8"), err
-            if status == -2:
-                raise PrologError("cannot build the arguments of a bridge call")
-            raise PrologError(err or "bridge helper failed", err or None)
+            data = _packed(args)
+            pred, module_bytes, name_bytes = self._predicate(module, name, len(args) + 1)
+            return self._fast_outcome(self._fast(pred, module_bytes, name_bytes, data, len(data),
+                                                 *self._fast_refs))
         self._mark_strings(ctypes.byref(self._mark))
         mark = self._mark.value
         fid = self._open_frame()
@@ -534,6 +586,9 @@ class _JanusEngine:
 
     _APPLY = "retalisc_bridge:bridge_apply(Module, Name, Args, Status, Out, Err)"
 
+    def apply_numbers(self, module: str, name: str, nreals: int, nints: int, args: tuple) -> None:
+        return None     # no typed road: the caller takes the text road
+
     def apply(self, module: str, name: str, args: tuple) -> tuple[int, Any, str]:
         for arg in args:
             _check_value(arg)
@@ -584,6 +639,23 @@ def _pack(value: Any, parts: List[bytes]) -> None:
         _pack(base(value), parts)
     else:
         raise TypeError(f"cannot pass a {type(value).__name__} to Prolog")
+
+
+def _packed(args: tuple) -> bytes:
+    """The encoding of the argument list `args` (_pack), strings and numbers on the spot."""
+    parts: List[bytes] = [_LIST(b"l", len(args))]
+    append = parts.append
+    for value in args:
+        kind = type(value)
+        if kind is str:
+            data = value.encode("utf-8")
+            append(_STRING(b"s", len(data)))
+            append(data)
+        elif kind is float:
+            append(_FLOAT(b"f", value))
+        else:
+            _pack(value, parts)
+    return b"".join(parts)
 
 
 def _check_value(value: Any) -> None:
@@ -734,6 +806,25 @@ class Bridge:
         _not_serving()
         with self._lock:
             status, out, term = self._engine.apply(module, name, args)
+        if status == _ERROR:
+            raise PrologError(out or term, term or None)
+        if status != _OK:
+            raise GoalFailed(f"goal failed: {module}:{name}/{len(args) + 1}")
+        return out
+
+    def apply_numbers(self, module: str, name: str, nreals: int, nints: int,
+                      *args: Any) -> Union[Tuple[List[float], List[int]], str, None]:
+        """Run ``module:name(Arg1, ..., ArgN, Out)`` once, as `apply`, for a predicate whose
+        answer is a term ``F(R1, ..., Rm, I1, ..., Ik)`` of `nreals` floats and `nints`
+        integers: returns (reals, ints), read by the C library without text; an answer of
+        another form comes back as its text. None when this backend has no typed road (janus,
+        or the C library not built): the caller then uses `apply` on a text answer."""
+        _not_serving()
+        with self._lock:
+            result = self._engine.apply_numbers(module, name, nreals, nints, args)
+        if result is None:
+            return None
+        status, out, term = result
         if status == _ERROR:
             raise PrologError(out or term, term or None)
         if status != _OK:

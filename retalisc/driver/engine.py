@@ -555,6 +555,10 @@ class Engine:
 
     def _call(self, name: str, *args) -> str:
         """rtl_api:Name(Args..., Out): the values go to Prolog as data (Bridge.apply)."""
+        self._check_usable()
+        return self.bridge.apply(_API, name, *args)
+
+    def _check_usable(self) -> None:
         if self._closed:
             raise RuntimeError("this Engine is closed")
         active = getattr(self.bridge, "active_program", None)
@@ -562,7 +566,6 @@ class Engine:
             raise InactiveEngineError(
                 f"this Engine ({self.module}) is not the active one: the runtime processes one program per "
                 f"process, and {active} was loaded or activated after it (call activate() to switch back)")
-        return self.bridge.apply(_API, name, *args)
 
     def _predicate_call(self, module: str, name: str, *args) -> str:
         """`module:name(Args..., Out)` of another API module (the tracing), as `_call`."""
@@ -942,7 +945,14 @@ class Engine:
         no transform."""
         args = (_text(target, "a frame id"), _text(source, "a frame id"), _tf_time(time))
         with self._lock:
-            output = self._call("rtl_api_tf_lookup", *args)
+            self._check_usable()
+            answer = self.bridge.apply_numbers(_API, "rtl_api_tf_lookup_numbers", 7, 2, *args)
+            if answer is None:      # no typed road in this process: the same answer as text
+                answer = self._call("rtl_api_tf_lookup", *args)
+        if type(answer) is tuple:
+            (x, y, z, qx, qy, qz, qw), (secs, nsecs) = answer
+            return TfTransform((x, y, z), (qx, qy, qz, qw), (secs, nsecs))
+        output = answer
         if output[0] == "!":
             raise TfLookupError(output[2:])
         _, x, y, z, qx, qy, qz, qw, secs, nsecs = output.split("\t")
