@@ -23,8 +23,9 @@ PACKAGE = ROOT / "retalisc"
 FEED = PACKAGE / "driver" / "feed.py"
 
 #: The Engine's feeding calls; only feed.py (the loop's sources) makes them, and the sources that
-#: feed something other than an Engine's event road: explain.py's event log (rtl_trace.pl).
-FEEDING_CALLS = {"feed_lines", "feed_batch", "feed_paced", "advance_clock", "end_of_input"}
+#: feed something other than an Engine's event road: explain.py's event log (rtl_trace.pl); and
+#: the update script of active queries (`ScriptSource`, `retalisc aq` with or without --state).
+FEEDING_CALLS = {"feed_lines", "feed_batch", "feed_paced", "advance_clock", "end_of_input", "run_script_batch"}
 #: Text only the loop makes: a problem's kind after a place, the summary's words.
 RUN_TEXT = [re.compile(r"(^|:)\s*rejected:\s*$"), re.compile(r"events in, "),
             re.compile(r"^\s*derived, $"), re.compile(r"retalis: cannot write")]
@@ -80,10 +81,11 @@ def test_the_guard_sees_a_road_of_its_own(tmp_path):
 
 
 def test_every_road_runs_the_loop():
-    """run_event_file, run_recoverable, the recoverable aq script, replay_bag and explain all
-    end in FeedLoop.run."""
+    """run_event_file, run_recoverable, the aq script (plain and recoverable), replay_bag and
+    explain all end in FeedLoop.run."""
     roads = {"driver/run.py": "run_event_file", "driver/recovery.py": "run_recoverable",
-             "robot_io/replay.py": "replay_bag", "driver/explain.py": "_feed"}
+             "robot_io/replay.py": "replay_bag", "driver/explain.py": "_feed",
+             "driver/active_queries.py": "run_script"}
     for relative, function in roads.items():
         tree = ast.parse((PACKAGE / relative).read_text(encoding="utf-8"))
         [definition] = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == function]

@@ -338,8 +338,8 @@ class WallClock:
 
 class EngineSource:
     """What the loop does with the Engine around a source's batches (every source of an Engine
-    inherits this; a source of another kind, `recovery.py`'s update script of active queries,
-    overrides it)."""
+    inherits this; a source of another kind, `ScriptSource`'s update script of active queries,
+    has its own)."""
 
     name = ""
     live = False
@@ -404,6 +404,60 @@ class LineSource(EngineSource):
             self.wall.saw(engine.clock())
         stop = bool(rejected) and (self.strict or rejected[-1].kind == "halt")
         return rejection_problems(rejected, engine.take_warnings()), stop
+
+
+SCRIPT_BATCH = 100        # update-script commands run per call into the runtime
+
+
+class ScriptSource:
+    """An update script of active queries (`retalisc aq --script`, with or without `--state`)
+    as a source of the feed loop: a batch is at most `batch_size` commands run by
+    `ActiveQueries.run_script_batch` from the script line reached (`line`); its output is the
+    notifications' JSON Lines as `retalisc aq` prints them, written as text. A bad line or a
+    failed command ends the run with its message, the script named `display_name` in it
+    (status 2 or 1); there is no Engine around it (no halt at load, no end of input, no
+    summary)."""
+
+    live = False
+
+    def __init__(self, path: str, display_name: str, line: int = 1, batch_size: int = SCRIPT_BATCH):
+        self.name = display_name
+        self.path = path
+        self.line = line
+        self.batch_size = batch_size
+        self.done = False
+
+    @property
+    def batches(self):
+        while not self.done:
+            yield Batch(self.line, [None] * self.batch_size, 0)
+
+    def feed(self, aq, batch: Batch, write) -> Tuple[List[Problem], bool]:
+        ran = aq.run_script_batch(self.path, self.line, self.batch_size)
+        write(ran.output)
+        if ran.status == "error":
+            raise RunStopped(ran.message.replace(self.path, self.name), ran.exit_status)
+        self.line = ran.next_line
+        self.done = ran.status == "done"
+        return [], False
+
+    def at_start(self, aq) -> str:
+        return ""
+
+    def at_end(self, aq, write, drop_pending: bool, strict: bool) -> None:
+        pass
+
+    def release(self, aq) -> None:
+        pass
+
+    def closing_lines(self) -> List[str]:
+        return []
+
+    def summary(self, aq, seconds: float, log) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
 
 
 def feed_resilient(engine, items: list, write, retext, where, dues: Optional[List[float]] = None,
