@@ -91,6 +91,11 @@ def test_every_road_runs_the_loop():
         [definition] = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == function]
         names = {n.id for n in ast.walk(definition) if isinstance(n, ast.Name)}
         assert "FeedLoop" in names, f"{relative}:{function} does not run feed.FeedLoop"
+    command = ast.parse((PACKAGE / "commands" / "aq.py").read_text(encoding="utf-8"))
+    names = {n.id for n in ast.walk(command) if isinstance(n, ast.Name)}
+    modules = {alias.name for n in ast.walk(command) if isinstance(n, ast.Import) for alias in n.names}
+    assert "run_script" in names and "subprocess" not in modules, \
+        "retalisc aq runs its script through active_queries.run_script (the loop), not a process of its own"
     tree = ast.parse((PACKAGE / "driver" / "recovery.py").read_text(encoding="utf-8"))
     for function in ("run_aq_recoverable",):
         [definition] = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == function]
