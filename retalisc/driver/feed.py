@@ -359,6 +359,10 @@ class EngineSource:
         """The source's own lines before the summary."""
         return []
 
+    def problem_line(self, problem: Problem) -> Optional[str]:
+        """The line the loop writes for `problem` (None: counted only, not written)."""
+        return problem_text(self.name, problem.where, problem.kind, problem.text)
+
     def summary(self, engine, seconds: float, log) -> None:
         print_summary(engine, seconds, log=log)
 
@@ -452,6 +456,9 @@ class ScriptSource:
 
     def closing_lines(self) -> List[str]:
         return []
+
+    def problem_line(self, problem: Problem) -> Optional[str]:
+        return problem_text(self.name, problem.where, problem.kind, problem.text)
 
     def summary(self, aq, seconds: float, log) -> None:
         pass
@@ -565,6 +572,14 @@ class Sink:
     def closing_lines(self) -> List[str]:
         """The sink's own lines before the summary."""
         return []
+
+
+class NullSink(Sink):
+    """A sink that takes nothing: the outputs leave elsewhere (a live node's, one at a time
+    through `Engine.on_output`)."""
+
+    def write(self, produced) -> None:
+        pass
 
 
 class TextSink(Sink):
@@ -714,7 +729,7 @@ def quiet_collector():
 
 class FeedLoop:
     """Feeds one source's batches to `engine`, each batch's output to `sinks`, and reports
-    (module docstring). `display`: the progress display (`Progress`, or a source's own: update,
+    (module docstring), its lines on `log` (standard error) or through `say`. `display`: the progress display (`Progress`, or a source's own: update,
     clear, close). `signals`: the stop signals end the run between batches (SignalStops);
     without, a KeyboardInterrupt goes to the caller. `engine_errors`: an Engine error outside
     any line (PrologError) ends the run with `NAME: error: ERROR` and status 1 instead of
@@ -722,7 +737,7 @@ class FeedLoop:
 
     def __init__(self, engine, source, sinks: Sinks, display=None, drop_pending: bool = False,
                  strict: bool = False, signals: bool = True, engine_errors: Tuple[type, ...] = (),
-                 log: Optional[IO[str]] = None):
+                 log: Optional[IO[str]] = None, say: Optional[Callable[[str], None]] = None):
         self.engine = engine
         self.source = source
         self.sinks = sinks
@@ -732,9 +747,13 @@ class FeedLoop:
         self.signals = signals
         self.engine_errors = engine_errors
         self.log = log
+        self.say = say
 
     def _say(self, text: str) -> None:
-        print(text, file=self.log or sys.stderr)
+        if self.say is not None:
+            self.say(text)
+        else:
+            print(text, file=self.log or sys.stderr)
 
     def run(self, first_output: Sequence = (), checkpoint=None, report: Optional[Callable[[], str]] = None,
             runtime_loop: Optional[Callable[[SignalStops], None]] = None) -> int:
@@ -790,7 +809,9 @@ class FeedLoop:
                     if display is not None:
                         display.clear()
                 for problem in problems:
-                    self._say(problem_text(source.name, problem.where, problem.kind, problem.text))
+                    line = source.problem_line(problem)
+                    if line is not None:
+                        self._say(line)
                 if display is not None:
                     display.batch(batch, derived[0])
                 if getattr(source, "live", False):
