@@ -81,11 +81,11 @@ def test_the_guard_sees_a_road_of_its_own(tmp_path):
 
 
 def test_every_road_runs_the_loop():
-    """run_event_file, run_recoverable, the aq script (plain and recoverable), replay_bag and
-    explain all end in FeedLoop.run."""
+    """run_event_file, run_recoverable, the aq script (plain and recoverable), replay_bag,
+    explain and the live nodes' consumer all end in FeedLoop.run."""
     roads = {"driver/run.py": "run_event_file", "driver/recovery.py": "run_recoverable",
              "robot_io/replay.py": "replay_bag", "driver/explain.py": "_feed",
-             "driver/active_queries.py": "run_script"}
+             "driver/active_queries.py": "run_script", "live/node.py": "_loop"}
     for relative, function in roads.items():
         tree = ast.parse((PACKAGE / relative).read_text(encoding="utf-8"))
         [definition] = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == function]
