@@ -23,8 +23,9 @@ PACKAGE = ROOT / "retalisc"
 FEED = PACKAGE / "driver" / "feed.py"
 
 #: The Engine's feeding calls; only feed.py (the loop's sources) makes them, and the sources that
-#: feed something other than an Engine's event road: explain.py's event log (rtl_trace.pl).
-FEEDING_CALLS = {"feed_lines", "feed_batch", "feed_paced", "advance_clock", "end_of_input"}
+#: feed something other than an Engine's event road: explain.py's event log (rtl_trace.pl); and
+#: the update script of active queries (`ScriptSource`, `retalisc aq` with or without --state).
+FEEDING_CALLS = {"feed_lines", "feed_batch", "feed_paced", "advance_clock", "end_of_input", "run_script_batch"}
 #: Text only the loop makes: a problem's kind after a place, the summary's words.
 RUN_TEXT = [re.compile(r"(^|:)\s*rejected:\s*$"), re.compile(r"events in, "),
             re.compile(r"^\s*derived, $"), re.compile(r"retalis: cannot write")]
@@ -80,15 +81,21 @@ def test_the_guard_sees_a_road_of_its_own(tmp_path):
 
 
 def test_every_road_runs_the_loop():
-    """run_event_file, run_recoverable, the recoverable aq script, replay_bag and explain all
-    end in FeedLoop.run."""
+    """run_event_file, run_recoverable, the aq script (plain and recoverable), replay_bag,
+    explain and the live nodes' consumer all end in FeedLoop.run."""
     roads = {"driver/run.py": "run_event_file", "driver/recovery.py": "run_recoverable",
-             "robot_io/replay.py": "replay_bag", "driver/explain.py": "_feed"}
+             "robot_io/replay.py": "replay_bag", "driver/explain.py": "_feed",
+             "driver/active_queries.py": "run_script", "live/node.py": "_loop"}
     for relative, function in roads.items():
         tree = ast.parse((PACKAGE / relative).read_text(encoding="utf-8"))
         [definition] = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == function]
         names = {n.id for n in ast.walk(definition) if isinstance(n, ast.Name)}
         assert "FeedLoop" in names, f"{relative}:{function} does not run feed.FeedLoop"
+    command = ast.parse((PACKAGE / "commands" / "aq.py").read_text(encoding="utf-8"))
+    names = {n.id for n in ast.walk(command) if isinstance(n, ast.Name)}
+    modules = {alias.name for n in ast.walk(command) if isinstance(n, ast.Import) for alias in n.names}
+    assert "run_script" in names and "subprocess" not in modules, \
+        "retalisc aq runs its script through active_queries.run_script (the loop), not a process of its own"
     tree = ast.parse((PACKAGE / "driver" / "recovery.py").read_text(encoding="utf-8"))
     for function in ("run_aq_recoverable",):
         [definition] = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == function]

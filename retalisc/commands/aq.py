@@ -1,19 +1,17 @@
 """`retalisc aq PROGRAM.pl --script UPDATES.txt`: run active queries over an update script.
 
-Compiles the definite program with the chosen transformation and runs the script in a plain
-`swipl` process (`aq_script_main/1` of `prolog_runtime/rtl_aq_script.pl`), printing one JSON object
-per notification on standard output or to `--out FILE` (docs/active_queries.md). With
-`--state DIR` the script runs in this process instead (the in-process bridge), with snapshots
-of the active queries in DIR so that a run killed and started again ends with the same
-`--out` file as a run that never stopped (docs/recovery.md).
+Compiles the definite program with the chosen transformation, loads it in this process (the
+in-process bridge) and runs the script as a source of the feed loop (`feed.ScriptSource`, the
+commands interpreted by `prolog_runtime/rtl_aq_script.pl`), printing one JSON object per
+notification on standard output or to `--out FILE` (docs/active_queries.md). With `--state DIR`
+the same loop runs with snapshots of the active queries in DIR (`recovery.Recovery`), so that a
+run killed and started again ends with the same `--out` file as a run that never stopped
+(docs/recovery.md). A compiled program also runs a script on its own in plain `swipl`
+(`aq_script_main/1`).
 """
 from __future__ import annotations
 
-import os
-import shutil
-import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 import click
@@ -21,14 +19,6 @@ import click
 from ..compiler import AQ_MODES, AqOptions, compile_source
 from ..frontend.errors import RetalisError
 from .options import check_snapshot_options, output_directory, output_file, state_options
-
-
-def _swipl() -> str:
-    exe = os.environ.get("SWIPL") or shutil.which("swipl")
-    if not exe:
-        click.echo("error: swipl (SWI-Prolog) is not on PATH", err=True)
-        sys.exit(1)
-    return exe
 
 
 def compile_program_or_exit(program: str, mode: str, subsumption: bool) -> str:
@@ -45,10 +35,6 @@ def compile_program_or_exit(program: str, mode: str, subsumption: bool) -> str:
     for note in result.warnings:
         click.echo(note, err=True)
     return result.prolog
-
-
-def _prolog_atom(text: str) -> str:
-    return "'" + text.replace("\\", "\\\\").replace("'", "\\'") + "'"
 
 
 @click.command("aq", epilog="""\b
@@ -89,41 +75,28 @@ def aq_command(program: str, script: str, mode: str, subsumption: bool, out: str
         output_directory(state, "--state")
     output_file(out, "--out")
     prolog = compile_program_or_exit(program, mode, subsumption)
+    aq = _load_or_exit(program, prolog)
     if state is not None:
-        sys.exit(_run_with_state(program, script, mode, subsumption, out, state, snapshot_every,
-                                 snapshot_seconds))
-    with tempfile.TemporaryDirectory(prefix="retalisc_aq_") as tmp:
-        compiled = Path(tmp) / "program.pl"
-        compiled.write_text(prolog, encoding="utf-8")
-        script_path = str(Path(script).resolve())
-        cmd = [_swipl(), "--no-tty", "-q", "--no-packs", "-g", f"aq_script_main({_prolog_atom(script_path)})",
-               "-t", "halt(1)", str(compiled)]
-        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    if out == "-":
-        sys.stdout.flush()
-        sys.stdout.buffer.write(proc.stdout)
-        sys.stdout.flush()
-    else:
-        with open(out, "wb") as sink:
-            sink.write(proc.stdout)
-    err = proc.stderr.decode("utf-8", errors="replace").replace(script_path, script)
-    if err:
-        sys.stderr.write(err)
-    if proc.returncode not in (0, 1, 2):
-        sys.exit(1)
-    sys.exit(proc.returncode)
+        sys.exit(_run_with_state(aq, script, out, state, snapshot_every, snapshot_seconds))
+    from ..driver.active_queries import run_script
+
+    sys.exit(run_script(aq, script, out, display_name=script))
 
 
-def _run_with_state(program, script, mode, subsumption, out, state, snapshot_every, snapshot_seconds) -> int:
-    from ..driver import recovery
+def _load_or_exit(program: str, prolog: str):
     from ..driver.active_queries import ActiveQueries
     from ..driver.bridge import PrologError
 
     try:
-        aq = ActiveQueries.from_file(program, mode=mode, subsumption=subsumption)
+        return ActiveQueries.from_compiled(prolog)
     except PrologError as error:
         click.echo(f"{program}: error: the program cannot be loaded: {error}", err=True)
-        return 2
+        sys.exit(2)
+
+
+def _run_with_state(aq, script, out, state, snapshot_every, snapshot_seconds) -> int:
+    from ..driver import recovery
+
     try:
         return recovery.run_aq_recoverable(
             aq, script, out, state, display_name=script,
@@ -132,6 +105,5 @@ def _run_with_state(program, script, mode, subsumption, out, state, snapshot_eve
     except recovery.RecoveryError as error:
         click.echo(f"error: --state {state}: {error}", err=True)
         return 2
-
 
 COMMANDS = [aq_command]

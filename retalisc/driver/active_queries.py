@@ -17,6 +17,7 @@ engine): loading another program unloads the previous one and drops every query.
 """
 from __future__ import annotations
 
+import sys
 import tempfile
 from pathlib import Path
 from typing import Callable, Dict, Iterable, List, NamedTuple, Optional, Union
@@ -24,6 +25,7 @@ from typing import Callable, Dict, Iterable, List, NamedTuple, Optional, Union
 from ..compiler import AqOptions, compile_source
 from . import snapshot
 from .bridge import Bridge, PrologError
+from .feed import FeedLoop, ScriptSource, Sinks, TextSink
 
 _API = "rtl_aq_api"
 
@@ -74,6 +76,13 @@ class ActiveQueries:
         return aq
 
     @classmethod
+    def from_compiled(cls, prolog: str, bridge: Optional[Bridge] = None) -> "ActiveQueries":
+        """The program `compile_source(..., active_queries=...)` compiled, loaded."""
+        aq = cls(bridge)
+        aq.load_compiled(prolog)
+        return aq
+
+    @classmethod
     def from_file(cls, path: Union[str, Path], mode: str = "tabled", subsumption: bool = False,
                   bridge: Optional[Bridge] = None) -> "ActiveQueries":
         text = Path(path).read_text(encoding="utf-8")
@@ -82,7 +91,10 @@ class ActiveQueries:
     def load(self, source_text: str, file: str = "<program>", mode: str = "tabled",
              subsumption: bool = False) -> None:
         """Compile the definite program and load it (replacing a previously loaded one)."""
-        prolog = compile_source(source_text, file, active_queries=AqOptions(mode, subsumption)).prolog
+        self.load_compiled(compile_source(source_text, file, active_queries=AqOptions(mode, subsumption)).prolog)
+
+    def load_compiled(self, prolog: str) -> None:
+        """Load a program compiled for active queries (replacing a previously loaded one)."""
         out = Path(self._tmp.name) / f"aq_program_{abs(hash(prolog)) % 10**12}.pl"
         out.write_text(prolog, encoding="utf-8")
         previous = _loaded["path"]
@@ -205,3 +217,17 @@ class ActiveQueries:
     def state_digest(self) -> str:
         """A hash of everything a snapshot holds (equal states, equal digests)."""
         return self.bridge.apply(_API, "aq_api_state_digest")
+
+
+def run_script(aq: ActiveQueries, script: Union[str, Path], out: str = "-", display_name: Optional[str] = None,
+               log=None) -> int:
+    """`retalisc aq PROGRAM --script SCRIPT [--out OUT]`: the update script run on the loaded
+    ActiveQueries `aq` by the feed loop (a `ScriptSource`), the notifications as JSON Lines on
+    standard output or to `out`; a bad line ends the run with its message (`display_name`
+    naming the script) and status 2, a failed command with status 1. Returns the exit status."""
+    if out == "-":
+        sink = TextSink(sys.stdout, "standard output", owned=False)
+    else:
+        sink = TextSink(open(out, "w", encoding="utf-8", newline=""), str(out), owned=True)
+    source = ScriptSource(str(Path(script).resolve()), display_name or str(script))
+    return FeedLoop(aq, source, Sinks([sink]), signals=False, engine_errors=(PrologError,), log=log).run()

@@ -338,8 +338,8 @@ class WallClock:
 
 class EngineSource:
     """What the loop does with the Engine around a source's batches (every source of an Engine
-    inherits this; a source of another kind, `recovery.py`'s update script of active queries,
-    overrides it)."""
+    inherits this; a source of another kind, `ScriptSource`'s update script of active queries,
+    has its own)."""
 
     name = ""
     live = False
@@ -358,6 +358,10 @@ class EngineSource:
     def closing_lines(self) -> List[str]:
         """The source's own lines before the summary."""
         return []
+
+    def problem_line(self, problem: Problem) -> Optional[str]:
+        """The line the loop writes for `problem` (None: counted only, not written)."""
+        return problem_text(self.name, problem.where, problem.kind, problem.text)
 
     def summary(self, engine, seconds: float, log) -> None:
         print_summary(engine, seconds, log=log)
@@ -404,6 +408,63 @@ class LineSource(EngineSource):
             self.wall.saw(engine.clock())
         stop = bool(rejected) and (self.strict or rejected[-1].kind == "halt")
         return rejection_problems(rejected, engine.take_warnings()), stop
+
+
+SCRIPT_BATCH = 100        # update-script commands run per call into the runtime
+
+
+class ScriptSource:
+    """An update script of active queries (`retalisc aq --script`, with or without `--state`)
+    as a source of the feed loop: a batch is at most `batch_size` commands run by
+    `ActiveQueries.run_script_batch` from the script line reached (`line`); its output is the
+    notifications' JSON Lines as `retalisc aq` prints them, written as text. A bad line or a
+    failed command ends the run with its message, the script named `display_name` in it
+    (status 2 or 1); there is no Engine around it (no halt at load, no end of input, no
+    summary)."""
+
+    live = False
+
+    def __init__(self, path: str, display_name: str, line: int = 1, batch_size: int = SCRIPT_BATCH):
+        self.name = display_name
+        self.path = path
+        self.line = line
+        self.batch_size = batch_size
+        self.done = False
+
+    @property
+    def batches(self):
+        while not self.done:
+            yield Batch(self.line, [None] * self.batch_size, 0)
+
+    def feed(self, aq, batch: Batch, write) -> Tuple[List[Problem], bool]:
+        ran = aq.run_script_batch(self.path, self.line, self.batch_size)
+        write(ran.output)
+        if ran.status == "error":
+            raise RunStopped(ran.message.replace(self.path, self.name), ran.exit_status)
+        self.line = ran.next_line
+        self.done = ran.status == "done"
+        return [], False
+
+    def at_start(self, aq) -> str:
+        return ""
+
+    def at_end(self, aq, write, drop_pending: bool, strict: bool) -> None:
+        pass
+
+    def release(self, aq) -> None:
+        pass
+
+    def closing_lines(self) -> List[str]:
+        return []
+
+    def problem_line(self, problem: Problem) -> Optional[str]:
+        return problem_text(self.name, problem.where, problem.kind, problem.text)
+
+    def summary(self, aq, seconds: float, log) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
 
 
 def feed_resilient(engine, items: list, write, retext, where, dues: Optional[List[float]] = None,
@@ -511,6 +572,14 @@ class Sink:
     def closing_lines(self) -> List[str]:
         """The sink's own lines before the summary."""
         return []
+
+
+class NullSink(Sink):
+    """A sink that takes nothing: the outputs leave elsewhere (a live node's, one at a time
+    through `Engine.on_output`)."""
+
+    def write(self, produced) -> None:
+        pass
 
 
 class TextSink(Sink):
@@ -660,7 +729,7 @@ def quiet_collector():
 
 class FeedLoop:
     """Feeds one source's batches to `engine`, each batch's output to `sinks`, and reports
-    (module docstring). `display`: the progress display (`Progress`, or a source's own: update,
+    (module docstring), its lines on `log` (standard error) or through `say`. `display`: the progress display (`Progress`, or a source's own: update,
     clear, close). `signals`: the stop signals end the run between batches (SignalStops);
     without, a KeyboardInterrupt goes to the caller. `engine_errors`: an Engine error outside
     any line (PrologError) ends the run with `NAME: error: ERROR` and status 1 instead of
@@ -668,7 +737,7 @@ class FeedLoop:
 
     def __init__(self, engine, source, sinks: Sinks, display=None, drop_pending: bool = False,
                  strict: bool = False, signals: bool = True, engine_errors: Tuple[type, ...] = (),
-                 log: Optional[IO[str]] = None):
+                 log: Optional[IO[str]] = None, say: Optional[Callable[[str], None]] = None):
         self.engine = engine
         self.source = source
         self.sinks = sinks
@@ -678,9 +747,13 @@ class FeedLoop:
         self.signals = signals
         self.engine_errors = engine_errors
         self.log = log
+        self.say = say
 
     def _say(self, text: str) -> None:
-        print(text, file=self.log or sys.stderr)
+        if self.say is not None:
+            self.say(text)
+        else:
+            print(text, file=self.log or sys.stderr)
 
     def run(self, first_output: Sequence = (), checkpoint=None, report: Optional[Callable[[], str]] = None,
             runtime_loop: Optional[Callable[[SignalStops], None]] = None) -> int:
@@ -736,7 +809,9 @@ class FeedLoop:
                     if display is not None:
                         display.clear()
                 for problem in problems:
-                    self._say(problem_text(source.name, problem.where, problem.kind, problem.text))
+                    line = source.problem_line(problem)
+                    if line is not None:
+                        self._say(line)
                 if display is not None:
                     display.batch(batch, derived[0])
                 if getattr(source, "live", False):

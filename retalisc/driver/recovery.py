@@ -21,7 +21,8 @@ from ..robot_io.messages import Convention
 from ..robot_io.replay import BagOptions, replay_bag
 from .bridge import PrologError
 from .event_lines import max_line_bytes
-from .feed import Batch, BinarySink, FeedLoop, LineSource, Progress, RunStopped, Sinks, file_batches, live_batches
+from .feed import (SCRIPT_BATCH, Batch, BinarySink, FeedLoop, LineSource, Progress, ScriptSource, Sinks, file_batches,
+                   live_batches)
 from .snapshot import STATE_FORMAT, StateError, fsync_directory, replace_atomically
 
 
@@ -456,7 +457,7 @@ def _journaled_batches(journal: EventJournal, restored, first_line: int, batch_s
 
 
 DEFAULT_AQ_SNAPSHOT_COMMANDS = 10_000   # script commands between two snapshots of `retalisc aq --state`
-DEFAULT_AQ_BATCH = 100                  # commands run per call into the runtime
+DEFAULT_AQ_BATCH = SCRIPT_BATCH
 
 
 @_holding_the_state_directory
@@ -482,60 +483,11 @@ def run_aq_recoverable(aq, script: str, out: str, state: Union[str, Path], displ
     if restored is not None:
         print(f"retalisc: restored snapshot {restored['number']} of {directory.directory} "
               f"(script line {line}, {restored['out_bytes']} output bytes)", file=log)
-    source = _ScriptSource(script_path, display_name or script, line, batch_size)
+    source = ScriptSource(script_path, display_name or script, line, batch_size)
     recovery = Recovery(directory, aq, sink, "script", script_path, restored,
                         lambda batch: None if source.done else {"input_line": source.line}, {"input_line": line},
                         snapshot_commands, snapshot_seconds, log)
     return FeedLoop(aq, source, Sinks([sink]), signals=False, log=log).run(checkpoint=recovery)
-
-
-class _ScriptSource:
-    """An update script of active queries as a source of the feed loop: a batch is at most
-    `batch_size` commands run by `ActiveQueries.run_script_batch` from the script line
-    reached; its output is the notifications' JSON Lines as `retalisc aq` prints them. A bad
-    line or a failed command ends the run with its message (status 2 or 1); there is no
-    Engine around it (no end of input, no summary)."""
-
-    live = False
-
-    def __init__(self, path: str, display_name: str, line: int, batch_size: int):
-        self.name = display_name
-        self.path = path
-        self.line = line
-        self.batch_size = batch_size
-        self.done = False
-
-    @property
-    def batches(self):
-        while not self.done:
-            yield Batch(self.line, [None] * self.batch_size, 0)
-
-    def feed(self, aq, batch, write):
-        ran = aq.run_script_batch(self.path, self.line, self.batch_size)
-        write(ran.output)
-        if ran.status == "error":
-            raise RunStopped(ran.message.replace(self.path, self.name), ran.exit_status)
-        self.line = ran.next_line
-        self.done = ran.status == "done"
-        return [], False
-
-    def at_start(self, aq) -> str:
-        return ""
-
-    def at_end(self, aq, write, drop_pending, strict) -> None:
-        pass
-
-    def release(self, aq) -> None:
-        pass
-
-    def closing_lines(self):
-        return []
-
-    def summary(self, aq, seconds, log) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
 
 
 @_holding_the_state_directory

@@ -71,7 +71,8 @@ from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 from .state import STATEFUL_CALLS
 from ..robot_io.bags import typestore
 from ..driver.bridge import PrologError  # noqa: F401  (the name tests and callers use)
-from ..driver.feed import beat, feed_resilient, where_text
+from ..driver.feed import (Batch, EngineSource, FeedLoop, NullSink, Problem, Sinks, beat, feed_resilient,
+                           where_text)
 
 BATCH = 2000
 REPORTS_PER_TOPIC = 10       # rejected messages reported on stderr per topic; then only counted
@@ -179,6 +180,45 @@ class Transport:
 _STOP = object()
 
 
+class _Arrivals(EngineSource):
+    """A live node's queue as a source of the feed loop (feed.FeedLoop): its items are the
+    messages, heartbeats, service requests and the stop (`LiveNode._arrivals`); a batch is fed
+    by `LiveNode._feed`, its outputs leaving through `Engine.on_output` (published, and
+    written to `out`). `batches`: a list of batches instead (a journal's replay). A live node
+    runs until it is stopped: no end of the input, no halt at load, its summary the node's
+    (commands/live.py)."""
+
+    live = True
+
+    def __init__(self, node: "LiveNode", until: Optional[float] = None, batches=None):
+        self.node = node
+        self.batches = node._arrivals(until) if batches is None else batches
+        self.live = batches is None           # a replay: no collection set-up per journal record
+
+    def feed(self, engine, batch: Batch, write) -> Tuple[List[Problem], bool]:
+        return self.node._feed(batch.lines), False
+
+    def problem_line(self, problem: Problem) -> Optional[str]:
+        if problem.kind == "rejected":
+            return where_text(problem.where, problem.kind, problem.text)
+        return f"error: {problem.detail}"
+
+    def at_start(self, engine) -> str:
+        return ""
+
+    def at_end(self, engine, write, drop_pending: bool, strict: bool) -> None:
+        pass
+
+    def release(self, engine) -> None:
+        pass
+
+    def summary(self, engine, seconds: float, log) -> None:
+        pass
+
+
+_NO_SINKS = Sinks([NullSink()])
+
+
 class LiveNode:
     def __init__(self, engine, transport: Transport, config: Optional[PubSubConfig] = None,
                  convention: Optional[Convention] = None, out: Optional[IO[str]] = None,
@@ -222,6 +262,7 @@ class LiveNode:
         self.late = 0              # the runtime's late count when it was last checked
         self._late_warnings = 0
         self._late_checked: Optional[float] = None    # time.monotonic() of the last check
+        self._problems: List[Problem] = []         # to write with the next batch (FeedLoop)
         engine.on_output(self._output)
 
     # ---- life cycle ------------------------------------------------------------------------
@@ -348,7 +389,7 @@ class LiveNode:
     def feed_events(self, events: List[tuple]) -> None:
         """Feed `(event, time, arrival)` items in order (journaled first when the node keeps one),
         their outputs published."""
-        self._feed(events)
+        self._loop(_Arrivals(self, batches=[Batch(0, events, 0)]))
 
     def replay_call(self, name: str, args, now: Optional[float]) -> Reply:
         """A stateful service request by name, replayed from the journal (`now`: the wall-clock
@@ -390,7 +431,17 @@ class LiveNode:
     # ---- the consumer thread ------------------------------------------------------------------
 
     def _consume(self, until: Optional[float] = None) -> None:
-        """Take what arrives and feed it, until a stop (or the time.monotonic() `until`)."""
+        """Take what arrives and feed it, until a stop (or the time.monotonic() `until`): the
+        feed loop (feed.FeedLoop) over the node's queue (`_Arrivals`)."""
+        self._loop(_Arrivals(self, until=until))
+
+    def _loop(self, source: "_Arrivals") -> None:
+        FeedLoop(self.engine, source, _NO_SINKS, signals=False, say=self.log).run()
+
+    def _arrivals(self, until: Optional[float]):
+        """The batches of the queue: all that is waiting (with `linger`, what arrives within
+        that many seconds of the first), at most BATCH events; a service request or a heartbeat
+        runs between two batches, the batch before it fed first."""
         pending: List[tuple] = []           # (event, time, the arrival: for the text road)
         while True:
             idle = self.state.idle_timeout() if self.state is not None else None
@@ -411,7 +462,7 @@ class LiveNode:
                 if item is _STOP:
                     stop = True
                 elif len(item) == 4:
-                    self._feed(pending)
+                    yield Batch(0, pending, 0)
                     pending = []
                     function, args, future, request = item
                     future.set_result(self._run_call(function, args, request))
@@ -420,7 +471,7 @@ class LiveNode:
                     if event is not None:
                         pending.append(event)
                         if len(pending) >= BATCH:
-                            self._feed(pending)
+                            yield Batch(0, pending, 0)
                             pending = []
                 if stop:
                     break
@@ -429,7 +480,7 @@ class LiveNode:
                     item = self._queue.get_nowait() if left is None or left <= 0 else self._queue.get(timeout=left)
                 except queue.Empty:
                     break
-            self._feed(pending)
+            yield Batch(0, pending, 0)
             pending = []
             if stop:
                 return
@@ -508,9 +559,11 @@ class LiveNode:
         return self._clock() if self._replay_now is None else self._replay_now
 
     def _reject(self, topic: str, number: int, error) -> None:
+        """Count a rejected message; the first REPORTS_PER_TOPIC of a topic are problems the
+        loop writes with the batch."""
         self.stats.rejected[topic] += 1
         if self.stats.rejected[topic] <= REPORTS_PER_TOPIC:
-            self.log(where_text(f"{topic}#{number}", "rejected", str(error)))
+            self._problems.append(Problem(f"{topic}#{number}", "rejected", str(error)))
 
     def _learn_type(self, name: str, definition: Optional[str]) -> None:
         if not definition:
@@ -522,7 +575,9 @@ class LiveNode:
         self.store.register(types)
         self.learned[name] = definition
 
-    def _feed(self, events: List[tuple]) -> None:
+    def _feed(self, events: List[tuple]) -> List[Problem]:
+        """Feed a batch; the problems the loop writes (the messages rejected since the last
+        batch, then the batch's)."""
         if self.state is not None:
             self.state.events(events)       # journaled (flushed) before they are fed
         count = len(events)
@@ -540,13 +595,15 @@ class LiveNode:
                     self._reject(problem.item[0], problem.item[1], problem.text)
                 else:
                     self.stats.errors += 1
-                    self.log(f"error: {problem.detail}")
+                    self._problems.append(problem)
         if self.out is not None:
             self.out.flush()
         if count and (self._late_checked is None or time.monotonic() - self._late_checked >= LATE_CHECK_SECONDS):
             self._check_late()
         if self.state is not None and count:
             self.state.fed(self, count)
+        problems, self._problems = self._problems, []
+        return problems
 
     def _check_late(self) -> None:
         """Warn when events came later than the delay bound since the last check."""
