@@ -67,6 +67,7 @@ from typing import IO, Any, Callable, Dict, List, Optional, Tuple
 from ..driver.values import read_term, write_term
 from ..robot_io.messages import CLOCK_JUMP, CLOCK_TOPIC, ConversionError, Convention, EventClock, MessageConverter
 from ..robot_io.ros1_terms import Ros1Terms
+from ..robot_io.wire import MessageWriter
 from .config import PubSubConfig, resolve_topic, ros1_type, store_type
 from .state import STATEFUL_CALLS
 from ..robot_io.bags import typestore
@@ -230,6 +231,7 @@ class LiveNode:
         self.store = typestore("ros1_noetic" if transport.wire == "ros1" else "ros2_humble")
         convention = convention or Convention.of_program(engine)     # the program's strings
         self.converter = MessageConverter(self.store, convention)
+        self.writer = MessageWriter(self.converter, "ros1" if transport.wire == "ros1" else "cdr")
         # messages go to the runtime as bytes, which it reads in C (ros1_terms.py; CDR too)
         self.ros1_terms = Ros1Terms(engine, self.store, convention, cdr=transport.wire == "cdr")
         self.clock = EventClock(log)             # the one clock rule (consumer thread only)
@@ -637,11 +639,7 @@ class LiveNode:
                 name = found
             else:
                 name = store_type(msgtype)
-            name, msg = self.converter.message(term, name)
-            if self.transport.wire == "ros1":
-                data = bytes(self.store.serialize_ros1(msg, name))
-            else:
-                data = bytes(self.store.serialize_cdr(msg, name))
+            data = self.writer.write(term, name)         # the term's data to bytes (robot_io/wire.py)
             self._send(topic, ros1_type(name), data, self._numbered_by(name), self.outputs)
             self.stats.published[topic] += 1
         except Exception as error:

@@ -192,6 +192,7 @@ class Ros2Transport(Transport):
         self._lock = threading.Lock()
         self._closing = False
         self._publishers: Dict[str, tuple] = {}
+        self._matched: Dict[str, int] = {}              # topic -> its subscribers, from matched events
         self._thread: Optional[threading.Thread] = None
         self._reader: Optional[threading.Thread] = None
         self.context = None
@@ -319,9 +320,27 @@ class Ros2Transport(Transport):
             if entry is not None:
                 self.ros.destroy_publisher(entry[1])
             profile = qos_profile(self.node.config.qos(topic, False), topic, False)
-            entry = self._publishers[topic] = (msgtype, self.ros.create_publisher(message_class(msgtype), topic,
-                                                                                  profile))
+            entry = self._publishers[topic] = (msgtype, self._create_publisher(topic, msgtype, profile))
         return entry[1]
+
+    def _create_publisher(self, topic: str, msgtype: str, profile):
+        """An rclpy publisher whose subscriber count `subscriber_count` keeps from its matched
+        events (run by the executor's thread when the graph changes): asking rmw for the count
+        with every message cost a graph query per output. Without matched events (an rmw
+        that has none), the count is asked each time."""
+        from rclpy.event_handler import PublisherEventCallbacks
+
+        def matched(status, topic=topic) -> None:
+            self._matched[topic] = status.current_count
+
+        self._matched.pop(topic, None)
+        try:
+            publisher = self.ros.create_publisher(message_class(msgtype), topic, profile,
+                                                  event_callbacks=PublisherEventCallbacks(matched=matched))
+        except Exception:        # UnsupportedEventTypeError: no matched events from this rmw
+            return self.ros.create_publisher(message_class(msgtype), topic, profile)
+        self._matched.setdefault(topic, publisher.get_subscription_count())
+        return publisher
 
     def publish(self, topic: str, msgtype: str, data: bytes) -> None:
         self.advertise(topic, msgtype).publish(data)
@@ -348,7 +367,10 @@ class Ros2Transport(Transport):
 
     def subscriber_count(self, topic: str) -> int:
         entry = self._publishers.get(topic)
-        return 0 if entry is None else entry[1].get_subscription_count()
+        if entry is None:
+            return 0
+        count = self._matched.get(topic)
+        return entry[1].get_subscription_count() if count is None else count
 
     def close(self) -> None:
         if self.context is None:

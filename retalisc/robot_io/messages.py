@@ -383,17 +383,27 @@ class MessageConverter:
         raise ConversionError(f"{path}: expected an integer ({base}), not {_describe(term)}")
 
     def _time(self, term: Value, msgtype: str, path: str):
-        cls = self.typestore.types[msgtype]
-        if isinstance(term, list) and len(term) == 2 and all(isinstance(v, int) for v in term):
-            sec, nanosec = term
-        elif isinstance(term, (int, float)) and not isinstance(term, bool) and math.isfinite(term):
-            total = round(term * 1_000_000_000)
-            sec, nanosec = divmod(total, 1_000_000_000)
-        else:
-            raise ConversionError(f"{path}: expected a time [Sec, NSec] or seconds, not {_describe(term)}")
-        if not 0 <= nanosec < 1_000_000_000:
-            raise ConversionError(f"{path}: nanoseconds {nanosec} outside [0, 1e9)")
-        return cls(sec=sec, nanosec=nanosec)
+        sec, nanosec = time_parts(term, path)
+        return self.typestore.types[msgtype](sec=sec, nanosec=nanosec)
+
+    def base_value(self, term: Value, base: str) -> Any:
+        """The Python value of a field of ROS type `base` (a ROS primitive) given as `term`;
+        ConversionError when it is not one."""
+        return self._base_value(term, base, "")
+
+
+def time_parts(term: Value, path: str = "") -> Tuple[int, int]:
+    """(sec, nanosec) of a time term: `[Sec, NSec]` or a number of seconds."""
+    if isinstance(term, list) and len(term) == 2 and all(isinstance(v, int) for v in term):
+        sec, nanosec = term
+    elif isinstance(term, (int, float)) and not isinstance(term, bool) and math.isfinite(term):
+        total = round(term * 1_000_000_000)
+        sec, nanosec = divmod(total, 1_000_000_000)
+    else:
+        raise ConversionError(f"{path}: expected a time [Sec, NSec] or seconds, not {_describe(term)}")
+    if not 0 <= nanosec < 1_000_000_000:
+        raise ConversionError(f"{path}: nanoseconds {nanosec} outside [0, 1e9)")
+    return sec, nanosec
 
 
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")

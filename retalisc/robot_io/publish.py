@@ -37,6 +37,7 @@ from typing import Dict, List, Optional, Tuple
 from . import require
 from ..driver.values import String, Term, Value, is_atom, read_term, write_term
 from .messages import ConversionError, Convention, MessageConverter, type_functor
+from .wire import MessageWriter
 
 EVENTS_TOPIC = "/retalis/events"
 EVENT_SCHEMA = {
@@ -74,6 +75,7 @@ class Publisher:
     def __init__(self, store, fallback_store=None, convention: Convention = Convention()):
         self.stores = [store] + ([fallback_store] if fallback_store is not None else [])
         self.converters = [MessageConverter(s, convention) for s in self.stores]
+        self.writers = [MessageWriter(converter, "cdr") for converter in self.converters]
         self.convention = convention
         self._schemas: Dict[Tuple[int, str], bytes] = {}
         self._fed: Dict[float, List[Tuple[str, object]]] = {}
@@ -114,13 +116,13 @@ class Publisher:
                 if msgtype is None:
                     continue
                 try:
-                    _, msg = converter.message(term, msgtype)
+                    data = self.writers[index].write(term, msgtype)
                 except ConversionError:
                     break
                 topic = _consumer_topic(event.consumer) if event.consumer else "/retalis/" + \
                     type_functor(msgtype).replace("__0__", "/")
-                return Message(topic, msgtype, "ros2msg", self._schema(index, msgtype), "cdr",
-                               bytes(self.stores[index].serialize_cdr(msg, msgtype)), _ns(event.end))
+                return Message(topic, msgtype, "ros2msg", self._schema(index, msgtype), "cdr", data,
+                               _ns(event.end))
         payload = {"event": event.event, "start": event.start, "end": event.end}
         if isinstance(term, Term):
             payload["name"] = term.name
