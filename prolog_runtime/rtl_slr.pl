@@ -55,9 +55,10 @@ Cost model (thesis 5.2.1, 5.2.2):
   - prev/next find their starting point by binary search on the numbers (logarithmic)
     and then walk towards older/newer records until one unifies with the pattern.
   - Instances are found per event through one dynamic predicate per event type
-    (Name/Arity) whose first argument is the first argument of the instance's pattern,
-    so an event of a type no instance records costs one failed lookup, and an instance
-    whose pattern has a different first argument is not even tried.
+    (Name/Arity) whose first argument is the hash of the pattern's constant arguments
+    (its mask: the positions of its atomic arguments); the event is hashed under each
+    mask in use for the type, so an event of a type no instance records costs one failed
+    lookup, and an instance with a constant the event does not have is not even tried.
 
 Memory events (thesis 4.2.4) are raised, and fed to the event rules and subscriptions,
 when something can receive them (an event rule or a subscription on them):
@@ -349,14 +350,30 @@ watch(M, Pattern, H) :-
     watch_head(Pattern, M, H, Head),
     assertz(Head),
     functor(Head, P, _),
+    pattern_mask(Pattern, Mask),
+    mask_use(P, M, Mask, 1),
     rtl_add_type_output_hook(Pattern, rtl_slr:observe(P)).
 
 unwatch(M, Pattern, H) :-
     watch_head(Pattern, M, H, Head),
     retractall(Head),
     functor(Head, P, _),
+    pattern_mask(Pattern, Mask),
+    mask_use(P, M, Mask, -1),
     (   current_predicate(P/3), \+ call(P, _, _, _)
     ->  rtl_remove_type_output_hook(Pattern, rtl_slr:observe(P))
+    ;   true
+    ).
+
+% mask_use(+P, +Program, +Mask, +Delta): the type's clause `P('$mask'(Mask), Program, Count)`
+% counts the instances whose patterns have constants at the positions of Mask.
+mask_use(P, M, Mask, Delta) :-
+    MaskHead =.. [P, '$mask'(Mask), M, Count0],
+    (   retract(MaskHead) -> true ; Count0 = 0 ),
+    Count is Count0 + Delta,
+    (   Count > 0
+    ->  NewHead =.. [P, '$mask'(Mask), M, Count],
+        assertz(NewHead)
     ;   true
     ).
 
@@ -381,7 +398,7 @@ rtl_slr_watch_predicate(Name) :-
     atom(Name),
     sub_atom(Name, 0, _, _, '$slr_watch ').
 
-% watch_head(+Pattern, +Program, +H, -Head): Head is `P(FirstArgOfPattern, Program, H)`
+% watch_head(+Pattern, +Program, +H, -Head): Head is `P(Key, Program, H)`, Key the hash of the pattern's constants
 % for the type's index predicate P (created on first use).
 watch_head(Pattern, M, H, Head) :-
     functor(Pattern, Name, Arity),
@@ -391,8 +408,34 @@ watch_head(Pattern, M, H, Head) :-
         dynamic(rtl_slr:P/3),
         assertz(watch_predicate(Name, Arity, P))
     ),
-    (   Arity > 0 -> arg(1, Pattern, First) ; First = [] ),
-    Head =.. [P, First, M, H].
+    pattern_mask(Pattern, Mask),
+    event_key(Pattern, Mask, Key),
+    Head =.. [P, Key, M, H].
+
+% pattern_mask(+Pattern, -Mask): bit I-1 of Mask is set when argument I of Pattern is
+% atomic (a constant that an event must equal to match).
+pattern_mask(Pattern, Mask) :-
+    (   compound(Pattern) -> compound_name_arguments(Pattern, _, Args) ; Args = [] ),
+    args_mask(Args, 1, 0, Mask).
+
+args_mask([], _, Mask, Mask).
+args_mask([A|As], Bit, Mask0, Mask) :-
+    (   atomic(A) -> Mask1 is Mask0 \/ Bit ; Mask1 = Mask0 ),
+    Bit1 is Bit << 1,
+    args_mask(As, Bit1, Mask1, Mask).
+
+% event_key(+Term, +Mask, -Key): Key is the integer hash of the arguments of Term at the
+% positions of Mask; unbound when one of them is not ground (an event with variables).
+event_key(Term, Mask, Key) :-
+    (   compound(Term) -> compound_name_arguments(Term, _, Args) ; Args = [] ),
+    masked_args(Args, Mask, Values),
+    term_hash(Mask-Values, Key).
+
+masked_args([], _, []).
+masked_args([A|As], Mask, Values) :-
+    (   Mask /\ 1 =:= 1 -> Values = [A|Values1] ; Values = Values1 ),
+    Mask1 is Mask >> 1,
+    masked_args(As, Mask1, Values1).
 
 % ---- recording ---------------------------------------------------------------------------
 
@@ -400,12 +443,16 @@ watch_head(Pattern, M, H, Head) :-
 %   some instance records; P is the type's index predicate.
 observe(P, Event, Start, End, Op) :-
     rtl_program(M),
-    (   compound(Event), compound_name_arity(Event, _, Arity), Arity > 0
-    ->  arg(1, Event, First)
-    ;   First = []
-    ),
-    findall(H, call(P, First, M, H), Hs),
+    findall(Mask, call(P, '$mask'(Mask), M, _), Masks),
+    findall(H, ( member(Mask, Masks), event_key(Event, Mask, Key), index_hit(P, Key, M, H) ), Hs0),
+    sort(Hs0, Hs),                              % creation order, each instance once
     observe_in(Hs, Op, Event, Start, End).
+
+index_hit(P, Key, M, H) :-
+    (   integer(Key)
+    ->  call(P, Key, M, H)
+    ;   call(P, Key0, M, H), integer(Key0)       % an event with variables: every instance
+    ).
 
 observe_in([], _, _, _, _).
 observe_in([H|Hs], Op, Event, Start, End) :-
