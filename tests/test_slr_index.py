@@ -1,0 +1,211 @@
+"""The index of memory instances (issue 39, item 4) against plain unification.
+
+Instances are found by every constant argument of their pattern (rtl_slr.pl: a mask of the
+constant positions and the hash of the constants). Random patterns over `e/3` and `h/2` (each
+argument a variable, a repeated variable, a constant: atoms, integers, a float beside the equal
+integer, or a nested term with variables and constants inside) are created and deleted through
+`Engine.memory` in the middle of a random stream of ground events fed through the Engine; each
+live instance must then hold exactly the events since its creation that unify with its pattern
+(`unify` below, a plain implementation over Python values), in order. SLR_INDEX_EXAMPLES sets the
+number of examples (default 100).
+"""
+from __future__ import annotations
+
+import os
+from typing import Dict, List, Optional, Tuple, Union
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from retalisc.driver.engine import Engine
+
+EXAMPLES = int(os.environ.get("SLR_INDEX_EXAMPLES", "100"))
+TYPES = {"e": 3, "h": 2}
+ATOMS = ["a", "b"]
+NUMBERS = [0, 1, 1.0, -2]
+
+Value = Union[int, float, str, tuple]      # atom (str), number, or (functor, (args...))
+
+
+def text(value: Value) -> str:
+    """writeq text of a ground value (the atoms here need no quotes)."""
+    if isinstance(value, tuple):
+        return f"{value[0]}({','.join(text(a) for a in value[1])})"
+    return repr(value) if isinstance(value, float) else str(value)
+
+
+# ---- patterns: ("var", name) | ("const", value) | ("term", functor, [patterns]) -------------
+
+def pattern_text(pattern) -> str:
+    kind = pattern[0]
+    if kind == "var":
+        return pattern[1]
+    if kind == "const":
+        return text(pattern[1])
+    return f"{pattern[1]}({', '.join(pattern_text(p) for p in pattern[2])})"
+
+
+def unify(pattern, value: Value, bindings: dict) -> Optional[dict]:
+    """Bindings extended so that PATTERN equals the ground VALUE, or None (no unification)."""
+    kind = pattern[0]
+    if kind == "var":
+        if pattern[1] == "_":
+            return bindings
+        if pattern[1] in bindings:
+            return bindings if same(bindings[pattern[1]], value) else None
+        return {**bindings, pattern[1]: value}
+    if kind == "const":
+        return bindings if same(pattern[1], value) else None
+    if not isinstance(value, tuple) or value[0] != pattern[1] or len(value[1]) != len(pattern[2]):
+        return None
+    for sub, arg in zip(pattern[2], value[1]):
+        bindings = unify(sub, arg, bindings)
+        if bindings is None:
+            return None
+    return bindings
+
+
+def same(a: Value, b: Value) -> bool:
+    """Prolog's ==: 1 and 1.0 are different terms."""
+    if isinstance(a, tuple) or isinstance(b, tuple):
+        return (isinstance(a, tuple) and isinstance(b, tuple) and a[0] == b[0] and len(a[1]) == len(b[1])
+                and all(same(x, y) for x, y in zip(a[1], b[1])))
+    return type(a) is type(b) and a == b
+
+
+# ---- strategies ------------------------------------------------------------------------------
+
+constants = st.sampled_from(ATOMS + NUMBERS)
+
+
+def ground_values(depth: int = 1):
+    if depth == 0:
+        return constants
+    return st.one_of(constants, st.builds(lambda f, args: (f, tuple(args)), st.sampled_from(["f", "g"]),
+                                          st.lists(ground_values(depth - 1), min_size=1, max_size=2)))
+
+
+@st.composite
+def events(draw):
+    name = draw(st.sampled_from(sorted(TYPES)))
+    return (name, tuple(draw(ground_values()) for _ in range(TYPES[name])))
+
+
+def sub_patterns(depth: int = 1):
+    leaves = st.one_of(st.builds(lambda v: ("var", v), st.sampled_from(["_", "X", "Y"])),
+                       st.builds(lambda c: ("const", c), constants))
+    if depth == 0:
+        return leaves
+    return st.one_of(leaves, st.builds(lambda f, args: ("term", f, args), st.sampled_from(["f", "g"]),
+                                       st.lists(sub_patterns(depth - 1), min_size=1, max_size=2)))
+
+
+@st.composite
+def patterns(draw):
+    name = draw(st.sampled_from(sorted(TYPES)))
+    return ("term", name, [draw(sub_patterns()) for _ in range(TYPES[name])])
+
+
+@st.composite
+def stories(draw):
+    """Steps: ("event", value), ("add", ident, pattern), ("delete", ident)."""
+    steps: List[tuple] = []
+    live: List[str] = []
+    made = 0
+    for _ in range(draw(st.integers(1, 4))):
+        steps.append(("add", f"m{made}", draw(patterns())))
+        live.append(f"m{made}")
+        made += 1
+    for _ in range(draw(st.integers(5, 40))):
+        choice = draw(st.integers(0, 9))
+        if choice == 0:
+            steps.append(("add", f"m{made}", draw(patterns())))
+            live.append(f"m{made}")
+            made += 1
+        elif choice == 1 and live:
+            steps.append(("delete", live.pop(draw(st.integers(0, len(live) - 1)))))
+        else:
+            steps.append(("event", draw(events())))
+    return steps
+
+
+# ---- running ---------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def engine():
+    return Engine.from_source("n(X) <- m(X).\n", "slr_index.rtl")
+
+
+def run(engine: Engine, steps: List[tuple]) -> Dict[str, Tuple[tuple, List[tuple]]]:
+    """Feed STEPS; return the live instances: ident -> (pattern, [(event, end time)] expected)."""
+    engine.bridge.once(f"retalis:rtl_use_program({engine.module})")
+    engine.clear()
+    engine.memory("d_mem(_)")
+    live: Dict[str, Tuple[tuple, List[tuple]]] = {}
+    batch: List[tuple] = []
+    time = 0
+
+    def flush():
+        if batch:
+            engine.feed_batch(batch)
+            batch.clear()
+
+    for step in steps:
+        if step[0] == "event":
+            time += 1
+            batch.append((text(step[1]), time, time, "add"))
+            for pattern, held in live.values():
+                if unify(pattern, step[1], {}) is not None:
+                    held.append((step[1], time))
+        elif step[0] == "add":
+            flush()
+            engine.memory(f"c_mem({step[1]}, {pattern_text(step[2])}-[], inf, inf)")
+            live[step[1]] = (step[2], [])
+        else:
+            flush()
+            engine.memory(f"d_mem({step[1]})")
+            del live[step[1]]
+    flush()
+    return live
+
+
+def describe(steps: List[tuple]) -> str:
+    lines = []
+    for step in steps:
+        if step[0] == "event":
+            lines.append(f"  event {text(step[1])}")
+        elif step[0] == "add":
+            lines.append(f"  add {step[1]}: {pattern_text(step[2])}")
+        else:
+            lines.append(f"  delete {step[1]}")
+    return "\n".join(lines)
+
+
+SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
+                    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+
+
+@SETTINGS
+@given(stories())
+def test_each_instance_holds_what_unification_finds(engine, steps):
+    live = run(engine, steps)
+    for ident, (pattern, held) in live.items():
+        expected = [{"E": text(value), "T": str(end)} for value, end in held]
+        assert engine.query_all(f"mem({ident}, E^T)") == expected, f"{ident}: {pattern_text(pattern)}\n{describe(steps)}"
+
+
+def test_the_oracle_is_not_trivial(engine):
+    """Instances with constants at different positions, nested terms and a repeated variable
+    over one type: each holds only its own events."""
+    e = ("term", "e", [("const", "a"), ("var", "X"), ("var", "X")])
+    steps = [("add", "m0", e),
+             ("add", "m1", ("term", "e", [("var", "_"), ("const", 1), ("var", "_")])),
+             ("add", "m2", ("term", "e", [("var", "_"), ("term", "f", [("const", "b")]), ("var", "_")])),
+             ("event", ("e", ("a", 1, 1))), ("event", ("e", ("a", 1.0, 1))), ("event", ("e", ("b", ("f", ("b",)), 0))),
+             ("delete", "m0"), ("event", ("e", ("a", 0, 0)))]
+    live = run(engine, steps)
+    assert sorted(live) == ["m1", "m2"]
+    assert engine.query_all("mem(m1, E)") == [{"E": "e(a,1,1)"}]
+    assert engine.query_all("mem(m2, E)") == [{"E": "e(b,f(b),0)"}]
+    assert [len(held) for _, held in live.values()] == [1, 1]
