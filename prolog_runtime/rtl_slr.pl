@@ -56,8 +56,8 @@ Cost model (thesis 5.2.1, 5.2.2):
     and then walk towards older/newer records until one unifies with the pattern.
   - Instances are found per event through one dynamic predicate per event type
     (Name/Arity) whose first argument is the hash of the pattern's constant arguments
-    (its mask: the positions of its atomic arguments); the event is hashed under each
-    mask in use for the type, so an event of a type no instance records costs one failed
+    (its mask: the positions of its atomic arguments, rtl_pattern_key.pl); the event is
+    hashed under each mask in use for the type, so an event of a type no instance records costs one failed
     lookup, and an instance with a constant the event does not have is not even tried.
 
 Memory events (thesis 4.2.4) are raised, and fed to the event rules and subscriptions,
@@ -81,6 +81,7 @@ Def. 18). A time argument that is not bound raises an instantiation error.
 :- use_module(rtl_time).
 :- use_module(rtl_raise).
 :- use_module(rtl_time_index).
+:- use_module(rtl_pattern_key, [rtl_pattern_mask/2, rtl_pattern_key/3]).
 :- use_module(rtl_subscriptions, [rtl_subscribed/1]).
 
 :- meta_predicate rtl_with_view(+, 0), rtl_with_needs(0, -).
@@ -350,7 +351,7 @@ watch(M, Pattern, H) :-
     watch_head(Pattern, M, H, Head),
     assertz(Head),
     functor(Head, P, _),
-    pattern_mask(Pattern, Mask),
+    rtl_pattern_mask(Pattern, Mask),
     mask_use(P, M, Mask, 1),
     rtl_add_type_output_hook(Pattern, rtl_slr:observe(P)).
 
@@ -358,7 +359,7 @@ unwatch(M, Pattern, H) :-
     watch_head(Pattern, M, H, Head),
     retractall(Head),
     functor(Head, P, _),
-    pattern_mask(Pattern, Mask),
+    rtl_pattern_mask(Pattern, Mask),
     mask_use(P, M, Mask, -1),
     (   current_predicate(P/3), \+ call(P, _, _, _)
     ->  rtl_remove_type_output_hook(Pattern, rtl_slr:observe(P))
@@ -408,34 +409,9 @@ watch_head(Pattern, M, H, Head) :-
         dynamic(rtl_slr:P/3),
         assertz(watch_predicate(Name, Arity, P))
     ),
-    pattern_mask(Pattern, Mask),
-    event_key(Pattern, Mask, Key),
+    rtl_pattern_mask(Pattern, Mask),
+    rtl_pattern_key(Pattern, Mask, Key),
     Head =.. [P, Key, M, H].
-
-% pattern_mask(+Pattern, -Mask): bit I-1 of Mask is set when argument I of Pattern is
-% atomic (a constant that an event must equal to match).
-pattern_mask(Pattern, Mask) :-
-    (   compound(Pattern) -> compound_name_arguments(Pattern, _, Args) ; Args = [] ),
-    args_mask(Args, 1, 0, Mask).
-
-args_mask([], _, Mask, Mask).
-args_mask([A|As], Bit, Mask0, Mask) :-
-    (   atomic(A) -> Mask1 is Mask0 \/ Bit ; Mask1 = Mask0 ),
-    Bit1 is Bit << 1,
-    args_mask(As, Bit1, Mask1, Mask).
-
-% event_key(+Term, +Mask, -Key): Key is the integer hash of the arguments of Term at the
-% positions of Mask; unbound when one of them is not ground (an event with variables).
-event_key(Term, Mask, Key) :-
-    (   compound(Term) -> compound_name_arguments(Term, _, Args) ; Args = [] ),
-    masked_args(Args, Mask, Values),
-    term_hash(Mask-Values, Key).
-
-masked_args([], _, []).
-masked_args([A|As], Mask, Values) :-
-    (   Mask /\ 1 =:= 1 -> Values = [A|Values1] ; Values = Values1 ),
-    Mask1 is Mask >> 1,
-    masked_args(As, Mask1, Values1).
 
 % ---- recording ---------------------------------------------------------------------------
 
@@ -444,7 +420,7 @@ masked_args([A|As], Mask, Values) :-
 observe(P, Event, Start, End, Op) :-
     rtl_program(M),
     findall(Mask, call(P, '$mask'(Mask), M, _), Masks),
-    findall(H, ( member(Mask, Masks), event_key(Event, Mask, Key), index_hit(P, Key, M, H) ), Hs0),
+    findall(H, ( member(Mask, Masks), rtl_pattern_key(Event, Mask, Key), index_hit(P, Key, M, H) ), Hs0),
     sort(Hs0, Hs),                              % creation order, each instance once
     observe_in(Hs, Op, Event, Start, End).
 

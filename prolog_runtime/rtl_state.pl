@@ -89,7 +89,8 @@ state_predicate(rtl_slr, need(data, data)).
 state_predicate(rtl_slr, expiry(integer, program, data)).
 state_predicate(rtl_slr, bounds_name(integer, bounds_global)).
 state_predicate(rtl_subscriptions, subscription(program, data, atom, data, conditions, data, data, data)).
-state_predicate(rtl_subscriptions, by_functor(program, atom, integer, data, atom)).
+state_predicate(rtl_subscriptions, by_key(integer, program, atom, integer, integer, data, atom)).
+state_predicate(rtl_subscriptions, by_mask(program, atom, integer, integer, integer)).
 state_predicate(rtl_sync, pending(integer, data, goal, data, data, data)).
 state_predicate(rtl_sync, condition(integer, data, data, data)).
 state_predicate(rtl_sync, call_monitor(data, integer)).

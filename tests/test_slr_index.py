@@ -1,17 +1,20 @@
-"""The index of memory instances (issue 39, item 4) against plain unification.
+"""The index of memory instances and subscriptions (issue 39, item 4) against plain unification.
 
-Instances are found by every constant argument of their pattern (rtl_slr.pl: a mask of the
-constant positions and the hash of the constants). Random patterns over `e/3` and `h/2` (each
+Instances and subscriptions are found by every constant argument of their pattern
+(rtl_pattern_key.pl: a mask of the constant positions and the hash of the constants). Random patterns over `e/3` and `h/2` (each
 argument a variable, a repeated variable, a constant: atoms, integers, a float beside the equal
 integer, or a nested term with variables and constants inside) are created and deleted through
 `Engine.memory` in the middle of a random stream of ground events fed through the Engine; each
 live instance must then hold exactly the events since its creation that unify with its pattern
-(`unify` below, a plain implementation over Python values), in order. SLR_INDEX_EXAMPLES sets the
-number of examples (default 100).
+(`unify` below, a plain implementation over Python values), in order; the same stories with
+subscriptions (made with `Engine.subscribe`, ended with `Engine.unsubscribe`) must deliver to each
+consumer exactly the events between its subscription and its end that unify with its pattern,
+in processing order. SLR_INDEX_EXAMPLES sets the number of examples (default 100).
 """
 from __future__ import annotations
 
 import os
+import itertools
 from typing import Dict, List, Optional, Tuple, Union
 
 import pytest
@@ -209,3 +212,70 @@ def test_the_oracle_is_not_trivial(engine):
     assert engine.query_all("mem(m1, E)") == [{"E": "e(a,1,1)"}]
     assert engine.query_all("mem(m2, E)") == [{"E": "e(b,f(b),0)"}]
     assert [len(held) for _, held in live.values()] == [1, 1]
+
+
+# ---- subscriptions ---------------------------------------------------------------------------
+
+_CONSUMERS = itertools.count()
+
+
+def run_subscriptions(engine: Engine, steps: List[tuple]) -> Tuple[Dict[str, List[tuple]], Dict[str, List[tuple]]]:
+    """Feed STEPS with subscriptions for the memories of the story ("add": subscribe, "delete":
+    unsubscribe at the clock); return (delivered, expected) per consumer: [(event text, end)]."""
+    engine.bridge.once(f"retalis:rtl_use_program({engine.module})")
+    engine.clear()
+    engine.memory("d_mem(_)")
+    run_id = next(_CONSUMERS)
+    consumers: Dict[str, str] = {}                 # story ident -> consumer
+    ids: Dict[str, str] = {}
+    live: Dict[str, tuple] = {}
+    expected: Dict[str, List[tuple]] = {}
+    delivered: Dict[str, List[tuple]] = {}
+    batch: List[tuple] = []
+    time = 0
+
+    def flush():
+        if batch:
+            for out in engine.feed_batch(batch):
+                if out.consumer in delivered:
+                    delivered[out.consumer].append((out.event, str(out.end)))
+            batch.clear()
+
+    for step in steps:
+        if step[0] == "event":
+            time += 1
+            batch.append((text(step[1]), time, time, "add"))
+            for ident, pattern in live.items():
+                if unify(pattern, step[1], {}) is not None:
+                    expected[consumers[ident]].append((text(step[1]), str(time)))
+        elif step[0] == "add":
+            flush()
+            consumer = consumers[step[1]] = f"c{run_id}_{step[1]}"
+            ids[step[1]] = engine.subscribe(consumer, pattern_text(step[2]))
+            live[step[1]] = step[2]
+            expected[consumer], delivered[consumer] = [], []
+        else:
+            flush()
+            engine.unsubscribe(ids[step[1]], time)
+            del live[step[1]]
+    flush()
+    for ident in live:
+        engine.unsubscribe(ids[ident], 0)           # later examples restart the clock
+    return delivered, expected
+
+
+@SETTINGS
+@given(stories())
+def test_each_subscription_receives_what_unification_finds(engine, steps):
+    delivered, expected = run_subscriptions(engine, steps)
+    assert delivered == expected, describe(steps)
+
+
+def test_the_subscription_oracle_is_not_trivial(engine):
+    steps = [("add", "m0", ("term", "e", [("const", "a"), ("var", "X"), ("var", "X")])),
+             ("add", "m1", ("term", "e", [("var", "_"), ("const", 1), ("var", "_")])),
+             ("event", ("e", ("a", 1, 1))), ("event", ("e", ("a", 1.0, 1))), ("delete", "m0"),
+             ("event", ("e", ("a", 0, 0))), ("event", ("e", ("b", 1, 0)))]
+    delivered, expected = run_subscriptions(engine, steps)
+    assert delivered == expected
+    assert [len(v) for v in delivered.values()] == [1, 2]
