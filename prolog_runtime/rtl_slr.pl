@@ -8,6 +8,7 @@
             stream_history/1,           % +Name/Arity
             stream_history/3,           % +Name/Arity, +N, +L
             mem/2,                      % ?Id, ?Event                            (Def. 22)
+            rtl_slr_rebuild_index/1,    % +Program
             prev/2,                     % ?Event, +Zs                            (Def. 19)
             prev/3,                     % ?Id, ?Event, +Zs                       (Def. 23)
             next/2,                     % ?Event, +[Zs, Ze]                      (thesis rule 4.7)
@@ -365,6 +366,20 @@ unwatch(M, Pattern, H) :-
     ->  rtl_remove_type_output_hook(Pattern, rtl_slr:observe(P))
     ;   true
     ).
+
+%!  rtl_slr_rebuild_index(+Program) is det.
+%
+%   Make the index of Program's instances again from their patterns: rtl_state.pl calls it
+%   after a restore, so that no key of a snapshot is trusted (keys are term_hash/2 values).
+
+rtl_slr_rebuild_index(M) :-
+    forall(watch_predicate(_, _, P), ( Head =.. [P, _, M, _], retractall(Head) )),
+    forall(instance(H, M, _, Pattern, _, _, _, _, _),
+           ( watch_head(Pattern, M, H, Head),
+             assertz(Head),
+             functor(Head, P, _),
+             rtl_pattern_mask(Pattern, Mask),
+             mask_use(P, M, Mask, 1) )).
 
 % mask_use(+P, +Program, +Mask, +Delta): the type's clause `P('$mask'(Mask), Program, Count)`
 % counts the instances whose patterns have constants at the positions of Mask.

@@ -9,6 +9,7 @@
             unsub/2,                    % +Id, +Te                                   (thesis 3.4)
             subscribe_between/5,        % +Consumer, +Query, ?Template, +Ts, +Te     (thesis 3.4)
             rtl_consumer_dir/1,         % +Directory
+            rtl_subscriptions_rebuild_index/1,  % +Program
             rtl_close_consumer_files/0
           ]).
 
@@ -136,19 +137,37 @@ rtl_subscribe(Id, Consumer, Pattern, Conds, Template, Ts0, Te0) :-
     ;   true
     ),
     atom_string(ConsumerAtom, Consumer),
+    (   aggregate_all(max(S), by_key(_, M, _, _, S, _, _), Last) -> Seq is Last + 1 ; Seq = 1 ),
+    assertz(subscription(M, Id, ConsumerAtom, Pattern, Conds, Template, Ts, Te)),
+    file(M, Pattern, Seq, Id, ConsumerAtom),
+    rtl_add_output_hook(rtl_subscriptions:deliver).
+
+file(M, Pattern, Seq, Id, Consumer) :-
     functor(Pattern, Name, Arity),
     rtl_pattern_mask(Pattern, Mask),
     rtl_pattern_key(Pattern, Mask, Key),
-    (   aggregate_all(max(S), by_key(_, M, _, _, S, _, _), Last) -> Seq is Last + 1 ; Seq = 1 ),
-    assertz(subscription(M, Id, ConsumerAtom, Pattern, Conds, Template, Ts, Te)),
-    assertz(by_key(Key, M, Name, Arity, Seq, Id, ConsumerAtom)),
-    mask_use(M, Name, Arity, Mask, 1),
-    rtl_add_output_hook(rtl_subscriptions:deliver).
+    assertz(by_key(Key, M, Name, Arity, Seq, Id, Consumer)),
+    mask_use(M, Name, Arity, Mask, 1).
 
 mask_use(M, Name, Arity, Mask, Delta) :-
     (   retract(by_mask(M, Name, Arity, Mask, Count0)) -> true ; Count0 = 0 ),
     Count is Count0 + Delta,
     (   Count > 0 -> assertz(by_mask(M, Name, Arity, Mask, Count)) ; true ).
+
+%!  rtl_subscriptions_rebuild_index(+Program) is det.
+%
+%   File Program's subscriptions again under the keys of their patterns, in the order they
+%   were made: rtl_state.pl calls it after a restore, so that no key of a snapshot is
+%   trusted (keys are term_hash/2 values).
+
+rtl_subscriptions_rebuild_index(M) :-
+    findall(Seq-(Id-Consumer), by_key(_, M, _, _, Seq, Id, Consumer), Filed0),
+    sort(Filed0, Filed),
+    retractall(by_key(_, M, _, _, _, _, _)),
+    retractall(by_mask(M, _, _, _, _)),
+    forall(( member(Seq-(Id-Consumer), Filed),
+             once(subscription(M, Id, Consumer, Pattern, _, _, _, _)) ),
+           file(M, Pattern, Seq, Id, Consumer)).
 
 %!  rtl_unsubscribe(+Id, +Te) is det.
 %

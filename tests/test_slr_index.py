@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import os
 import itertools
+import re
 from typing import Dict, List, Optional, Tuple, Union
 
 import pytest
@@ -279,3 +280,73 @@ def test_the_subscription_oracle_is_not_trivial(engine):
     delivered, expected = run_subscriptions(engine, steps)
     assert delivered == expected
     assert [len(v) for v in delivered.values()] == [1, 2]
+
+
+# ---- snapshots -------------------------------------------------------------------------------
+
+def _scramble_keys(path, module: str) -> int:
+    """Replace every key of the snapshot's index for the program MODULE (the first argument of
+    the watch clauses of rtl_slr and of by_key/7) by another integer, as a runtime hashing
+    otherwise would file them; returns how many were changed."""
+    lines, changed = [], 0
+    key = re.compile(r"^(fact\(rtl_slr,'\$slr_watch [^']*'\(|fact\(rtl_subscriptions,by_key\()(-?\d+),")
+    for line in path.read_text(encoding="utf-8").splitlines(keepends=True):
+        match = key.match(line)
+        if match and f",{module}," in line:
+            line = f"{match.group(1)}{int(match.group(2)) + 1},{line[match.end():]}"
+            changed += 1
+        lines.append(line)
+    path.write_text("".join(lines), encoding="utf-8")
+    return changed
+
+
+@pytest.mark.parametrize("scrambled", [False, True])
+def test_a_restore_files_instances_and_subscriptions_again(tmp_path, scrambled):
+    """The keys of the index are not taken from a snapshot: they are made again from the
+    restored patterns, so a snapshot whose keys were computed otherwise (another hash) restores
+    an index that finds exactly what unification finds."""
+    source = "n(X) <- m(X).\n"
+    patterns = {"m0": ("term", "e", [("const", "a"), ("var", "X"), ("var", "X")]),
+                "m1": ("term", "e", [("var", "_"), ("const", 1), ("var", "_")]),
+                "m2": ("term", "h", [("term", "f", [("const", "b")]), ("const", 1.0)])}
+    before = [("e", ("a", 1, 1)), ("e", ("b", 1, 0)), ("h", (("f", ("b",)), 1.0))]
+    after = [("e", ("a", 0, 0)), ("e", ("a", 1, 0)), ("h", (("f", ("b",)), 1)), ("h", (("f", ("b",)), 1.0)),
+             ("e", ("b", 1, 1))]
+    first = Engine.from_source(source, "slr_index_state.rtl")
+    for ident, pattern in patterns.items():
+        first.memory(f"c_mem({ident}, {pattern_text(pattern)}-[], inf, inf)")
+        first.subscribe(f"s_{ident}", pattern_text(pattern))
+    first.feed_batch([(text(v), t, t, "add") for t, v in enumerate(before, 1)])
+    state = tmp_path / "engine.state"
+    first.save_state(state)
+    if scrambled:
+        assert _scramble_keys(state, first.module) == 2 * len(patterns)
+    second = Engine.from_source(source, "slr_index_state.rtl")
+    second.restore_state(state)
+    outputs = second.feed_batch([(text(v), t, t, "add") for t, v in enumerate(after, len(before) + 1)])
+    for ident, pattern in patterns.items():
+        held = [(v, t) for t, v in enumerate(before + after, 1) if unify(pattern, v, {}) is not None]
+        assert second.query_all(f"mem({ident}, E^T)") == [{"E": text(v), "T": str(t)} for v, t in held]
+        got = [(o.event, str(o.end)) for o in outputs if o.consumer == f"s_{ident}"]
+        assert got == [(text(v), str(t)) for v, t in held if t > len(before)]
+    assert second.query_all("mem(m1, E)") == [{"E": "e(a,1,1)"}, {"E": "e(b,1,0)"}, {"E": "e(a,1,0)"},
+                                               {"E": "e(b,1,1)"}]
+
+
+def test_a_snapshot_of_the_first_argument_index_is_refused(tmp_path):
+    """A snapshot of the runtime before this index is refused by its runtime identity
+    (snapshot.runtime_version hashes the runtime's sources); one with this identity that holds
+    the old index, `by_functor/5`, is refused too: it is no longer state."""
+    from retalisc.driver.snapshot import StateError
+
+    engine = Engine.from_source("n(X) <- m(X).\n", "slr_index_old.rtl")
+    engine.subscribe("c", "e(a, _, _)")
+    state = tmp_path / "engine.state"
+    engine.save_state(state)
+    old = re.sub(r"fact\(rtl_subscriptions,by_key\(-?\d+,(\w+),(\w+),(\d+),\d+,(\w+),(\w+)\)\)\.",
+                 r"fact(rtl_subscriptions,by_functor(\1,\2,\3,\4,\5)).", state.read_text(encoding="utf-8"))
+    assert "by_functor(" in old
+    state.write_text(old, encoding="utf-8")
+    with pytest.raises(StateError, match="not declared state|by_functor"):
+        engine.restore_state(state)
+    assert engine.query_all("true") == [{}]
