@@ -24,8 +24,14 @@ the clock starts), with the program a variant of examples/nao/nao.rtl:
             synchronized (A.5), and C copies of the synchronized rule each waiting D seconds
             after the detection (about 7.5 * C * D postponed monitors at any time; pending
             ones are dropped at the end).
+  pairs     (issue 39, item 4) the split rules with one memory per tf frame pair of the
+            recording (52 pairs, 48 with parent `torso`) against the five of the application:
+            CPU per transform, the ratio against the 1.5x target; each case run with this
+            tree's runtime and with the runtime of --before (a checkout of the commit before
+            instances were found by every constant argument: the first argument only), in
+            the same run.
 
-Usage: python benchmarks/nao.py [--quick] [--seconds S] [--only FIGS] [--out-dir DIR] [--no-plot]
+Usage: python benchmarks/nao.py [--quick] [--seconds S] [--only FIGS] [--before TREE] [--out-dir DIR] [--no-plot]
 Prints one `target met|MISSED|figure ...` line per figure; writes nao[_quick].json and PNG plots.
 """
 from __future__ import annotations
@@ -65,6 +71,25 @@ def split_rules() -> str:
 
 def with_memories(count: int, pattern: str, size: int, prefix: str) -> str:
     return split_rules() + "".join(f"memorize({pattern}, [], rec, {prefix}{k}, {size}).\n" for k in range(count))
+
+
+def pair_memories(pairs) -> str:
+    """The split rules with one memory a frame pair, each recording the pair's transforms."""
+    def quoted(frame: str) -> str:
+        return "'" + frame.replace("'", "\\'") + "'"
+
+    return split_rules() + "".join(f"memorize(tf({quoted(p)}, {quoted(c)}, V, Q), [], tf(V, Q), pair{k}, 2500).\n"
+                                   for k, (p, c) in enumerate(pairs))
+
+
+def transforms_in(seconds: float) -> int:
+    """How many transforms make_bag.py writes in a recording of SECONDS."""
+    from make_bag import GROUPS
+
+    return round(seconds * sum(rate * len(pairs) for rate, _, pairs in GROUPS))
+
+
+PAIRS_TARGET = 1.5
 
 
 def with_interpolations(k: int) -> str:
@@ -208,9 +233,10 @@ def output_latency(bag_path: str, dues: List[float], outputs: List[tuple]) -> di
             "p95": late[int(len(late) * 0.95)], "max": late[-1]} if late else {"count": 0}
 
 
-def run_case(spec: dict, stream_seconds: float) -> dict:
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    proc = subprocess.run([sys.executable, __file__, "--measure"], input=json.dumps(spec), text=True,
+def run_case(spec: dict, stream_seconds: float, root: Path = ROOT) -> dict:
+    """One case in a fresh process, with the runtime of the tree ROOT (its benchmarks/nao.py measures)."""
+    env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.run([sys.executable, str(root / "benchmarks" / "nao.py"), "--measure"], input=json.dumps(spec), text=True,
                           capture_output=True, env=env, timeout=3600)
     if proc.returncode != 0:
         raise SystemExit(f"benchmark case failed:\n{proc.stderr[-3000:]}")
@@ -223,13 +249,13 @@ def run_case(spec: dict, stream_seconds: float) -> dict:
 
 # ---- the figures -------------------------------------------------------------------------------------
 
-def run_all(bag: Path, seconds: float, quick: bool, only: Optional[set]) -> dict:
+def run_all(bag: Path, seconds: float, quick: bool, only: Optional[set], before: Optional[Path] = None) -> dict:
     def want(fig: str) -> bool:
         return only is None or fig in only
 
-    def case(source: str, **extra) -> dict:
+    def case(source: str, root: Path = ROOT, **extra) -> dict:
         spec = {"source": source, "bag": str(bag), **extra}
-        result = run_case(spec, seconds)
+        result = run_case(spec, seconds, root)
         print(f"  {extra.get('label', '')}: {result['share'] * 100:.2f} % of a core "
               f"({result['cpu']:.2f} s CPU, {result['events']:,} events)", file=sys.stderr)
         return result
@@ -264,6 +290,21 @@ def run_all(bag: Path, seconds: float, quick: bool, only: Optional[set]) -> dict
         res["waiting"] = [dict(copies=c, delay=d, **case(with_waiting_copies(c, d), drop_pending=True,
                                                          label=f"{c} rules waiting {d} s"))
                           for c, d in ([(4, 2.0)] if quick else [(4, 2.0), (8, 4.0), (16, 8.0)])]
+    if want("pairs"):
+        print("pairs ...", file=sys.stderr)
+        from make_bag import CHAIN, GROUPS
+
+        every = [pair for _, _, pairs in GROUPS for pair in pairs]
+        transforms = transforms_in(seconds)
+        res["pairs"] = {"pairs": len(every), "torso": sum(1 for p, _ in every if p == "torso"), "transforms": transforms}
+        trees = [("after", ROOT)] + ([("before", before)] if before else [])
+        for name, root in trees:
+            row = {}
+            for key, pairs in (("five", CHAIN), ("all", every)):
+                result = case(pair_memories(pairs), root, label=f"{name}: {len(pairs)} memories, one a pair")
+                result["us_per_transform"] = result["cpu"] / transforms * 1e6
+                row[key] = result
+            res["pairs"][name] = row
     return res
 
 
@@ -331,6 +372,24 @@ def report(res: dict, rate: float) -> None:
               f"{res['sync']['share'] * 100:.2f} %")
         print("target figure  Fig 5.13 " + ", ".join(
             f"~{r['copies'] * r['delay'] * rate:.0f} waiting monitors: {r['share'] * 100:.2f} %" for r in res["waiting"]))
+    if "pairs" in res:
+        report_pairs(res["pairs"])
+
+
+def report_pairs(pairs: dict) -> None:
+    print(f"Memory instances per frame pair: {pairs['pairs']} pairs ({pairs['torso']} with parent torso), "
+          f"{pairs['transforms']:,} transforms")
+    for name in ("before", "after"):
+        if name not in pairs:
+            continue
+        five, every = pairs[name]["five"]["us_per_transform"], pairs[name]["all"]["us_per_transform"]
+        ratio = every / five
+        label = "first-argument index (728a727)" if name == "before" else "index on every constant argument"
+        print(f"  {name:6} {label}: {pairs['pairs']} memories {every:.1f} us per transform, 5 memories {five:.1f} us: "
+              f"{ratio:.2f}x")
+        if name == "after":
+            print(f"target {'met' if ratio <= PAIRS_TARGET else 'MISSED':6} ingest with one memory per frame pair within "
+                  f"{PAIRS_TARGET:g}x of the cost with 5: {ratio:.2f}x ({every:.1f} vs {five:.1f} us per transform)")
 
 
 def plot(res: dict, rate: float, out_dir: Path, prefix: str) -> List[Path]:
@@ -397,6 +456,21 @@ def plot(res: dict, rate: float, out_dir: Path, prefix: str) -> List[Path]:
         ax.set_ylabel("CPU, % of one core")
         ax.set_title("Synchronization (Fig 5.12-5.13); above: postponed monitors")
         save(fig, "sync")
+    if "pairs" in res:
+        pairs = res["pairs"]
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        names = [n for n in ("before", "after") if n in pairs]
+        width = 0.38
+        for i, (key, label) in enumerate((("five", "5 memories (the application's)"),
+                                          ("all", f"{pairs['pairs']} memories, one a frame pair"))):
+            ax.bar([j + (i - 0.5) * width for j in range(len(names))],
+                   [pairs[n][key]["us_per_transform"] for n in names], width, label=label)
+        ax.set_xticks(range(len(names)))
+        ax.set_xticklabels(["before: first argument" if n == "before" else "after: every constant" for n in names])
+        ax.set_ylabel("CPU per transform (us)")
+        ax.set_title(f"Memories over tf, found by their pattern (target: {PAIRS_TARGET:g}x of 5)")
+        ax.legend(fontsize=8)
+        save(fig, "pairs")
     return paths
 
 
@@ -404,7 +478,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a 6 s recording and fewer cases")
     parser.add_argument("--seconds", type=float, help="length of the recording (default 60, quick 6)")
-    parser.add_argument("--only", help="comma-separated figures: 5.2, 5.4 (5.4-5.8), 5.9 (5.9-5.11), 5.12 (5.12-5.13)")
+    parser.add_argument("--only", help="comma-separated figures: 5.2, 5.4 (5.4-5.8), 5.9 (5.9-5.11), 5.12 (5.12-5.13), pairs")
+    parser.add_argument("--before", type=Path, help="a checkout of the runtime to compare in the pairs case "
+                        "(e.g. `git worktree add --detach /tmp/idx_before 728a727`, C helpers built)")
     parser.add_argument("--out-dir", type=Path, default=ROOT / "benchmarks" / "results")
     parser.add_argument("--no-plot", action="store_true")
     parser.add_argument("--measure", action="store_true", help=argparse.SUPPRESS)
@@ -422,7 +498,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     with tempfile.TemporaryDirectory(prefix="retalisc-nao-") as folder:
         bag, _ = make_bag.write(Path(folder) / "nao.bag", seconds=seconds, seed=1)
         rate = detections_per_second(bag, seconds)
-        res = run_all(bag, seconds, args.quick, only)
+        res = run_all(bag, seconds, args.quick, only, args.before)
     res["detections_per_s"] = rate
     report(res, rate)
     (args.out_dir / f"{prefix}.json").write_text(json.dumps(res, indent=1))

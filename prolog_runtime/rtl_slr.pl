@@ -8,6 +8,7 @@
             stream_history/1,           % +Name/Arity
             stream_history/3,           % +Name/Arity, +N, +L
             mem/2,                      % ?Id, ?Event                            (Def. 22)
+            rtl_slr_rebuild_index/1,    % +Program
             prev/2,                     % ?Event, +Zs                            (Def. 19)
             prev/3,                     % ?Id, ?Event, +Zs                       (Def. 23)
             next/2,                     % ?Event, +[Zs, Ze]                      (thesis rule 4.7)
@@ -55,9 +56,10 @@ Cost model (thesis 5.2.1, 5.2.2):
   - prev/next find their starting point by binary search on the numbers (logarithmic)
     and then walk towards older/newer records until one unifies with the pattern.
   - Instances are found per event through one dynamic predicate per event type
-    (Name/Arity) whose first argument is the first argument of the instance's pattern,
-    so an event of a type no instance records costs one failed lookup, and an instance
-    whose pattern has a different first argument is not even tried.
+    (Name/Arity) whose first argument is the hash of the pattern's constant arguments
+    (its mask: the positions of its atomic arguments, rtl_pattern_key.pl); the event is
+    hashed under each mask in use for the type, so an event of a type no instance records costs one failed
+    lookup, and an instance with a constant the event does not have is not even tried.
 
 Memory events (thesis 4.2.4) are raised, and fed to the event rules and subscriptions,
 when something can receive them (an event rule or a subscription on them):
@@ -80,6 +82,7 @@ Def. 18). A time argument that is not bound raises an instantiation error.
 :- use_module(rtl_time).
 :- use_module(rtl_raise).
 :- use_module(rtl_time_index).
+:- use_module(rtl_pattern_key, [rtl_pattern_mask/2, rtl_pattern_key/3]).
 :- use_module(rtl_subscriptions, [rtl_subscribed/1]).
 
 :- meta_predicate rtl_with_view(+, 0), rtl_with_needs(0, -).
@@ -349,14 +352,44 @@ watch(M, Pattern, H) :-
     watch_head(Pattern, M, H, Head),
     assertz(Head),
     functor(Head, P, _),
+    rtl_pattern_mask(Pattern, Mask),
+    mask_use(P, M, Mask, 1),
     rtl_add_type_output_hook(Pattern, rtl_slr:observe(P)).
 
 unwatch(M, Pattern, H) :-
     watch_head(Pattern, M, H, Head),
     retractall(Head),
     functor(Head, P, _),
+    rtl_pattern_mask(Pattern, Mask),
+    mask_use(P, M, Mask, -1),
     (   current_predicate(P/3), \+ call(P, _, _, _)
     ->  rtl_remove_type_output_hook(Pattern, rtl_slr:observe(P))
+    ;   true
+    ).
+
+%!  rtl_slr_rebuild_index(+Program) is det.
+%
+%   Make the index of Program's instances again from their patterns: rtl_state.pl calls it
+%   after a restore, so that no key of a snapshot is trusted (keys are term_hash/2 values).
+
+rtl_slr_rebuild_index(M) :-
+    forall(watch_predicate(_, _, P), ( Head =.. [P, _, M, _], retractall(Head) )),
+    forall(instance(H, M, _, Pattern, _, _, _, _, _),
+           ( watch_head(Pattern, M, H, Head),
+             assertz(Head),
+             functor(Head, P, _),
+             rtl_pattern_mask(Pattern, Mask),
+             mask_use(P, M, Mask, 1) )).
+
+% mask_use(+P, +Program, +Mask, +Delta): the type's clause `P('$mask'(Mask), Program, Count)`
+% counts the instances whose patterns have constants at the positions of Mask.
+mask_use(P, M, Mask, Delta) :-
+    MaskHead =.. [P, '$mask'(Mask), M, Count0],
+    (   retract(MaskHead) -> true ; Count0 = 0 ),
+    Count is Count0 + Delta,
+    (   Count > 0
+    ->  NewHead =.. [P, '$mask'(Mask), M, Count],
+        assertz(NewHead)
     ;   true
     ).
 
@@ -381,7 +414,7 @@ rtl_slr_watch_predicate(Name) :-
     atom(Name),
     sub_atom(Name, 0, _, _, '$slr_watch ').
 
-% watch_head(+Pattern, +Program, +H, -Head): Head is `P(FirstArgOfPattern, Program, H)`
+% watch_head(+Pattern, +Program, +H, -Head): Head is `P(Key, Program, H)`, Key the hash of the pattern's constants
 % for the type's index predicate P (created on first use).
 watch_head(Pattern, M, H, Head) :-
     functor(Pattern, Name, Arity),
@@ -391,8 +424,9 @@ watch_head(Pattern, M, H, Head) :-
         dynamic(rtl_slr:P/3),
         assertz(watch_predicate(Name, Arity, P))
     ),
-    (   Arity > 0 -> arg(1, Pattern, First) ; First = [] ),
-    Head =.. [P, First, M, H].
+    rtl_pattern_mask(Pattern, Mask),
+    rtl_pattern_key(Pattern, Mask, Key),
+    Head =.. [P, Key, M, H].
 
 % ---- recording ---------------------------------------------------------------------------
 
@@ -400,12 +434,16 @@ watch_head(Pattern, M, H, Head) :-
 %   some instance records; P is the type's index predicate.
 observe(P, Event, Start, End, Op) :-
     rtl_program(M),
-    (   compound(Event), compound_name_arity(Event, _, Arity), Arity > 0
-    ->  arg(1, Event, First)
-    ;   First = []
-    ),
-    findall(H, call(P, First, M, H), Hs),
+    findall(Mask, call(P, '$mask'(Mask), M, _), Masks),
+    findall(H, ( member(Mask, Masks), rtl_pattern_key(Event, Mask, Key), index_hit(P, Key, M, H) ), Hs0),
+    sort(Hs0, Hs),                              % creation order, each instance once
     observe_in(Hs, Op, Event, Start, End).
+
+index_hit(P, Key, M, H) :-
+    (   integer(Key)
+    ->  call(P, Key, M, H)
+    ;   call(P, Key0, M, H), integer(Key0)       % an event with variables: every instance
+    ).
 
 observe_in([], _, _, _, _).
 observe_in([H|Hs], Op, Event, Start, End) :-

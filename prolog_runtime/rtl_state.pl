@@ -89,7 +89,8 @@ state_predicate(rtl_slr, need(data, data)).
 state_predicate(rtl_slr, expiry(integer, program, data)).
 state_predicate(rtl_slr, bounds_name(integer, bounds_global)).
 state_predicate(rtl_subscriptions, subscription(program, data, atom, data, conditions, data, data, data)).
-state_predicate(rtl_subscriptions, by_functor(program, atom, integer, data, atom)).
+state_predicate(rtl_subscriptions, by_key(integer, program, atom, integer, integer, data, atom)).
+state_predicate(rtl_subscriptions, by_mask(program, atom, integer, integer, integer)).
 state_predicate(rtl_sync, pending(integer, data, goal, data, data, data)).
 state_predicate(rtl_sync, condition(integer, data, data, data)).
 state_predicate(rtl_sync, call_monitor(data, integer)).
@@ -765,7 +766,15 @@ apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, 
     captured_flags(CurrentFlags),               % 0 (as a new flag) unless the snapshot has it
     forall(( member(K-_, CurrentFlags), \+ memberchk(K-_, Flags), owned_by(K, Modules) ), flag(K, _, 0)),
     forall(member(K-V, Flags), flag(K, _, V)),
-    forall(( member(Mod-Ts, Data), state_data(Mod, _, _, Load) ), call(Mod:Load, Ts)).
+    forall(( member(Mod-Ts, Data), state_data(Mod, _, _, Load) ), call(Mod:Load, Ts)),
+    forall(( index_rebuild(Mod, Rebuild), memberchk(Mod, Modules) ), call(Mod:Rebuild, M)).
+
+% index_rebuild(?Module, ?Goal): Module files its state under hashes of patterns
+% (rtl_pattern_key.pl); call(Module:Goal, Program) files it again once the state is in place,
+% so that a snapshot's keys are never trusted (term_hash/2 may differ between versions of
+% SWI-Prolog, and a crafted snapshot could file an instance under a key it does not have).
+index_rebuild(rtl_slr, rtl_slr_rebuild_index).
+index_rebuild(rtl_subscriptions, rtl_subscriptions_rebuild_index).
 
 plain_fact(clause(_, _, _)).
 plain_fact(fact(M, H)) :-

@@ -9,6 +9,7 @@
             unsub/2,                    % +Id, +Te                                   (thesis 3.4)
             subscribe_between/5,        % +Consumer, +Query, ?Template, +Ts, +Te     (thesis 3.4)
             rtl_consumer_dir/1,         % +Directory
+            rtl_subscriptions_rebuild_index/1,  % +Program
             rtl_close_consumer_files/0
           ]).
 
@@ -32,8 +33,11 @@ Three spellings:
     `subscribe_between(Consumer, Q, Template, Ts, Te)`.
 
 Subscriptions belong to the program that is running when they are made (rtl_program/1),
-and are indexed by the functor of their pattern: an event no subscription can match costs
-one failed index lookup.
+and are found by every constant argument of their pattern (rtl_pattern_key.pl): a
+subscription is filed under the key of its pattern's constants, and an event is keyed once
+per mask in use for its type; only the subscriptions filed under its keys are unified with
+it, in the order they were made. An event of a type no subscription is on costs one failed
+lookup.
 */
 
 :- use_module(rtl_guard, [rtl_condition_raised/3]).
@@ -41,12 +45,17 @@ one failed index lookup.
 :- use_module(rtl_time).
 :- use_module(rtl_io).
 :- use_module(library(occurs)).
+:- use_module(rtl_pattern_key, [rtl_pattern_mask/2, rtl_pattern_key/3]).
 
 
 % subscription(Program, Id, Consumer, Pattern, Conds, Template, Ts, Te)
 :- dynamic subscription/8.
-% by_functor(Program, Name, Arity, Id, Consumer): the index the output hook walks.
-:- dynamic by_functor/5.
+% by_key(Key, Program, Name, Arity, Seq, Id, Consumer): the index the output hook reads, Key
+% the hash of the pattern's constants (rtl_pattern_key/3), Seq the order of creation.
+:- dynamic by_key/7.
+% by_mask(Program, Name, Arity, Mask, Count): Count subscriptions on Name/Arity have constants
+% at the positions of Mask.
+:- dynamic by_mask/5.
 
 :- multifile retalis:rtl_declaration_handler/3.
 retalis:rtl_declaration_handler(subscribe, 5, rtl_subscriptions).
@@ -128,10 +137,37 @@ rtl_subscribe(Id, Consumer, Pattern, Conds, Template, Ts0, Te0) :-
     ;   true
     ),
     atom_string(ConsumerAtom, Consumer),
-    functor(Pattern, Name, Arity),
+    (   aggregate_all(max(S), by_key(_, M, _, _, S, _, _), Last) -> Seq is Last + 1 ; Seq = 1 ),
     assertz(subscription(M, Id, ConsumerAtom, Pattern, Conds, Template, Ts, Te)),
-    assertz(by_functor(M, Name, Arity, Id, ConsumerAtom)),
+    file(M, Pattern, Seq, Id, ConsumerAtom),
     rtl_add_output_hook(rtl_subscriptions:deliver).
+
+file(M, Pattern, Seq, Id, Consumer) :-
+    functor(Pattern, Name, Arity),
+    rtl_pattern_mask(Pattern, Mask),
+    rtl_pattern_key(Pattern, Mask, Key),
+    assertz(by_key(Key, M, Name, Arity, Seq, Id, Consumer)),
+    mask_use(M, Name, Arity, Mask, 1).
+
+mask_use(M, Name, Arity, Mask, Delta) :-
+    (   retract(by_mask(M, Name, Arity, Mask, Count0)) -> true ; Count0 = 0 ),
+    Count is Count0 + Delta,
+    (   Count > 0 -> assertz(by_mask(M, Name, Arity, Mask, Count)) ; true ).
+
+%!  rtl_subscriptions_rebuild_index(+Program) is det.
+%
+%   File Program's subscriptions again under the keys of their patterns, in the order they
+%   were made: rtl_state.pl calls it after a restore, so that no key of a snapshot is
+%   trusted (keys are term_hash/2 values).
+
+rtl_subscriptions_rebuild_index(M) :-
+    findall(Seq-(Id-Consumer), by_key(_, M, _, _, Seq, Id, Consumer), Filed0),
+    sort(Filed0, Filed),
+    retractall(by_key(_, M, _, _, _, _, _)),
+    retractall(by_mask(M, _, _, _, _)),
+    forall(( member(Seq-(Id-Consumer), Filed),
+             once(subscription(M, Id, Consumer, Pattern, _, _, _, _)) ),
+           file(M, Pattern, Seq, Id, Consumer)).
 
 %!  rtl_unsubscribe(+Id, +Te) is det.
 %
@@ -162,7 +198,7 @@ rtl_subscription(Id, Consumer, Pattern, Conds, Template, Ts, Te) :-
 rtl_subscribed(Event) :-
     rtl_program(M),
     functor(Event, Name, Arity),
-    by_functor(M, Name, Arity, _, _),
+    by_mask(M, Name, Arity, _, _),
     !.
 
 % ---- delivery -------------------------------------------------------------------------
@@ -171,10 +207,22 @@ rtl_subscribed(Event) :-
 deliver(Event, Start, End, Op) :-
     rtl_program(M),
     functor(Event, Name, Arity),
-    (   by_functor(M, Name, Arity, _, _)
-    ->  forall(by_functor(M, Name, Arity, Id, Consumer),
+    (   by_mask(M, Name, Arity, _, _)
+    ->  findall(Seq-(Id-Consumer),
+                ( by_mask(M, Name, Arity, Mask, _),
+                  rtl_pattern_key(Event, Mask, Key),
+                  index_hit(Key, M, Name, Arity, Seq, Id, Consumer) ),
+                Hits0),
+        sort(Hits0, Hits),                      % the order of creation, each once
+        forall(member(_-(Id-Consumer), Hits),
                deliver(M, Id, Consumer, Event, Start, End, Op))
     ;   true
+    ).
+
+index_hit(Key, M, Name, Arity, Seq, Id, Consumer) :-
+    (   integer(Key)
+    ->  by_key(Key, M, Name, Arity, Seq, Id, Consumer)
+    ;   by_key(_, M, Name, Arity, Seq, Id, Consumer)     % an event with variables: every one of its type
     ).
 
 deliver(M, Id, Consumer, Event, Start, End, Op) :-
@@ -323,5 +371,8 @@ fresh_id(M, Id) :-
     (   subscription(M, N, _, _, _, _, _, _) -> fresh_id(M, Id) ; Id = N ).
 
 remove(M, Id, Consumer) :-
-    retractall(subscription(M, Id, Consumer, _, _, _, _, _)),
-    retractall(by_functor(M, _, _, Id, Consumer)).
+    forall(retract(subscription(M, Id, Consumer, Pattern, _, _, _, _)),
+           ( functor(Pattern, Name, Arity),
+             rtl_pattern_mask(Pattern, Mask),
+             mask_use(M, Name, Arity, Mask, -1) )),
+    retractall(by_key(_, M, _, _, _, Id, Consumer)).

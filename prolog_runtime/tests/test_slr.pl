@@ -50,7 +50,45 @@ well_formed(Id, Values) :-
     pairs_values(NumberEnds, Ends),
     assertion(msort(Ends, Ends)).
 
+
+%   Instances are found through the hash of their pattern's constants (one mask per set of
+%   constant positions): what each instance records equals plain unification of every event
+%   with every pattern, over random patterns (constants, variables, nested terms) and events.
+random_arg(A) :-
+    random_between(0, 5, K),
+    (   K =< 1 -> random_member(A, [a, b, 1])
+    ;   K =:= 2 -> random_member(A, [f(a), f(_), g(b, _)])
+    ;   true
+    ).
+
+random_event_arg(A) :-
+    random_member(A, [a, b, 1, 2, f(a), f(b), g(b, c), "a"]).
+
+index_round :-
+    rtl_ele:rtl_clear,
+    rtl_slr:d_mem(_),
+    random_between(1, 12, NP),
+    findall(I-P, ( between(1, NP, I), P = p(_, _, _),
+                   forall(arg(J, P, A), ( J > 0, random_arg(A) )) ), Patterns),
+    forall(member(I-P, Patterns), rtl_slr:c_mem(m(I), P-[], inf, inf)),
+    findall(p(A1, A2, A3), ( between(1, 30, _), random_event_arg(A1), random_event_arg(A2),
+                             random_event_arg(A3) ), Events),
+    forall(nth1(T, Events, E), rtl_ele:rtl_event(E, T, T)),
+    forall(member(I-P, Patterns),
+           (   aggregate_all(count, ( member(E, Events), \+ E \= P ), Expected),
+               rtl_slr:current_program(M),
+               rtl_slr:id_handle(M, m(I), H),
+               rtl_slr:bounds(H, First, Last),
+               Got is Last - First + 1,
+               assertion(Got =:= Expected)
+           )).
+
 :- begin_tests(rtl_slr, [cleanup((rtl_slr:d_mem(_), rtl_ele:rtl_clear))]).
+
+test(index_finds_what_unification_finds) :-
+    set_random(seed(39)),
+    forall(between(1, 20, _), index_round).
+
 
 test(in_order_records_are_appended) :-
     fresh(m, inf),
