@@ -66,7 +66,7 @@ def test_cep_peers_quick(tmp_path):
                for t in targets)
     assert "| Esper 9.0.0 in memory (100k events, outside the project) | 2.50M | 357k | 263k |" in out
     assert "disagree" not in out
-    assert re.search(r"P1:     1,000: +[\d.]+ us \(gc +[\d.]+ %\)", out)
+    assert re.search(r"P1:     1,000: +[\d.]+ us \(gc +[\d.]+ %, clause gc +[\d.]+ %, \d+ stored\)", out)
     summary = json.loads((tmp_path / "cep_peers.json").read_text())
     cells = summary["results"]["1000"]
     assert cells["P0"]["engine"]["derived"] == 0 and cells["P1"]["engine"]["derived"] > 0
