@@ -39,7 +39,7 @@ written as the predicate and position of its clause and found again on restore. 
 (streams) cannot be written: a global holding one is skipped, a clause holding one makes the
 save fail with an error.
 
-The file is text, one term a line (write_canonical/2): `rtl_state(Version, Identity,
+The file is text, one term a line (rtl_write_readable/2 of rtl_text.pl): `rtl_state(Version, Identity,
 Module)`, `rules(Added, Removed)`, `trie(Id, Entries)` per trie, `fact(Module, Head)` per
 fact (those holding clause references last), `clause(Module, Head, Body)` for the named
 predicates of an active-query program, `global(Key, Value)`, `flag(Key, Value)` and
@@ -59,6 +59,7 @@ restoring (retalisc/driver/recovery.py).
 :- use_module(rtl_io, [rtl_too_deep_text/2]).
 :- use_module(rtl_slr, [rtl_slr_type_hook/1, rtl_slr_watch_predicate/1]).
 :- use_module(library(readutil)).
+:- use_module(rtl_text, [rtl_write_readable/2]).
 
 state_version(2).
 
@@ -255,7 +256,7 @@ write_state(Out, V, Identity, Program) :-
     write_term_line(Out, end(Count)).
 
 write_term_line(Out, Term) :-
-    write_canonical(Out, Term),
+    rtl_write_readable(Out, Term),
     write(Out, '.\n').
 
 % Clause references are in the arguments declared `clause_refs` only.
@@ -441,7 +442,7 @@ read_snapshot(File, Terms) :-
 
 % Data only: read_term/3 runs nothing (no directives, no term expansion) and uses no
 % operator of the snapshot's; it makes neither cyclic terms nor attributed variables. Each
-% line is read by itself, one term (write_canonical/2 writes none over two lines), so that
+% line is read by itself, one term (rtl_write_readable/2 writes none over two lines), so that
 % a line nested deeper than snapshot_max_depth/1 is refused before it is read (the reader
 % recurses on the C stack).
 read_terms(In, Terms) :-
