@@ -60,6 +60,7 @@ restoring (retalisc/driver/recovery.py).
 :- use_module(rtl_slr, [rtl_slr_type_hook/1, rtl_slr_watch_predicate/1]).
 :- use_module(library(readutil)).
 :- use_module(rtl_text, [rtl_write_readable/2]).
+:- use_module(rtl_seen, [rtl_seen_owner/2, rtl_seen_fresh_module/1]).
 
 state_version(2).
 
@@ -73,14 +74,16 @@ state_version(2).
 %   Besides these, the partial-match stores of the program's rules (ele_partial_store/2),
 %   the events of the generations of rtl_seen.pl (`rtl_seen_<N>:seen/3`, `seen_atomic/1`),
 %   the watch predicates of rtl_slr.pl (`'$slr_watch Name/Arity'/3`) and the predicates an
-%   active-query program names are state (family_predicate/4).
+%   active-query program names are state (family_predicate/4). An argument of type
+%   `this_program` makes a fact the program's own: a snapshot holds those of its program
+%   only, and a restore replaces those only (the seen store of rtl_seen.pl is per program).
 
 state_predicate(rtl_flags, flag_value(atom, data)).
 state_predicate(rtl_ele, output_hook(output_hook)).
 state_predicate(rtl_ele, type_output_hook(data, type_output_hook)).
 state_predicate(rtl_event_types, known_type(atom, integer)).
-state_predicate(rtl_seen, generation(seen_module, data)).
-state_predicate(rtl_seen, free_generation(seen_module)).
+state_predicate(rtl_seen, generation(this_program, seen_module, data)).
+state_predicate(rtl_seen, free_generation(this_program, seen_module)).
 state_predicate(rtl_slr, instance(integer, program, data, data, conditions, data, data, data, data)).
 state_predicate(rtl_slr, id_handle(program, data, integer)).
 state_predicate(rtl_slr, watch_predicate(atom, integer, watch_predicate)).
@@ -289,8 +292,22 @@ clause_terms(Program, M:Name/Arity, Terms, S0, S) :-
     ),
     (   Program = M-Which, Which \== all, memberchk(Name/Arity, Which)
     ->  findall(clause(M, H1, B1), member(H1-B1, Clauses), Terms)
-    ;   findall(fact(M, H1), ( member(H1-B1, Clauses), fact_body(M:Name/Arity, B1) ), Terms)
+    ;   Program = P-_,
+        findall(fact(M, H1), ( member(H1-B1, Clauses), fact_body(M:Name/Arity, B1), own_fact(P, M, H1) ), Terms)
     ).
+
+% A fact with a `this_program` argument belongs to that program.
+own_fact(P, M, Head) :-
+    (   this_program_arg(M, Head, I)
+    ->  arg(I, Head, P0), P0 == P
+    ;   true
+    ).
+
+this_program_arg(M, Head, I) :-
+    functor(Head, Name, Arity),
+    functor(Decl, Name, Arity),
+    state_predicate(M, Decl),
+    arg(I, Decl, this_program), !.
 
 fact_body(PI, Body) :-
     (   Body == true -> true
@@ -308,7 +325,8 @@ captured_predicates(Program, PIs) :-
             (   state_predicate(Module, Head), current_module(Module),
                 functor(Head, Name, Arity)
             ;   member(Name/Arity, Stores), Module = M
-            ;   current_module(Module), seen_module(Module), member(Name/Arity, [seen/3, seen_atomic/1])
+            ;   Program = P-_, rtl_seen_owner(Module, P), current_module(Module),
+                member(Name/Arity, [seen/3, seen_atomic/1])
             ;   Module = rtl_slr, current_predicate(rtl_slr:Name/3), watch_name(Name), Arity = 3
             ),
             PIs0),
@@ -521,15 +539,51 @@ check_snapshot(Terms, Identity, Program, Plan) :-
     ),
     Ctx = ctx(M, Which, Stores, Modules, Kinds),
     empty_assoc(NoTypes),
-    foldl(check_fact(Ctx, Map), FactTerms, Facts, NoTypes, _),
-    check_clause_references(Facts),
+    foldl(check_fact(Ctx, Map), FactTerms, Facts0, NoTypes, _),
+    check_clause_references(Facts0),
     (   Which == all
     ->  true
-    ;   catch(rtl_aq:aq_state_code(Facts), aq_rule_error(Why), state_error("~w", [Why]))
+    ;   catch(rtl_aq:aq_state_code(Facts0), aq_rule_error(Why), state_error("~w", [Why]))
     ),
-    maplist(check_global(Ctx, Map), GlobalTerms, Globals),
+    maplist(check_global(Ctx, Map), GlobalTerms, Globals0),
     maplist(check_flag, FlagTerms, Flags),
+    seen_modules_placed(M, Facts0, Globals0, Facts, Globals),
     Plan = plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, Data).
+
+% The generation modules of the snapshot's seen store (rtl_seen.pl): each holding events is
+% one of the program's generations in the snapshot, and one another program of this process
+% holds is given a fresh name.
+seen_modules_placed(M, Facts0, Globals0, Facts, Globals) :-
+    findall(G, ( member(fact(rtl_seen, H), Facts0), ( H = generation(_, G, _) ; H = free_generation(_, G) ) ),
+            Named0),
+    (   memberchk(rtl_seen_generation-Open, Globals0), Open \== [] -> Named1 = [Open|Named0] ; Named1 = Named0 ),
+    msort(Named1, NamedAll),
+    sort(NamedAll, Named),
+    (   NamedAll \== Named
+    ->  state_error("the snapshot names a generation of the seen store twice", [])
+    ;   member(fact(SM, _), Facts0), seen_module(SM), \+ memberchk(SM, Named)
+    ->  state_error("the snapshot holds events of ~q, which is not a generation of its program", [SM])
+    ;   true
+    ),
+    findall(G-New, ( member(G, Named), rtl_seen_owner(G, P), P \== M, rtl_seen_fresh_module(New) ), Renames),
+    (   Renames == []
+    ->  Facts = Facts0, Globals = Globals0
+    ;   maplist(seen_renamed(Renames), Facts0, Facts),
+        maplist(seen_renamed(Renames), Globals0, Globals)
+    ).
+
+seen_renamed(Renames, fact(SM, H), fact(SM1, H1)) :- !,
+    renamed_module(Renames, SM, SM1),
+    (   H = generation(P, G, E) -> renamed_module(Renames, G, G1), H1 = generation(P, G1, E)
+    ;   H = free_generation(P, G) -> renamed_module(Renames, G, G1), H1 = free_generation(P, G1)
+    ;   H1 = H
+    ).
+seen_renamed(Renames, rtl_seen_generation-G, rtl_seen_generation-G1) :- !,
+    renamed_module(Renames, G, G1).
+seen_renamed(_, T, T).
+
+renamed_module(Renames, G, G1) :-
+    (   atom(G), memberchk(G-G1, Renames) -> true ; G1 = G ).
 
 data_term(data(_, _)).
 
@@ -657,6 +711,7 @@ arg_ok(clause_refs, _, _, V) :-
 arg_ok(atom, _, _, V) :- atom(V).
 arg_ok(integer, _, _, V) :- integer(V).
 arg_ok(program, Ctx, _, V) :- program_module(Ctx, V).
+arg_ok(this_program, ctx(M, _, _, _, _), _, V) :- V == M.
 arg_ok(seen_module, _, _, V) :- ( V == [] -> true ; seen_module(V) ).     % [] for none
 arg_ok(watch_predicate, _, _, V) :- watch_name(V).
 arg_ok(bounds_global, _, _, V) :- atom(V), sub_atom(V, 0, _, _, '$rtl_slr_bounds_').
@@ -756,7 +811,7 @@ apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, 
     % in one process) keeps its state: only the modules the snapshot has are replaced.
     captured_predicates(M-Which, Current),
     forall(( member(CM:Name/Arity, Current), ( memberchk(CM, Modules) ; seen_module(CM) ) ),
-           ( functor(H, Name, Arity), retractall(CM:H) )),
+           ( functor(H, Name, Arity), own_head(M, CM, H), retractall(CM:H) )),
     partition(plain_fact, Facts, Plain, WithRefs),
     forall(member(T, Plain), assert_term(T)),
     forall(member(T0, WithRefs), ( reblob(Map, T0, T), assert_term(T) )),
@@ -767,6 +822,10 @@ apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, 
     forall(( member(K-_, CurrentFlags), \+ memberchk(K-_, Flags), owned_by(K, Modules) ), flag(K, _, 0)),
     forall(member(K-V, Flags), flag(K, _, V)),
     forall(( member(Mod-Ts, Data), state_data(Mod, _, _, Load) ), call(Mod:Load, Ts)).
+
+% The most general head of the facts of CM:H that are program M's.
+own_head(M, CM, H) :-
+    (   this_program_arg(CM, H, I) -> arg(I, H, M) ; true ).
 
 plain_fact(clause(_, _, _)).
 plain_fact(fact(M, H)) :-
