@@ -905,13 +905,35 @@ rtl_state_capture(Program, state(Preds, Globals, Flags)) :-
     findall(pred(CM, Name, Arity, Clauses),
             ( member(CM0:Name/Arity, PIs),
               functor(H, Name, Arity),
-              findall(C, ( clause(CM0:H, B), canonical(M, H-B, C), numbervars(C, 0, _) ), Clauses),
+              findall(C, ( clause(CM0:H, B), canonical(M, H-B, C0), unnamed_seen(C0, C),
+                           numbervars(C, 0, _) ), Clauses),
               Clauses \== [],                  % a predicate without clauses is no state
-              ( CM0 == M -> CM = '$program' ; CM = CM0 ) ),
-            Preds),
+              ( CM0 == M -> CM = '$program' ; seen_module(CM0) -> CM = '$seen' ; CM = CM0 ) ),
+            Preds0),
+    merged_seen(Preds0, Preds),
     captured_globals(Globals0),
-    findall(K-V, ( member(K-V0, Globals0), \+ unwritable_blob(V0), canonical(M, V0, V) ), Globals),
-    captured_flags(Flags).
+    findall(K-V, ( member(K-V0, Globals0), \+ unwritable_blob(V0), canonical(M, V0, V1), unnamed_seen(K-V1, K-V) ),
+            Globals),
+    captured_flags(Flags0),
+    exclude(=(rtl_seen_generations-_), Flags0, Flags).
+
+% The generation modules of the seen store are named as they came free in this process (a
+% restore next to another Engine renames them): the digest leaves their names out.
+unnamed_seen(generation(P, _, E)-true, generation(P, '$seen', E)-true) :- !.
+unnamed_seen(free_generation(P, _)-true, free_generation(P, '$seen')-true) :- !.
+unnamed_seen(rtl_seen_generation-G, rtl_seen_generation-C) :- !,
+    ( G == [] -> C = [] ; C = '$seen' ).
+unnamed_seen(T, T).
+
+merged_seen(Preds0, Preds) :-
+    partition([pred(CM, _, _, _)]>>(CM == '$seen'), Preds0, Seen, Others),
+    findall(pred('$seen', Name, Arity, Clauses),
+            ( member(Name/Arity, [seen/3, seen_atomic/1]),
+              findall(C, ( member(pred(_, Name, Arity, Cs), Seen), member(C, Cs) ), Clauses0),
+              Clauses0 \== [],
+              msort(Clauses0, Clauses) ),
+            Merged),
+    append(Others, Merged, Preds).
 
 unwritable_blob(V) :-
     \+ plain_atomic(V),
