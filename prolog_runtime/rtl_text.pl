@@ -115,7 +115,7 @@ rtl_write_readable(Out, Term) :-
     term_variables(Term, Vars),
     term_singletons(Term, Singletons),
     variable_names(Vars, Singletons, 0, Names),
-    write_term(Out, Term, [ quoted(true), ignore_ops(true), dotlists(false), numbervars(false),
+    write_term(Out, Term, [ quoted(true), ignore_ops(true), dotlists(false), brace_terms(false), numbervars(false),
                             quote_non_ascii(true), character_escapes_unicode(true),
                             variable_names(Names)
                           ]).
