@@ -721,7 +721,7 @@ rtl_api_use_tracing("") :-
 %!  rtl_api_ground_canonical(+Text:text, -Canonical:string) is det.
 %
 %   rtl_ground_canonical/2 (rtl_text.pl): Text read as one ground term, written back with
-%   write_canonical/1; `!Reason` when it is not one.
+%   rtl_write_readable/2; `!Reason` when it is not one.
 
 rtl_api_ground_canonical(Text, Canonical) :-
     rtl_ground_canonical(Text, Canonical).

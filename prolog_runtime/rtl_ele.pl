@@ -83,6 +83,8 @@ deletion is too late).
 %   Make Module (a compiled Retalis program) the program that processes events.
 
 rtl_use_program(Module) :-
+    (   rtl_program(Old) -> true ; Old = [] ),
+    forall(program_hook(Old, Module), true),
     nb_setval(rtl_program, Module),
     rtl_timers_program(Module),
     rtl_reset,
@@ -134,6 +136,13 @@ rtl_clear :-
 %   Multifile: other runtime modules forget what they keep of the events seen (rtl_clear/0).
 
 :- multifile clear_hook/0.
+
+%!  program_hook(+Old, +New) is nondet.
+%
+%   Multifile: rtl_use_program/1 switches from program Old (`[]` for none) to New; other
+%   runtime modules switch what they keep per program (rtl_seen.pl).
+
+:- multifile program_hook/2.
 
 %!  expiry_hook(+Clock) is nondet.
 %

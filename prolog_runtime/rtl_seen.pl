@@ -3,7 +3,9 @@
             rtl_seen_add_atomic/1,      % +Items
             rtl_seen_take/3,            % +Event, +Start, +End
             rtl_seen_horizon/1,         % -Time
-            rtl_seen_count/1            % -Count
+            rtl_seen_count/1,           % -Count
+            rtl_seen_owner/2,           % ?Module, ?Program
+            rtl_seen_fresh_module/1     % -Module
           ]).
 
 /** <module> The input events seen recently, to check retractions against
@@ -16,6 +18,11 @@ window of the program's stores before the clock is forgotten (with `max_delay` `
 nothing is). A retraction of an event that is not remembered and ends after that horizon
 is refused; one of an older event cannot be checked and is processed as before.
 
+The store belongs to the program that was active when its events came (rtl_use_program/1):
+each program has its own generations, and switching programs parks the open generation of
+the one left and takes up that of the one activated, so an Engine's retraction checks see
+its own events only and its snapshot holds only them.
+
 Memory is proportional to the event rate times `max_delay + window` (plus a few thousand
 events), as for the partial matches (docs/runtime.md).
 */
@@ -23,8 +30,9 @@ events), as for the partial matches (docs/runtime.md).
 :- use_module(library(lists)).
 :- use_module(rtl_ele).
 
-:- dynamic generation/2.        % generation(Module, End): its events are Module:seen(Event, Start, End0)
-:- dynamic free_generation/1.   % free_generation(Module): not in use
+:- dynamic generation/3.        % generation(Program, Module, End): its events are Module:seen(Event, Start, End0)
+:- dynamic free_generation/2.   % free_generation(Program, Module): not in use
+:- dynamic parked/3.            % parked(Program, Module, Size): the open generation of a program not active
 
 %!  rtl_seen_add(+Event, +Start, +End) is det.
 %
@@ -85,7 +93,8 @@ open_generation_name(Name) :-
 
 rtl_seen_take(Event, Start, End) :-
     (   nb_current(rtl_seen_generation, Name), Name \== []
-    ;   generation(Name, _)
+    ;   active_program(P),
+        generation(P, Name, _)
     ),
     generation_take(Name, Event, Start, End),
     !.
@@ -106,10 +115,10 @@ generation_take(Name, Event, Start, End) :-
 
 % The modules of dropped generations are used again (modules are never deleted).
 open_generation(Name) :-
-    (   retract(free_generation(Name))
+    active_program(P),
+    (   retract(free_generation(P, Name))
     ->  true
-    ;   flag(rtl_seen_generations, G, G + 1),
-        format(atom(Name), 'rtl_seen_~d', [G])
+    ;   rtl_seen_fresh_module(Name)
     ),
     dynamic([Name:seen/3, Name:seen_atomic/1]),
     nb_setval(rtl_seen_size, 0),
@@ -120,25 +129,75 @@ open_generation(Name) :-
 close_generation(Name, End) :-
     rtl_clock(Clock),
     GenerationEnd is max(Clock, End),
-    assertz(generation(Name, GenerationEnd)),
+    active_program(P),
+    assertz(generation(P, Name, GenerationEnd)),
     nb_setval(rtl_seen_generation, []),
     nb_setval(rtl_seen_size, 0),
     rtl_seen_horizon(Horizon),
-    forall(( generation(Old, OldEnd), OldEnd < Horizon ),
-           drop_generation(Old)).
+    forall(( generation(P, Old, OldEnd), OldEnd < Horizon ),
+           drop_generation(P, Old)).
 
-drop_generation(Name) :-
-    retractall(generation(Name, _)),
+drop_generation(P, Name) :-
+    retractall(generation(P, Name, _)),
     retractall(Name:seen(_, _, _)),
     retractall(Name:seen_atomic(_)),
-    assertz(free_generation(Name)).
+    assertz(free_generation(P, Name)).
+
+% The program whose events are remembered (`[]` before any: a runtime used without one).
+active_program(P) :-
+    (   rtl_program(P0) -> P = P0 ; P = [] ).
+
+%!  rtl_seen_fresh_module(-Module) is det.
+%
+%   A generation module no program holds (rtl_seen_owner/2): the counter may be behind the
+%   modules in use after a snapshot restored its value.
+
+rtl_seen_fresh_module(Name) :-
+    repeat,
+    flag(rtl_seen_generations, G, G + 1),
+    format(atom(Name), 'rtl_seen_~d', [G]),
+    \+ rtl_seen_owner(Name, _),
+    !.
+
+%!  rtl_seen_owner(?Module, ?Program) is nondet.
+%
+%   Module is a generation module of Program: a closed or free generation of it, its open
+%   generation, or the parked open generation of a program not active.
+
+rtl_seen_owner(Name, P) :-
+    (   generation(P, Name, _)
+    ;   free_generation(P, Name)
+    ;   parked(P, Name, _)
+    ;   nb_current(rtl_seen_generation, Name), Name \== [], active_program(P)
+    ).
+
+% Switching programs: the open generation of the program left is parked, that of the one
+% activated taken up.
+:- multifile rtl_ele:program_hook/2.
+rtl_ele:program_hook(Old, New) :-
+    (   Old == New
+    ->  true
+    ;   (   nb_current(rtl_seen_generation, Name), Name \== []
+        ->  generation_size(Size),
+            retractall(parked(Old, _, _)),
+            assertz(parked(Old, Name, Size))
+        ;   true
+        ),
+        (   retract(parked(New, NewName, NewSize))
+        ->  nb_setval(rtl_seen_generation, NewName),
+            nb_setval(rtl_seen_size, NewSize)
+        ;   nb_setval(rtl_seen_generation, []),
+            nb_setval(rtl_seen_size, 0)
+        )
+    ).
 
 %!  rtl_seen_count(-Count) is det.
 %
 %   The number of input events remembered.
 
 rtl_seen_count(Count) :-
-    findall(Name, ( nb_current(rtl_seen_generation, Name), Name \== [] ; generation(Name, _) ), Names),
+    active_program(P),
+    findall(Name, ( nb_current(rtl_seen_generation, Name), Name \== [] ; generation(P, Name, _) ), Names),
     aggregate_all(sum(N), ( member(Name, Names),
                             predicate_property(Name:seen(_, _, _), number_of_clauses(N)) ), Singles),
     aggregate_all(sum(N), ( member(Name, Names),
@@ -164,12 +223,14 @@ rtl_seen_horizon(Horizon) :-
     ).
 
 :- multifile rtl_ele:clear_hook/0.
-rtl_ele:clear_hook :-
-    forall(generation(Name, _), drop_generation(Name)),
+rtl_ele:clear_hook :-                            % the active program's store only
+    active_program(P),
+    forall(generation(P, Name, _), drop_generation(P, Name)),
     (   nb_current(rtl_seen_generation, Name), Name \== []
     ->  retractall(Name:seen(_, _, _)),
         retractall(Name:seen_atomic(_)),
-        assertz(free_generation(Name))
+        assertz(free_generation(P, Name))
     ;   true
     ),
-    nb_setval(rtl_seen_generation, []).
+    nb_setval(rtl_seen_generation, []),
+    nb_setval(rtl_seen_size, 0).

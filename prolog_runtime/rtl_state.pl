@@ -39,7 +39,7 @@ written as the predicate and position of its clause and found again on restore. 
 (streams) cannot be written: a global holding one is skipped, a clause holding one makes the
 save fail with an error.
 
-The file is text, one term a line (write_canonical/2): `rtl_state(Version, Identity,
+The file is text, one term a line (rtl_write_readable/2 of rtl_text.pl): `rtl_state(Version, Identity,
 Module)`, `rules(Added, Removed)`, `trie(Id, Entries)` per trie, `fact(Module, Head)` per
 fact (those holding clause references last), `clause(Module, Head, Body)` for the named
 predicates of an active-query program, `global(Key, Value)`, `flag(Key, Value)` and
@@ -59,6 +59,8 @@ restoring (retalisc/driver/recovery.py).
 :- use_module(rtl_io, [rtl_too_deep_text/2]).
 :- use_module(rtl_slr, [rtl_slr_type_hook/1, rtl_slr_watch_predicate/1]).
 :- use_module(library(readutil)).
+:- use_module(rtl_text, [rtl_write_readable/2]).
+:- use_module(rtl_seen, [rtl_seen_owner/2, rtl_seen_fresh_module/1]).
 
 state_version(2).
 
@@ -72,14 +74,16 @@ state_version(2).
 %   Besides these, the partial-match stores of the program's rules (ele_partial_store/2),
 %   the events of the generations of rtl_seen.pl (`rtl_seen_<N>:seen/3`, `seen_atomic/1`),
 %   the watch predicates of rtl_slr.pl (`'$slr_watch Name/Arity'/3`) and the predicates an
-%   active-query program names are state (family_predicate/4).
+%   active-query program names are state (family_predicate/4). An argument of type
+%   `this_program` makes a fact the program's own: a snapshot holds those of its program
+%   only, and a restore replaces those only (the seen store of rtl_seen.pl is per program).
 
 state_predicate(rtl_flags, flag_value(atom, data)).
 state_predicate(rtl_ele, output_hook(output_hook)).
 state_predicate(rtl_ele, type_output_hook(data, type_output_hook)).
 state_predicate(rtl_event_types, known_type(atom, integer)).
-state_predicate(rtl_seen, generation(seen_module, data)).
-state_predicate(rtl_seen, free_generation(seen_module)).
+state_predicate(rtl_seen, generation(this_program, seen_module, data)).
+state_predicate(rtl_seen, free_generation(this_program, seen_module)).
 state_predicate(rtl_slr, instance(integer, program, data, data, conditions, data, data, data, data)).
 state_predicate(rtl_slr, id_handle(program, data, integer)).
 state_predicate(rtl_slr, watch_predicate(atom, integer, watch_predicate)).
@@ -256,7 +260,7 @@ write_state(Out, V, Identity, Program) :-
     write_term_line(Out, end(Count)).
 
 write_term_line(Out, Term) :-
-    write_canonical(Out, Term),
+    rtl_write_readable(Out, Term),
     write(Out, '.\n').
 
 % Clause references are in the arguments declared `clause_refs` only.
@@ -289,8 +293,22 @@ clause_terms(Program, M:Name/Arity, Terms, S0, S) :-
     ),
     (   Program = M-Which, Which \== all, memberchk(Name/Arity, Which)
     ->  findall(clause(M, H1, B1), member(H1-B1, Clauses), Terms)
-    ;   findall(fact(M, H1), ( member(H1-B1, Clauses), fact_body(M:Name/Arity, B1) ), Terms)
+    ;   Program = P-_,
+        findall(fact(M, H1), ( member(H1-B1, Clauses), fact_body(M:Name/Arity, B1), own_fact(P, M, H1) ), Terms)
     ).
+
+% A fact with a `this_program` argument belongs to that program.
+own_fact(P, M, Head) :-
+    (   this_program_arg(M, Head, I)
+    ->  arg(I, Head, P0), P0 == P
+    ;   true
+    ).
+
+this_program_arg(M, Head, I) :-
+    functor(Head, Name, Arity),
+    functor(Decl, Name, Arity),
+    state_predicate(M, Decl),
+    arg(I, Decl, this_program), !.
 
 fact_body(PI, Body) :-
     (   Body == true -> true
@@ -308,7 +326,8 @@ captured_predicates(Program, PIs) :-
             (   state_predicate(Module, Head), current_module(Module),
                 functor(Head, Name, Arity)
             ;   member(Name/Arity, Stores), Module = M
-            ;   current_module(Module), seen_module(Module), member(Name/Arity, [seen/3, seen_atomic/1])
+            ;   Program = P-_, rtl_seen_owner(Module, P), current_module(Module),
+                member(Name/Arity, [seen/3, seen_atomic/1])
             ;   Module = rtl_slr, current_predicate(rtl_slr:Name/3), watch_name(Name), Arity = 3
             ),
             PIs0),
@@ -442,7 +461,7 @@ read_snapshot(File, Terms) :-
 
 % Data only: read_term/3 runs nothing (no directives, no term expansion) and uses no
 % operator of the snapshot's; it makes neither cyclic terms nor attributed variables. Each
-% line is read by itself, one term (write_canonical/2 writes none over two lines), so that
+% line is read by itself, one term (rtl_write_readable/2 writes none over two lines), so that
 % a line nested deeper than snapshot_max_depth/1 is refused before it is read (the reader
 % recurses on the C stack).
 read_terms(In, Terms) :-
@@ -521,15 +540,51 @@ check_snapshot(Terms, Identity, Program, Plan) :-
     ),
     Ctx = ctx(M, Which, Stores, Modules, Kinds),
     empty_assoc(NoTypes),
-    foldl(check_fact(Ctx, Map), FactTerms, Facts, NoTypes, _),
-    check_clause_references(Facts),
+    foldl(check_fact(Ctx, Map), FactTerms, Facts0, NoTypes, _),
+    check_clause_references(Facts0),
     (   Which == all
     ->  true
-    ;   catch(rtl_aq:aq_state_code(Facts), aq_rule_error(Why), state_error("~w", [Why]))
+    ;   catch(rtl_aq:aq_state_code(Facts0), aq_rule_error(Why), state_error("~w", [Why]))
     ),
-    maplist(check_global(Ctx, Map), GlobalTerms, Globals),
+    maplist(check_global(Ctx, Map), GlobalTerms, Globals0),
     maplist(check_flag, FlagTerms, Flags),
+    seen_modules_placed(M, Facts0, Globals0, Facts, Globals),
     Plan = plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, Data).
+
+% The generation modules of the snapshot's seen store (rtl_seen.pl): each holding events is
+% one of the program's generations in the snapshot, and one another program of this process
+% holds is given a fresh name.
+seen_modules_placed(M, Facts0, Globals0, Facts, Globals) :-
+    findall(G, ( member(fact(rtl_seen, H), Facts0), ( H = generation(_, G, _) ; H = free_generation(_, G) ) ),
+            Named0),
+    (   memberchk(rtl_seen_generation-Open, Globals0), Open \== [] -> Named1 = [Open|Named0] ; Named1 = Named0 ),
+    msort(Named1, NamedAll),
+    sort(NamedAll, Named),
+    (   NamedAll \== Named
+    ->  state_error("the snapshot names a generation of the seen store twice", [])
+    ;   member(fact(SM, _), Facts0), seen_module(SM), \+ memberchk(SM, Named)
+    ->  state_error("the snapshot holds events of ~q, which is not a generation of its program", [SM])
+    ;   true
+    ),
+    findall(G-New, ( member(G, Named), rtl_seen_owner(G, P), P \== M, rtl_seen_fresh_module(New) ), Renames),
+    (   Renames == []
+    ->  Facts = Facts0, Globals = Globals0
+    ;   maplist(seen_renamed(Renames), Facts0, Facts),
+        maplist(seen_renamed(Renames), Globals0, Globals)
+    ).
+
+seen_renamed(Renames, fact(SM, H), fact(SM1, H1)) :- !,
+    renamed_module(Renames, SM, SM1),
+    (   H = generation(P, G, E) -> renamed_module(Renames, G, G1), H1 = generation(P, G1, E)
+    ;   H = free_generation(P, G) -> renamed_module(Renames, G, G1), H1 = free_generation(P, G1)
+    ;   H1 = H
+    ).
+seen_renamed(Renames, rtl_seen_generation-G, rtl_seen_generation-G1) :- !,
+    renamed_module(Renames, G, G1).
+seen_renamed(_, T, T).
+
+renamed_module(Renames, G, G1) :-
+    (   atom(G), memberchk(G-G1, Renames) -> true ; G1 = G ).
 
 data_term(data(_, _)).
 
@@ -657,6 +712,7 @@ arg_ok(clause_refs, _, _, V) :-
 arg_ok(atom, _, _, V) :- atom(V).
 arg_ok(integer, _, _, V) :- integer(V).
 arg_ok(program, Ctx, _, V) :- program_module(Ctx, V).
+arg_ok(this_program, ctx(M, _, _, _, _), _, V) :- V == M.
 arg_ok(seen_module, _, _, V) :- ( V == [] -> true ; seen_module(V) ).     % [] for none
 arg_ok(watch_predicate, _, _, V) :- watch_name(V).
 arg_ok(bounds_global, _, _, V) :- atom(V), sub_atom(V, 0, _, _, '$rtl_slr_bounds_').
@@ -756,7 +812,7 @@ apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, 
     % in one process) keeps its state: only the modules the snapshot has are replaced.
     captured_predicates(M-Which, Current),
     forall(( member(CM:Name/Arity, Current), ( memberchk(CM, Modules) ; seen_module(CM) ) ),
-           ( functor(H, Name, Arity), retractall(CM:H) )),
+           ( functor(H, Name, Arity), own_head(M, CM, H), retractall(CM:H) )),
     partition(plain_fact, Facts, Plain, WithRefs),
     forall(member(T, Plain), assert_term(T)),
     forall(member(T0, WithRefs), ( reblob(Map, T0, T), assert_term(T) )),
@@ -775,6 +831,10 @@ apply_state(plan(M, Which, Modules, Added, Removed, Facts, Globals, Flags, Map, 
 % SWI-Prolog, and a crafted snapshot could file an instance under a key it does not have).
 index_rebuild(rtl_slr, rtl_slr_rebuild_index).
 index_rebuild(rtl_subscriptions, rtl_subscriptions_rebuild_index).
+
+% The most general head of the facts of CM:H that are program M's.
+own_head(M, CM, H) :-
+    (   this_program_arg(CM, H, I) -> arg(I, H, M) ; true ).
 
 plain_fact(clause(_, _, _)).
 plain_fact(fact(M, H)) :-
@@ -854,13 +914,35 @@ rtl_state_capture(Program, state(Preds, Globals, Flags)) :-
     findall(pred(CM, Name, Arity, Clauses),
             ( member(CM0:Name/Arity, PIs),
               functor(H, Name, Arity),
-              findall(C, ( clause(CM0:H, B), canonical(M, H-B, C), numbervars(C, 0, _) ), Clauses),
+              findall(C, ( clause(CM0:H, B), canonical(M, H-B, C0), unnamed_seen(C0, C),
+                           numbervars(C, 0, _) ), Clauses),
               Clauses \== [],                  % a predicate without clauses is no state
-              ( CM0 == M -> CM = '$program' ; CM = CM0 ) ),
-            Preds),
+              ( CM0 == M -> CM = '$program' ; seen_module(CM0) -> CM = '$seen' ; CM = CM0 ) ),
+            Preds0),
+    merged_seen(Preds0, Preds),
     captured_globals(Globals0),
-    findall(K-V, ( member(K-V0, Globals0), \+ unwritable_blob(V0), canonical(M, V0, V) ), Globals),
-    captured_flags(Flags).
+    findall(K-V, ( member(K-V0, Globals0), \+ unwritable_blob(V0), canonical(M, V0, V1), unnamed_seen(K-V1, K-V) ),
+            Globals),
+    captured_flags(Flags0),
+    exclude(=(rtl_seen_generations-_), Flags0, Flags).
+
+% The generation modules of the seen store are named as they came free in this process (a
+% restore next to another Engine renames them): the digest leaves their names out.
+unnamed_seen(generation(P, _, E)-true, generation(P, '$seen', E)-true) :- !.
+unnamed_seen(free_generation(P, _)-true, free_generation(P, '$seen')-true) :- !.
+unnamed_seen(rtl_seen_generation-G, rtl_seen_generation-C) :- !,
+    ( G == [] -> C = [] ; C = '$seen' ).
+unnamed_seen(T, T).
+
+merged_seen(Preds0, Preds) :-
+    partition([pred(CM, _, _, _)]>>(CM == '$seen'), Preds0, Seen, Others),
+    findall(pred('$seen', Name, Arity, Clauses),
+            ( member(Name/Arity, [seen/3, seen_atomic/1]),
+              findall(C, ( member(pred(_, Name, Arity, Cs), Seen), member(C, Cs) ), Clauses0),
+              Clauses0 \== [],
+              msort(Clauses0, Clauses) ),
+            Merged),
+    append(Others, Merged, Preds).
 
 unwritable_blob(V) :-
     \+ plain_atomic(V),

@@ -2,7 +2,8 @@
           [ rtl_read_text/4,            % +Text, -Term, -Bindings, +Options
             rtl_read_event/2,           % +Text, -Event
             rtl_read_ground/2,          % +Text, -Term
-            rtl_ground_canonical/2      % +Text, -Canonical
+            rtl_ground_canonical/2,     % +Text, -Canonical
+            rtl_write_readable/2        % +Stream, +Term
           ]).
 
 /** <module> Reading untrusted text as one term
@@ -98,5 +99,41 @@ rtl_ground_canonical(Text, Canonical) :-
     ->  format(string(Canonical), '!not ground: variable ~w', [Name])
     ;   \+ ground(Term)
     ->  Canonical = "!not ground"
-    ;   format(string(Canonical), '~k', [Term])
+    ;   with_output_to(string(Canonical), rtl_write_readable(current_output, Term))
+    ).
+
+%!  rtl_write_readable(+Out, +Term) is det.
+%
+%   Write Term as write_canonical/2 does (quoted, no operators, no `'$VAR'` naming, shared
+%   variables named and singletons `_`), but with the non-ASCII characters that need it
+%   written as `\uXXXX`/`\UXXXXXXXX` escapes: write_canonical/2 of SWI-Prolog 9 writes the
+%   code points U+D8000..U+DFFFF as `\xD8000\`, which its own reader refuses ("Illegal
+%   character code"), so a term holding one could not be read back. These options write
+%   every code point 1..0x10FFFF in a form read_term/2 reads back.
+
+rtl_write_readable(Out, Term) :-
+    term_variables(Term, Vars),
+    term_singletons(Term, Singletons),
+    variable_names(Vars, Singletons, 0, Names),
+    write_term(Out, Term, [ quoted(true), ignore_ops(true), dotlists(false), brace_terms(false), numbervars(false),
+                            quote_non_ascii(true), character_escapes_unicode(true),
+                            variable_names(Names)
+                          ]).
+
+variable_names([], _, _, []).
+variable_names([V|Vs], Singletons, I, [Name=V|Names]) :-
+    (   member(S, Singletons), S == V
+    ->  Name = '_',
+        I1 = I
+    ;   variable_name(I, Name),
+        I1 is I + 1
+    ),
+    variable_names(Vs, Singletons, I1, Names).
+
+variable_name(I, Name) :-                          % A, ..., Z, A1, ..., Z1, A2, ...
+    Letter is 0'A + I mod 26,
+    N is I // 26,
+    (   N =:= 0
+    ->  char_code(Name, Letter)
+    ;   format(atom(Name), '~c~d', [Letter, N])
     ).

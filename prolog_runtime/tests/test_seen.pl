@@ -16,6 +16,11 @@
 seen_test_program:ele_store(s_lefts, 3, 10).
 seen_test_program:ele_partial_store(s_lefts, 3).
 seen_test_program:ele_printed(_).
+:- dynamic other_test_program:ele_trigger/3, other_test_program:ele_untrigger/3.
+other_test_program:ele_printed(_).
+other_test_program:ele_store(o_lefts, 3, 10).
+other_test_program:ele_partial_store(o_lefts, 3).
+:- dynamic other_test_program:o_lefts/3.
 
 setup :-
     rtl_use_program(seen_test_program),
@@ -142,5 +147,35 @@ model_step(T, Model0, Model) :-
     ;   add(k(K), T),
         Model = [k(K)-T|Model0]
     ).
+
+% Two programs of one process: each checks retractions against its own events, switching
+% back finds the open generation again, and clearing one forgets only its events.
+test(each_program_has_its_own_store, [setup(setup)]) :-
+    add(mine, 1),
+    rtl_use_program(other_test_program),
+    assertion(\+ rtl_seen_take(mine, 1, 1)),
+    rtl_seen_add(theirs, 2, 2),
+    assertion(rtl_seen_count(1)),
+    rtl_use_program(seen_test_program),
+    assertion(rtl_seen_count(1)),
+    assertion(\+ rtl_seen_take(theirs, 2, 2)),
+    rtl_clear,
+    assertion(rtl_seen_count(0)),
+    rtl_use_program(other_test_program),
+    assertion(rtl_seen_take(theirs, 2, 2)),
+    rtl_clear,
+    rtl_use_program(seen_test_program).
+
+test(generation_modules_are_not_shared, [setup(setup)]) :-
+    forall(between(1, 1100, I), add(e(I), I)),                 % a closed generation and an open one
+    rtl_use_program(other_test_program),
+    forall(between(1, 1100, I), rtl_seen_add(f(I), I, I)),
+    findall(M-P, rtl_seen_owner(M, P), Owners),
+    forall(( member(M-P, Owners), member(M-Q, Owners) ), assertion(P == Q)),
+    assertion(\+ rtl_seen_take(e(1050), 1050, 1050)),
+    assertion(rtl_seen_take(f(1050), 1050, 1050)),
+    rtl_clear,
+    rtl_use_program(seen_test_program),
+    assertion(rtl_seen_take(e(1050), 1050, 1050)).
 
 :- end_tests(rtl_seen).

@@ -59,4 +59,19 @@ test(the_text_is_never_run) :-
 test(not_text, [throws(error(type_error(text, 42), _))]) :-
     rtl_read_text(42, _, _, []).
 
+% rtl_write_readable/2 writes what write_canonical/2 writes, and reads back where that does not.
+test(write_readable_is_canonical_for_ascii) :-
+    T = f({a}, [b|_], X, X, '$VAR'(1), "s", 1.0Inf, -(1), a:b, [], 'A b'),
+    with_output_to(string(S1), write_canonical(T)),
+    with_output_to(string(S2), rtl_write_readable(current_output, T)),
+    assertion(S1 == S2).
+
+test(write_readable_reads_back_every_range) :-
+    forall(member(C, [1, 0x7f, 0xe9, 0xD7FF, 0xE000, 0xFFFF, 0x1F600, 0xD8000, 0xDABCD, 0xDFFFF, 0x10FFFF]),
+           (   atom_codes(A, [C]), string_codes(Str, [0'x, C]),
+               with_output_to(string(S), rtl_write_readable(current_output, g(A, Str))),
+               term_string(T, S),
+               assertion(T == g(A, Str))
+           )).
+
 :- end_tests(rtl_text).
