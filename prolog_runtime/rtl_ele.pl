@@ -220,8 +220,9 @@ rtl_event(Event, Start, End) :-
     ).
 
 % An event in time order that nothing can use: its type is `quiet` (event_dispatch/2) and
-% the clock it moves to passes no sweep, timer or memory expiry. It only moves the clock and counts. Its duration and start
-% matter only to the rules that take its type (note_duration/3, rtl_started_after/1).
+% the clock it moves to passes no sweep, timer or memory expiry. It only moves the clock and
+% counts. Its duration and start matter only to the rules that take its type
+% (note_duration/3, rtl_started_after/1).
 quiet_event(Event, End) :-
     event_dispatch(Event, quiet),
     no_sweep_due(End),
@@ -242,7 +243,7 @@ no_sweep_due(End) :-
 % clause), no hook takes it (a memory, a subscription: hooks of its type or of every type)
 % and input is not echoed; else `used`. Found on the first event of the type and kept in
 % dispatch_of/2, looked up by first-argument indexing on the event itself. Whatever adds
-% triggers or hooks, or turns echo on, forgets it (rtl_dispatch_changed/0).
+% or removes triggers or hooks, or turns echo on, forgets it (rtl_dispatch_changed/0).
 event_dispatch(Event, Dispatch) :-
     (   dispatch_of(Event, Known)
     ->  Dispatch = Known
@@ -502,7 +503,8 @@ rtl_add_output_hook(Hook) :-
 
 rtl_remove_output_hook(Hook) :-
     retractall(output_hook(Hook)),
-    (   output_hook(_) -> true ; nb_setval(rtl_output_hooks, false) ).
+    (   output_hook(_) -> true ; nb_setval(rtl_output_hooks, false) ),
+    rtl_dispatch_changed.
 
 %!  rtl_add_type_output_hook(+Pattern, :Hook) is det.
 %!  rtl_remove_type_output_hook(+Pattern, :Hook) is det.
@@ -519,7 +521,8 @@ rtl_add_type_output_hook(Pattern, Hook) :-
 
 rtl_remove_type_output_hook(Pattern, Hook) :-
     type_skeleton(Pattern, Skeleton),
-    retractall(type_output_hook(Skeleton, Hook)).
+    retractall(type_output_hook(Skeleton, Hook)),
+    rtl_dispatch_changed.
 
 %!  rtl_dry_run(:Goal, -Retracted:integer, -Derived:integer) is det.
 %
@@ -561,7 +564,8 @@ rtl_dry_running :-
 %   Remove the hooks of every type (inside the snapshot of a dry run, rtl_dry_run/3).
 
 rtl_remove_type_output_hooks :-
-    retractall(type_output_hook(_, _)).
+    retractall(type_output_hook(_, _)),
+    rtl_dispatch_changed.
 
 type_skeleton(Pattern, Skeleton) :-
     (   compound(Pattern)

@@ -247,19 +247,10 @@ def _parse(tokens: list, i: int):
         return result, i + 1
     if kind == "atom":
         if i + 1 < len(tokens) and tokens[i + 1][0] == "(":
-            args = []
-            i += 2
-            while True:
-                arg, i = _parse(tokens, i)
-                args.append(arg)
-                if i >= len(tokens):
-                    raise _Unsupported
-                if tokens[i][0] == ",":
-                    i += 1
-                elif tokens[i][0] == ")":
-                    return Term(value, tuple(args)), i + 1
-                else:
-                    raise _Unsupported
+            args, i, end = _items(tokens, i + 2, ")")
+            if end != ")":
+                raise _Unsupported
+            return Term(value, tuple(args)), i + 1
         if i + 1 < len(tokens) and tokens[i + 1][0] not in (",", ")", "]", "|"):
             raise _Unsupported            # an operator term such as a-b or - 1
         return value, i + 1
@@ -271,29 +262,36 @@ def _parse(tokens: list, i: int):
             return _parse(tokens, i)
         return "{}", i + 1
     if kind == "[":
-        items = []
-        i += 1
-        while True:
-            item, i = _parse(tokens, i)
-            items.append(item)
-            if i >= len(tokens):
-                raise _Unsupported
-            if tokens[i][0] == ",":
-                i += 1
-            elif tokens[i][0] == "]":
-                return items, i + 1
-            elif tokens[i][0] == "|":              # a partial list: '[|]'(Head, Tail) cells
-                tail, i = _parse(tokens, i + 1)
-                if i >= len(tokens) or tokens[i][0] != "]":
-                    raise _Unsupported
-                if isinstance(tail, list):
-                    return items + tail, i + 1
-                for item in reversed(items):
-                    tail = Term("[|]", (item, tail))
-                return tail, i + 1
-            else:
-                raise _Unsupported
+        items, i, end = _items(tokens, i + 1, "]")
+        if end == "]":
+            return items, i + 1
+        tail, i = _parse(tokens, i + 1)            # after `|`: a partial list, '[|]'(Head, Tail) cells
+        if i >= len(tokens) or tokens[i][0] != "]":
+            raise _Unsupported
+        if isinstance(tail, list):
+            return items + tail, i + 1
+        for item in reversed(items):
+            tail = Term("[|]", (item, tail))
+        return tail, i + 1
     raise _Unsupported
+
+
+def _items(tokens, i, close):
+    """The comma-separated terms from token i up to `close` (or, in a list, `|`): the items,
+    the index of the token that ended them and that token's kind."""
+    items = []
+    while True:
+        item, i = _parse(tokens, i)
+        items.append(item)
+        if i >= len(tokens):
+            raise _Unsupported
+        kind = tokens[i][0]
+        if kind == ",":
+            i += 1
+        elif kind == close or (kind == "|" and close == "]"):
+            return items, i, kind
+        else:
+            raise _Unsupported
 
 
 # ---- writing term text ---------------------------------------------------------------------
