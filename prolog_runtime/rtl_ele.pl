@@ -501,10 +501,15 @@ rtl_add_output_hook(Hook) :-
     nb_setval(rtl_output_hooks, true),
     rtl_dispatch_changed.
 
+% Removing a hook that is not there changes nothing, not even the globals a snapshot holds
+% (a restore that tidies the hooks of an idle module must leave the state it restored).
 rtl_remove_output_hook(Hook) :-
-    retractall(output_hook(Hook)),
-    (   output_hook(_) -> true ; nb_setval(rtl_output_hooks, false) ),
-    rtl_dispatch_changed.
+    (   output_hook(Hook)
+    ->  retractall(output_hook(Hook)),
+        (   output_hook(_) -> true ; nb_setval(rtl_output_hooks, false) ),
+        rtl_dispatch_changed
+    ;   true
+    ).
 
 %!  rtl_add_type_output_hook(+Pattern, :Hook) is det.
 %!  rtl_remove_type_output_hook(+Pattern, :Hook) is det.

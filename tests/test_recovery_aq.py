@@ -110,6 +110,23 @@ def test_stopped_saved_restored_into_a_new_load_goes_on_as_if_never_stopped(case
     assert first.output + rest.output == full
 
 
+def test_an_event_program_run_earlier_in_the_process_does_not_change_a_restore(case, tmp_path):
+    # The event engine's modules (rtl_ele, rtl_tf) share the process: a restore that tidies
+    # their idle hooks once set a global the snapshot did not hold, and the digests differed.
+    from retalisc.driver.engine import Engine
+    engine = Engine.from_source("b(X) <- a(X).\n")
+    engine.on_output(lambda out: None)
+    assert [out.name for out in engine.feed("a(1)", 1)] == ["b"]
+    _, program, script, _ = case
+    aq = ActiveQueries.from_file(program)
+    aq.run_script_batch(script, 1, 100)
+    digest = aq.state_digest()
+    aq.save_state(tmp_path / "s.state")
+    again = ActiveQueries.from_file(program)
+    again.restore_state(tmp_path / "s.state")
+    assert again.state_digest() == digest
+
+
 def test_snapshot_of_another_program_is_refused_and_changes_nothing(case, tmp_path):
     _, program, script, _ = case
     aq = ActiveQueries.from_file(program)
