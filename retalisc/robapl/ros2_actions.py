@@ -175,7 +175,6 @@ class Ros2Actions:
             import rclpy
             from rclpy.executors import SingleThreadedExecutor
         except ImportError:
-            _hand_over()
             raise MissingRclpy("ROS 2 actions need rclpy: run retalisc in .venv-ros2's Python "
                                "(bash setup.sh makes it; $RETALISC_ROS2_PYTHON names another)") from None
         self.actions = actions
@@ -304,9 +303,3 @@ def _text(value) -> str:
         return f"{functor}({','.join(_text(a) for a in args)})"
     return str(value)
 
-
-def _hand_over() -> None:
-    """`retalisc robapl run` in a Python without rclpy: the same command in .venv-ros2's Python
-    (as `retalisc ros2` does), when this is the retalisc program itself."""
-    from ..commands.live import _hand_over_to_ros2_venv
-    _hand_over_to_ros2_venv()
