@@ -30,6 +30,7 @@ def register(actions):
     ros2 = Ros2Actions(actions, node_name="robapl_test_agent")
     ros2.service("close_gripper", "/gripper", "std_srvs/srv/SetBool")
     ros2.service("press_button", "/press", "std_srvs/srv/Trigger")
+    ros2.service("ring", "/no_such_service", "std_srvs/srv/Trigger", wait=0.5)
     if WITH_ACTION:
         ros2.action("carry", "/perform", "robapl_interfaces/action/Perform")
     else:
@@ -48,6 +49,9 @@ rules {
   }
   refuse <- true | list refuse {
     external open: close_gripper(false)
+  }
+  bell <- true | list bell {
+    external ring: ring
   }
   help <- true | list help [priority: 5; resources: <hands, blocking, 1>] {
     external call: press_button
@@ -113,7 +117,7 @@ def _transition(trace, node, to):
 def test_services_results_and_failures_come_back_as_events(tmp_path):
     """SetBool and Trigger calls: the response's message is the result (bound by `result:` and
     tested by the next node's pre condition); a false `success` is an action_failed event."""
-    trace, seen = run_agent(tmp_path, [(0, "grasp(cup)"), (5, "refuse")], with_action=False)
+    trace, seen = run_agent(tmp_path, [(0, "grasp(cup)"), (5, "refuse"), (6, "bell")], with_action=False)
     events = [r["event"] for r in trace if "event" in r]
     assert any(e.startswith('action_result("grasp#1/close@') and e.endswith(",closed)") for e in events)
     assert any(e.startswith('action_result("grasp#1/press@') and e.endswith(",pressed)") for e in events)
@@ -122,6 +126,9 @@ def test_services_results_and_failures_come_back_as_events(tmp_path):
     assert any(e.startswith('action_failed("refuse#1/open@') and e.endswith(',"refused")') for e in events)
     failed = _transition(trace, "refuse#1/open", "iteration_ended")
     assert failed["outcome"] == "failure" and failed["why"] == "action failed"
+    # a service no server offers: the action fails at once (after `wait`), the run goes on
+    assert _transition(trace, "bell#1/ring", "iteration_ended")["why"] == "action failed"
+    assert _transition(trace, "bell#1", "finished")["outcome"] == "success"
     assert seen[:2] == [{"service": "gripper", "data": True}, {"service": "press"}]
     assert {"service": "gripper", "data": False} in seen
     # the Trigger answers after 0.3 s: the node waited for its result event, on the agent's clock
@@ -153,6 +160,24 @@ def test_a_preempted_plan_cancels_its_ros2_goal(tmp_path):
     assert not any(r.get("belief_update") == "grasp#1/held" for r in trace)
     assert _transition(trace, "help#1/call", "iteration_ended")["outcome"] == "success"
     assert _transition(trace, "help#1/call", "executing")["t"] >= 2.0
+
+
+def test_ros2_actions_without_rclpy_are_a_clear_error(tmp_path):
+    """No rclpy here and no ROS 2 Python to hand over to: exit status 1 and what to do."""
+    pytest.importorskip("lark")
+    try:
+        import rclpy  # noqa: F401
+        pytest.skip("this Python has rclpy")
+    except ImportError:
+        pass
+    (tmp_path / "arm.apl").write_text(AGENT)
+    (tmp_path / "actions.py").write_text("WITH_ACTION = False\n" + ACTIONS)
+    (tmp_path / "events.jsonl").write_text('{"t": 0, "event": "refuse"}\n')
+    done = subprocess.run(retalisc_argv(this_python, "robapl", "run", str(tmp_path / "arm.apl"), "--events",
+                                        str(tmp_path / "events.jsonl"), "--actions", str(tmp_path / "actions.py")),
+                          env=retalisc_env({"RETALISC_ROS2_PYTHON": str(tmp_path / "no-python")}),
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1 and "ROS 2 actions need rclpy" in done.stderr, done.stderr
 
 
 # ----- the inbox, without ROS 2
