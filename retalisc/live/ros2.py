@@ -171,6 +171,14 @@ def _own_reader_group():
     return OwnReader()
 
 
+def _run_event(handler) -> None:
+    """Take a ready QoS event of an input subscription and run its callback (rclpy's default
+    ones log a warning), in the reader thread."""
+    taken = handler.take_data()
+    if taken:
+        handler.callback(taken)
+
+
 class Ros2Transport(Transport):
     wire = "cdr"
     name = "ros2"
@@ -249,25 +257,34 @@ class Ros2Transport(Transport):
         from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
         arrived = self.node.arrived
-        wait_set, size = None, -1
+        wait_set, size = None, None
         while not self._closing:
             with self._lock:
                 for subscription in self._retired:
                     self.ros.destroy_subscription(subscription)
                 self._retired.clear()
                 readers = list(self._subscriptions.items())
+            events = [handler for _, (subscription, _) in readers for handler in subscription.event_handlers]
             with ExitStack() as held:          # the handles stay valid while they are waited on
                 held.enter_context(self.context.handle)
                 for _, (subscription, _) in readers:
                     held.enter_context(subscription.handle)
+                for handler in events:
+                    held.enter_context(handler)
                 held.enter_context(self._wake.handle)
-                if size != len(readers):
-                    wait_set, size = _rclpy.WaitSet(len(readers), 1, 0, 0, 0, 0, self.context.handle), len(readers)
+                if size != (len(readers), len(events)):
+                    size = (len(readers), len(events))
+                    wait_set = _rclpy.WaitSet(len(readers), 1, 0, 0, 0, len(events), self.context.handle)
                 wait_set.clear_entities()
                 for _, (subscription, _) in readers:
                     wait_set.add_subscription(subscription.handle)
+                for handler in events:
+                    handler.add_to_wait_set(wait_set)
                 wait_set.add_guard_condition(self._wake.handle)
                 wait_set.wait(-1)
+                for handler in events:
+                    if handler.is_ready(wait_set):
+                        _run_event(handler)
                 ready = wait_set.get_ready_entities("subscription")
                 pending = [(topic, subscription.handle, subscription.msg_type, definition)
                            for topic, (subscription, definition) in readers if subscription.handle.pointer in ready]
@@ -296,11 +313,9 @@ class Ros2Transport(Transport):
                       else message_definition(msgtype, self.node.store.fielddefs))
         profile = qos_profile(self.node.config.qos(topic, True), topic, True)
         # the callback is never called (_own_reader_group): _read takes the bytes itself
+        # and its QoS events (incompatible QoS: a warning) are _read's too (_run_event)
         subscription = self.ros.create_subscription(cls, topic, lambda data: None, profile, raw=True,
                                                     callback_group=self._group)
-        for handler in subscription.event_handlers:     # its QoS events (incompatible QoS: a warning)
-            handler.callback_group = self.ros.default_callback_group      # stay the executor's
-            self.ros.default_callback_group.add_entity(handler)
         with self._lock:
             self._subscriptions[topic] = (subscription, definition)
         self._wake.trigger()

@@ -141,6 +141,10 @@ class ResultInbox:
         with self._cond:
             return self._waiting.pop(handle, None) is not None
 
+    def waiting_for(self, handle: str) -> bool:
+        with self._cond:
+            return handle in self._waiting
+
     def outstanding(self) -> int:
         with self._cond:
             return len(self._waiting)
@@ -271,6 +275,10 @@ class Ros2Actions:
             self.inbox.answer(handle, False, "goal rejected")
             return
         self._goals[handle] = goal_handle
+        # its node aborted before the goal was accepted: whoever takes it from _goals cancels it
+        if not self.inbox.waiting_for(handle) and self._goals.pop(handle, None) is not None:
+            goal_handle.cancel_goal_async()
+            return
 
         def done(result_future):
             self._goals.pop(handle, None)
