@@ -203,3 +203,73 @@ def test_the_inbox_fails_an_unanswered_call_after_its_timeout_and_drops_late_ans
     assert event == Compound("action_failed", ("c@3", "timeout")) and at == pytest.approx(1.2)
     inbox.answer("c@3", True, "late")
     assert inbox.collect(None) == [] and inbox.outstanding() == 0
+
+
+class _Message:
+    """A stand-in for a generated rclpy message class: its fields in declared order."""
+    FIELDS: dict = {}
+
+    def __init__(self, **values):
+        for name in self.FIELDS:
+            setattr(self, name, values.get(name))
+
+    @classmethod
+    def get_fields_and_field_types(cls):
+        return dict(cls.FIELDS)
+
+
+class SetBool_Request(_Message):
+    FIELDS = {"data": "boolean"}
+
+
+class AddTwoInts_Response(_Message):
+    FIELDS = {"sum": "int64"}
+
+
+class Pose_Response(_Message):
+    FIELDS = {"success": "boolean", "x": "double", "frame": "string"}
+
+
+def test_requests_are_filled_in_field_order_and_answers_read_by_the_defaults():
+    from retalisc.robapl.executor import ActionFailed
+    from retalisc.robapl.ros2_actions import fill_message, message_value
+    from retalisc.robapl.terms import Atom
+
+    assert fill_message(SetBool_Request, ("true",)).data is True
+    assert fill_message(SetBool_Request, (False,)).data is False
+    with pytest.raises(ActionFailed, match="boolean"):
+        fill_message(SetBool_Request, ("maybe",))
+    with pytest.raises(ActionFailed, match="1 fields"):
+        fill_message(SetBool_Request, ("true", "true"))
+    assert message_value(AddTwoInts_Response(sum=5)) == (True, 5)
+    assert message_value(Pose_Response(success=True, x=1.5, frame="map")) == \
+        (True, Compound("pose", (1.5, Atom("map"))))
+    assert message_value(Pose_Response(success=False, x=0.0, frame="map")) == (False, "failed")
+
+
+def test_every_call_is_answered_once_stamped_no_earlier_than_its_call():
+    from hypothesis import given, settings, strategies as st
+
+    @settings(max_examples=60, deadline=None)
+    @given(st.lists(st.tuples(st.floats(0, 100), st.sampled_from(["answer", "forget", "late"])), max_size=8))
+    def check(calls):
+        inbox = ResultInbox(timeout=1000.0)
+        at, times = 0.0, []
+        for number, (step, fate) in enumerate(calls):
+            at += step
+            times.append(at)
+            inbox.expect(f"h@{number}", at)
+            if fate == "answer":
+                inbox.answer(f"h@{number}", True, number)
+            elif fate == "forget":
+                assert inbox.forget(f"h@{number}")
+        answered = [number for number, (_, fate) in enumerate(calls) if fate == "answer"]
+        got = inbox.collect(inbox.now())         # the next event is due: no waiting for the late ones
+        assert [event.args[1] for _, event in got] == answered
+        assert all(stamp >= times[event.args[1]] for stamp, event in got)
+        for number, (_, fate) in enumerate(calls):
+            inbox.answer(f"h@{number}", True, number)           # a second answer is dropped
+        late = [number for number, (_, fate) in enumerate(calls) if fate == "late"]
+        assert [event.args[1] for _, event in inbox.collect(None)] == late and inbox.outstanding() == 0
+
+    check()
