@@ -3,6 +3,8 @@
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from retalisc.robapl.conditions_aq import ActiveQueryConditions
 from retalisc.robapl.runner import load_actions, read_event_lines, run_agent, trace_lines
@@ -23,3 +25,28 @@ def test_active_query_conditions_give_the_golden_trace(folder):
     assert trace_lines(trace) == (folder / "trace.jsonl").read_text()
     # the monitored conditions the knowledge base can answer were registered and answered there
     assert bool(sources[0]._queries) == bool(sources[0].rules)
+
+
+GOLDEN_AGENTS = [GOLDEN / name for name in ("pause_resume", "invariant", "finishing_fails", "resume_aborted",
+                                            "ancestor_skips", "abstract_goals", "finishing_skips", "sequence")]
+
+
+@st.composite
+def scenarios(draw):
+    folder = draw(st.sampled_from(GOLDEN_AGENTS))
+    words = [term for _, term in read_event_lines((folder / "events.jsonl").read_text()).events]
+    count = draw(st.integers(1, 10))
+    times = sorted(draw(st.lists(st.integers(0, 60), min_size=count, max_size=count)))
+    return folder, [(float(t), draw(st.sampled_from(words))) for t in times]
+
+
+@settings(max_examples=25, deadline=None)
+@given(scenarios())
+def test_active_queries_and_the_resolver_give_the_same_trace(scenario):
+    folder, events = scenario
+    agent = load_agent(folder / "agent.apl")
+    actions = str(GOLDEN / "actions.py")
+    by_resolution = run_agent(agent, events, load_actions(actions))
+    by_queries = run_agent(agent, events, load_actions(actions),
+                           conditions=lambda executor: ActiveQueryConditions(agent, executor))
+    assert trace_lines(by_queries) == trace_lines(by_resolution)
