@@ -50,3 +50,18 @@ def test_active_queries_and_the_resolver_give_the_same_trace(scenario):
     by_queries = run_agent(agent, events, load_actions(actions),
                            conditions=lambda executor: ActiveQueryConditions(agent, executor))
     assert trace_lines(by_queries) == trace_lines(by_resolution)
+
+
+def test_a_condition_marked_with_a_question_mark_is_an_active_query():
+    from retalisc.robapl.executor import Executor
+    from retalisc.robapl.syntax import parse_agent
+    folder = GOLDEN / "sequence"
+    text = (folder / "agent.apl").read_text().replace("[start: finished(first)]", "[start: ? finished(first)]")
+    assert text != (folder / "agent.apl").read_text()
+    agent = parse_agent(text, str(folder / "agent.apl"))
+    second = agent.rules[0].plan.children[1]
+    assert second.active_queries == ("start",) and second.conditions["start"] == \
+        load_agent(folder / "agent.apl").rules[0].plan.children[1].conditions["start"]
+    read = read_event_lines((folder / "events.jsonl").read_text())
+    trace = run_agent(agent, read.events, load_actions(str(GOLDEN / "actions.py")))
+    assert trace_lines(trace) == (folder / "trace.jsonl").read_text()

@@ -66,7 +66,7 @@ def _literal_text(literal: Literal, plan: str, me: str) -> Optional[str]:
 class ActiveQueryConditions:
     """A `conditions.ConditionSource`: the monitored conditions of `agent` answered by active queries."""
 
-    def __init__(self, agent, executor, mode: str = "tabled"):
+    def __init__(self, agent, executor, mode: str = "tabled", only_marked: bool = False):
         from ..driver.active_queries import ActiveQueries
 
         self.view = executor
@@ -84,6 +84,8 @@ class ActiveQueryConditions:
         keys |= self._updated_keys(agent)
         lines += [f":- dynamic {atom_text(name)}/{arity}." for name, arity in sorted(keys)]
         for number, (spec, name, query) in enumerate(self._monitored(agent)):
+            if only_marked and name not in spec.active_queries:
+                continue
             body = [_literal_text(l, "Plan", "Me") for l in query]
             if None in body:
                 continue
