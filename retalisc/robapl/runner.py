@@ -58,9 +58,22 @@ def run_agent(agent: Agent, events: List[Tuple[float, Term]], actions: Actions, 
     """The trace of `agent` on `events`; `iec` an `iec.SteppedIEC` driven in step with it,
     `conditions` a `conditions.ConditionSource` (default: resolution on the belief base)."""
     executor = Executor(agent, actions, iec=iec)
-    if conditions is not None:
+    if conditions is None and _marks_active_queries(agent):
+        from .conditions_aq import ActiveQueryConditions
+        executor.conditions = ActiveQueryConditions(agent, executor, only_marked=True)
+    elif conditions is not None:
         executor.conditions = conditions(executor)
     return executor.run(events)
+
+
+def _marks_active_queries(agent: Agent) -> bool:
+    stack = [rule.plan for rule in agent.rules]
+    while stack:
+        spec = stack.pop()
+        if spec.active_queries:
+            return True
+        stack.extend(spec.children)
+    return False
 
 
 def trace_lines(trace: List[dict]) -> str:

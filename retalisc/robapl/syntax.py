@@ -48,6 +48,8 @@ class NodeSpec:
     conditions: Dict[str, Query] = field(default_factory=dict)
     #: the conditions written as event patterns: name -> (derived event, ELE pattern text, span)
     patterns: Dict[str, Tuple[Term, str, Optional[Span]]] = field(default_factory=dict)
+    #: the conditions marked `?`: answered by active queries of the agent's IEC (conditions_aq.py)
+    active_queries: Tuple[str, ...] = ()
     priority: Optional[int] = None
     resources: Tuple[ResourceUsage, ...] = ()
     result: Optional[str] = None
@@ -157,6 +159,10 @@ class _Build(Transformer):
         span = _span(meta, self.file)
         return ("condition", name, (Literal("positive", Compound("event", (event,))),), span, (event, pattern, span))
 
+    @v_args(meta=True)
+    def aq_condition(self, meta, items):
+        return ("condition", str(items[0]), items[1], _span(meta, self.file), None, "aq")
+
     def priority(self, items):
         return ("priority", int(items[0]))
 
@@ -183,7 +189,9 @@ class _Build(Transformer):
                             raise RetalisSemanticError(f"node {node.name}: the {attribute[1]} condition is given twice",
                                                        attribute[3])
                         node.conditions[attribute[1]] = attribute[2]
-                        if len(attribute) > 4:
+                        if len(attribute) > 5:
+                            node.active_queries += (attribute[1],)
+                        elif len(attribute) > 4:
                             node.patterns[attribute[1]] = attribute[4]
                     elif attribute[0] == "priority":
                         node.priority = attribute[1]
