@@ -39,7 +39,7 @@ rtl_read_text(Text, Term, Bindings, Options) :-
     ->  sub_string(Rest1, 1, _, 0, Rest)
     ;   Rest = Rest1
     ),
-    (   only_layout(Rest)
+    (   ( Rest == "" ; only_layout(Rest) )      % (the common case needs no second read)
     ->  Term = Term0,
         Bindings = Bindings0
     ;   syntax_error_at(end_of_clause_expected, Text, End)
