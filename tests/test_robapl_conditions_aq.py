@@ -53,7 +53,6 @@ def test_active_queries_and_the_resolver_give_the_same_trace(scenario):
 
 
 def test_a_condition_marked_with_a_question_mark_is_an_active_query():
-    from retalisc.robapl.executor import Executor
     from retalisc.robapl.syntax import parse_agent
     folder = GOLDEN / "sequence"
     text = (folder / "agent.apl").read_text().replace("[start: finished(first)]", "[start: ? finished(first)]")

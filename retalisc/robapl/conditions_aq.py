@@ -75,21 +75,21 @@ class ActiveQueryConditions:
         lines = [_PRELUDE]
         facts = {h for h, b in agent.beliefs if not b}
         for head, body in agent.beliefs:
-            if body and any(_literal_text(l, "P", "N") != (_text(l.term) if l.kind == "positive" else None)
-                            for l in body if l.kind == "positive"):
+            if body and any(_literal_text(lit, "P", "N") != (_text(lit.term) if lit.kind == "positive" else None)
+                            for lit in body if lit.kind == "positive"):
                 continue          # a rule with built-ins: its conditions go to the resolver
             if body:
-                lines.append(f"{_text(head)} :- {', '.join(_literal_text(l, 'P', 'N') for l in body)}.")
+                lines.append(f"{_text(head)} :- {', '.join(_literal_text(lit, 'P', 'N') for lit in body)}.")
         keys = {(h.functor, len(h.args)) if isinstance(h, Compound) else (h.name, 0) for h in facts}
         keys |= self._updated_keys(agent)
         lines += [f":- dynamic {atom_text(name)}/{arity}." for name, arity in sorted(keys)]
         for number, (spec, name, query) in enumerate(self._monitored(agent)):
             if only_marked and name not in spec.active_queries:
                 continue
-            body = [_literal_text(l, "Plan", "Me") for l in query]
+            body = [_literal_text(lit, "Plan", "Me") for lit in query]
             if None in body:
                 continue
-            head_vars = variables(Compound("v", tuple(t for l in query for t in (l.term, l.right) if t is not None)))
+            head_vars = variables(Compound("v", tuple(t for lit in query for t in (lit.term, lit.right) if t is not None)))
             head_vars = [v for v in head_vars if v not in ("Plan", "Me")]
             predicate = f"rq_c{number}"
             lines.append(f"{predicate}({', '.join(['Plan', 'Me'] + head_vars)}) :- {', '.join(body)}.")
